@@ -300,7 +300,10 @@ def as_euler_zxz(q: ArrayLike) -> FloatArray:
 
 
 def from_bryant_xyz(angles: ArrayLike) -> FloatArray:
-    """Quaternion of Bryant angles ``(α₁, α₂, α₃)``: ``exp(α₁ e_x) ⊗ exp(α₂ e_y) ⊗ exp(α₃ e_z)``."""
+    """Quaternion of Bryant angles ``(α₁, α₂, α₃)``.
+
+    ``q = exp(α₁ e_x) ⊗ exp(α₂ e_y) ⊗ exp(α₃ e_z)``.
+    """
     a = _three_angles(angles, 'angles')
     return multiply(multiply(_axis_quaternion(a[..., 0], 0), _axis_quaternion(a[..., 1], 1)),
                     _axis_quaternion(a[..., 2], 2))
