@@ -1,0 +1,120 @@
+"""Shared pieces of the throughput benchmark: QoS, wire layouts and tiny process helpers.
+
+Everything here is used by the helper processes (publisher, subscriber, relays) and by the
+driver, ``bench/node_throughput.py``. The CDR helpers encode and decode the few fields the
+benchmark needs straight from the serialized bytes, so the measuring processes never build
+Python message objects on their hot path (building an ``Imu`` costs ~7 µs, deserializing one
+~20 µs; see ``bench/NOTES.md``).
+
+CDR (XCDR1, little endian) layouts used here, offsets counted from the start of the buffer,
+which begins with the 4-byte encapsulation header ``00 01 00 00``:
+
+* ``std_msgs/Header``: ``int32 sec`` at 4, ``uint32 nanosec`` at 8, ``uint32 len`` at 12
+  (string length including its NUL), the ``frame_id`` bytes from 16.
+* Body alignment: doubles are 8-aligned relative to offset 4 (the end of the header bytes).
+* ``sensor_msgs/Imu`` body: orientation (4 doubles), orientation_covariance (9),
+  angular_velocity (3), angular_velocity_covariance (9), linear_acceleration (3),
+  linear_acceleration_covariance (9): 37 doubles, 296 bytes.
+* ``geometry_msgs/PoseStamped`` body: position (3 doubles), orientation (4): 56 bytes.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+from typing import Dict, Optional, Tuple
+
+#: Topic names every benchmark process uses (relative, so ``--ros-args -r`` remaps them).
+IMU_TOPIC = 'imu'
+POSE_TOPIC = 'pose'
+
+#: History depth for the benchmark QoS (RELIABLE, KEEP_LAST): a deep queue, as the issue asks.
+QUEUE_DEPTH = 1000
+
+_STAMP = struct.Struct('<iI')
+_BODY_OFFSET_IMU_GYRO = 13 * 8  # orientation (4) + orientation_covariance (9) doubles
+_VEC3 = struct.Struct('<3d')
+_CDR_LE_HEADER = b'\x00\x01\x00\x00'
+
+
+def ros_env(domain_id: int) -> Dict[str, str]:
+    """Return a copy of the environment for a benchmark process on ``domain_id`` (localhost)."""
+    env = dict(os.environ)
+    env['ROS_DOMAIN_ID'] = str(domain_id)
+    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    env['PYTHONUNBUFFERED'] = '1'
+    return env
+
+
+def reliable_qos(depth: int = QUEUE_DEPTH):
+    """Return the benchmark QoS: RELIABLE, VOLATILE, KEEP_LAST ``depth``."""
+    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+    return QoSProfile(depth=depth, history=HistoryPolicy.KEEP_LAST,
+                      reliability=ReliabilityPolicy.RELIABLE)
+
+
+def _body_start(frame_id_length: int) -> int:
+    """Offset of the first 8-aligned body field after a header with this frame_id length."""
+    end = 16 + frame_id_length  # 4 encapsulation + 8 stamp + 4 length + characters
+    return 4 + ((end - 4 + 7) // 8) * 8
+
+
+def header_cdr(frame_id: str) -> bytes:
+    """Return the CDR bytes of a zero-stamp ``std_msgs/Header`` up to the aligned body start."""
+    text = frame_id.encode() + b'\x00'
+    head = _CDR_LE_HEADER + _STAMP.pack(0, 0) + struct.pack('<I', len(text)) + text
+    return head + b'\x00' * (_body_start(len(text)) - len(head))
+
+
+def imu_cdr(omega_body: Tuple[float, float, float], frame_id: str = 'imu') -> bytearray:
+    """Return a serialized ``sensor_msgs/Imu`` with zero stamp and the given angular velocity.
+
+    The orientation is the identity with covariance ``-1`` in element 0 (REP-145: "no
+    orientation estimate"); all other fields are zero.
+    """
+    orientation = struct.pack('<4d', 0.0, 0.0, 0.0, 1.0)
+    orientation_covariance = struct.pack('<9d', -1.0, *([0.0] * 8))
+    body = (orientation + orientation_covariance + _VEC3.pack(*omega_body)
+            + bytes(9 * 8) + _VEC3.pack(0.0, 0.0, 0.0) + bytes(9 * 8))
+    return bytearray(header_cdr(frame_id) + body)
+
+
+def pose_cdr(frame_id: str = 'world') -> bytearray:
+    """Return a serialized ``geometry_msgs/PoseStamped`` with zero stamp, identity pose."""
+    body = struct.pack('<7d', 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+    return bytearray(header_cdr(frame_id) + body)
+
+
+def set_stamp_ns(buffer: bytearray, stamp_ns: int) -> None:
+    """Write ``stamp_ns`` (nanoseconds since the epoch) into a serialized header's stamp."""
+    _STAMP.pack_into(buffer, 4, stamp_ns // 1_000_000_000, stamp_ns % 1_000_000_000)
+
+
+def stamp_ns(buffer: bytes) -> int:
+    """Return the header stamp (nanoseconds) of a serialized stamped message."""
+    sec, nanosec = _STAMP.unpack_from(buffer, 4)
+    return sec * 1_000_000_000 + nanosec
+
+
+def imu_gyro(buffer: bytes) -> Optional[Tuple[float, float, float]]:
+    """Return ``angular_velocity`` of a serialized little-endian Imu, or None if not CDR LE."""
+    if buffer[1] != 1:
+        return None
+    (length,) = struct.unpack_from('<I', buffer, 12)
+    return _VEC3.unpack_from(buffer, _body_start(length) + _BODY_OFFSET_IMU_GYRO)
+
+
+def cpu_ticks(pid: int) -> int:
+    """Return utime + stime (clock ticks) of process ``pid``, all its threads included."""
+    with open(f'/proc/{pid}/stat') as stat:
+        fields = stat.read().rsplit(')', 1)[1].split()
+    return int(fields[11]) + int(fields[12])  # fields 14 and 15 of proc(5)
+
+
+def rss_kib(pid: int) -> int:
+    """Return the resident set size (KiB) of process ``pid`` from /proc/<pid>/status."""
+    with open(f'/proc/{pid}/status') as status:
+        for line in status:
+            if line.startswith('VmRSS:'):
+                return int(line.split()[1])
+    raise RuntimeError(f'no VmRSS line for pid {pid}')

@@ -1,0 +1,239 @@
+"""Rendering of the throughput and soak results into ``docs/performance.md`` and a PNG plot.
+
+Used by ``bench/node_throughput.py``; reads ``bench/results/throughput.json`` and
+``bench/results/soak.json`` (whichever exist) so a soak run and a sweep run can be made at
+different times and still land in one report.
+"""
+
+import importlib.metadata
+import json
+import os
+from pathlib import Path
+import platform
+from typing import List, Optional
+
+#: A row counts only if the publisher achieved at least this fraction of the asked rate.
+PUBLISHER_SHORTFALL = 0.97
+#: The issue's targets for the node at 1 kHz.
+TARGET_CPU_PERCENT_1KHZ = 10.0
+TARGET_P99_MS_1KHZ = 1.0
+TARGET_ZERO_LOSS_HZ = 10000.0
+TARGET_RELAY_FACTOR = 2.0
+TARGET_SOAK_GROWTH_KIB = 5 * 1024
+
+
+def _cpu_model() -> str:
+    with open('/proc/cpuinfo') as cpuinfo:
+        for line in cpuinfo:
+            if line.startswith('model name'):
+                return line.split(':', 1)[1].strip()
+    return platform.processor() or 'unknown'
+
+
+def _memory_gib() -> float:
+    with open('/proc/meminfo') as meminfo:
+        for line in meminfo:
+            if line.startswith('MemTotal:'):
+                return int(line.split()[1]) / 2**20
+    return float('nan')
+
+
+def _version(distribution: str) -> str:
+    try:
+        return importlib.metadata.version(distribution)
+    except importlib.metadata.PackageNotFoundError:
+        return 'not installed'
+
+
+def machine_description() -> dict:
+    """Return cores, CPU model, memory, OS, Python/rclpy/rmw versions and the load average."""
+    from rclpy.utilities import get_rmw_implementation_identifier
+    return {
+        'cores': os.cpu_count(), 'cpu_model': _cpu_model(),
+        'memory_gib': round(_memory_gib(), 1), 'kernel': platform.release(),
+        'python': platform.python_version(), 'rclpy': _version('ros-jazzy-rclpy'),
+        'rmw': get_rmw_implementation_identifier(),
+        'rmw_fastrtps_cpp': _version('ros-jazzy-rmw-fastrtps-cpp'),
+        'load_average_at_start': [round(load, 2) for load in os.getloadavg()],
+    }
+
+
+def _fmt(value: Optional[float], digits: int = 2) -> str:
+    return '–' if value is None else f'{value:.{digits}f}'
+
+
+def row_line(label: str, row: dict) -> str:
+    """Return one progress line for a measured row."""
+    return (f'{label:>12} {row["rate_hz"]:>8.0f} Hz  sent {row["sent"]:>6}  '
+            f'lost {row["lost"]:>6}  pub {row["publisher_hz"]:>8.0f} Hz  '
+            f'cpu {row["cpu_percent"]:5.1f} %  p50 {_fmt(row["latency_p50_ms"])} ms  '
+            f'p99 {_fmt(row["latency_p99_ms"])} ms')
+
+
+def publisher_kept_up(row: dict) -> bool:
+    """Return whether the publisher achieved the asked rate closely enough to trust the row."""
+    return row['publisher_hz'] >= PUBLISHER_SHORTFALL * row['rate_hz']
+
+
+def highest_zero_loss_rate(rows: List[dict]) -> float:
+    """Return the highest rate at which it and every lower rate lost nothing (0 if none).
+
+    A rate whose publisher fell short counts as a failure: its zero loss proves nothing.
+    """
+    best = 0.0
+    for row in sorted(rows, key=lambda r: r['rate_hz']):
+        if row['lost'] != 0 or not publisher_kept_up(row):
+            break
+        best = row['rate_hz']
+    return best
+
+
+def _row_at(rows: List[dict], rate_hz: float) -> Optional[dict]:
+    return next((row for row in rows if row['rate_hz'] == rate_hz), None)
+
+
+def _table(rows: List[dict]) -> List[str]:
+    lines = ['| rate (Hz) | sent | received | lost | publisher (Hz) | CPU (% core) | '
+             'p50 (ms) | p99 (ms) | RSS (MiB) |',
+             '|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
+    for row in rows:
+        short = '' if publisher_kept_up(row) else ' (short)'
+        lines.append(
+            f'| {row["rate_hz"]:.0f} | {row["sent"]} | {row["received"]} | {row["lost"]} | '
+            f'{row["publisher_hz"]:.0f}{short} | {row["cpu_percent"]:.1f} | '
+            f'{_fmt(row["latency_p50_ms"], 3)} | {_fmt(row["latency_p99_ms"], 3)} | '
+            f'{row["rss_kib"] / 1024:.1f} |')
+    return lines
+
+
+def _summary(targets: dict) -> List[str]:
+    lines = ['| target | highest zero-loss rate (Hz) | CPU at 1 kHz (% core) | '
+             'p99 at 1 kHz (ms) | command |', '|---|---:|---:|---:|---|']
+    for label, target in targets.items():
+        at_1khz = _row_at(target['rows'], 1000.0)
+        lines.append(
+            f'| {label} | {highest_zero_loss_rate(target["rows"]):.0f} | '
+            f'{_fmt(at_1khz and at_1khz["cpu_percent"], 1)} | '
+            f'{_fmt(at_1khz and at_1khz["latency_p99_ms"], 3)} | `{target["command"]}` |')
+    return lines
+
+
+def _node_verdict(targets: dict) -> List[str]:
+    node = targets.get('node')
+    if node is None:
+        return ['The node was not part of this run.']
+    at_1khz = _row_at(node['rows'], 1000.0)
+    best = highest_zero_loss_rate(node['rows'])
+    relay = targets.get('relay')
+    relay_best = highest_zero_loss_rate(relay['rows']) if relay else None
+
+    def verdict(ok: bool) -> str:
+        return 'met' if ok else 'NOT met'
+    lines = []
+    if at_1khz is not None:
+        lines += [
+            f'- 1 kHz CPU ≤ {TARGET_CPU_PERCENT_1KHZ:.0f} % of a core: '
+            f'{at_1khz["cpu_percent"]:.1f} % — '
+            f'{verdict(at_1khz["cpu_percent"] <= TARGET_CPU_PERCENT_1KHZ)}',
+            f'- 1 kHz p99 latency ≤ {TARGET_P99_MS_1KHZ:.0f} ms: '
+            f'{_fmt(at_1khz["latency_p99_ms"], 3)} ms — '
+            f'{verdict((at_1khz["latency_p99_ms"] or 1e9) <= TARGET_P99_MS_1KHZ)}',
+            f'- 1 kHz zero loss: lost {at_1khz["lost"]} — {verdict(at_1khz["lost"] == 0)}']
+    lines.append(f'- highest zero-loss rate ≥ {TARGET_ZERO_LOSS_HZ:.0f} Hz: {best:.0f} Hz — '
+                 f'{verdict(best >= TARGET_ZERO_LOSS_HZ)}')
+    if relay_best is not None:
+        lines.append(f'- ≥ {TARGET_RELAY_FACTOR:.0f}× the bare relay ({relay_best:.0f} Hz): '
+                     f'{verdict(best >= TARGET_RELAY_FACTOR * relay_best)}')
+    return lines
+
+
+def _machine(machine: dict) -> List[str]:
+    return [f'- {machine["cores"]} cores, {machine["cpu_model"]}, '
+            f'{machine["memory_gib"]} GiB RAM, Linux {machine["kernel"]}',
+            f'- Python {machine["python"]}, rclpy {machine["rclpy"]}, rmw '
+            f'{machine["rmw"]} {machine["rmw_fastrtps_cpp"]}',
+            f'- load average when the run started: {machine["load_average_at_start"]} '
+            '(the machine is shared)']
+
+
+def _soak_section(soak: dict) -> List[str]:
+    samples = soak['samples']
+    first, last = samples[0], samples[-1]
+    ok = abs(soak['growth_kib']) <= TARGET_SOAK_GROWTH_KIB
+    return ['## Memory soak', '',
+            f'`{soak["command"]}` at {soak["rate_hz"]:.0f} Hz for {soak["minutes"]} min '
+            '(`--soak`): VmRSS from /proc/<pid>/status.', '',
+            f'- RSS after {first["minute"]} min: {first["rss_kib"] / 1024:.1f} MiB',
+            f'- RSS after {last["minute"]} min: {last["rss_kib"] / 1024:.1f} MiB',
+            f'- growth {soak["growth_kib"] / 1024:+.2f} MiB (target: within 5 MiB) — '
+            f'{"met" if ok else "NOT met"}',
+            '- per minute (MiB): ' + ', '.join(f'{s["rss_kib"] / 1024:.1f}' for s in samples),
+            '']
+
+
+def plot(throughput: dict, png_path: Path) -> None:
+    """Plot loss, CPU and p99 latency versus rate for every target."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    for label, target in throughput['targets'].items():
+        rows = target['rows']
+        rates = [row['rate_hz'] for row in rows]
+        loss = [100.0 * row['lost'] / max(row['sent'], 1) for row in rows]
+        axes[0].plot(rates, loss, 'o-', label=label)
+        axes[1].plot(rates, [row['cpu_percent'] for row in rows], 'o-', label=label)
+        axes[2].plot(rates, [row['latency_p99_ms'] or float('nan') for row in rows], 'o-',
+                     label=label)
+    titles = ('lost (% of sent)', 'CPU (% of one core)', 'p99 latency (ms)')
+    for axis, title in zip(axes, titles):
+        axis.set_xscale('log')
+        axis.set_xlabel('gyro rate (Hz)')
+        axis.set_title(title)
+        axis.grid(True, which='both', alpha=0.3)
+    axes[2].set_yscale('log')
+    axes[0].legend()
+    figure.tight_layout()
+    figure.savefig(png_path, dpi=110)
+    plt.close(figure)
+
+
+def render(throughput: Optional[dict], soak: Optional[dict], png_name: str) -> str:
+    """Return the Markdown report."""
+    lines = ['# Performance', '',
+             'Generated by `bench/node_throughput.py` (do not edit by hand; rerun it). '
+             'Method, techniques and the recipe for a fast rclpy node: `bench/NOTES.md`.', '']
+    if throughput is not None:
+        lines += ['## Machine', ''] + _machine(throughput['machine']) + ['']
+        lines += [
+            '## Throughput', '',
+            f'Each row: fresh processes (target, `pose` subscriber, `imu` publisher; RELIABLE, '
+            f'KEEP_LAST 1000), {throughput["warmup_s"]} s warm-up, '
+            f'{throughput["duration_s"]} s measured. *Lost* = published in the window but not '
+            f'received within {throughput["drain_s"]} s after the last publish. CPU = utime + '
+            'stime of the target process over the window. Latency = receive wall time − pose '
+            'stamp (the publish wall time). "(short)" marks a publisher that fell more than '
+            f'{100 * (1 - PUBLISHER_SHORTFALL):.0f} % short of the asked rate.', '']
+        lines += _summary(throughput['targets']) + ['', '### Node targets', '']
+        lines += _node_verdict(throughput['targets']) + ['', f'![throughput]({png_name})', '']
+        for label, target in throughput['targets'].items():
+            lines += [f'### {label}', '', f'`{target["command"]}`', '']
+            lines += _table(target['rows']) + ['']
+    if soak is not None:
+        lines += _soak_section(soak)
+    return '\n'.join(lines)
+
+
+def _load(path: Path) -> Optional[dict]:
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def write(results_dir: Path, report_path: Path) -> None:
+    """Regenerate ``report_path`` (and the PNG beside it) from the saved results."""
+    throughput = _load(results_dir / 'throughput.json')
+    soak = _load(results_dir / 'soak.json')
+    png_path = report_path.with_suffix('.png')
+    if throughput is not None:
+        plot(throughput, png_path)
+    report_path.parent.mkdir(parents=True, exist_ok=True)
+    report_path.write_text(render(throughput, soak, png_path.name))

@@ -1,0 +1,333 @@
+"""Node throughput benchmark: loss, CPU and latency of a gyro -> pose node versus rate.
+
+For every rate and every target (the node, the bare ``SingleThreadedExecutor`` relay
+``bench/relay.py`` as the anchor, the prototype ``bench/fast_relay.py``) it starts three fresh
+processes exactly as a user would: the target executable, a subscriber of ``pose``
+(``bench/_subscriber.py``) and a publisher of ``sensor_msgs/Imu`` on ``imu``
+(``bench/_publisher.py``, RELIABLE, KEEP_LAST 1000). Targets alternate within each rate so
+background load on the shared machine hits them alike. Per run it reports:
+
+* sent: messages published in the measured window (after a warm-up), and the publisher's
+  achieved rate (a publisher that cannot keep up invalidates the row; it is flagged);
+* received / lost: poses whose stamp lies in the window, received within ``--drain`` seconds
+  after the last publish; anything later or never counts as lost;
+* CPU: the target's utime + stime over the window (/proc/<pid>/stat, all threads), in % of one
+  core;
+* latency p50 / p99: receive wall time minus pose stamp (= the gyro stamp = publish wall time).
+
+``--soak`` instead runs one target at 1 kHz for ``--soak-minutes`` and reports its RSS
+(/proc/<pid>/status VmRSS) at 1 minute and at the end.
+
+Results go to ``bench/results/*.json``; ``docs/performance.md`` and ``docs/performance.png``
+are regenerated from them after every run. Exit code 0 unless a process crashed.
+
+Examples::
+
+    python bench/node_throughput.py                      # all targets, default rates
+    python bench/node_throughput.py --targets relay,fast_relay --rates 1000,5000 --duration 3
+    python bench/node_throughput.py --target fast3='python bench/fast_relay.py --outputs \
+pose,orientation,imu_data'
+    python bench/node_throughput.py --soak --targets node
+"""
+
+import argparse
+import json
+import os
+from pathlib import Path
+import queue
+import shlex
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from typing import Dict, List, Optional
+
+BENCH = Path(__file__).resolve().parent
+REPO = BENCH.parent
+sys.path.insert(0, str(BENCH))
+
+from _common import cpu_ticks, ros_env, rss_kib  # noqa: E402
+import _report  # noqa: E402
+
+DEFAULT_RATES = [200, 500, 1000, 2000, 5000, 10000, 15000, 20000]
+NODE_ARGS = ['--ros-args', '-p', 'scene:=strapdown']
+CLOCK_TICKS = os.sysconf('SC_CLK_TCK')
+
+
+class ProcessCrashed(RuntimeError):
+    """A benchmark process exited on its own before the run was over."""
+
+
+class Process:
+    """A child process whose stdout JSON lines are collected by a reader thread."""
+
+    def __init__(self, argv: List[str], env: Dict[str, str], log_path: Path,
+                 json_stdout: bool) -> None:
+        """Start ``argv``; stderr (and stdout unless ``json_stdout``) go to ``log_path``."""
+        self.argv = argv
+        self.log_path = log_path
+        self.log = open(log_path, 'wb')
+        self.events: 'queue.Queue[dict]' = queue.Queue()
+        self.popen = subprocess.Popen(
+            argv, env=env, cwd=REPO, stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE if json_stdout else self.log, stderr=self.log)
+        if json_stdout:
+            threading.Thread(target=self._read_events, daemon=True).start()
+
+    def _read_events(self) -> None:
+        for line in self.popen.stdout:
+            try:
+                self.events.put(json.loads(line))
+            except ValueError:
+                self.log.write(line)
+
+    def wait_event(self, name: str, timeout: float) -> dict:
+        """Return the next event called ``name``; raise ProcessCrashed if the child died."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            try:
+                event = self.events.get(timeout=0.05)
+            except queue.Empty:
+                self.check_alive()
+                continue
+            if event.get('event') == 'error':
+                raise ProcessCrashed(f'{self.argv[1]}: {event}')
+            if event.get('event') == name:
+                return event
+        raise ProcessCrashed(f'timed out after {timeout} s waiting for "{name}" from '
+                             f'{shlex.join(self.argv)} (log {self.log_path})')
+
+    def check_alive(self) -> None:
+        """Raise ProcessCrashed if the process has exited."""
+        if self.popen.poll() is not None:
+            tail = self.log_path.read_text(errors='replace')[-2000:]
+            raise ProcessCrashed(f'{shlex.join(self.argv)} exited with {self.popen.returncode}'
+                                 f'\n{tail}')
+
+    def stop(self, sig: int = signal.SIGINT, grace: float = 3.0) -> Optional[int]:
+        """Send ``sig``, wait up to ``grace`` seconds, then SIGKILL; return the exit code."""
+        if self.popen.poll() is None:
+            try:
+                self.popen.stdin.close()
+                self.popen.send_signal(sig)
+                self.popen.wait(grace)
+            except subprocess.TimeoutExpired:
+                self.popen.kill()
+                self.popen.wait()
+        self.log.close()
+        return self.popen.returncode
+
+
+def default_targets() -> Dict[str, List[str]]:
+    """Return the built-in targets: the node (when it exists), the relay and the fast relay."""
+    python = sys.executable
+    targets = {}
+    if shutil.which('propagation_node'):
+        targets['node'] = ['propagation_node'] + NODE_ARGS
+    elif (REPO / 'rigid_body_attitude' / 'node.py').exists():
+        targets['node'] = [python, '-m', 'rigid_body_attitude.node'] + NODE_ARGS
+    targets['relay'] = [python, str(BENCH / 'relay.py')]
+    targets['fast_relay'] = [python, str(BENCH / 'fast_relay.py')]
+    return targets
+
+
+class Session:
+    """Starts processes for one run and guarantees they are all stopped afterwards."""
+
+    def __init__(self, domain_id: int, workdir: Path) -> None:
+        """Use ``domain_id`` for every process; logs and recordings go to ``workdir``."""
+        self.env = ros_env(domain_id)
+        self.env['PYTHONPATH'] = os.pathsep.join(
+            [str(REPO)] + [p for p in [os.environ.get('PYTHONPATH')] if p])
+        self.workdir = workdir
+        self.processes: List[Process] = []
+
+    def start(self, name: str, argv: List[str], json_stdout: bool = False) -> Process:
+        """Start ``argv`` with its log in ``workdir/name.log``."""
+        process = Process(argv, self.env, self.workdir / f'{name}.log', json_stdout)
+        self.processes.append(process)
+        return process
+
+    def close(self) -> None:
+        """Stop every process still running (SIGINT, then SIGKILL after a grace period)."""
+        for process in reversed(self.processes):
+            process.stop()
+        self.processes.clear()
+
+
+def measure(session: Session, target_argv: List[str], rate: float,
+            args: argparse.Namespace) -> dict:
+    """Run one target at one rate and return its row (counts, CPU, latency, RSS)."""
+    import numpy as np
+    recording = session.workdir / 'poses.bin'
+    python = sys.executable
+    subscriber = session.start('subscriber', [python, str(BENCH / '_subscriber.py'),
+                                              '--out', str(recording)], json_stdout=True)
+    target = session.start('target', target_argv)
+    subscriber.wait_event('matched', args.match_timeout)
+    publisher = session.start('publisher', [
+        python, str(BENCH / '_publisher.py'), '--rate', str(rate), '--duration',
+        str(args.duration), '--warmup', str(args.warmup)], json_stdout=True)
+    publisher.wait_event('matched', args.match_timeout)
+    pids = {'target': target.popen.pid, 'publisher': publisher.popen.pid,
+            'subscriber': subscriber.popen.pid}
+    publisher.wait_event('start', args.match_timeout + args.warmup + 5)
+    ticks0 = {name: cpu_ticks(pid) for name, pid in pids.items()}
+    wall0 = time.monotonic()
+    end = publisher.wait_event('end', 2 * args.duration + 10)
+    ticks1 = {name: cpu_ticks(pid) for name, pid in pids.items()}
+    window_s = time.monotonic() - wall0
+    rss = rss_kib(target.popen.pid)
+    time.sleep(args.drain)
+    target.check_alive()
+    subscriber.stop(signal.SIGTERM, grace=10.0)
+    data = np.fromfile(recording, dtype='<i8')
+    stamps, received_at = data[:data.size // 2], data[data.size // 2:]
+    in_window = (stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
+    in_time = received_at <= end['last_stamp_ns'] + int(args.drain * 1e9)
+    stamps, latency_ms = stamps[in_window & in_time], (received_at - stamps)[
+        in_window & in_time] * 1e-6
+    received = int(np.unique(stamps).size)
+    cpu = {name: 100.0 * (ticks1[name] - ticks0[name]) / CLOCK_TICKS / window_s
+           for name in pids}
+    return {
+        'rate_hz': rate, 'sent': end['sent'], 'received': received,
+        'lost': end['sent'] - received, 'publisher_hz': end['achieved_hz'],
+        'publisher_max_lag_ms': end['max_lag_ms'], 'cpu_percent': cpu['target'],
+        'publisher_cpu_percent': cpu['publisher'],
+        'subscriber_cpu_percent': cpu['subscriber'],
+        'latency_p50_ms': float(np.percentile(latency_ms, 50)) if received else None,
+        'latency_p99_ms': float(np.percentile(latency_ms, 99)) if received else None,
+        'latency_max_ms': float(latency_ms.max()) if received else None,
+        'rss_kib': rss,
+    }
+
+
+def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> dict:
+    """Measure every target at every rate; return the results document."""
+    results = {'machine': _report.machine_description(), 'duration_s': args.duration,
+               'warmup_s': args.warmup, 'drain_s': args.drain,
+               'targets': {label: {'command': shlex.join(argv), 'rows': []}
+                           for label, argv in targets.items()}}
+    for rate in args.rates:
+        for label, argv in targets.items():
+            with tempfile.TemporaryDirectory(prefix='bench_') as tmp:
+                session = Session(args.domain_id, Path(tmp))
+                try:
+                    row = measure(session, argv, rate, args)
+                finally:
+                    session.close()
+            results['targets'][label]['rows'].append(row)
+            print(_report.row_line(label, row), flush=True)
+    return results
+
+
+def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
+    """Run ``argv`` at ``--soak-rate`` for ``--soak-minutes``; sample its RSS every minute."""
+    minutes = args.soak_minutes
+    with tempfile.TemporaryDirectory(prefix='bench_soak_') as tmp:
+        session = Session(args.domain_id, Path(tmp))
+        try:
+            subscriber = session.start('subscriber', [
+                sys.executable, str(BENCH / '_subscriber.py'), '--out',
+                str(Path(tmp) / 'poses.bin')], json_stdout=True)
+            target = session.start('target', argv)
+            subscriber.wait_event('matched', args.match_timeout)
+            publisher = session.start('publisher', [
+                sys.executable, str(BENCH / '_publisher.py'), '--rate', str(args.soak_rate),
+                '--duration', str(minutes * 60 + 5), '--warmup', '0'], json_stdout=True)
+            publisher.wait_event('start', args.match_timeout + 5)
+            samples = []
+            for minute in range(1, int(minutes) + 1):
+                time.sleep(60.0)
+                target.check_alive()
+                samples.append({'minute': minute, 'rss_kib': rss_kib(target.popen.pid)})
+                print(f'soak {label}: minute {minute} RSS {samples[-1]["rss_kib"]} KiB',
+                      flush=True)
+        finally:
+            session.close()
+    growth = samples[-1]['rss_kib'] - samples[0]['rss_kib']
+    return {'label': label, 'command': shlex.join(argv), 'rate_hz': args.soak_rate,
+            'minutes': minutes, 'samples': samples, 'growth_kib': growth,
+            'machine': _report.machine_description()}
+
+
+def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
+    """Parse the command line."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--rates', default=','.join(map(str, DEFAULT_RATES)),
+                        help='comma-separated rates in Hz (default %(default)s)')
+    parser.add_argument('--duration', type=float, default=4.0,
+                        help='measured seconds per rate (default %(default)s)')
+    parser.add_argument('--warmup', type=float, default=0.5,
+                        help='unmeasured seconds of publishing first (default %(default)s)')
+    parser.add_argument('--drain', type=float, default=1.0,
+                        help='seconds after the last publish a pose may still arrive '
+                             '(default %(default)s)')
+    parser.add_argument('--targets', default=None,
+                        help='comma-separated built-in targets: node, relay, fast_relay '
+                             '(default: all available)')
+    parser.add_argument('--target', action='append', default=[], metavar='LABEL=COMMAND',
+                        help='an extra target command line (repeatable)')
+    parser.add_argument('--node-cmd', default=None,
+                        help='command line of the node target (default: propagation_node '
+                             'or python -m rigid_body_attitude.node, with '
+                             f'{" ".join(NODE_ARGS)})')
+    parser.add_argument('--domain-id', type=int,
+                        default=int(os.environ.get('ROS_DOMAIN_ID', '64')))
+    parser.add_argument('--match-timeout', type=float, default=30.0)
+    parser.add_argument('--soak', action='store_true',
+                        help='RSS soak of one target instead of the throughput sweep')
+    parser.add_argument('--soak-minutes', type=int, default=10)
+    parser.add_argument('--soak-rate', type=float, default=1000.0)
+    parser.add_argument('--results-dir', type=Path, default=BENCH / 'results')
+    parser.add_argument('--report', type=Path, default=REPO / 'docs' / 'performance.md')
+    args = parser.parse_args(argv)
+    args.rates = [float(rate) for rate in args.rates.split(',') if rate]
+    return args
+
+
+def select_targets(args: argparse.Namespace) -> Dict[str, List[str]]:
+    """Return the targets to measure, in order, from the built-ins and ``--target``."""
+    available = default_targets()
+    if args.node_cmd:
+        available['node'] = shlex.split(args.node_cmd)
+    names = args.targets.split(',') if args.targets else list(available)
+    missing = [name for name in names if name not in available]
+    if missing:
+        raise SystemExit(f'error: targets {missing} not available; have {list(available)}')
+    targets = {name: available[name] for name in names}
+    for spec in args.target:
+        label, _, command = spec.partition('=')
+        if not label or not command:
+            raise SystemExit(f'error: expected --target LABEL=COMMAND, got {spec!r}')
+        targets[label] = shlex.split(command)
+    return targets
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    """Run the sweep (or the soak), save the results and regenerate the report."""
+    args = parse_args(argv)
+    targets = select_targets(args)
+    args.results_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        if args.soak:
+            label, command = next(iter(targets.items()))
+            result = run_soak(label, command, args)
+            (args.results_dir / 'soak.json').write_text(json.dumps(result, indent=1))
+        else:
+            result = run_throughput(targets, args)
+            (args.results_dir / 'throughput.json').write_text(json.dumps(result, indent=1))
+    except ProcessCrashed as err:
+        print(f'error: {err}', file=sys.stderr)
+        return 1
+    _report.write(args.results_dir, args.report)
+    print(f'wrote {args.report}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
