@@ -77,12 +77,23 @@ class Parameter:
 
 def real(value: Any) -> float:
     """A finite real number (booleans and strings are refused)."""
+    if isinstance(value, str) and _looks_numeric(value):
+        raise TypeError(f'a number (YAML 1.1 reads {value} as text: write it with a sign in '
+                        f'the exponent and a dot, e.g. 7.0e+6)')
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TypeError('a number')
     number = float(value)
     if not np.isfinite(number):
         raise ValueError('a finite number')
     return number
+
+
+def _looks_numeric(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def positive(value: Any) -> float:
@@ -204,7 +215,7 @@ def validate_parameters(effect_name: str, spec: Mapping[str, Parameter],
             if parameter.default is REQUIRED:
                 raise SceneError(f'Effect {effect_name!r}: missing parameter {key!r} '
                                  f'({parameter.description}); valid parameters: {valid}')
-            checked[key] = parameter.default
+            checked[key] = parameter.convert(parameter.default)
             continue
         try:
             checked[key] = parameter.convert(params[key])
