@@ -1,0 +1,101 @@
+"""Packaging of rigid_body_attitude as an ament_python package.
+
+Whatever installs it, a prefix ends up with the layout ROS 2 expects::
+
+    <prefix>/lib/python3.X/site-packages/rigid_body_attitude/   the Python package
+    <prefix>/share/ament_index/resource_index/packages/rigid_body_attitude   (empty marker)
+    <prefix>/share/rigid_body_attitude/package.xml
+    <prefix>/share/rigid_body_attitude/config/...                  scenes and parameter files
+    <prefix>/lib/rigid_body_attitude/<executable>                  what `ros2 run` starts
+
+``ros2 run rigid_body_attitude propagation_node`` finds the package prefix through the ament
+index (AMENT_PREFIX_PATH) and runs ``<prefix>/lib/rigid_body_attitude/propagation_node``.
+
+How each installer gets there:
+
+* **pip** (``make``: a non-editable ``pip install`` into ``.venv``) builds a wheel. A wheel
+  ignores setup.cfg's ``[install] install_scripts``, so the console scripts land in
+  ``<prefix>/bin`` (handy on PATH, not where ``ros2 run`` looks). The small launchers in
+  ``scripts/launchers/`` are therefore shipped as data files to ``lib/rigid_body_attitude``
+  (pip keeps their executable bit); each runs its entry point with ``<prefix>/bin/python``
+  found relative to itself, so it needs no activated virtual env.
+* **colcon build** on a ROS install runs ``setup.py install`` (egg_info, build, install
+  --single-version-externally-managed). setup.cfg sends the console scripts to
+  ``lib/rigid_body_attitude``; ``install_data`` runs after ``install_scripts`` and writes the
+  launcher of the same name over each one. Both start the same ``main()``; the launcher finds no
+  ``<prefix>/bin/python`` in colcon's install space and uses ``python3`` from PATH, the
+  interpreter of the sourced ROS install.
+* **colcon build --symlink-install** runs ``setup.py develop``; setup.cfg's ``[develop]
+  script_dir`` puts the console scripts in ``lib/rigid_body_attitude`` and colcon links the data
+  files (the launchers among them) into the install space. Either file under a name starts the
+  same ``main()``.
+"""
+
+from pathlib import Path
+import xml.etree.ElementTree as ElementTree
+
+from setuptools import find_packages, setup
+
+PACKAGE_NAME = 'rigid_body_attitude'
+SOURCE_DIR = Path(__file__).resolve().parent
+
+# Executable name -> entry point. Each name has a launcher in scripts/launchers/ and a console
+# script; ``make test`` (test/test_packaging.py) checks that the two agree.
+EXECUTABLES = {
+    'propagation_node': 'rigid_body_attitude.node:main',
+    'replay': 'rigid_body_attitude.replay:main',
+    'accuracy_study': 'rigid_body_attitude.study:main',
+}
+
+# Names that say what they belong to, for <prefix>/bin on a shared PATH.
+ALIASES = {
+    'rigid-body-attitude-node': 'rigid_body_attitude.node:main',
+    'rigid-body-attitude-replay': 'rigid_body_attitude.replay:main',
+    'rigid-body-attitude-study': 'rigid_body_attitude.study:main',
+}
+
+
+def package_version() -> str:
+    """Return the version in package.xml, the one place it is written."""
+    root = ElementTree.parse(SOURCE_DIR / 'package.xml').getroot()
+    return root.findtext('version').strip()
+
+
+def config_data_files() -> list[tuple[str, list[str]]]:
+    """Return data_files entries shipping config/ recursively to share/<package>/config."""
+    entries = []
+    config_dir = SOURCE_DIR / 'config'
+    for directory in sorted(p for p in [config_dir, *config_dir.rglob('*')] if p.is_dir()):
+        files = sorted(
+            str(p.relative_to(SOURCE_DIR)) for p in directory.iterdir()
+            if p.is_file() and not p.name.startswith('.'))
+        if files:
+            target = Path('share', PACKAGE_NAME, directory.relative_to(SOURCE_DIR))
+            entries.append((str(target), files))
+    return entries
+
+
+setup(
+    name=PACKAGE_NAME,
+    version=package_version(),
+    packages=find_packages(include=[PACKAGE_NAME, PACKAGE_NAME + '.*']),
+    package_data={PACKAGE_NAME: ['py.typed']},
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + PACKAGE_NAME]),
+        ('share/' + PACKAGE_NAME, ['package.xml']),
+        ('lib/' + PACKAGE_NAME, ['scripts/launchers/' + name for name in EXECUTABLES]),
+        *config_data_files(),
+    ],
+    install_requires=['numpy', 'PyYAML', 'scipy'],
+    python_requires='>=3.10',
+    zip_safe=True,
+    maintainer='rigid_body_attitude developers',
+    maintainer_email='dev@rigid-body-attitude.invalid',
+    description='Rigid-body attitude propagation: a NumPy core and ROS 2 shells over it.',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            f'{name} = {target}' for name, target in {**EXECUTABLES, **ALIASES}.items()
+        ],
+    },
+)
