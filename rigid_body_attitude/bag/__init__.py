@@ -1,0 +1,119 @@
+"""rosbag2 input/output (through the pure-Python ``rosbags`` library; no ROS install needed).
+
+* :mod:`~rigid_body_attitude.bag.reader`: :class:`BagReader`, :func:`read_messages` (raw CDR
+  tuples in bag-time order) and :func:`read_series` (a topic as arrays).
+* :mod:`~rigid_body_attitude.bag.cdr`: fast ``struct`` codecs of the fixed-layout messages
+  (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped, Float64).
+* :mod:`~rigid_body_attitude.bag.writer`: :class:`BagWriter` for output bags and
+  :func:`write_bag` for arrays of samples.
+* :mod:`~rigid_body_attitude.bag.msgtypes`: message type names, the Jazzy type store and the
+  generic (slow) serialisation, including ``DiagnosticArray``.
+
+Quaternions cross this API scalar-first ``(w, x, y, z)`` as everywhere in the package
+(:mod:`rigid_body_attitude.quaternion`); only the CDR bytes hold ``(x, y, z, w)``.
+"""
+
+from rigid_body_attitude.bag.cdr import (
+    ATTITUDE_DECODERS,
+    RATE_DECODERS,
+    TORQUE_DECODERS,
+    Decoder,
+    encode_float64,
+    encode_imu,
+    encode_pose_stamped,
+    encode_quaternion_stamped,
+    encode_twist_stamped,
+    encode_vector3_stamped,
+    encode_wrench_stamped,
+    float64_value,
+    header_frame_id,
+    header_stamp_ns,
+    imu_acceleration,
+    imu_rates,
+    pose_orientation,
+    pose_position,
+    quaternion_stamped,
+    stamp_to_ns,
+    twist_angular,
+    twist_linear,
+    vector3_stamped,
+    wrench_force,
+    wrench_torque,
+)
+from rigid_body_attitude.bag.errors import BagError
+from rigid_body_attitude.bag.msgtypes import (
+    DIAGNOSTIC_ARRAY,
+    FLOAT64,
+    IMU,
+    POSE_STAMPED,
+    QUATERNION_STAMPED,
+    TWIST_STAMPED,
+    VECTOR3_STAMPED,
+    WRENCH_STAMPED,
+    DiagnosticStatus,
+    deserialize,
+    encode_diagnostic_array,
+    serialize,
+    typestore,
+)
+from rigid_body_attitude.bag.reader import (
+    SERIES_DECODERS,
+    BagMessage,
+    BagReader,
+    Series,
+    read_messages,
+    read_series,
+)
+from rigid_body_attitude.bag.writer import GROUND_TRUTH_TYPES, STORAGES, BagWriter, write_bag
+
+__all__ = [
+    'ATTITUDE_DECODERS',
+    'DIAGNOSTIC_ARRAY',
+    'FLOAT64',
+    'GROUND_TRUTH_TYPES',
+    'IMU',
+    'POSE_STAMPED',
+    'QUATERNION_STAMPED',
+    'RATE_DECODERS',
+    'SERIES_DECODERS',
+    'STORAGES',
+    'TORQUE_DECODERS',
+    'TWIST_STAMPED',
+    'VECTOR3_STAMPED',
+    'WRENCH_STAMPED',
+    'BagError',
+    'BagMessage',
+    'BagReader',
+    'BagWriter',
+    'Decoder',
+    'DiagnosticStatus',
+    'Series',
+    'deserialize',
+    'encode_diagnostic_array',
+    'encode_float64',
+    'encode_imu',
+    'encode_pose_stamped',
+    'encode_quaternion_stamped',
+    'encode_twist_stamped',
+    'encode_vector3_stamped',
+    'encode_wrench_stamped',
+    'float64_value',
+    'header_frame_id',
+    'header_stamp_ns',
+    'imu_acceleration',
+    'imu_rates',
+    'pose_orientation',
+    'pose_position',
+    'quaternion_stamped',
+    'read_messages',
+    'read_series',
+    'serialize',
+    'stamp_to_ns',
+    'twist_angular',
+    'twist_linear',
+    'typestore',
+    'vector3_stamped',
+    'wrench_force',
+    'wrench_torque',
+    'write_bag',
+]

@@ -1,0 +1,17 @@
+"""Error type of the rosbag2 layer.
+
+Errors raised by the ``rosbags`` library (``ReaderError``, ``WriterError``, ``SerdeError``,
+``FileNotFoundError``) are translated into :class:`BagError` at this package's boundary, so a
+caller catches one type (or :class:`~rigid_body_attitude.errors.AttitudeError`) for every bad
+bag, topic or message.
+"""
+
+from __future__ import annotations
+
+from rigid_body_attitude.errors import AttitudeError
+
+__all__ = ['BagError']
+
+
+class BagError(AttitudeError):
+    """A bag cannot be opened or written, lacks a topic, or holds a message we cannot decode."""
