@@ -19,16 +19,18 @@ How each installer gets there:
   ``scripts/launchers/`` are therefore shipped as data files to ``lib/rigid_body_attitude``
   (pip keeps their executable bit); each runs its entry point with ``<prefix>/bin/python``
   found relative to itself, so it needs no activated virtual env.
-* **colcon build** on a ROS install runs ``setup.py install`` (egg_info, build, install
-  --single-version-externally-managed). setup.cfg sends the console scripts to
-  ``lib/rigid_body_attitude``; ``install_data`` runs after ``install_scripts`` and writes the
-  launcher of the same name over each one. Both start the same ``main()``; the launcher finds no
-  ``<prefix>/bin/python`` in colcon's install space and uses ``python3`` from PATH, the
-  interpreter of the sourced ROS install.
-* **colcon build --symlink-install** runs ``setup.py develop``; setup.cfg's ``[develop]
-  script_dir`` puts the console scripts in ``lib/rigid_body_attitude`` and colcon links the data
-  files (the launchers among them) into the install space. Either file under a name starts the
-  same ``main()``.
+* **colcon build** on a ROS install runs ``setup.py egg_info build install
+  --single-version-externally-managed``. setup.cfg sends the console scripts to
+  ``lib/rigid_body_attitude``. setuptools runs ``install_scripts`` last (its entry-point scripts
+  need the egg-info), after ``install_data`` has copied the launchers there, so the console
+  scripts of the same names replace them: the files any ament_python package gets, with the
+  building interpreter in their shebang. test/test_packaging.py runs this command.
+* **colcon build --symlink-install** runs ``setup.py develop ... install_data``. setup.cfg's
+  ``[develop] script_dir`` puts the console scripts in ``lib/rigid_body_attitude`` first;
+  ``install_data`` does not overwrite a file newer than its source, so they normally stay (a
+  launcher edited later is copied over its script). Either file starts the same ``main()``; a
+  launcher finds no ``<prefix>/bin/python`` in colcon's install space and runs ``python3`` from
+  PATH, the interpreter of the sourced ROS install.
 """
 
 from pathlib import Path
