@@ -50,8 +50,10 @@ run: install
 	$(VENV_PYTHON) scripts/ros2run $(PACKAGE) propagation_node $(RUN_ARGS) $(ARGS)
 
 # -P: the working directory is not put on sys.path, so the tests import the installed package.
+# A subset: make test TESTS=test/test_packaging.py ARGS='-x -q'.
+TESTS ?= test
 test: install
-	$(VENV_PYTHON) -P -m pytest test $(ARGS)
+	$(VENV_PYTHON) -P -m pytest $(TESTS) $(ARGS)
 
 lint: install
 	$(VENV_PYTHON) -m flake8 $(PACKAGE) test setup.py scripts/ros2run
