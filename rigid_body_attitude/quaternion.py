@@ -288,15 +288,15 @@ def as_euler_zxz(q: ArrayLike) -> FloatArray:
     """Euler angles ``(ψ, θ, φ)``, ``θ ∈ [0, π]``; at ``sin θ = 0`` only ψ ± φ is defined.
 
     In the gimbal-lock case (θ = 0 or π) φ is set to 0 and ψ carries the whole rotation.
+    Read from the quaternion, not the matrix: ``q = (cos(θ/2) cos((ψ+φ)/2),
+    sin(θ/2) cos((ψ−φ)/2), sin(θ/2) sin((ψ−φ)/2), cos(θ/2) sin((ψ+φ)/2))``, so θ comes from
+    atan2 (accurate near 0 and π) and ψ ± φ from well-conditioned half-angles.
     """
-    r = to_matrix(q)
-    theta = np.arccos(np.clip(r[..., 2, 2], -1.0, 1.0))
-    psi = np.arctan2(r[..., 0, 2], -r[..., 1, 2])
-    phi = np.arctan2(r[..., 2, 0], r[..., 2, 1])
-    locked = np.abs(np.sin(theta)) < 1e-12
-    psi = np.where(locked, np.arctan2(r[..., 1, 0], r[..., 0, 0]), psi)
-    phi = np.where(locked, 0.0, phi)
-    return np.stack([psi, theta, phi], axis=-1)
+    w, x, y, z = np.moveaxis(normalize(q), -1, 0)
+    sin_half, cos_half = np.hypot(x, y), np.hypot(w, z)
+    theta = 2.0 * np.arctan2(sin_half, cos_half)
+    angle_sum, angle_difference = 2.0 * np.arctan2(z, w), 2.0 * np.arctan2(y, x)
+    return _locked_angles(angle_sum, theta, angle_difference, cos_half, sin_half)
 
 
 def from_bryant_xyz(angles: ArrayLike) -> FloatArray:
@@ -313,15 +313,39 @@ def as_bryant_xyz(q: ArrayLike) -> FloatArray:
     """Bryant angles ``(α₁, α₂, α₃)``, ``α₂ ∈ [−π/2, π/2]``; singular at ``cos α₂ = 0``.
 
     In the gimbal-lock case α₃ is set to 0 and α₁ carries the remaining rotation.
+    Read from the quaternion: with ``β = α₂/2 + π/4``, ``(w + y, x + z) = √2 sin β
+    (cos, sin)((α₁+α₃)/2)`` and ``(w − y, x − z) = √2 cos β (cos, sin)((α₁−α₃)/2)``.
     """
-    r = to_matrix(q)
-    alpha2 = np.arcsin(np.clip(r[..., 0, 2], -1.0, 1.0))
-    alpha1 = np.arctan2(-r[..., 1, 2], r[..., 2, 2])
-    alpha3 = np.arctan2(-r[..., 0, 1], r[..., 0, 0])
-    locked = np.abs(np.cos(alpha2)) < 1e-12
-    alpha1 = np.where(locked, np.arctan2(r[..., 2, 1], r[..., 1, 1]), alpha1)
-    alpha3 = np.where(locked, 0.0, alpha3)
-    return np.stack([alpha1, alpha2, alpha3], axis=-1)
+    w, x, y, z = np.moveaxis(normalize(q), -1, 0)
+    sin_beta, cos_beta = np.hypot(w + y, x + z), np.hypot(w - y, x - z)
+    alpha2 = 2.0 * np.arctan2(sin_beta, cos_beta) - 0.5 * np.pi
+    angle_sum = 2.0 * np.arctan2(x + z, w + y)
+    angle_difference = 2.0 * np.arctan2(x - z, w - y)
+    return _locked_angles(angle_sum, alpha2, angle_difference, sin_beta / np.sqrt(2.0),
+                          cos_beta / np.sqrt(2.0))
+
+
+def _locked_angles(angle_sum: FloatArray, middle: FloatArray, angle_difference: FloatArray,
+                   sum_weight: FloatArray, difference_weight: FloatArray) -> FloatArray:
+    """``(first, middle, last)`` from ``first ± last``, wrapped to ``[−π, π)``.
+
+    ``sum_weight`` and ``difference_weight`` are the lengths of the half-angle vectors the sum
+    and the difference were read from. Where ``sin`` of the middle angle (their doubled
+    product) is below 1e−12 only the one with the larger weight is defined: the last angle is
+    set to 0 and the first carries that one.
+    """
+    locked = 2.0 * sum_weight * difference_weight < 1e-12
+    first = 0.5 * (angle_sum + angle_difference)
+    last = 0.5 * (angle_sum - angle_difference)
+    defined = np.where(sum_weight >= difference_weight, angle_sum, angle_difference)
+    first = np.where(locked, defined, first)
+    last = np.where(locked, 0.0, last)
+    return np.stack([_wrapped(first), middle, _wrapped(last)], axis=-1)
+
+
+def _wrapped(angle: FloatArray) -> FloatArray:
+    """``angle`` wrapped to ``[−π, π)``."""
+    return np.remainder(angle + np.pi, 2.0 * np.pi) - np.pi
 
 
 def scalar_exp_step(q: Any, omega: Any, dt: float) -> tuple[float, float, float, float]:
