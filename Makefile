@@ -35,7 +35,8 @@ ARGS ?=
 # its Python 3.12 modules and libraries into the venv's, so they are not passed on.
 export AMENT_PREFIX_PATH := $(abspath $(VENV))
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
-unexport PYTHONPATH LD_LIBRARY_PATH RMW_IMPLEMENTATION ROS_LOCALHOST_ONLY _ROS_WHEELS_BOOTSTRAP_COMPLETE
+unexport PYTHONPATH LD_LIBRARY_PATH RMW_IMPLEMENTATION ROS_LOCALHOST_ONLY
+unexport _ROS_WHEELS_BOOTSTRAP_COMPLETE
 
 .PHONY: run test install lint clean help
 .DEFAULT_GOAL := help
@@ -55,8 +56,9 @@ TESTS ?= test
 test: install
 	$(VENV_PYTHON) -P -m pytest $(TESTS) $(ARGS)
 
+# The same paths as test/test_flake8.py.
 lint: install
-	$(VENV_PYTHON) -m flake8 $(PACKAGE) test setup.py scripts/ros2run
+	$(VENV_PYTHON) -m flake8 $(PACKAGE) test $(wildcard bench) setup.py scripts/ros2run
 
 install: $(PACKAGE_STAMP)
 
