@@ -2,10 +2,11 @@
 
 import numpy as np
 import pytest
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, StoragePlugin, Writer
 import yaml
 
 from rigid_body_attitude import bag
-from rigid_body_attitude.bag import cdr
+from rigid_body_attitude.bag import cdr, mcap
 from rigid_body_attitude.errors import AttitudeError, InputError
 from rigid_body_attitude.quaternion import from_ros, normalize, to_ros
 
@@ -393,3 +394,61 @@ def test_write_bag_rejects_bad_input_without_creating_the_bag(tmp_path, changes,
     with pytest.raises(InputError, match=message):
         bag.write_bag(tmp_path / 'bag', **arguments)
     assert not (tmp_path / 'bag').exists()
+
+
+def _rosbags_messages(path, topics):
+    """The reference sequence: rosbags' own reader, as (topic, time, msgtype, bytes)."""
+    with Reader(path) as reader:
+        connections = [c for c in reader.connections if c.topic in topics]
+        return [(c.topic, t, c.msgtype, bytes(data))
+                for c, t, data in reader.messages(connections)]
+
+
+@pytest.mark.parametrize('receive_order', ['monotonic', 'shuffled', 'halves_swapped'])
+def test_mcap_fast_iteration_matches_rosbags(tmp_path, receive_order):
+    # 5000 Imu messages of 324 B fill two 1 MiB chunks. Every 50th receive time repeats its
+    # neighbour's (ties). 'shuffled' permutes receive times within blocks of 7 (out of order
+    # inside a chunk, chunks touching); 'halves_swapped' also records the second half before
+    # the first, so the chunks overlap in time.
+    count = 5000
+    rng = np.random.default_rng(11)
+    receive = 1.0 + 1e-3 * np.arange(count)
+    if receive_order != 'monotonic':
+        receive = 1.0 + 1e-3 * (np.arange(count) // 7 * 7 + rng.integers(0, 7, count))
+    receive[::50] = receive[1::50]
+    if receive_order == 'halves_swapped':
+        receive[count // 2:] -= 2.6
+    path = tmp_path / 'bag'
+    bag.write_bag(path, stamps=np.arange(count) * 1e-3, rates=rng.normal(size=(count, 3)),
+                  ground_truth=np.tile([1.0, 0.0, 0.0, 0.0], (count, 1)),
+                  receive_times=receive, storage='mcap')
+    with bag.BagReader(path) as reader:
+        assert mcap.fast_messages(reader._reader.storage, reader.connections(['imu']))
+        chunks = sorted(reader._reader.storage.storages[0].chunks,
+                        key=lambda chunk: chunk.message_start_time)
+        assert len(chunks) >= 2
+        overlap = chunks[0].message_end_time - chunks[1].message_start_time
+        assert (overlap > 1_000_000_000) == (receive_order == 'halves_swapped')
+        ours = list(reader.messages(['imu', 'ground_truth']))
+        imu_only = list(reader.messages(['imu']))
+    assert ours == _rosbags_messages(path, {'imu', 'ground_truth'})
+    assert imu_only == _rosbags_messages(path, {'imu'})
+    assert [t for _, t, _, _ in ours] == sorted(t for _, t, _, _ in ours)
+
+
+def test_fast_iteration_declines_what_it_does_not_handle(tmp_path):
+    compressed = tmp_path / 'message_compressed'
+    writer = Writer(compressed, version=9, storage_plugin=StoragePlugin.MCAP)
+    writer.set_compression(CompressionMode.MESSAGE, CompressionFormat.ZSTD)
+    with writer:
+        connection = writer.add_connection('imu', bag.IMU, typestore=bag.typestore())
+        for step in range(3):
+            writer.write(connection, step, cdr.encode_imu(step, 'imu', [step, 0.0, 0.0]))
+    sqlite = tmp_path / 'sqlite'
+    bag.write_bag(sqlite, stamps=[0.0, 1.0], rates=np.zeros((2, 3)))
+    for path in (compressed, sqlite):
+        with bag.BagReader(path) as reader:
+            assert mcap.fast_messages(reader._reader.storage, reader.connections(['imu'])) is None
+            assert list(reader.messages(['imu'])) == _rosbags_messages(path, {'imu'})
+    rates = bag.read_series(compressed, 'imu').values
+    assert rates[:, 0].tolist() == [0.0, 1.0, 2.0]

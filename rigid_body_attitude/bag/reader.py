@@ -3,7 +3,8 @@
 Messages come out as plain tuples ``(topic, bag_time_ns, msgtype, data)`` in bag-time order
 (the recorder's receive time; ties keep their write order). ``data`` is the CDR bytes: decode
 the per-sample fields with :mod:`rigid_body_attitude.bag.cdr` (fast) or a full message object
-with :func:`rigid_body_attitude.bag.msgtypes.deserialize` (slow).
+with :func:`rigid_body_attitude.bag.msgtypes.deserialize` (slow). Indexed MCAP files are
+walked by :mod:`rigid_body_attitude.bag.mcap` (same output as ``rosbags``' iterator, faster).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from rigid_body_attitude.bag.cdr import (
     wrench_torque,
 )
 from rigid_body_attitude.bag.errors import BagError
+from rigid_body_attitude.bag.mcap import fast_messages
 from rigid_body_attitude.bag.msgtypes import (
     FLOAT64,
     IMU,
@@ -154,6 +156,10 @@ class BagReader:
 
     def _iterate(self, connections: list[Connection]) -> Iterator[BagMessage]:
         try:
+            fast = fast_messages(self._reader.storage, connections)
+            if fast is not None:
+                yield from fast
+                return
             for connection, bag_time_ns, data in self._reader.messages(connections):
                 yield connection.topic, bag_time_ns, connection.msgtype, data
         # A truncated or corrupt storage file surfaces only while reading.
