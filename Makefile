@@ -81,7 +81,7 @@ $(PACKAGE_STAMP): $(REQUIREMENTS_STAMP) $(PACKAGE_FILES)
 	mkdir -p $(STAGE_DIR)
 	cp -R setup.py setup.cfg package.xml LICENSE resource config scripts $(PACKAGE) $(STAGE_DIR)/
 	find $(STAGE_DIR) -name __pycache__ -prune -exec rm -rf {} +
-	$(PIP_INSTALL) --no-deps --no-build-isolation --force-reinstall $(STAGE_DIR)
+	$(PIP_INSTALL) --no-deps --no-build-isolation --use-pep517 --force-reinstall $(STAGE_DIR)
 	rm -rf $(STAGE_DIR)
 	touch $@
 
