@@ -1,7 +1,8 @@
 """rosbag2 input/output (through the pure-Python ``rosbags`` library; no ROS install needed).
 
 * :mod:`~rigid_body_attitude.bag.reader`: :class:`BagReader`, :func:`read_messages` (raw CDR
-  tuples in bag-time order) and :func:`read_series` (a topic as arrays).
+  tuples in bag-time order) and :func:`read_series` (a topic as arrays); indexed MCAP files
+  are walked by :mod:`~rigid_body_attitude.bag.mcap`.
 * :mod:`~rigid_body_attitude.bag.cdr`: fast ``struct`` codecs of the fixed-layout messages
   (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped, Float64).
 * :mod:`~rigid_body_attitude.bag.writer`: :class:`BagWriter` for output bags and
@@ -10,7 +11,9 @@
   generic (slow) serialisation, including ``DiagnosticArray``.
 
 Quaternions cross this API scalar-first ``(w, x, y, z)`` as everywhere in the package
-(:mod:`rigid_body_attitude.quaternion`); only the CDR bytes hold ``(x, y, z, w)``.
+(:mod:`rigid_body_attitude.quaternion`); only the CDR bytes hold ``(x, y, z, w)``. Decoders
+return header stamps as float seconds (resolution 2.4·10⁻⁷ s at epoch times);
+:func:`header_stamp_ns` gives the exact integer nanoseconds.
 """
 
 from rigid_body_attitude.bag.cdr import (

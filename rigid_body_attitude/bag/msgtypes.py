@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
+from types import MappingProxyType
 from typing import Any, NamedTuple
 
 from rosbags.serde import SerdeError
@@ -84,7 +85,7 @@ class DiagnosticStatus(NamedTuple):
     name: str
     message: str
     hardware_id: str = ''
-    values: Mapping[str, str] = {}
+    values: Mapping[str, str] = MappingProxyType({})
 
 
 def encode_diagnostic_array(stamp_ns: int, frame_id: str,
