@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude import quaternion
 from rigid_body_attitude.effects import EFFECTS, BodyProperties, Effect
+from rigid_body_attitude.effects.base import real
 from rigid_body_attitude.errors import AttitudeError, SceneError
 from rigid_body_attitude.inertia import Inertia
 
@@ -202,7 +203,10 @@ def _text(key: str, value: Any) -> str:
 
 def _number(key: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise SceneError(f'Expected {key!r} to be a number, got {value!r}')
+        try:
+            real(value)  # always raises here; its reason explains YAML 1.1's '1e-3' text
+        except (TypeError, ValueError) as err:
+            raise SceneError(f'Expected {key!r} to be {err}, got {value!r}') from err
     return float(value)
 
 
