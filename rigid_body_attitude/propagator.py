@@ -209,6 +209,9 @@ class DynamicsPropagator(_Propagator):
             self.step(h)
             steps += 1
             remaining = t_end - self.state.time
+        if steps:
+            # t + h + h + ... misses t_end by round-off; the steps covered [t, t_end]
+            self.state.time = float(t_end)
         return steps
 
     def _force(self, t: float, attitude: FloatArray) -> FloatArray:

@@ -117,14 +117,14 @@ class GyroStream(_Counting):
                 self.last_stamp = stamp
                 return self._reject('time_jump', reset=True)
             return self._reject('stale_stamp')
-        if self.constant_dt > 0.0:
-            propagator.update(propagator.state.time + self.constant_dt, omega_body)
-            self.last_stamp = stamp
-            return self._accept(_INTEGRATED)
         if stamp - self.last_stamp > self.max_dt:
             propagator.start(stamp, omega_body)
             self.last_stamp = stamp
             return self._reject('gap')
+        if self.constant_dt > 0.0:
+            propagator.update(propagator.state.time + self.constant_dt, omega_body)
+            self.last_stamp = stamp
+            return self._accept(_INTEGRATED)
         propagator.update(stamp, omega_body)
         self.last_stamp = stamp
         return self._accept(_INTEGRATED)
