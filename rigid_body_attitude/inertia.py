@@ -25,6 +25,11 @@ FloatArray = NDArray[np.float64]
 
 _SYMMETRY_TOLERANCE = 1e-12
 _TRIANGLE_TOLERANCE = 1e-12
+#: Smallest accepted ratio J_min/J_max. ``eigh`` finds the eigenvalues of a symmetric matrix
+#: to an absolute error of a few ε·J_max, so below this the smallest moment (and the sign
+#: that makes the tensor positive definite) is rounding noise: the tensor is numerically
+#: singular and ``J⁻¹`` would be noise or overflow.
+_SINGULARITY_RATIO = 64.0 * float(np.finfo(np.float64).eps)
 
 
 def _validated_tensor(value: ArrayLike) -> FloatArray:
@@ -45,14 +50,22 @@ def _validated_tensor(value: ArrayLike) -> FloatArray:
     if asymmetry > _SYMMETRY_TOLERANCE * max(scale, 1e-300):
         raise InertiaError(f'Expected `inertia` to be symmetric, got {tensor.tolist()!r} '
                            f'(largest |J - Jᵀ| = {asymmetry:.3g})')
-    return 0.5 * (tensor + tensor.T)
+    # Symmetric input is returned unchanged (no halving of subnormals, no overflow of J + Jᵀ).
+    return tensor + 0.5 * (tensor.T - tensor)
 
 
 def _validated_moments(tensor: FloatArray) -> tuple[FloatArray, FloatArray]:
     moments, axes = np.linalg.eigh(tensor)
+    if not np.all(np.isfinite(moments)):
+        raise InertiaError(f'Expected `inertia` with finite principal moments, got '
+                           f'{tensor.tolist()!r} with principal moments {moments.tolist()!r}')
     if moments[0] <= 0.0:
         raise InertiaError(f'Expected `inertia` to be positive definite, got {tensor.tolist()!r} '
                            f'with principal moments {moments.tolist()!r}')
+    if moments[0] <= _SINGULARITY_RATIO * moments[2]:
+        raise InertiaError(f'Expected `inertia` to be numerically non-singular (smallest/largest '
+                           f'principal moment > {_SINGULARITY_RATIO:.3g}), got '
+                           f'{tensor.tolist()!r} with principal moments {moments.tolist()!r}')
     slack = moments[0] + moments[1] - moments[2]
     if slack < -_TRIANGLE_TOLERANCE * moments[2]:
         raise InertiaError(f'Expected principal moments with J1 + J2 >= J3 (a real mass '
@@ -86,7 +99,11 @@ class Inertia:
         object.__setattr__(self, 'tensor', checked)
         object.__setattr__(self, 'principal_moments', moments)
         object.__setattr__(self, 'principal_axes', axes)
-        object.__setattr__(self, 'inverse', np.linalg.inv(checked))
+        inverse = np.linalg.inv(checked)
+        if not np.all(np.isfinite(inverse)):
+            raise InertiaError(f'Expected `inertia` with a finite inverse, got '
+                               f'{checked.tolist()!r} (inverse {inverse.tolist()!r})')
+        object.__setattr__(self, 'inverse', inverse)
 
     @property
     def is_diagonal(self) -> bool:
