@@ -10,12 +10,14 @@ Two reference updates (the full strapdown menu lives in :mod:`rigid_body_attitud
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude import quaternion
+from rigid_body_attitude.errors import InputError
 
 __all__ = ['exp_map_step', 'quaternion_rate', 'rk4_quaternion_step']
 
@@ -29,14 +31,40 @@ def quaternion_rate(attitude: ArrayLike, omega_body: ArrayLike) -> FloatArray:
     return 0.5 * quaternion.multiply(attitude, pure)
 
 
+def _checked_attitude(attitude: ArrayLike) -> FloatArray:
+    """``attitude`` as a finite, non-zero ``(..., 4)`` array, or :class:`InputError`."""
+    q = quaternion.as_quaternion(attitude, 'attitude')
+    if np.any(np.linalg.norm(q, axis=-1) == 0.0):
+        raise InputError(f'Expected `attitude` to be a non-zero quaternion, got {q.tolist()!r}')
+    return q
+
+
+def _checked_step(h: float) -> float:
+    """``h`` as a finite float [s], or :class:`InputError`."""
+    try:
+        step = float(h)
+    except (TypeError, ValueError) as err:
+        raise InputError(f'Expected `h` to be a finite number of seconds, got {h!r}') from err
+    if not math.isfinite(step):
+        raise InputError(f'Expected `h` to be a finite number of seconds, got {h!r}')
+    return step
+
+
 def exp_map_step(attitude: ArrayLike, omega_body: ArrayLike, h: float) -> FloatArray:
     """``q ⊗ exp(h ω_body)``: exact for a rate held over ``h`` (order 1 for a varying rate).
 
     Cost: one quaternion exponential and one product. Invariant: ``|q|`` to round-off; the
     result is renormalised so round-off does not accumulate over 10⁷ steps.
     """
+    q = _checked_attitude(attitude)
     omega = quaternion.as_vector(omega_body, 'omega_body')
-    result = quaternion.multiply(attitude, quaternion.exp(h * omega))
+    step = _checked_step(h)
+    with np.errstate(over='ignore', invalid='ignore'):  # an overflow is reported just below
+        rotation = step * omega
+    if not np.all(np.isfinite(rotation)):
+        raise InputError(f'Expected a finite rotation `h * omega_body`, got h={h!r}, '
+                         f'omega_body={omega.tolist()!r}')
+    result = quaternion.multiply(q, quaternion.exp(rotation))
     return result / np.linalg.norm(result, axis=-1, keepdims=True)
 
 
@@ -47,10 +75,15 @@ def rk4_quaternion_step(attitude: ArrayLike, omega_of_time: Callable[[float], Ar
     RK4 does not keep ``|q|`` (it shrinks by about ``(h|ω|)⁶/9216`` per step, physics.md §6);
     the projection restores it.
     """
-    q = quaternion.as_quaternion(attitude, 'attitude')
-    k1 = quaternion_rate(q, omega_of_time(t))
-    k2 = quaternion_rate(q + 0.5 * h * k1, omega_of_time(t + 0.5 * h))
-    k3 = quaternion_rate(q + 0.5 * h * k2, omega_of_time(t + 0.5 * h))
-    k4 = quaternion_rate(q + h * k3, omega_of_time(t + h))
+    q = _checked_attitude(attitude)
+    h = _checked_step(h)
+
+    def rate(time: float) -> FloatArray:
+        return quaternion.as_vector(omega_of_time(time), 'omega_body')
+
+    k1 = quaternion_rate(q, rate(t))
+    k2 = quaternion_rate(q + 0.5 * h * k1, rate(t + 0.5 * h))
+    k3 = quaternion_rate(q + 0.5 * h * k2, rate(t + 0.5 * h))
+    k4 = quaternion_rate(q + h * k3, rate(t + h))
     result = q + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     return result / np.linalg.norm(result, axis=-1, keepdims=True)
