@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from rigid_body_attitude.errors import InputError, IntegratorError
 from rigid_body_attitude.inertia import Inertia
 
 __all__ = ['RigidBodyModel', 'euler_rate', 'rk4_step']
@@ -143,6 +144,14 @@ def _derivative(model: RigidBodyModel, t: float,
             i20 * bx + i21 * by + i22 * bz)
 
 
+def _all_finite(h: float, values: tuple[float, ...]) -> bool:
+    """Whether ``h`` and every value are finite numbers (False for nested sequences)."""
+    try:
+        return math.isfinite(h) and all(map(math.isfinite, values))
+    except TypeError:
+        return False
+
+
 def rk4_step(model: RigidBodyModel, t: float, attitude: FloatArray, omega_body: FloatArray,
              h: float) -> tuple[FloatArray, FloatArray]:
     """Classical RK4 on ``(q, ω)`` jointly, then ``q`` renormalised.
@@ -154,6 +163,10 @@ def rk4_step(model: RigidBodyModel, t: float, attitude: FloatArray, omega_body: 
     method is measured against (Kutta 1901; Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1).
     """
     y0 = tuple(attitude.tolist()) + tuple(omega_body.tolist())
+    if len(y0) != 7 or not _all_finite(h, y0):
+        raise InputError(f'Expected a finite step `h`, `attitude` (4,) and `omega_body` (3,), '
+                         f'got h={h!r}, attitude={attitude.tolist()!r}, '
+                         f'omega_body={omega_body.tolist()!r}')
     half = 0.5 * h
     k1 = _derivative(model, t, y0)
     k2 = _derivative(model, t + half, tuple(a + half * b for a, b in zip(y0, k1)))
@@ -162,4 +175,8 @@ def rk4_step(model: RigidBodyModel, t: float, attitude: FloatArray, omega_body: 
     sixth = h / 6.0
     y1 = [a + sixth * (b + 2.0 * (c + d) + e) for a, b, c, d, e in zip(y0, k1, k2, k3, k4)]
     norm = math.sqrt(y1[0] * y1[0] + y1[1] * y1[1] + y1[2] * y1[2] + y1[3] * y1[3])
+    if not (norm > 0.0 and all(map(math.isfinite, y1))):
+        raise IntegratorError(f'RK4 step of h={h!r} from attitude {list(y0[:4])!r}, omega_body '
+                              f'{list(y0[4:])!r} gave the non-finite state {y1!r}; reduce the '
+                              f'step')
     return np.array(y1[:4]) / norm, np.array(y1[4:])
