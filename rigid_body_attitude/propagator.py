@@ -14,6 +14,7 @@ jumps) is :mod:`rigid_body_attitude.stream`'s job.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -177,7 +178,13 @@ class DynamicsPropagator(_Propagator):
         self._power_start: float | None = None
 
     def step(self, h: float) -> None:
-        """Advance the state by one step of ``h`` seconds."""
+        """Advance the state by one step of ``h`` seconds.
+
+        Raises :class:`InputError` unless ``h`` is a positive finite number; the state is then
+        unchanged.
+        """
+        if not (isinstance(h, numbers.Real) and math.isfinite(h) and h > 0.0):
+            raise InputError(f'Expected `h` to be a positive finite number of seconds, got {h!r}')
         state = self.state
         t, attitude, omega = state.time, state.attitude, state.omega_body
         new_attitude, new_omega = self.integrator.step(attitude, omega, t, h, self.model)
@@ -268,8 +275,12 @@ class GyroPropagator(_Propagator):
         return omega
 
     def start(self, t: float, omega_measured: ArrayLike) -> None:
-        """Take a baseline sample at ``t`` without integrating (first sample, after a gap)."""
-        omega = self.corrected(t, np.asarray(omega_measured, dtype=np.float64))
+        """Take a baseline sample at ``t`` without integrating (first sample, after a gap).
+
+        Raises :class:`InputError` for a non-finite ``t`` or a rate that is not 3 finite
+        numbers; the state is then unchanged (as for :meth:`update`).
+        """
+        omega = self.corrected(t, _checked_sample(t, omega_measured))
         self.method.reset()
         self.state.time, self.state.omega_body = float(t), omega
         if not self.has_sample:
@@ -278,12 +289,21 @@ class GyroPropagator(_Propagator):
 
     def update(self, t: float, omega_measured: ArrayLike) -> None:
         """Integrate from the previous sample's time to ``t`` with the new sample."""
-        omega = self.corrected(t, np.asarray(omega_measured, dtype=np.float64))
+        omega = self.corrected(t, _checked_sample(t, omega_measured))
         dt = float(t) - self.state.time
         attitude = self.method.propagate(tuple(self.state.attitude),
                                          tuple(self.state.omega_body), tuple(omega), dt)
         self.state.attitude = np.array(attitude)
         self.state.time, self.state.omega_body = float(t), omega
+
+
+def _checked_sample(t: float, omega_measured: ArrayLike) -> FloatArray:
+    """A gyro sample's rate as a finite (3,) array, or :class:`InputError`."""
+    omega = quaternion.as_vector(omega_measured, 'omega_measured')
+    if omega.shape != (3,) or not math.isfinite(t):
+        raise InputError(f'Expected a gyro sample at a finite time `t` with `omega_measured` '
+                         f'3 finite numbers, got t={t!r}, omega_measured={omega.tolist()!r}')
+    return omega
 
 
 def build_propagator(scene: Scene) -> DynamicsPropagator | GyroPropagator:
