@@ -353,10 +353,14 @@ def scalar_exp_step(q: Any, omega: Any, dt: float) -> tuple[float, float, float,
 
     ``q`` is a 4-sequence ``(w, x, y, z)``, ``omega`` a 3-sequence (rad/s, body frame). The
     result is renormalised, so the norm error stays at round-off however many steps are taken.
+    A non-finite ``omega * dt`` or a zero or non-finite ``q`` raises :class:`InputError`.
     """
     qw, qx, qy, qz = q
     vx, vy, vz = omega[0] * dt, omega[1] * dt, omega[2] * dt
     angle = math.sqrt(vx * vx + vy * vy + vz * vz)
+    if not math.isfinite(angle):
+        raise InputError(f'Expected a finite rotation `omega * dt`, got omega={tuple(omega)!r}, '
+                         f'dt={dt!r}')
     if angle < SERIES_THRESHOLD:
         a2 = angle * angle
         scale = 0.5 - a2 / 48.0 + a2 * a2 / 3840.0
@@ -367,5 +371,8 @@ def scalar_exp_step(q: Any, omega: Any, dt: float) -> tuple[float, float, float,
     x = qw * ex + qx * ew + qy * ez - qz * ey
     y = qw * ey - qx * ez + qy * ew + qz * ex
     z = qw * ez + qx * ey - qy * ex + qz * ew
-    inv = 1.0 / math.sqrt(w * w + x * x + y * y + z * z)
+    norm_squared = w * w + x * x + y * y + z * z
+    if not 0.0 < norm_squared < math.inf:
+        raise InputError(f'Expected `q` to be a finite non-zero quaternion, got {tuple(q)!r}')
+    inv = 1.0 / math.sqrt(norm_squared)
     return w * inv, x * inv, y * inv, z * inv
