@@ -35,7 +35,10 @@ DEFAULT_CHUNK = 4096
 
 def _principal(inertia: ArrayLike, count: int) -> tuple[FloatArray, FloatArray]:
     """Principal moments (N, 3) and right-handed axes (N, 3, 3) of one or N tensors."""
-    tensors = np.asarray(inertia, dtype=np.float64)
+    try:
+        tensors = np.asarray(inertia, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise InputError(f'Expected `inertia` to be numeric, got {inertia!r}') from err
     if tensors.shape in ((3,), (3, 3)):
         single = Inertia(tensors)
         return (np.broadcast_to(single.principal_moments, (count, 3)),
