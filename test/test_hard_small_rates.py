@@ -20,6 +20,7 @@ from rigid_body_attitude import quaternion as quat
 from rigid_body_attitude.batch import TorqueFreeBatch
 from rigid_body_attitude.dynamics import RigidBodyModel, rk4_step
 from rigid_body_attitude.inertia import Inertia
+from rigid_body_attitude.integrators.kinematic import _dexpinv_exact as dexpinv
 from rigid_body_attitude.propagator import DynamicsPropagator, GyroPropagator
 from rigid_body_attitude.scene import load_scene
 
@@ -69,6 +70,22 @@ def mp_log(q):
     s = mpmath.sqrt(sum(x * x for x in qm[1:]))
     scale = 2 / qm[0] if s == 0 else 2 * mpmath.atan2(s, qm[0]) / s
     return [x * scale for x in qm[1:]]
+
+
+def mp_dexpinv(theta, omega):
+    """``ω + ½ θ × ω + (1 − (a/2) cot(a/2))/a² θ × (θ × ω)`` (a = |θ|, 1/12 at 0), 50 digits."""
+    t = [mpmath.mpf(float(x)) for x in theta]
+    w = [mpmath.mpf(float(x)) for x in omega]
+    angle = mpmath.sqrt(sum(x * x for x in t))
+    factor = (mpmath.mpf(1) / 12 if angle == 0
+              else (1 - (angle / 2) * mpmath.cot(angle / 2)) / angle ** 2)
+
+    def cross(a, b):
+        return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+    first = cross(t, w)
+    second = cross(t, first)
+    return [a + b / 2 + factor * c for a, b, c in zip(w, first, second)]
 
 
 def errors_against(values, reference):
@@ -125,6 +142,21 @@ def test_exp_and_log_agree_across_the_series_threshold():
         assert absolute <= ABSOLUTE_BOUND and relative <= 2.0 * EPS
         absolute, relative = errors_against(quat.log(quat.exp(v)), mp_log(quat.exp(v)))
         assert absolute <= ABSOLUTE_BOUND and relative <= 2.0 * EPS
+
+
+def test_dexpinv_series_branch_matches_50_digit_values():
+    # The inverse differential of exp used by the Bortz/RKMK methods. Its factor
+    # (1 − (a/2) cot(a/2))/a² cancels catastrophically for small a, so below the threshold it
+    # is the series 1/12 + a²/720 (truncation a⁴/30240 < 4e−21). Rates with components in
+    # [−½, ½] keep the result below 1, where 1e−16 is one rounding of the final sum.
+    rng = np.random.default_rng(43)
+    worst = 0.0
+    for theta in list(small_rotation_vectors(400, seed=44)) + [np.zeros(3), [SUBNORMAL] * 3]:
+        omega = rng.uniform(-0.5, 0.5, size=3)
+        absolute, _ = errors_against(dexpinv(tuple(theta), tuple(omega)),
+                                     mp_dexpinv(theta, omega))
+        worst = max(worst, absolute)
+    assert worst <= ABSOLUTE_BOUND
 
 
 def test_scalar_exp_step_series_branch_matches_50_digit_values():
