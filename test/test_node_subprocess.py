@@ -1,0 +1,138 @@
+"""The installed ``propagation_node`` executable as ``ros2 run`` starts it, over real topics.
+
+The executable is ``<prefix>/lib/rigid_body_attitude/propagation_node`` with the prefix from
+``ament_index_python``'s ``get_package_prefix`` (what ros2run does). Each test starts it in a
+namespace of its own on the test run's domain (conftest's environment is inherited), talks to
+it from an in-process harness node and stops it with SIGINT: exit code 0, no traceback.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+import os
+from pathlib import Path
+import signal
+import subprocess
+
+from ament_index_python.packages import get_package_prefix
+from geometry_msgs.msg import PoseStamped, QuaternionStamped
+import numpy as np
+import pytest
+from ros_helpers import Harness, ros_session, RosContext, unique_namespace
+from sensor_msgs.msg import Imu
+
+from rigid_body_attitude import quaternion
+
+PACKAGE = 'rigid_body_attitude'
+START_TIMEOUT = 30.0  # seconds for the process to start and discover the harness
+
+
+@pytest.fixture
+def ros(ros_domain_id: int) -> Iterator[RosContext]:
+    """A context and executor of the test's own on the test run's domain."""
+    with ros_session(ros_domain_id) as session:
+        yield session
+
+
+def executable() -> Path:
+    """``<prefix>/lib/rigid_body_attitude/propagation_node``, found as ros2run finds it."""
+    path = Path(get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / 'propagation_node'
+    assert path.is_file() and os.access(path, os.X_OK), f'{path} is not an executable file'
+    return path
+
+
+def start(*arguments: str) -> subprocess.Popen:
+    """Start the installed node with ``arguments``; stdout and stderr are captured."""
+    return subprocess.Popen([str(executable()), *arguments], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def stop_with_sigint(process: subprocess.Popen, timeout: float = 15.0) -> tuple[int, str]:
+    """SIGINT, then the exit code and stderr (killed and failed if it does not stop)."""
+    process.send_signal(signal.SIGINT)
+    try:
+        _, stderr = process.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        _, stderr = process.communicate()
+        pytest.fail(f'propagation_node ignored SIGINT for {timeout} s; stderr:\n{stderr}')
+    return process.returncode, stderr
+
+
+@pytest.fixture
+def processes() -> Iterator[list[subprocess.Popen]]:
+    """Processes a test starts; any still running afterwards is killed."""
+    started: list[subprocess.Popen] = []
+    yield started
+    for process in started:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+
+
+def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes):
+    namespace = unique_namespace(request)
+    process = start('--ros-args', '-p', 'scene:=strapdown', '-r', f'__ns:={namespace}')
+    processes.append(process)
+    harness = Harness(ros, namespace)
+    imu_publisher = harness.publisher(Imu, 'imu')
+    orientations = harness.record(QuaternionStamped, 'orientation')
+    harness.wait_for_connections(START_TIMEOUT)
+    omega = np.array([0.4, -0.1, 0.9])
+    base_ns = 1_700_000_000 * 10**9
+    for k in range(20):  # 100 Hz stamps, sent at a pace a best-effort queue of 5 keeps up with
+        imu = Imu()
+        imu.header.stamp.sec, imu.header.stamp.nanosec = divmod(base_ns + k * 10**7, 10**9)
+        imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z = omega
+        imu_publisher.publish(imu)
+        harness.spin_for(0.02)
+    assert harness.spin_until(lambda: len(orientations) >= 20, 5.0), len(orientations)
+    code, stderr = stop_with_sigint(process)
+    assert code == 0, stderr
+    assert 'Traceback' not in stderr
+    first_ns = orientations[0].header.stamp.sec * 10**9 + orientations[0].header.stamp.nanosec
+    for message in orientations:
+        at_ns = message.header.stamp.sec * 10**9 + message.header.stamp.nanosec
+        q = message.quaternion
+        # Exact for a constant rate (exp_map), round-off only over 20 steps: 1e-12.
+        expected = quaternion.exp((at_ns - first_ns) * 1e-9 * omega)
+        assert np.max(np.abs(np.array([q.w, q.x, q.y, q.z]) - expected)) <= 1e-12
+
+
+def test_default_scene_with_the_params_file_publishes_pose_alone(ros, request, processes):
+    namespace = unique_namespace(request)
+    params_file = Path(get_package_prefix(PACKAGE)) / 'share' / PACKAGE / 'config' / 'params.yaml'
+    assert params_file.is_file()
+    process = start('--ros-args', '--params-file', str(params_file), '-r', f'__ns:={namespace}')
+    processes.append(process)
+    harness = Harness(ros, namespace)
+    poses = harness.record(PoseStamped, 'pose')
+    harness.wait_for_connections(START_TIMEOUT)
+    assert harness.spin_until(lambda: len(poses) >= 25, 10.0), len(poses)
+    code, stderr = stop_with_sigint(process)
+    assert code == 0, stderr
+    assert 'Traceback' not in stderr
+    assert "scene 'torque_free_box'" in stderr  # the start-up INFO line names the scene
+    stamps = np.array([m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in poses])
+    assert np.all(np.diff(stamps) > 0.0)
+    # Timer ticks at publish_rate = 50 Hz on the node clock: a median spacing of 20 ms, with
+    # room for scheduling jitter on a loaded machine.
+    assert 0.015 <= float(np.median(np.diff(stamps))) <= 0.025
+    norms = [np.linalg.norm([m.pose.orientation.w, m.pose.orientation.x, m.pose.orientation.y,
+                             m.pose.orientation.z]) for m in poses]
+    assert max(abs(norm - 1.0) for norm in norms) <= 1e-12
+    assert {m.header.frame_id for m in poses} == {'world'}
+
+
+@pytest.mark.parametrize('arguments, expected', [
+    (('-p', 'scene:=no_such_scene'), "error: Unknown scene 'no_such_scene'"),
+    (('-p', 'publish_rate:=50'), 'error: Expected parameter `publish_rate` to be a double'),
+    (('-p', 'max_dt:=0.0'), 'error: Expected parameter `max_dt` to be a finite number > 0'),
+])
+def test_bad_parameters_give_one_error_line_and_exit_2(processes, arguments, expected):
+    process = start('--ros-args', *arguments)
+    processes.append(process)
+    _, stderr = process.communicate(timeout=START_TIMEOUT)
+    assert process.returncode == 2
+    assert stderr.startswith(expected)
+    assert stderr.count('\n') == 1 and 'Traceback' not in stderr
