@@ -54,21 +54,17 @@ from rigid_body_attitude.messages import (
     stale_command_count, TimeBase)
 from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import build_propagator, DynamicsPropagator
-from rigid_body_attitude.scene import load_scene, Scene
+from rigid_body_attitude.scene import Scene
+from rigid_body_attitude.settings import (
+    DIAGNOSTICS_PERIOD, load_node_scene, NODE_DEFAULTS, NODE_NAME, publishes)
 from rigid_body_attitude.stream import ClockDriver, CommandStream, GyroStream, Outcome
 
 __all__ = ['AttitudePropagatorNode', 'NodeSettings', 'check_parameters', 'main']
 
-NODE_NAME = 'attitude_propagator'
-
-#: Rejections after which the state still moved to the sample's time (published).
-_MOVED_REASONS = ('gap', 'time_jump')
-
 #: Seconds between repeated warnings about the same rejection reason.
 WARNING_INTERVAL = 5.0
 
-#: Diagnostics period [s] and how many periods between INFO log lines.
-DIAGNOSTICS_PERIOD = 1.0
+#: Diagnostics periods (settings.DIAGNOSTICS_PERIOD, 1 s) between INFO log lines.
 LOG_EVERY_PERIODS = 5
 
 _LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN,
@@ -81,37 +77,39 @@ OUTPUT_QOS = QoSProfile(depth=10)
 
 
 @dataclass(frozen=True)
-class _Spec:
-    """One parameter: default, description, range (min, max) or None, read-only."""
+class ParameterSpec:
+    """One node parameter: description, range ``(min, max)`` or None, read-only.
 
-    default: Any
+    Defaults are :data:`rigid_body_attitude.settings.NODE_DEFAULTS` (shared with replay).
+    """
+
     description: str
     limits: tuple[float, float] | None = None
     read_only: bool = True
 
 
-PARAMETERS: dict[str, _Spec] = {
-    'scene': _Spec('torque_free_box', 'built-in scene name or path to a scene YAML file'),
-    'world_frame': _Spec('world', 'frame of pose, orientation and angular_momentum',
-                         read_only=False),
-    'body_frame': _Spec('base_link', 'frame of twist (the body)', read_only=False),
-    'publish_rate': _Spec(50.0, 'Hz: dynamics ticks; energy and angular_momentum output',
-                          (0.0, 1000.0)),
-    'use_header_stamps': _Spec(True, 'gyro and command times from header stamps (else the '
-                               'receive time on the node clock)', read_only=False),
-    'constant_dt': _Spec(0.0, 's: integrate each gyro sample over this step (0 = stamps)',
-                         (0.0, 10.0), read_only=False),
-    'max_dt': _Spec(0.1, 's: a longer gap between gyro samples is not integrated across',
-                    (0.0, 3600.0), read_only=False),
-    'time_jump_threshold': _Spec(1.0, 's: a larger backward jump of input stamps or node '
-                                 'clock resets to the initial state', (0.0, 1.0e6),
+PARAMETERS: dict[str, ParameterSpec] = {
+    'scene': ParameterSpec('built-in scene name or path to a scene YAML file'),
+    'world_frame': ParameterSpec('frame of pose, orientation and angular_momentum',
                                  read_only=False),
-    'torque_timeout': _Spec(0.0, 's: commands (torque, force, rotor torque) are held this '
-                            'long, then zeroed (0 = the scene\'s)', (0.0, 3600.0)),
-    'integrator': _Spec('', 'integrator (dynamics) or strapdown method (gyro) overriding '
-                        'the scene\'s ("" = the scene\'s)'),
-    'step': _Spec(0.0, 's: integration step of dynamics scenes (0 = the scene\'s)',
-                  (0.0, 10.0)),
+    'body_frame': ParameterSpec('frame of twist (the body)', read_only=False),
+    'publish_rate': ParameterSpec('Hz: dynamics ticks; energy and angular_momentum output',
+                                  (0.0, 1000.0)),
+    'use_header_stamps': ParameterSpec('gyro and command times from header stamps (else the '
+                                       'receive time on the node clock)', read_only=False),
+    'constant_dt': ParameterSpec('s: integrate each gyro sample over this step (0 = stamps)',
+                                 (0.0, 10.0), read_only=False),
+    'max_dt': ParameterSpec('s: a longer gap between gyro samples is not integrated across',
+                            (0.0, 3600.0), read_only=False),
+    'time_jump_threshold': ParameterSpec('s: a larger backward jump of input stamps or node '
+                                         'clock resets to the initial state', (0.0, 1.0e6),
+                                         read_only=False),
+    'torque_timeout': ParameterSpec('s: commands (torque, force, rotor torque) are held this '
+                                    'long, then zeroed (0 = the scene\'s)', (0.0, 3600.0)),
+    'integrator': ParameterSpec('integrator (dynamics) or strapdown method (gyro) overriding '
+                                'the scene\'s ("" = the scene\'s)'),
+    'step': ParameterSpec('s: integration step of dynamics scenes (0 = the scene\'s)',
+                          (0.0, 10.0)),
 }
 
 _TYPE_NAMES = {float: 'double (written with a decimal point, e.g. 50.0)',
@@ -152,7 +150,7 @@ class NodeSettings:
     torque_timeout: float
 
 
-def _descriptor(name: str, spec: _Spec) -> ParameterDescriptor:
+def _descriptor(name: str, spec: ParameterSpec) -> ParameterDescriptor:
     limits = ([FloatingPointRange(from_value=spec.limits[0], to_value=spec.limits[1])]
               if spec.limits else [])
     return ParameterDescriptor(name=name, description=spec.description,
@@ -164,13 +162,9 @@ def load_settings(values: Mapping[str, Any]) -> NodeSettings:
     problem = check_parameters(values)
     if problem:
         raise InputError(problem)
-    timeout = values['torque_timeout']
-    held = {'timeout': timeout} if timeout > 0.0 else {}
-    scene = load_scene(values['scene']).with_overrides(
-        integrator=values['integrator'], step=values['step'],
-        effect_parameters={name: held for name in ('commanded_torque', 'commanded_force',
-                                                   'rotor')} if held else None)
-    return NodeSettings(scene, values['publish_rate'], timeout)
+    scene = load_node_scene(values['scene'], values['integrator'], values['step'],
+                            values['torque_timeout'])
+    return NodeSettings(scene, values['publish_rate'], values['torque_timeout'])
 
 
 class AttitudePropagatorNode(Node):
@@ -222,10 +216,10 @@ class AttitudePropagatorNode(Node):
         for name, spec in PARAMETERS.items():
             try:
                 values[name] = self.declare_parameter(
-                    name, spec.default, _descriptor(name, spec)).value
+                    name, NODE_DEFAULTS[name], _descriptor(name, spec)).value
             except InvalidParameterTypeException as err:
                 raise InputError(f'Expected parameter `{name}` to be a '
-                                 f'{_TYPE_NAMES[type(spec.default)]}: {err}') from err
+                                 f'{_TYPE_NAMES[type(NODE_DEFAULTS[name])]}: {err}') from err
             except ParameterException as err:
                 raise InputError(f'Bad parameter `{name}`: {err}') from err
         return values
@@ -393,7 +387,7 @@ class AttitudePropagatorNode(Node):
                                        (x, y, z))
         if outcome.reason:
             self._rejected('gyro', outcome, stamp)
-            if outcome.reason not in _MOVED_REASONS:
+            if not publishes(outcome):
                 return False
         qw, qx, qy, qz = self.output_tracker.attitude(self.propagator)
         self._publish_attitude(stamp, qx, qy, qz, qw)
@@ -436,7 +430,7 @@ class AttitudePropagatorNode(Node):
             self._rejected('clock', outcome, None)
             if outcome.reset:
                 self.command_stream.reset()
-            if outcome.reason not in _MOVED_REASONS:
+            if not publishes(outcome):
                 return
         self._publish_dynamics()
 

@@ -29,10 +29,11 @@ from std_srvs.srv import Trigger
 from rigid_body_attitude import quaternion
 from rigid_body_attitude.errors import InputError, IntegratorError, SceneError
 from rigid_body_attitude.messages import TimeBase
-from rigid_body_attitude.node import AttitudePropagatorNode, check_parameters, main, PARAMETERS
+from rigid_body_attitude.node import AttitudePropagatorNode, check_parameters, main
 from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import build_propagator
 from rigid_body_attitude.scene import load_scene
+from rigid_body_attitude.settings import NODE_DEFAULTS
 from rigid_body_attitude.stream import ClockDriver, CommandStream, GyroStream
 
 #: Input stamps start at a realistic epoch with a fractional second: as float seconds these
@@ -125,7 +126,7 @@ def own_statuses(messages: list[DiagnosticArray], node: AttitudePropagatorNode
 # -- parameters ----------------------------------------------------------------------------
 
 def defaults() -> dict[str, Any]:
-    return {name: spec.default for name, spec in PARAMETERS.items()}
+    return dict(NODE_DEFAULTS)
 
 
 def test_check_parameters_accepts_defaults():

@@ -80,22 +80,32 @@ def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes):
     harness.wait_for_connections(START_TIMEOUT)
     omega = np.array([0.4, -0.1, 0.9])
     base_ns = 1_700_000_000 * 10**9
-    for k in range(20):  # 100 Hz stamps, sent at a pace a best-effort queue of 5 keeps up with
+    # 100 Hz stamps, sent at a pace a best-effort queue of 5 keeps up with, until 20 outputs
+    # came back (discovery may still be completing for the first few).
+    for k in range(500):
         imu = Imu()
         imu.header.stamp.sec, imu.header.stamp.nanosec = divmod(base_ns + k * 10**7, 10**9)
         imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z = omega
         imu_publisher.publish(imu)
-        harness.spin_for(0.02)
-    assert harness.spin_until(lambda: len(orientations) >= 20, 5.0), len(orientations)
+        if harness.spin_until(lambda: len(orientations) >= 20, 0.02):
+            break
+    assert len(orientations) >= 20
     code, stderr = stop_with_sigint(process)
     assert code == 0, stderr
     assert 'Traceback' not in stderr
-    first_ns = orientations[0].header.stamp.sec * 10**9 + orientations[0].header.stamp.nanosec
-    for message in orientations:
-        at_ns = message.header.stamp.sec * 10**9 + message.header.stamp.nanosec
+
+    def seconds(message: QuaternionStamped) -> float:
+        return (message.header.stamp.sec * 10**9 + message.header.stamp.nanosec - base_ns) * 1e-9
+
+    first = orientations[0]
+    first_attitude = [first.quaternion.w, first.quaternion.x, first.quaternion.y,
+                      first.quaternion.z]
+    for message in orientations[1:]:
         q = message.quaternion
-        # Exact for a constant rate (exp_map), round-off only over 20 steps: 1e-12.
-        expected = quaternion.exp((at_ns - first_ns) * 1e-9 * omega)
+        # Exact for a constant rate (exp_map; a lost sample only lengthens one step, all
+        # steps commute): round-off only over < 500 steps, 1e-12.
+        expected = quaternion.multiply(
+            first_attitude, quaternion.exp((seconds(message) - seconds(first)) * omega))
         assert np.max(np.abs(np.array([q.w, q.x, q.y, q.z]) - expected)) <= 1e-12
 
 
