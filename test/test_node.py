@@ -260,6 +260,26 @@ def test_angular_velocity_topic_drives_gyro_scenes(ros, request):
     assert np.max(np.abs(scalar_first(orientations) - expected)) <= 1e-12
 
 
+def test_receive_time_replaces_header_stamps_when_asked(ros, request):
+    harness = Harness(ros, unique_namespace(request))
+    node = start_node(harness, scene='strapdown', use_header_stamps=False)
+    harness.publisher(Imu, 'imu')
+    orientations = harness.record(QuaternionStamped, 'orientation')
+    harness.wait_for_connections()
+    before_ns = node.get_clock().now().nanoseconds
+    for _ in range(3):  # unstamped (zero) headers, as from a driver that does not stamp
+        publish_and_wait(harness, node, 'imu', imu_message(0, OMEGA))
+    after_ns = node.get_clock().now().nanoseconds
+    stamps_ns = [nanoseconds(m.header.stamp) for m in orientations]
+    assert len(stamps_ns) == 3 and not node.gyro_stream.rejected
+    assert before_ns <= stamps_ns[0] < stamps_ns[1] < stamps_ns[2] <= after_ns
+    # Integrated over the receive-time differences (exact for a constant rate; the float
+    # seconds of the time base carry ~1e-16 s relative error): 1e-12.
+    elapsed = (stamps_ns[2] - stamps_ns[0]) * 1e-9
+    expected = quaternion.exp(elapsed * np.array(OMEGA))
+    assert np.max(np.abs(scalar_first(orientations[-1:])[0] - expected)) <= 1e-12
+
+
 def test_timing_faults_are_rejected_counted_and_reported(ros, request, capfd):
     harness = Harness(ros, unique_namespace(request))
     node = start_node(harness, scene='strapdown', max_dt=0.1, time_jump_threshold=1.0)
