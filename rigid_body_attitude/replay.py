@@ -452,6 +452,7 @@ class _Writer:
         self.connections = {name: writer.add_topic(name, OUTPUT_TOPICS[name])
                             for name in outputs}
         self.counts = {name: 0 for name in outputs}
+        self.invariants = 'energy' in outputs or 'angular_momentum' in outputs
         self.series = OutputSeries()
         self.keep_series = keep_series
 
@@ -706,8 +707,13 @@ class _Replay:
         self.write_invariants(now_ns, stamp_ns, sample.energy, sample.world_momentum)
 
     def publish_invariants(self, now_ns: int, stamp_ns: int) -> None:
-        """Energy and world momentum of the current state (gyro scenes, at a tick)."""
+        """Energy and world momentum of the current state (gyro scenes, at a tick).
+
+        Not computed when neither ``energy`` nor ``angular_momentum`` is written.
+        """
         self.fresh_output = False
+        if not self.writer.invariants:
+            return
         self.write_invariants(now_ns, stamp_ns, self.propagator.energy(),
                               tuple(self.propagator.world_momentum().tolist()))
 
