@@ -143,11 +143,10 @@ def check_parameters(values: Mapping[str, Any]) -> str:
 
 @dataclass(frozen=True)
 class NodeSettings:
-    """The scene and stream settings taken from the parameters at start."""
+    """What the read-only parameters fix at start: the scene (with overrides), the rate."""
 
     scene: Scene
     publish_rate: float
-    torque_timeout: float
 
 
 def _descriptor(name: str, spec: ParameterSpec) -> ParameterDescriptor:
@@ -164,7 +163,7 @@ def load_settings(values: Mapping[str, Any]) -> NodeSettings:
         raise InputError(problem)
     scene = load_node_scene(values['scene'], values['integrator'], values['step'],
                             values['torque_timeout'])
-    return NodeSettings(scene, values['publish_rate'], values['torque_timeout'])
+    return NodeSettings(scene, values['publish_rate'])
 
 
 class AttitudePropagatorNode(Node):
