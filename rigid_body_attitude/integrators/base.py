@@ -62,7 +62,10 @@ class BodyModel(Protocol):
     9-tuples of floats), ``principal_moments`` (ascending, (3,)), ``principal_axes``
     (rotation whose columns are the principal axes), ``torque_free`` (no torque, no rotor),
     ``torque_body(t, attitude, omega_body) -> (3,)`` [N m] and
-    ``rotor_momentum(t) -> (h [N m s], ḣ [N m])``.
+    ``rotor_momentum(t) -> (h [N m s], ḣ [N m])``. Optional: ``torque_depends_on_rate``
+    (bool, taken as True when absent); False lets the splitting methods apply a torque kick
+    exactly in one evaluation. ``has_rotor`` (bool, True when absent); False skips the rotor
+    query.
     """
 
     tensor_entries: tuple[float, ...]
@@ -93,10 +96,12 @@ class SimpleBodyModel:
     ``inertia`` is three principal moments or a symmetric (3, 3) tensor [kg m²];
     ``torque_body(t, attitude, omega_body) -> (3,)`` [N m] and
     ``rotor_momentum(t) -> (h, ḣ)`` are optional callables (absent means zero).
+    ``torque_depends_on_rate=False`` declares that the torque ignores ``omega_body``.
     """
 
     def __init__(self, inertia: ArrayLike, torque_body: TorqueFunction | None = None,
-                 rotor_momentum: RotorFunction | None = None):
+                 rotor_momentum: RotorFunction | None = None,
+                 torque_depends_on_rate: bool = True):
         tensor = np.asarray(inertia, dtype=np.float64)
         if tensor.shape == (3,):
             tensor = np.diag(tensor)
@@ -112,6 +117,8 @@ class SimpleBodyModel:
         self._axes = axes
         self._torque = torque_body
         self._rotor = rotor_momentum
+        self.torque_depends_on_rate = bool(torque_depends_on_rate)
+        self.has_rotor = rotor_momentum is not None
 
     @property
     def torque_free(self) -> bool:

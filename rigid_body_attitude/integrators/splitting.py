@@ -1,19 +1,27 @@
-"""Splitting methods for the rigid body: exact axis rotations, torque kicks, compositions.
+"""Splitting methods for the rigid body: exact rotations, torque kicks, symmetric compositions.
 
-Free part (principal axes, ``T = Σ m_i²/(2J_i)``): each term's flow is exact,
+Free part, principal axes, ``T = Σ m_i²/(2J_i)``. Two second-order symmetric approximations
+of its flow are built from exactly integrable pieces:
 
-    T_i(τ):  θ = τ m_i/J_i,   m ← rotation of m about e_i by −θ,   q ← q ⊗ exp(θ e_i),
+* **axis sweep** ``T₁(h/2) T₂(h/2) T₃(h) T₂(h/2) T₁(h/2)``, with ``T_i(τ)``: ``θ = τ m_i/J_i``,
+  ``m ←`` rotation of ``m`` about ``e_i`` by ``−θ``, ``q ← q ⊗ exp(θ e_i)`` (McLachlan 1993;
+  Touma & Wisdom 1994; physics.md §5);
+* **Casimir split** ``T = G²/(2J₂) + Σ_{i=1,3} ½ (1/J_i − 1/J₂) m_i²``: the ``G²`` flow
+  ``q ← q ⊗ exp(τ m/J₂)`` (``m`` constant) commutes with everything, the other two terms are
+  axis rotations with ``θ = τ (1/J_i − 1/J₂) m_i``, swept ``R₁(h/2) R₃(h) R₁(h/2)``. For an
+  axisymmetric body one term vanishes and the free flow is *exact*, including any fast spin
+  about the symmetry axis (Dullweber, Leimkuhler & McLachlan, J. Chem. Phys. 107, 1997).
 
-and the symmetric sweep ``T₁(h/2) T₂(h/2) T₃(h) T₂(h/2) T₁(h/2)`` is a second-order
-approximation of the free flow (Touma & Wisdom 1994; McLachlan 1993; Dullweber, Leimkuhler
-& McLachlan 1997). With a torque ``M(t, q, ω)`` or a rotor ``h(t)`` the remaining field
+With a torque ``M(t, q, ω)`` or a rotor ``h(t)`` the rest of the field,
+``ṁ = M(t, q, ω) − ḣ(t) − ω × h(t)`` with ``q`` and ``t`` frozen, is a *kick*. A kick is
+exact in one evaluation when no rotor momentum is present and the model declares
+``torque_depends_on_rate = False`` (gravity, commanded torques); otherwise it is integrated by
+RK4 (error O(τ⁵): the compositions then stay fourth order at most).
 
-    ṁ = M(t, q, ω) − ḣ(t) − ω × h(t)      (q and t frozen)
-
-is a *kick*; Strang composes ``kick(h/2) ∘ free(h) ∘ kick(h/2)`` with the kick at the step's
-two ends. The kick is integrated by RK4 (exact in one evaluation when ``M`` does not depend on
-ω, e.g. gravity), so its error is O(h⁵) and the composition stays second order and, to
-O(h⁵), symmetric, which is what the fourth-order composition needs.
+A composition with weights ``w₁…w_s`` (symmetric, ``Σ w = 1``) is
+``kick(w₁h/2) free(w₁h) kick((w₁+w₂)h/2) free(w₂h) … free(w_s h) kick(w_s h/2)``, with each
+kick at the time reached so far; adjacent half-kicks at the same (t, q) are merged. World
+angular momentum, ``|q|`` and ``|m|`` are kept exactly by every free piece.
 """
 
 from __future__ import annotations
@@ -23,27 +31,85 @@ import math
 import numpy as np
 
 from rigid_body_attitude import quaternion as quat
-from rigid_body_attitude.integrators.base import BodyModel, q_multiply, q_normalize, Quat, Vec
+from rigid_body_attitude.integrators.base import (
+    BodyModel, q_exp, q_multiply, q_normalize, Quat, Vec)
 from rigid_body_attitude.integrators.dynamics_base import DynamicsMethod
 
-__all__ = ['PrincipalFrame', 'StrangSplitting', 'Yoshida4Splitting', 'free_sweep']
+__all__ = [
+    'Casimir6Splitting',
+    'Casimir8Splitting',
+    'PrincipalFrame',
+    'StrangSplitting',
+    'Yoshida4Splitting',
+    'axis_sweep',
+    'casimir_free_flow',
+]
 
-#: Yoshida (1990) weights of the fourth-order symmetric triple jump.
-YOSHIDA_OUTER = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
-YOSHIDA_INNER = 1.0 - 2.0 * YOSHIDA_OUTER
+#: Yoshida (1990) fourth-order triple jump.
+_Y4 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
+YOSHIDA4_WEIGHTS = (_Y4, 1.0 - 2.0 * _Y4, _Y4)
+#: Yoshida (1990) sixth-order composition, solution A (seven stages).
+_Y6 = (0.784513610477560, 0.235573213359357, -1.17767998417887)
+YOSHIDA6_WEIGHTS = _Y6 + (1.0 - 2.0 * sum(_Y6),) + _Y6[::-1]
+#: Kahan & Li (Math. Comp. 66, 1997) eighth-order composition s17odr8 (seventeen stages).
+_KL8 = (0.13020248308889008087881763, 0.56116298177510838456196441,
+        -0.38947496264484728640807860, 0.15884190655515560089621075,
+        -0.39590389413323757733623154, 0.18453964097831570709183254,
+        0.25837438768632204729397911, 0.29501172360931029887096624)
+KAHAN_LI8_WEIGHTS = _KL8 + (-0.60550853383003451169892108,) + _KL8[::-1]
 
 
 class PrincipalFrame:
-    """Plain-float data of a model's principal frame (cached per model by the methods)."""
+    """Plain-float data of a model's principal frame (cached per model by the methods).
+
+    A diagonal inertia keeps the body axes (``V = I``, no conversions) with the moments in
+    body order; ``order`` lists the axes by increasing moment, so sweeps and the Casimir
+    reference (the middle moment) do not depend on how the body axes are labelled. Otherwise
+    the model's principal axes are used, already sorted.
+    """
 
     def __init__(self, model: BodyModel):
-        axes = np.asarray(model.principal_axes, dtype=np.float64)
-        self.moments = tuple(float(x) for x in model.principal_moments)
+        tensor = np.array(model.tensor_entries, dtype=np.float64).reshape(3, 3)
+        if np.count_nonzero(tensor - np.diag(np.diag(tensor))) == 0:
+            axes = np.eye(3)
+            moments = np.diag(tensor)
+            self.order = tuple(int(i) for i in np.argsort(moments, kind='stable'))
+        else:
+            axes = np.asarray(model.principal_axes, dtype=np.float64)
+            moments = np.asarray(model.principal_moments, dtype=np.float64)
+            self.order = (0, 1, 2)
+        self.moments = tuple(float(x) for x in moments)
         self.axes = tuple(axes.ravel().tolist())  # row-major V: body = V · principal
         self.rotation = tuple(quat.from_matrix(axes).tolist())  # q_body ⊗ rotation = q_p
         self.identity = bool(np.array_equal(axes, np.eye(3)))
         self.tensor = tuple(model.tensor_entries)
         self.inverse = tuple(model.inverse_entries)
+        reference = self.moments[self.order[1]]
+        self.reference = reference
+        self.casimir = tuple(1.0 / j - 1.0 / reference for j in self.moments)
+
+    def body_vector(self, v: Vec) -> Vec:
+        """Principal components to body components, ``V v``."""
+        if self.identity:
+            return v
+        a = self.axes
+        return (a[0] * v[0] + a[1] * v[1] + a[2] * v[2], a[3] * v[0] + a[4] * v[1] + a[5] * v[2],
+                a[6] * v[0] + a[7] * v[1] + a[8] * v[2])
+
+    def principal_vector(self, v: Vec) -> Vec:
+        """Body components to principal components, ``Vᵀ v``."""
+        if self.identity:
+            return v
+        a = self.axes
+        return (a[0] * v[0] + a[3] * v[1] + a[6] * v[2], a[1] * v[0] + a[4] * v[1] + a[7] * v[2],
+                a[2] * v[0] + a[5] * v[1] + a[8] * v[2])
+
+    def body_attitude(self, q: Quat) -> Quat:
+        """Principal-frame attitude to body attitude, ``q ⊗ r*``."""
+        if self.identity:
+            return q
+        r = self.rotation
+        return q_multiply(q, (r[0], -r[1], -r[2], -r[3]))
 
     def to_principal(self, q: Quat, m: Vec) -> tuple[Quat, Vec]:
         """Body-frame ``(q, m)`` to principal-frame ``(q ⊗ r, Vᵀ m)``."""
@@ -81,10 +147,9 @@ class PrincipalFrame:
                 j[6] * m[0] + j[7] * m[1] + j[8] * m[2])
 
 
-def _axis_flow(q: Quat, m: Vec, axis: int, tau: float, moments: tuple[float, ...]
-               ) -> tuple[Quat, Vec]:
-    """Exact flow ``T_axis(τ)`` of ``m_axis²/(2 J_axis)`` (principal frame)."""
-    half = 0.5 * tau * m[axis] / moments[axis]
+def _rotation(q: Quat, m: Vec, axis: int, theta: float) -> tuple[Quat, Vec]:
+    """``q ⊗ exp(θ e_axis)`` and ``m`` rotated about ``e_axis`` by ``−θ`` (principal frame)."""
+    half = 0.5 * theta
     c2, s2 = math.cos(half), math.sin(half)
     c, s = c2 * c2 - s2 * s2, 2.0 * s2 * c2
     w, x, y, z = q
@@ -99,30 +164,64 @@ def _axis_flow(q: Quat, m: Vec, axis: int, tau: float, moments: tuple[float, ...
             (m1 * c + m2 * s, m2 * c - m1 * s, m3))
 
 
-def free_sweep(q: Quat, m: Vec, h: float, moments: tuple[float, ...]) -> tuple[Quat, Vec]:
-    """``T₁(h/2) T₂(h/2) T₃(h) T₂(h/2) T₁(h/2)`` in the principal frame (order 2)."""
+def axis_sweep(q: Quat, m: Vec, h: float, frame: PrincipalFrame) -> tuple[Quat, Vec]:
+    """``T₁(h/2) T₂(h/2) T₃(h) T₂(h/2) T₁(h/2)`` in the principal frame (order 2; axes by
+    increasing moment)."""
+    j = frame.moments
+    a, b, c = frame.order
     half = 0.5 * h
-    q, m = _axis_flow(q, m, 0, half, moments)
-    q, m = _axis_flow(q, m, 1, half, moments)
-    q, m = _axis_flow(q, m, 2, h, moments)
-    q, m = _axis_flow(q, m, 1, half, moments)
-    return _axis_flow(q, m, 0, half, moments)
+    q, m = _rotation(q, m, a, half * m[a] / j[a])
+    q, m = _rotation(q, m, b, half * m[b] / j[b])
+    q, m = _rotation(q, m, c, h * m[c] / j[c])
+    q, m = _rotation(q, m, b, half * m[b] / j[b])
+    return _rotation(q, m, a, half * m[a] / j[a])
+
+
+def casimir_free_flow(q: Quat, m: Vec, h: float, frame: PrincipalFrame) -> tuple[Quat, Vec]:
+    """``G²/(2J₂)`` flow, then ``R₁(h/2) R₃(h) R₁(h/2)`` (exact when two moments are equal)."""
+    k = h / frame.reference
+    q = q_multiply(q, q_exp(k * m[0], k * m[1], k * m[2]))
+    a, _, c = frame.order
+    ca, cc = frame.casimir[a], frame.casimir[c]
+    if ca == 0.0:
+        return _rotation(q, m, c, h * cc * m[c]) if cc != 0.0 else (q, m)
+    if cc == 0.0:
+        return _rotation(q, m, a, h * ca * m[a])
+    half = 0.5 * h
+    q, m = _rotation(q, m, a, half * ca * m[a])
+    q, m = _rotation(q, m, c, h * cc * m[c])
+    return _rotation(q, m, a, half * ca * m[a])
 
 
 def _kick(q: Quat, m: Vec, t: float, tau: float, model: BodyModel,
           frame: PrincipalFrame) -> Vec:
-    """RK4 over ``τ`` of ``ṁ = M(t, q, J⁻¹m) − ḣ(t) − J⁻¹m × h(t)`` with q and t frozen."""
-    attitude = np.array(q)
-    rotor, rotor_rate = model.rotor_momentum(t)
-    hx, hy, hz = float(rotor[0]), float(rotor[1]), float(rotor[2])
-    rx, ry, rz = float(rotor_rate[0]), float(rotor_rate[1]), float(rotor_rate[2])
+    """Advance ``ṁ = M(t, q, ω) − ḣ(t) − ω × h(t)`` over ``τ`` with q and t frozen.
+
+    ``q`` and ``m`` are principal-frame; the torque and rotor callables see body-frame arrays.
+    """
+    attitude = np.array(frame.body_attitude(q))
+    j = frame.moments
+    if getattr(model, 'has_rotor', True):
+        rotor, rotor_rate = model.rotor_momentum(t)
+        hx, hy, hz = frame.principal_vector((float(rotor[0]), float(rotor[1]), float(rotor[2])))
+        rx, ry, rz = frame.principal_vector(
+            (float(rotor_rate[0]), float(rotor_rate[1]), float(rotor_rate[2])))
+    else:
+        hx = hy = hz = rx = ry = rz = 0.0
+    if hx == hy == hz == 0.0 and not getattr(model, 'torque_depends_on_rate', True):
+        omega = frame.body_vector((m[0] / j[0], m[1] / j[1], m[2] / j[2]))
+        torque = model.torque_body(t, attitude, np.array(omega))
+        mx, my, mz = frame.principal_vector((float(torque[0]), float(torque[1]),
+                                             float(torque[2])))
+        return m[0] + tau * (mx - rx), m[1] + tau * (my - ry), m[2] + tau * (mz - rz)
 
     def field(momentum: Vec) -> Vec:
-        p, r, s = frame.rate(momentum)
-        torque = model.torque_body(t, attitude, np.array((p, r, s)))
-        return (float(torque[0]) - rx - (r * hz - s * hy),
-                float(torque[1]) - ry - (s * hx - p * hz),
-                float(torque[2]) - rz - (p * hy - r * hx))
+        p, r, s = momentum[0] / j[0], momentum[1] / j[1], momentum[2] / j[2]
+        torque = model.torque_body(t, attitude, np.array(frame.body_vector((p, r, s))))
+        mx, my, mz = frame.principal_vector((float(torque[0]), float(torque[1]),
+                                             float(torque[2])))
+        return (mx - rx - (r * hz - s * hy), my - ry - (s * hx - p * hz),
+                mz - rz - (p * hy - r * hx))
 
     half = 0.5 * tau
     k1 = field(m)
@@ -133,23 +232,12 @@ def _kick(q: Quat, m: Vec, t: float, tau: float, model: BodyModel,
     return tuple(a + sixth * (b + 2.0 * (c + d) + e) for a, b, c, d, e in zip(m, k1, k2, k3, k4))
 
 
-def _strang(q: Quat, m: Vec, t: float, h: float, model: BodyModel, frame: PrincipalFrame,
-            free: bool) -> tuple[Quat, Vec]:
-    """One Strang step on body-frame ``(q, m)``."""
-    if not free:
-        m = _kick(q, m, t, 0.5 * h, model, frame)
-    qp, mp = frame.to_principal(q, m)
-    qp, mp = free_sweep(qp, mp, h, frame.moments)
-    q, m = frame.to_body(qp, mp)
-    if not free:
-        m = _kick(q, m, t + h, 0.5 * h, model, frame)
-    return q, m
-
-
-class _Splitting(DynamicsMethod):
-    """Caches the principal frame of the last model seen."""
+class _Composition(DynamicsMethod):
+    """A symmetric composition of kick–free–kick steps (see the module docstring)."""
 
     supports_torque = True
+    weights: tuple[float, ...] = (1.0,)
+    free_flow = staticmethod(axis_sweep)
 
     def __init__(self) -> None:
         self._model: BodyModel | None = None
@@ -161,46 +249,85 @@ class _Splitting(DynamicsMethod):
             self._model = model
         return self._frame
 
+    def _advance(self, q: Quat, omega: Vec, t: float, h: float,
+                 model: BodyModel) -> tuple[Quat, Vec]:
+        frame = self._frame_of(model)
+        free_flow = self.free_flow
+        q, m = frame.to_principal(q, frame.momentum(omega))
+        if model.torque_free:
+            for weight in self.weights:
+                q, m = free_flow(q, m, weight * h, frame)
+        else:
+            weights = self.weights
+            elapsed = 0.0
+            m = _kick(q, m, t, 0.5 * weights[0] * h, model, frame)
+            for index, weight in enumerate(weights):
+                q, m = free_flow(q, m, weight * h, frame)
+                elapsed += weight * h
+                following = weights[index + 1] if index + 1 < len(weights) else 0.0
+                m = _kick(q, m, t + elapsed, 0.5 * (weight + following) * h, model, frame)
+        q, m = frame.to_body(q, m)
+        return q_normalize(q), frame.rate(m)
 
-class StrangSplitting(_Splitting):
+
+class StrangSplitting(_Composition):
     """Strang splitting: ``kick(h/2) ∘ T₁(h/2)T₂(h/2)T₃(h)T₂(h/2)T₁(h/2) ∘ kick(h/2)``.
 
-    Order 2; cost five exact axis rotations (five sin/cos pairs) per step, plus two RK4 kicks
-    (eight torque evaluations) when a torque or rotor acts. Invariants (torque-free): ``|q|``,
-    ``|m|`` and the world angular momentum exactly (each sub-flow is a rotation that keeps
-    ``q ⊗ m ⊗ q*``), energy bounded without drift (symplectic, Hairer–Vilmart body
-    T = 1000, h = 0.05: 4.4e−4). Source: McLachlan (1993); Touma & Wisdom (1994); Dullweber,
-    Leimkuhler & McLachlan, J. Chem. Phys. 107 (1997).
+    Order 2; cost five exact axis rotations (five sin/cos pairs) per step, plus two kicks
+    (one torque evaluation each when exact, four with RK4) when a torque or rotor acts.
+    Invariants (torque-free): ``|q|``, ``|m|`` and the world angular momentum exactly (each
+    sub-flow is a rotation that keeps ``q ⊗ m ⊗ q*``), energy bounded without drift
+    (symplectic; Hairer–Vilmart body T = 1000, h = 0.05: 4.4e−4). Source: McLachlan (1993);
+    Touma & Wisdom (1994); Dullweber, Leimkuhler & McLachlan, J. Chem. Phys. 107 (1997).
     """
 
     name = 'strang'
     order = 2
-
-    def _advance(self, q: Quat, omega: Vec, t: float, h: float,
-                 model: BodyModel) -> tuple[Quat, Vec]:
-        frame = self._frame_of(model)
-        q, m = _strang(q, frame.momentum(omega), t, h, model, frame, model.torque_free)
-        return q_normalize(q), frame.rate(m)
+    weights = (1.0,)
 
 
-class Yoshida4Splitting(_Splitting):
+class Yoshida4Splitting(_Composition):
     """Yoshida's fourth-order triple jump of Strang steps: ``S(w₁h) S(w₀h) S(w₁h)``.
 
-    ``w₁ = 1/(2 − 2^{1/3})``, ``w₀ = 1 − 2w₁`` (a negative inner step). Order 4; cost three
-    Strang steps (fifteen axis rotations; six RK4 kicks with a torque). Invariants as
-    :class:`StrangSplitting`. Source: Yoshida, Phys. Lett. A 150 (1990).
+    ``w₁ = 1/(2 − 2^{1/3})``, ``w₀ = 1 − 2w₁`` (a negative inner step). Order 4; cost fifteen
+    axis rotations and four (merged) kicks per step. Invariants as :class:`StrangSplitting`.
+    Source: Yoshida, Phys. Lett. A 150 (1990).
     """
 
     name = 'yoshida4'
     order = 4
+    weights = YOSHIDA4_WEIGHTS
 
-    def _advance(self, q: Quat, omega: Vec, t: float, h: float,
-                 model: BodyModel) -> tuple[Quat, Vec]:
-        frame = self._frame_of(model)
-        free = model.torque_free
-        m = frame.momentum(omega)
-        outer, inner = YOSHIDA_OUTER * h, YOSHIDA_INNER * h
-        q, m = _strang(q, m, t, outer, model, frame, free)
-        q, m = _strang(q, m, t + outer, inner, model, frame, free)
-        q, m = _strang(q, m, t + outer + inner, outer, model, frame, free)
-        return q_normalize(q), frame.rate(m)
+
+class Casimir6Splitting(_Composition):
+    """Yoshida's sixth-order seven-stage composition of the Casimir-split Strang step.
+
+    Free flow ``G²/(2J₂)`` flow plus ``R₁(h/2)R₃(h)R₁(h/2)``, exact for an axisymmetric body,
+    so a fast spin about the symmetry axis costs nothing and (for a symmetric top with its
+    centre of mass on the axis, whose gravity commutes with the spin) does not limit the step.
+    Order 6 when kicks are exact (no rotor, ``torque_depends_on_rate`` False), otherwise 4
+    (RK4 kicks). Cost seven free flows (one exponential and up to three rotations each) and
+    eight kicks per step. Invariants as :class:`StrangSplitting`. Source: Yoshida, Phys.
+    Lett. A 150 (1990); Dullweber, Leimkuhler & McLachlan (1997).
+    """
+
+    name = 'casimir6'
+    order = 6
+    weights = YOSHIDA6_WEIGHTS
+    free_flow = staticmethod(casimir_free_flow)
+
+
+class Casimir8Splitting(_Composition):
+    """Kahan & Li's eighth-order seventeen-stage composition of the Casimir-split Strang step.
+
+    As :class:`Casimir6Splitting` with the s17odr8 weights. Order 8 when kicks are exact,
+    otherwise 4. Cost seventeen free flows and eighteen kicks per step: expensive per step,
+    but on the symmetric heavy top (fast spin exact) it reaches 1e−9 rad at T = 10 s with ~130
+    steps. Invariants as :class:`StrangSplitting`. Source: Kahan & Li, Math. Comp. 66 (1997);
+    Hairer, Lubich & Wanner, *Geometric Numerical Integration*, §V.3.
+    """
+
+    name = 'casimir8'
+    order = 8
+    weights = KAHAN_LI8_WEIGHTS
+    free_flow = staticmethod(casimir_free_flow)
