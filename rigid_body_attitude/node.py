@@ -53,7 +53,8 @@ from rigid_body_attitude.messages import (
     body_frame_velocity, diagnostic_report, LEVEL_ERROR, LEVEL_WARN,
     stale_command_count, TimeBase)
 from rigid_body_attitude.outputs import OutputTracker
-from rigid_body_attitude.propagator import build_propagator, DynamicsPropagator
+from rigid_body_attitude.propagator import (
+    build_propagator, DynamicsPropagator, MAX_STEPS_PER_CALL)
 from rigid_body_attitude.scene import Scene
 from rigid_body_attitude.settings import (
     DIAGNOSTICS_PERIOD, load_node_scene, NODE_DEFAULTS, NODE_NAME, publishes)
@@ -118,11 +119,13 @@ _POSITIVE = ('publish_rate', 'max_dt', 'time_jump_threshold')
 _NONNEGATIVE = ('constant_dt', 'torque_timeout', 'step')
 
 
-def check_parameters(values: Mapping[str, Any]) -> str:
+def check_parameters(values: Mapping[str, Any], dynamics_step: float = 0.0) -> str:
     """Why these node parameter values are unusable, or ``''`` when they are fine.
 
     Checks what the descriptors' types and ranges cannot: strictly positive values, finite
-    numbers, non-empty names and distinct frames.
+    numbers, non-empty names and distinct frames. With the ``dynamics_step`` [s] of a dynamics
+    scene it also checks that a clock jump just below ``time_jump_threshold`` (integrated in
+    one tick) stays within the propagator's :data:`MAX_STEPS_PER_CALL`.
     """
     for name in _POSITIVE:
         value = values[name]
@@ -138,6 +141,11 @@ def check_parameters(values: Mapping[str, Any]) -> str:
     if values['world_frame'] == values['body_frame']:
         return (f'Expected `world_frame` and `body_frame` to differ, both are '
                 f'{values["world_frame"]!r}')
+    threshold = values['time_jump_threshold']
+    if dynamics_step > 0.0 and threshold / dynamics_step > MAX_STEPS_PER_CALL:
+        return (f'Expected parameter `time_jump_threshold` to be at most '
+                f'{MAX_STEPS_PER_CALL * dynamics_step:g} s ({MAX_STEPS_PER_CALL} steps of '
+                f'{dynamics_step:g} s in one tick), got {threshold!r}')
     return ''
 
 
@@ -163,6 +171,10 @@ def load_settings(values: Mapping[str, Any]) -> NodeSettings:
         raise InputError(problem)
     scene = load_node_scene(values['scene'], values['integrator'], values['step'],
                             values['torque_timeout'])
+    if scene.rate_source == 'dynamics':
+        problem = check_parameters(values, scene.step)
+        if problem:
+            raise InputError(problem)
     return NodeSettings(scene, values['publish_rate'])
 
 
@@ -309,7 +321,7 @@ class AttitudePropagatorNode(Node):
         """Refuse run-time values that :func:`check_parameters` finds unusable."""
         values = self.get_parameters_values()
         values.update({p.name: p.value for p in parameters if p.name in PARAMETERS})
-        reason = check_parameters(values)
+        reason = check_parameters(values, self.scene.step if self.is_dynamics else 0.0)
         return SetParametersResult(successful=not reason, reason=reason)
 
     def parameters_set_callback(self, parameters: list[Parameter]) -> None:
@@ -572,7 +584,7 @@ def main(args: list[str] | None = None) -> int:
     try:
         node = AttitudePropagatorNode()
         rclpy.spin(node)
-    except (AttitudeError, ParameterException) as err:
+    except (AttitudeError, ParameterException, OSError) as err:
         print(f'error: {_error_text(err)}', file=sys.stderr)
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):

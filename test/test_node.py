@@ -28,7 +28,7 @@ from std_srvs.srv import Trigger
 
 from rigid_body_attitude import quaternion
 from rigid_body_attitude.errors import InputError, IntegratorError, SceneError
-from rigid_body_attitude.messages import TimeBase
+from rigid_body_attitude.messages import body_frame_velocity, TimeBase
 from rigid_body_attitude.node import AttitudePropagatorNode, check_parameters, main
 from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import build_propagator
@@ -148,6 +148,16 @@ def test_check_parameters_names_the_bad_value(name, value, expected):
     assert expected in check_parameters(values)
 
 
+def test_check_parameters_bounds_the_steps_of_one_tick():
+    values = defaults()
+    values['time_jump_threshold'] = 2e4
+    assert check_parameters(values) == ''  # gyro scenes: no integration over clock jumps
+    assert check_parameters(values, dynamics_step=0.002) == ''  # 1e7 steps
+    assert check_parameters(values, dynamics_step=0.001) == (
+        'Expected parameter `time_jump_threshold` to be at most 10000 s (10000000 steps of '
+        '0.001 s in one tick), got 20000.0')
+
+
 @pytest.mark.parametrize('name, value, error, match', [
     ('scene', 'no_such_scene', SceneError, "Unknown scene 'no_such_scene'; built-in scenes"),
     ('publish_rate', 50, InputError, 'Expected parameter `publish_rate` to be a double'),
@@ -186,6 +196,28 @@ def test_runtime_parameter_changes_are_checked_and_applied(ros, request):
     assert node.set_parameters([Parameter('world_frame', value='map')])[0].successful
     assert node.pose_message.header.frame_id == 'map'
     assert node.orientation_message.header.frame_id == 'map'
+
+
+@pytest.mark.parametrize('scene, inputs, outputs', [
+    ('strapdown', {'imu', 'angular_velocity', 'set_pose'}, {'imu/data'}),
+    ('torque_free_box', {'set_pose'}, {'twist'}),
+    ('commanded_torque', {'torque', 'set_pose'}, {'twist'}),
+    ('free_flyer', {'torque', 'set_pose'}, {'twist'}),
+    ('gyrostat', {'rotor_torque', 'set_pose'}, {'twist'}),
+])
+def test_subscriptions_exist_only_for_the_inputs_the_scene_uses(ros, request, scene, inputs,
+                                                                outputs):
+    namespace = unique_namespace(request)
+    node = AttitudePropagatorNode(context=ros.context, namespace=namespace,
+                                  parameter_overrides=[Parameter('scene', value=scene)])
+    assert set(node.subscriptions_by_topic) == inputs
+    published = {name.removeprefix(namespace + '/')
+                 for name, _ in node.get_publisher_names_and_types_by_node(
+                     node.get_name(), namespace)}
+    common = {'orientation', 'pose', 'energy', 'angular_momentum', '/diagnostics',
+              '/rosout', '/parameter_events'}
+    assert published == common | outputs
+    node.destroy_node()
 
 
 # -- gyro scenes ---------------------------------------------------------------------------
@@ -450,6 +482,55 @@ def test_commanded_torque_on_sim_time_gives_the_core_rates_and_energy(ros, reque
     advance_clock(harness, first_ns + (ticks + 1) * 20 * MS, twists, ticks + 2)
     assert (twists[-1].twist.angular.x, twists[-1].twist.angular.y,
             twists[-1].twist.angular.z) == (0.0, 0.0, 0.0)
+
+
+def test_commanded_force_moves_the_pose_as_the_core_predicts(ros, request):
+    harness = Harness(ros, unique_namespace(request))
+    node = start_node(harness, scene='free_flyer', use_sim_time=True, publish_rate=50.0)
+    harness.publisher(Clock, '/clock')
+    harness.publisher(WrenchStamped, 'torque')
+    twists = harness.record(TwistStamped, 'twist')
+    poses = harness.record(PoseStamped, 'pose')
+    harness.wait_for_connections()
+    advance_clock(harness, 1000 * 10**9, twists, 1)
+    first_ns = nanoseconds(twists[0].header.stamp)
+    force_body, torque_body = (2.0, 0.0, -1.0), (0.0, 0.0, 0.05)
+    wrench = WrenchStamped()
+    wrench.header.stamp = stamp(first_ns)
+    wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z = force_body
+    wrench.wrench.torque.x, wrench.wrench.torque.y, wrench.wrench.torque.z = torque_body
+    publish_and_wait(harness, node, 'torque', wrench)
+    assert node.command_stream.accepted == 2  # torque and force from one WrenchStamped
+    for k in range(1, 11):
+        advance_clock(harness, first_ns + k * 20 * MS, twists, k + 1)
+    assert harness.spin_until(lambda: len(poses) >= 11, 2.0)
+
+    propagator = build_propagator(load_scene('free_flyer'))
+    driver, commands, time_base = ClockDriver(propagator, 1.0), CommandStream(propagator), \
+        TimeBase()
+    driver.tick(time_base.seconds_from_nanoseconds(first_ns))
+    start = time_base.seconds_from_nanoseconds(first_ns)
+    commands.add('torque', start, torque_body)
+    commands.add('force', start, force_body)
+    for k in range(1, 11):
+        driver.tick(time_base.seconds_from_nanoseconds(first_ns + k * 20 * MS))
+    position, twist = poses[-1].pose.position, twists[-1].twist
+    # The node adds nothing to the core: the same bits.
+    assert (position.x, position.y, position.z) == tuple(propagator.state.position.tolist())
+    assert (twist.angular.x, twist.angular.y, twist.angular.z) == \
+        tuple(propagator.state.omega_body.tolist())
+    assert (twist.linear.x, twist.linear.y, twist.linear.z) == \
+        body_frame_velocity(propagator)
+    assert twists[-1].header.frame_id == 'base_link'
+    # Against the physics: the cube spins about z only (isotropic inertia, torque about z),
+    # so the world force keeps F_z exactly, and the translation update is exact for a
+    # constant force: z = F_z t²/2m to round-off. Its x component is F_x cos θ with
+    # θ < 0.03 rad over 0.2 s: x = v0 t + F_x t²/2m within (1 − cos 0.03) of the force term,
+    # 1e-4 of x; 1e-3 bounds it.
+    elapsed, mass = 0.2, propagator.scene.mass
+    assert position.z == pytest.approx(force_body[2] * elapsed**2 / (2 * mass), rel=1e-12)
+    assert position.x == pytest.approx(0.1 * elapsed + force_body[0] * elapsed**2 / (2 * mass),
+                                       rel=1e-3)
 
 
 def test_diagnostics_error_when_the_step_is_too_coarse(ros, request):
