@@ -67,8 +67,8 @@ from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import DynamicsPropagator, GyroPropagator, build_propagator
 from rigid_body_attitude.scene import Scene
 from rigid_body_attitude.settings import (
-    DIAGNOSTICS_PERIOD, DIAGNOSTICS_TOPIC, GYRO_TOPICS, MOVED_REASONS, NODE_DEFAULTS,
-    NODE_NAME, OUTPUT_TOPICS, ROTOR_TORQUE_TOPIC, TORQUE_TOPIC, load_node_scene,
+    DIAGNOSTICS_PERIOD, DIAGNOSTICS_TOPIC, GYRO_TOPICS, NODE_DEFAULTS, NODE_NAME,
+    OUTPUT_TOPICS, ROTOR_TORQUE_TOPIC, TORQUE_TOPIC, load_node_scene, publishes,
     timer_period_ns)
 from rigid_body_attitude.stream import ClockDriver, CommandStream, GyroStream
 
@@ -500,7 +500,7 @@ class _Replay:
         self.next_diagnostics_ns = 0
         self.period_start_inputs = 0
         self.fresh_output = False
-        self.last_output_ns = 0
+        self.last_output_ns: int | None = None
         self.started = False
 
     # -- time events --------------------------------------------------------------------
@@ -540,7 +540,7 @@ class _Replay:
             self.period_rejections[outcome.reason] += 1
             if outcome.reset:
                 self.command_stream.reset()
-            if outcome.reason not in MOVED_REASONS:
+            if not publishes(outcome):
                 return
         self.align(now_ns)
         self.publish_dynamics(now_ns)
@@ -608,7 +608,7 @@ class _Replay:
             outcome = add(seconds(sec, nanosec), decode(data)[1])
             if outcome.reason:
                 rejections[outcome.reason] += 1
-                if outcome.reason not in MOVED_REASONS:
+                if not publishes(outcome):
                     continue
             if self.alignment_ns is not None:
                 self.align(stamp_ns)
@@ -760,7 +760,7 @@ class _Replay:
         report = diagnostic_report(self.propagator, self.rejection_counts(),
                                    self.period_rejections, self.accepted_count(), rate,
                                    self.step_text())
-        self.period_rejections = Counter()
+        self.period_rejections.clear()  # in place: the gyro loop holds a reference
         status = DiagnosticStatus(level=report.level, name='/' + NODE_NAME,
                                   message=report.message, hardware_id=self.scene.name,
                                   values=dict(report.values))
@@ -874,6 +874,13 @@ def replay_bag(input_path: str | Path, output_path: str | Path,
             if output_path.exists():
                 shutil.rmtree(output_path)
             raise
+        if replay.alignment_ns is not None:
+            shutil.rmtree(output_path)
+            last = ('none' if replay.last_output_ns is None
+                    else f'{replay.last_output_ns * 1e-9:.9f} s')
+            raise InputError(f'Expected an output at or after stamp '
+                             f'{replay.alignment_ns * 1e-9:.9f} s to start from the ground '
+                             f'truth; the last is at {last}')
     return _result(input_path, output_path, replay, writer, truth, gyro_count, elapsed)
 
 
