@@ -445,7 +445,7 @@ def test_errors_name_argument_and_shape(call, message):
 
 
 def test_input_error_is_value_error():
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match=re.escape('Expected `q` to be finite, got [nan, ')):
         quat.normalize([np.nan, 0.0, 0.0, 1.0])
 
 

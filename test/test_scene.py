@@ -319,5 +319,5 @@ def test_unknown_builtin_lists_builtins():
 
 
 def test_scene_errors_are_value_errors():
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="Missing key 'body' in scene"):
         scene_from_mapping({'rate_source': 'dynamics'})
