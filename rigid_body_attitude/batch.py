@@ -1,8 +1,8 @@
 """Many torque-free bodies at once: Monte-Carlo dispersions of initial states or inertia.
 
-:class:`TorqueFreeBatch` advances N bodies with the same classical RK4 (+ renormalisation) as
-:func:`rigid_body_attitude.dynamics.rk4_step`, vectorised over bodies. Two things make it fast
-with plain NumPy:
+:class:`TorqueFreeBatch` advances N bodies with the same classical RK4 (+ renormalisation)
+as the ``rk4`` dynamics integrator, vectorised over bodies. Two things make it fast with plain
+NumPy:
 
 * each body is integrated in its own **principal frame**: ``q_p = q ⊗ P``, ``ω_p = Pᵀ ω``
   (``P`` the principal axes). Euler's equations become ``ω̇₁ = (J₂ − J₃)/J₁ ω₂ ω₃`` (and
