@@ -567,6 +567,10 @@ class _Replay:
         attitude = _interpolate(truth_stamps, truth_attitudes,
                                 np.array([stamp_ns], dtype=np.int64))[0]
         self.propagator.set_attitude(attitude)
+        if isinstance(self.propagator, GyroPropagator):
+            # A new start: group methods (simpson_coning, delta_two_sample, ...) would
+            # otherwise finish their group from the attitude they remembered before.
+            self.propagator.method.reset()
         self.aligned_at_ns = stamp_ns
         self.alignment_ns = None
 
