@@ -35,6 +35,22 @@ FloatArray = NDArray[np.float64]
 #: A single call may not integrate more steps than this (a clock jump far ahead).
 MAX_STEPS_PER_CALL = 10_000_000
 
+#: Largest rotation per step ``h·|ω|`` [rad] for the explicit Runge–Kutta methods. For a
+#: torque-free body every eigenvalue of the linearised equations has ``|λ| ≤ |ω|`` (the
+#: attitude ``|ω|/2``; the body-frame precession of ``m`` at most ``|ω|`` because
+#: ``J₁ + J₂ ≥ J₃``), and RK4 is stable on the imaginary axis up to ``h|λ| = 2√2 ≈ 2.83``;
+#: at ``h|ω| = 3`` it diverges within ten steps. Steps above the limit are split into equal
+#: substeps (:meth:`DynamicsPropagator.step`). An integrator may declare its own
+#: ``max_rotation_per_step``; methods not listed (splitting, exact, adaptive) have none.
+MAX_ROTATION_PER_STEP = {'rk4': 2.0, 'rkmk4': 2.0}
+
+#: A single step may not be split into more substeps than this.
+MAX_SUBSTEPS = 1_000_000
+
+#: Relative slack on the limit, so that a step at the limit up to round-off (h·|ω| computed
+#: as 2·(1 + 2ε)) is not split into one substep more.
+_LIMIT_SLACK = 1.0 + 1e-9
+
 
 @dataclass
 class PropagatorState:
@@ -176,15 +192,58 @@ class DynamicsPropagator(_Propagator):
                                   f'({", ".join(e.name for e in self.effects)}). Use rk4, '
                                   f'rkmk4, strang, yoshida4 or dopri45')
         self._power_start: float | None = None
+        self.rotation_limit = float(getattr(
+            self.integrator, 'max_rotation_per_step',
+            MAX_ROTATION_PER_STEP.get(self.integrator.name, math.inf)))
+        self.substeps_taken = 0
 
     def step(self, h: float) -> None:
         """Advance the state by one step of ``h`` seconds.
 
-        Raises :class:`InputError` unless ``h`` is a positive finite number; the state is then
-        unchanged.
+        An explicit method whose stability limit :attr:`rotation_limit` the step would exceed
+        (``h·|ω| > limit``, :data:`MAX_ROTATION_PER_STEP`) takes equal substeps instead, each
+        within the limit for the rate at its start; :attr:`substeps_taken` counts the extra
+        ones. Raises :class:`InputError` unless ``h`` is a positive finite number, and
+        :class:`IntegratorError` if more than :data:`MAX_SUBSTEPS` substeps would be needed;
+        the state is then unchanged.
         """
         if not (isinstance(h, numbers.Real) and math.isfinite(h) and h > 0.0):
             raise InputError(f'Expected `h` to be a positive finite number of seconds, got {h!r}')
+        if h * _norm(self.state.omega_body) <= self.rotation_limit * _LIMIT_SLACK:
+            self._single_step(h)
+            return
+        start = (self.state.time, self.state.attitude, self.state.omega_body,
+                 self.state.position, self.tracker.work)
+        try:
+            self._substeps(h)
+        except IntegratorError:
+            (self.state.time, self.state.attitude, self.state.omega_body, self.state.position,
+             self.tracker.work) = start
+            raise
+        self.state.time = start[0] + h
+
+    def _substeps(self, h: float) -> None:
+        """Cover ``h`` with substeps of at most :attr:`rotation_limit` rad each."""
+        end = self.state.time + h
+        remaining = h
+        taken = 0
+        while remaining > 0.0:
+            needed = math.ceil(remaining * _norm(self.state.omega_body)
+                               / (self.rotation_limit * _LIMIT_SLACK))
+            if taken + needed > MAX_SUBSTEPS:
+                raise IntegratorError(
+                    f'Integrator {self.integrator.name!r} is stable only for h·|ω| <= '
+                    f'{self.rotation_limit} rad; a step of {h!r} s at |ω| = '
+                    f'{_norm(self.state.omega_body)!r} rad/s would need more than '
+                    f'{MAX_SUBSTEPS} substeps. Use a smaller step or the strang, yoshida4, '
+                    f'dopri45 or exact integrator')
+            substep = remaining / max(needed, 1)
+            self._single_step(substep)
+            taken += 1
+            remaining = end - self.state.time if needed > 1 else 0.0
+        self.substeps_taken += taken - 1
+
+    def _single_step(self, h: float) -> None:
         state = self.state
         t, attitude, omega = state.time, state.attitude, state.omega_body
         new_attitude, new_omega = self.integrator.step(attitude, omega, t, h, self.model)
@@ -295,6 +354,12 @@ class GyroPropagator(_Propagator):
                                          tuple(self.state.omega_body), tuple(omega), dt)
         self.state.attitude = np.array(attitude)
         self.state.time, self.state.omega_body = float(t), omega
+
+
+def _norm(vector: FloatArray) -> float:
+    """Euclidean norm of a (3,) array in plain float math."""
+    x, y, z = vector.tolist()
+    return math.sqrt(x * x + y * y + z * z)
 
 
 def _checked_sample(t: float, omega_measured: ArrayLike) -> FloatArray:
