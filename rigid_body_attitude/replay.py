@@ -26,7 +26,10 @@ node does it when a player publishes ``/clock`` with the bag times (``use_sim_ti
 * **Commands** (``torque``: WrenchStamped → the scene's ``torque``/``force`` inputs;
   ``rotor_torque``: Vector3Stamped) go to ``CommandStream.add`` with their header stamps (the
   bag time when the stamp is zero or ``--no-header-stamps``), in bag-time order.
-* ``/diagnostics`` every second of bag time from the first message, as the node's report.
+* ``set_pose`` (PoseStamped) re-initialises the attitude (and position) when it comes, as in
+  the node.
+* ``/diagnostics`` every second of bag time from the first message, as the node's report, and
+  once more at the next second after the end.
 
 Stamps are converted with :class:`rigid_body_attitude.messages.TimeBase` as in the node. Output
 messages are written at the bag time of the input (or tick) that caused them. The output bag
@@ -55,10 +58,11 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude import quaternion
 from rigid_body_attitude.bag import (
-    ATTITUDE_DECODERS, IMU, RATE_DECODERS, STORAGES, VECTOR3_STAMPED, WRENCH_STAMPED,
-    BagError, BagReader, BagWriter, DiagnosticStatus, encode_diagnostic_array, encode_float64,
-    encode_pose_stamped, encode_quaternion_stamped, encode_twist_stamped,
-    encode_vector3_stamped, header_stamp_ns, vector3_stamped, wrench_force, wrench_torque)
+    ATTITUDE_DECODERS, IMU, POSE_STAMPED, RATE_DECODERS, STORAGES, VECTOR3_STAMPED,
+    WRENCH_STAMPED, BagError, BagReader, BagWriter, DiagnosticStatus, encode_diagnostic_array,
+    encode_float64, encode_pose_stamped, encode_quaternion_stamped, encode_twist_stamped,
+    encode_vector3_stamped, header_stamp_ns, pose_orientation, pose_position, vector3_stamped,
+    wrench_force, wrench_torque)
 from rigid_body_attitude.errors import AttitudeError, InputError
 from rigid_body_attitude.messages import (
     NANOSECONDS_PER_SECOND, TimeBase, body_frame_velocity, diagnostic_report,
@@ -68,7 +72,7 @@ from rigid_body_attitude.propagator import DynamicsPropagator, GyroPropagator, b
 from rigid_body_attitude.scene import Scene
 from rigid_body_attitude.settings import (
     DIAGNOSTICS_PERIOD, DIAGNOSTICS_TOPIC, GYRO_TOPICS, NODE_DEFAULTS, NODE_NAME,
-    OUTPUT_TOPICS, ROTOR_TORQUE_TOPIC, TORQUE_TOPIC, load_node_scene, publishes,
+    OUTPUT_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC, load_node_scene, publishes,
     timer_period_ns)
 from rigid_body_attitude.stream import ClockDriver, CommandStream, GyroStream
 
@@ -107,6 +111,7 @@ class ReplayOptions:
         gyro_topic: gyro topic (``''``: ``imu`` or else ``angular_velocity``, as the node).
         torque_topic: WrenchStamped commands.
         rotor_torque_topic: Vector3Stamped rotor motor torque commands.
+        set_pose_topic: PoseStamped re-initialisations of the attitude (and position).
         ground_truth_topic: QuaternionStamped or PoseStamped attitude to compare with.
         start_from_ground_truth: stamp [s] from which on the attitude starts from the ground
             truth (at the first gyro sample or tick at or after it); ``None``: the scene's.
@@ -128,6 +133,7 @@ class ReplayOptions:
     gyro_topic: str = ''
     torque_topic: str = TORQUE_TOPIC
     rotor_torque_topic: str = ROTOR_TORQUE_TOPIC
+    set_pose_topic: str = SET_POSE_TOPIC
     ground_truth_topic: str = ''
     start_from_ground_truth: float | None = None
     outputs: tuple[str, ...] = ()
@@ -277,6 +283,7 @@ class _Plan:
     gyro_is_imu: bool
     torque_topic: str
     rotor_torque_topic: str
+    set_pose_topic: str
     ground_truth_topic: str
     outputs: tuple[str, ...]
     notes: tuple[str, ...]
@@ -359,6 +366,8 @@ def _plan(reader: BagReader, propagator: DynamicsPropagator | GyroPropagator,
                                   (WRENCH_STAMPED,), notes)
     rotor_topic = _command_topic(reader, options.rotor_torque_topic, ROTOR_TORQUE_TOPIC,
                                  'rotor_torque' in inputs, (VECTOR3_STAMPED,), notes)
+    set_pose_topic = _command_topic(reader, options.set_pose_topic, SET_POSE_TOPIC, True,
+                                    (POSE_STAMPED,), [])
     truth_topic = ''
     if options.ground_truth_topic:
         truth_topic = _required(reader, options.ground_truth_topic, 'Ground-truth')
@@ -372,7 +381,7 @@ def _plan(reader: BagReader, propagator: DynamicsPropagator | GyroPropagator,
         raise InputError(f'Output {missing[0]!r} is not published for scene '
                          f'{propagator.scene.name!r} with this input; valid choices: '
                          f'{", ".join(available)}')
-    return _Plan(gyro_topic, gyro_decoder, is_imu, torque_topic, rotor_topic,
+    return _Plan(gyro_topic, gyro_decoder, is_imu, torque_topic, rotor_topic, set_pose_topic,
                  truth_topic, tuple(outputs), tuple(notes))
 
 
@@ -492,6 +501,7 @@ class _Replay:
         self.read: Counter[str] = Counter()
         self.input_messages = 0
         self.period_rejections: Counter[str] = Counter()
+        self.pose_rejections: Counter[str] = Counter()
         self.alignment_ns: int | None = (
             None if options.start_from_ground_truth is None
             else _seconds_to_ns(options.start_from_ground_truth))
@@ -664,10 +674,30 @@ class _Replay:
             vectors = {'rotor_torque': vector3_stamped(data)[1]}
             self.apply_command(('rotor_torque',), self.command_time(data, bag_time_ns),
                                vectors)
+        elif topic == self.plan.set_pose_topic:
+            self.set_pose(data)
         else:
             self.read[topic] += 1
             return
         self.read[topic] += 1
+
+    def set_pose(self, data: bytes) -> None:
+        """The node's ``set_pose_callback``: re-initialise the attitude (and position)."""
+        self.input_messages += 1
+        attitude, position = pose_orientation(data)[1], pose_position(data)[1]
+        if not all(math.isfinite(value) for value in attitude + position):
+            self.reject_pose('non_finite')
+            return
+        try:
+            self.propagator.set_attitude(
+                attitude, position if self.propagator.has_translation else None)
+        except InputError:
+            self.reject_pose('invalid_pose')
+
+    def reject_pose(self, reason: str) -> None:
+        """Count a rejected ``set_pose`` (separately from the streams, as the node)."""
+        self.pose_rejections[reason] += 1
+        self.period_rejections[reason] += 1
 
     def command_time(self, data: bytes, bag_time_ns: int) -> float:
         """The node's ``_command_time``: the header stamp, or the bag time if zero or unused."""
@@ -739,6 +769,7 @@ class _Replay:
         for stream in (self.gyro_stream, self.clock_driver, self.command_stream):
             if stream is not None:
                 counts.update(stream.rejected)
+        counts.update(self.pose_rejections)
         stale = stale_command_count(self.propagator.counters())
         if stale:
             counts['stale_torque'] = stale
@@ -852,7 +883,8 @@ def replay_bag(input_path: str | Path, output_path: str | Path,
                  if plan.ground_truth_topic else None)
         if plan.gyro_topic:
             selected = [plan.gyro_topic] + [t for t in (plan.torque_topic,
-                                                        plan.rotor_torque_topic) if t]
+                                                        plan.rotor_torque_topic,
+                                                        plan.set_pose_topic) if t]
         else:
             selected = list(reader.topics)
         total = sum(reader.message_counts.get(topic, 0) for topic in selected)
@@ -1048,6 +1080,8 @@ def _parser() -> argparse.ArgumentParser:
                         help='WrenchStamped commands (default: %(default)s)')
     topics.add_argument('--rotor-torque-topic', default=ROTOR_TORQUE_TOPIC,
                         help='Vector3Stamped rotor torque commands (default: %(default)s)')
+    topics.add_argument('--set-pose-topic', default=SET_POSE_TOPIC,
+                        help='PoseStamped attitude re-initialisations (default: %(default)s)')
     topics.add_argument('--outputs', default='',
                         help='comma-separated output topics to write (default: all)')
     report = parser.add_argument_group('report')
@@ -1075,6 +1109,7 @@ def _options(args: argparse.Namespace) -> ReplayOptions:
         use_header_stamps=not args.no_header_stamps, torque_timeout=args.torque_timeout,
         world_frame=args.world_frame, body_frame=args.body_frame, gyro_topic=args.gyro_topic,
         torque_topic=args.torque_topic, rotor_torque_topic=args.rotor_torque_topic,
+        set_pose_topic=args.set_pose_topic,
         ground_truth_topic=args.ground_truth,
         start_from_ground_truth=args.start_from_ground_truth, outputs=outputs,
         storage=args.storage)

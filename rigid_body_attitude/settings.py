@@ -32,6 +32,7 @@ __all__ = [
     'NODE_NAME',
     'OUTPUT_TOPICS',
     'ROTOR_TORQUE_TOPIC',
+    'SET_POSE_TOPIC',
     'TORQUE_TOPIC',
     'load_node_scene',
     'publishes',
@@ -62,6 +63,8 @@ GYRO_TOPICS = {'imu': 'sensor_msgs/msg/Imu',
 TORQUE_TOPIC = 'torque'
 #: Commanded motor torque on a rotor (``geometry_msgs/msg/Vector3Stamped``).
 ROTOR_TORQUE_TOPIC = 'rotor_torque'
+#: Re-initialisation of the attitude (and position) (``geometry_msgs/msg/PoseStamped``).
+SET_POSE_TOPIC = 'set_pose'
 #: Diagnostics (absolute name, as every ROS node publishes it).
 DIAGNOSTICS_TOPIC = '/diagnostics'
 #: Output topics (relative names) → message type. ``twist`` for dynamics scenes only,

@@ -200,6 +200,23 @@ def test_start_from_ground_truth_sets_the_attitude_there(tmp_path):
         quaternion.attitude_error(truth[0], quaternion.identity()), abs=1e-12)
 
 
+def test_set_pose_reinitialises_the_attitude_as_in_the_node(tmp_path, capsys):
+    stamps = 2.0 + np.arange(20) / RATE
+    poses = np.full((20, 4), np.nan)
+    target = quaternion.normalize([0.1, 0.7, -0.7, 0.1])
+    poses[9] = target  # set_pose recorded right after the gyro sample at 2.009 s
+    bag = tmp_path / 'in'
+    write_bag(bag, stamps=stamps, rates=np.tile(OMEGA, (20, 1)), ground_truth=poses,
+              ground_truth_topic='set_pose', ground_truth_type='PoseStamped')
+    code, text, _ = run([str(bag), '-o', str(tmp_path / 'out'), '--scene', GYRO_SCENE],
+                        capsys)
+    assert code == 0 and 'read: imu 20, set_pose 1' in text
+    q = read_series(tmp_path / 'out', 'orientation').values
+    assert quaternion.attitude_error(q[9], quaternion.exp(OMEGA * 9e-3)) < 1e-14
+    expected = quaternion.multiply(target, quaternion.exp(OMEGA * 1e-3))
+    assert quaternion.attitude_error(q[10], expected) < 1e-14
+
+
 def test_attitude_errors_compare_at_the_sparser_stamps_with_slerp():
     omega = np.array([0.0, 0.0, 2.0])
     dense_ns = np.arange(0, 1_000_000_001, 1_000_000, dtype=np.int64)
