@@ -5,8 +5,8 @@ mapping name → class (instantiate for a fresh, independent integrator):
 
 * :data:`DYNAMICS_INTEGRATORS` — ``step(attitude, omega_body, t, h, model)`` on the coupled
   attitude/Euler equations, with ``model`` a :class:`~.base.BodyModel`: ``rk4``, ``rkmk4``,
-  ``strang``, ``yoshida4``, ``casimir6``, ``casimir8``, ``dopri45``, ``exact``
-  (torque-free only);
+  ``strang``, ``yoshida4``, ``casimir6``, ``casimir8``, ``rkn4``, ``rkn6``, ``dopri45``,
+  ``exact`` (torque-free only);
 * :data:`STRAPDOWN_METHODS` — ``propagate(q, omega_previous, omega_current, dt)`` on a
   stream of gyro samples (:mod:`.strapdown`);
 * :data:`KINEMATIC_METHODS` — ``step(q, omega_of_time, t, h)`` for a rate known as a function
@@ -28,7 +28,8 @@ from rigid_body_attitude.integrators.kinematic import KINEMATIC_METHODS, kinemat
 from rigid_body_attitude.integrators.rigid_body_rk4 import RigidBodyRk4
 from rigid_body_attitude.integrators.rkmk4 import RigidBodyRkmk4
 from rigid_body_attitude.integrators.splitting import (
-    Casimir6Splitting, Casimir8Splitting, StrangSplitting, Yoshida4Splitting)
+    BlanesMoan4Splitting, BlanesMoan6Splitting, Casimir6Splitting, Casimir8Splitting,
+    StrangSplitting, Yoshida4Splitting)
 from rigid_body_attitude.integrators.strapdown import STRAPDOWN_METHODS, strapdown_method
 
 __all__ = [
@@ -47,7 +48,8 @@ __all__ = [
 #: Dynamics integrators by name (values are classes).
 DYNAMICS_INTEGRATORS: dict[str, Any] = {cls.name: cls for cls in (
     RigidBodyRk4, RigidBodyRkmk4, StrangSplitting, Yoshida4Splitting, Casimir6Splitting,
-    Casimir8Splitting, DormandPrince45, ExactTorqueFree)}
+    Casimir8Splitting, BlanesMoan4Splitting, BlanesMoan6Splitting, DormandPrince45,
+    ExactTorqueFree)}
 
 
 def dynamics_integrator(name: str, **options: Any) -> Any:

@@ -117,6 +117,8 @@ class SimpleBodyModel:
         self._axes = axes
         self._torque = torque_body
         self._rotor = rotor_momentum
+        if torque_body is not None:
+            self.torque_body = torque_body  # call the user's function directly (hot path)
         self.torque_depends_on_rate = bool(torque_depends_on_rate)
         self.has_rotor = rotor_momentum is not None
 
