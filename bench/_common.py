@@ -111,6 +111,13 @@ def cpu_ticks(pid: int) -> int:
     return int(fields[11]) + int(fields[12])  # fields 14 and 15 of proc(5)
 
 
+def busy_ticks() -> int:
+    """Return the machine's non-idle clock ticks summed over all cores (/proc/stat)."""
+    with open('/proc/stat') as stat:
+        fields = [int(value) for value in stat.readline().split()[1:]]
+    return sum(fields) - fields[3] - fields[4]  # minus idle and iowait
+
+
 def rss_kib(pid: int) -> int:
     """Return the resident set size (KiB) of process ``pid`` from /proc/<pid>/status."""
     with open(f'/proc/{pid}/status') as status:

@@ -66,7 +66,8 @@ def row_line(label: str, row: dict) -> str:
     """Return one progress line for a measured row."""
     return (f'{label:>12} {row["rate_hz"]:>8.0f} Hz  sent {row["sent"]:>6}  '
             f'lost {row["lost"]:>6}  pub {row["publisher_hz"]:>8.0f} Hz  '
-            f'cpu {row["cpu_percent"]:5.1f} %  p50 {_fmt(row["latency_p50_ms"])} ms  '
+            f'cpu {row["cpu_percent"]:5.1f} %  others {row["other_load_cores"]:4.2f}  '
+            f'p50 {_fmt(row["latency_p50_ms"])} ms  '
             f'p99 {_fmt(row["latency_p99_ms"])} ms')
 
 
@@ -94,15 +95,15 @@ def _row_at(rows: List[dict], rate_hz: float) -> Optional[dict]:
 
 def _table(rows: List[dict]) -> List[str]:
     lines = ['| rate (Hz) | sent | received | lost | publisher (Hz) | CPU (% core) | '
-             'p50 (ms) | p99 (ms) | RSS (MiB) |',
-             '|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
+             'p50 (ms) | p99 (ms) | RSS (MiB) | other load (cores) |',
+             '|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
     for row in rows:
         short = '' if publisher_kept_up(row) else ' (short)'
         lines.append(
             f'| {row["rate_hz"]:.0f} | {row["sent"]} | {row["received"]} | {row["lost"]} | '
             f'{row["publisher_hz"]:.0f}{short} | {row["cpu_percent"]:.1f} | '
             f'{_fmt(row["latency_p50_ms"], 3)} | {_fmt(row["latency_p99_ms"], 3)} | '
-            f'{row["rss_kib"] / 1024:.1f} |')
+            f'{row["rss_kib"] / 1024:.1f} | {row["other_load_cores"]:.2f} |')
     return lines
 
 

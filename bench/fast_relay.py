@@ -43,8 +43,10 @@ from sensor_msgs.msg import Imu
 MODES = ('waitset', 'waitset-obj', 'ste-raw', 'ste-drain', 'events', 'events-raw')
 OUTPUTS = ('pose', 'orientation', 'imu_data')
 
-_STAMP_AND_FRAME = slice(4, 16)  # sec, nanosec and the frame_id length word
 _QUATERNION = struct.Struct('<4d')
+
+#: The last decoded gyro rate: the prototype decodes it like the node would, then drops it.
+latest_omega_body = [(0.0, 0.0, 0.0)]
 
 
 class RawOutputs:
@@ -131,7 +133,7 @@ class ObjectOutputs:
 def raw_handler(outputs: RawOutputs) -> Callable[[bytes], None]:
     """Return the per-message work on serialized bytes: decode the gyro, publish outputs."""
     def handle(imu_cdr: bytes) -> None:
-        wx, wy, wz = imu_gyro(imu_cdr)
+        latest_omega_body[0] = imu_gyro(imu_cdr)
         outputs.publish(imu_cdr, (0.0, 0.0, 0.0, 1.0))
     return handle
 
@@ -140,7 +142,7 @@ def object_handler(outputs: ObjectOutputs) -> Callable[[Imu], None]:
     """Return the per-message work on an ``Imu`` object: read the gyro, publish outputs."""
     def handle(imu: Imu) -> None:
         omega = imu.angular_velocity
-        wx, wy, wz = omega.x, omega.y, omega.z
+        latest_omega_body[0] = (omega.x, omega.y, omega.z)
         outputs.publish(imu, (0.0, 0.0, 0.0, 1.0))
     return handle
 
@@ -203,7 +205,14 @@ def run(mode: str, outputs: List[str]) -> None:
         executor = SingleThreadedExecutor()
     executor.add_node(node)
     try:
-        executor.spin()
+        if mode.startswith('events'):
+            # EventsExecutor.spin() (and spin_once() without a timeout) busy-loops in rclpy
+            # 7.1.6 on this machine, runs no callback and ignores SIGINT; a finite timeout
+            # works (bench/NOTES.md).
+            while rclpy.ok():
+                executor.spin_once(timeout_sec=1.0)
+        else:
+            executor.spin()
     finally:
         executor.shutdown()
 

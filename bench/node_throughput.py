@@ -49,7 +49,7 @@ BENCH = Path(__file__).resolve().parent
 REPO = BENCH.parent
 sys.path.insert(0, str(BENCH))
 
-from _common import cpu_ticks, ros_env, rss_kib  # noqa: E402
+from _common import busy_ticks, cpu_ticks, ros_env, rss_kib  # noqa: E402
 import _report  # noqa: E402
 
 DEFAULT_RATES = [200, 500, 1000, 2000, 5000, 10000, 15000, 20000]
@@ -176,10 +176,10 @@ def measure(session: Session, target_argv: List[str], rate: float,
             'subscriber': subscriber.popen.pid}
     publisher.wait_event('start', args.match_timeout + args.warmup + 5)
     ticks0 = {name: cpu_ticks(pid) for name, pid in pids.items()}
-    wall0 = time.monotonic()
+    machine0, wall0 = busy_ticks(), time.monotonic()
     end = publisher.wait_event('end', 2 * args.duration + 10)
     ticks1 = {name: cpu_ticks(pid) for name, pid in pids.items()}
-    window_s = time.monotonic() - wall0
+    machine1, window_s = busy_ticks(), time.monotonic() - wall0
     rss = rss_kib(target.popen.pid)
     time.sleep(args.drain)
     target.check_alive()
@@ -193,12 +193,14 @@ def measure(session: Session, target_argv: List[str], rate: float,
     received = int(np.unique(stamps).size)
     cpu = {name: 100.0 * (ticks1[name] - ticks0[name]) / CLOCK_TICKS / window_s
            for name in pids}
+    ours = sum(ticks1.values()) - sum(ticks0.values())
+    other_cores = (machine1 - machine0 - ours) / CLOCK_TICKS / window_s
     return {
         'rate_hz': rate, 'sent': end['sent'], 'received': received,
         'lost': end['sent'] - received, 'publisher_hz': end['achieved_hz'],
         'publisher_max_lag_ms': end['max_lag_ms'], 'cpu_percent': cpu['target'],
         'publisher_cpu_percent': cpu['publisher'],
-        'subscriber_cpu_percent': cpu['subscriber'],
+        'subscriber_cpu_percent': cpu['subscriber'], 'other_load_cores': other_cores,
         'latency_p50_ms': float(np.percentile(latency_ms, 50)) if received else None,
         'latency_p99_ms': float(np.percentile(latency_ms, 99)) if received else None,
         'latency_max_ms': float(latency_ms.max()) if received else None,
