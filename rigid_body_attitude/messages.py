@@ -52,11 +52,13 @@ LEVEL_OK, LEVEL_WARN, LEVEL_ERROR = 0, 1, 2
 DRIFT_WARN_THRESHOLD = 1e-6
 DRIFT_ERROR_THRESHOLD = 1e-3
 
-#: Rejection counters reported, in order: the stream reasons, stale commands, bad poses.
-REJECTION_KEYS = (*REASONS, 'stale_torque', 'invalid_pose')
+#: Rejection counters reported, in order: the stream reasons, stale commands, bad poses, and
+#: clock ticks the integrator refused (the state was then reset).
+REJECTION_KEYS = (*REASONS, 'stale_torque', 'invalid_pose', 'integration_failed')
 
-#: Rejections that make the status WARN when they happened during the last period.
+#: Rejections that make the status WARN / ERROR when they happened during the last period.
 _WARNING_REASONS = ('non_finite', 'gap', 'time_jump', 'invalid_pose')
+_ERROR_REASONS = ('integration_failed',)
 
 
 class TimeBase:
@@ -156,10 +158,16 @@ def _drift_problems(propagator: DynamicsPropagator | GyroPropagator,
     return level, problems
 
 
-def _rejection_problems(new_rejections: Mapping[str, int]) -> list[str]:
-    """Reasons (gaps, time jumps, non-finite inputs) seen during the last period."""
-    return [f'{new_rejections[reason]} {reason} in the last period'
-            for reason in _WARNING_REASONS if new_rejections.get(reason, 0) > 0]
+def _rejection_problems(new_rejections: Mapping[str, int]) -> tuple[int, list[str]]:
+    """Level and reasons (gaps, time jumps, non-finite inputs...) of the last period."""
+    level, problems = LEVEL_OK, []
+    for reasons, reason_level in ((_ERROR_REASONS, LEVEL_ERROR),
+                                  (_WARNING_REASONS, LEVEL_WARN)):
+        for reason in reasons:
+            if new_rejections.get(reason, 0) > 0:
+                level = max(level, reason_level)
+                problems.append(f'{new_rejections[reason]} {reason} in the last period')
+    return level, problems
 
 
 def _vector_text(vector: NDArray[np.float64] | tuple[float, ...]) -> str:
@@ -175,14 +183,14 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator,
     those of the last period, ``accepted`` the inputs used so far, ``input_rate`` [Hz] the
     input messages per second of the last period and ``step_text`` the step description.
     WARN: a drift above :data:`DRIFT_WARN_THRESHOLD`, or gaps, time jumps, non-finite inputs
-    or invalid poses in the last period; ERROR: a drift above :data:`DRIFT_ERROR_THRESHOLD`.
+    or invalid poses in the last period; ERROR: a drift above :data:`DRIFT_ERROR_THRESHOLD`
+    or a refused integration in the last period.
     """
     diagnostics = propagator.diagnostics()
     level, problems = _drift_problems(propagator, diagnostics.energy_balance_residual,
                                       diagnostics.momentum_drift)
-    rejection_problems = _rejection_problems(new_rejections)
-    if rejection_problems:
-        level = max(level, LEVEL_WARN)
+    rejection_level, rejection_problems = _rejection_problems(new_rejections)
+    level = max(level, rejection_level)
     scene = propagator.scene
     values = [
         ('scene', scene.name),

@@ -205,7 +205,7 @@ class AttitudePropagatorNode(Node):
             self.gyro_stream = GyroStream(self.propagator, values['max_dt'],
                                           values['time_jump_threshold'])
         self.command_stream = CommandStream(self.propagator)
-        self.pose_rejections: Counter[str] = Counter()
+        self.shell_rejections: Counter[str] = Counter()  # set_pose, refused integrations
         self.input_messages = 0
         self._last_warning: dict[str, float] = {}
         self._create_outputs()
@@ -378,16 +378,21 @@ class AttitudePropagatorNode(Node):
     def reset_callback(self, request: Trigger.Request,
                        response: Trigger.Response) -> Trigger.Response:
         """Back to the scene's initial state (gyro: the next sample is a new baseline)."""
+        self._reset_state()
+        response.success = True
+        response.message = f'reset to the initial state of scene {self.scene.name!r}'
+        self.get_logger().info(response.message)
+        return response
+
+    def _reset_state(self) -> None:
+        """The scene's initial state; gyro: the next sample is a baseline, dynamics: the next
+        tick restarts the scene at the clock's time."""
         if self.gyro_stream is not None:
             self.gyro_stream.reset()
         else:
             self.clock_driver.reset()
             self.propagator.reset(self.propagator.state.time)
         self.command_stream.reset()
-        response.success = True
-        response.message = f'reset to the initial state of scene {self.scene.name!r}'
-        self.get_logger().info(response.message)
-        return response
 
     def _gyro_sample(self, stamp: Time, x: float, y: float, z: float) -> bool:
         """Feed one gyro sample to the stream; publish orientation and pose if it moved."""
@@ -422,8 +427,17 @@ class AttitudePropagatorNode(Node):
                 self._rejected(name, outcome, None)
                 return
 
+    def _integration_failed(self, err: AttitudeError) -> None:
+        """Count a refused integration, log it and restart the scene at the next tick."""
+        self.shell_rejections['integration_failed'] += 1
+        self._period_rejections['integration_failed'] += 1
+        self.get_logger().error(f'integration refused at t={self.propagator.state.time:.6f} s: '
+                                f'{err}; reset to the initial state of scene '
+                                f'{self.scene.name!r}')
+        self._reset_state()
+
     def _reject_pose(self, reason: str, detail: Any) -> None:
-        self.pose_rejections[reason] += 1
+        self.shell_rejections[reason] += 1
         self._period_rejections[reason] += 1
         self._warn(reason, f'set_pose rejected ({reason}): {detail}')
 
@@ -436,7 +450,11 @@ class AttitudePropagatorNode(Node):
                 self._publish_invariants()
             return
         now = self.get_clock().now().nanoseconds
-        outcome = self.clock_driver.tick(self.time_base.seconds_from_nanoseconds(now))
+        try:
+            outcome = self.clock_driver.tick(self.time_base.seconds_from_nanoseconds(now))
+        except AttitudeError as err:  # the integrator refused the step; the state is intact
+            self._integration_failed(err)
+            return
         if outcome.reason:
             self._rejected('clock', outcome, None)
             if outcome.reset:
@@ -521,7 +539,7 @@ class AttitudePropagatorNode(Node):
         for stream in (self.gyro_stream, self.clock_driver, self.command_stream):
             if stream is not None:
                 counts.update(stream.rejected)
-        counts.update(self.pose_rejections)
+        counts.update(self.shell_rejections)
         counts['stale_torque'] = stale_command_count(self.propagator.counters())
         return counts
 

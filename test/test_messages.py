@@ -100,3 +100,12 @@ def test_diagnostic_report_checks_no_invariant_for_gyro_scenes():
     assert report.level == LEVEL_OK
     assert float(report_values(report)['quaternion_norm_error']) <= 1e-15
     assert quaternion.norm_error(propagator.state.attitude) <= 1e-15
+
+
+def test_diagnostic_report_is_an_error_after_a_refused_integration():
+    propagator = build_propagator(load_scene('commanded_torque'))
+    report = diagnostic_report(propagator, {'integration_failed': 1, 'gap': 1},
+                               {'integration_failed': 1, 'gap': 1}, 0, 50.0, '0.001')
+    assert report.level == LEVEL_ERROR
+    assert report.message == ('1 integration_failed in the last period; '
+                              '1 gap in the last period')

@@ -374,7 +374,7 @@ def test_non_finite_inputs_are_rejected_and_outputs_stay_finite(ros, request):
     publish_and_wait(harness, node, 'set_pose', zero_pose)
     assert len(orientations) == 1
     assert dict(node.gyro_stream.rejected) == {'non_finite': 2}
-    assert dict(node.pose_rejections) == {'non_finite': 1, 'invalid_pose': 1}
+    assert dict(node.shell_rejections) == {'non_finite': 1, 'invalid_pose': 1}
     pose = PoseStamped()
     pose.pose.orientation.x, pose.pose.orientation.w = 1.0, 0.0  # 180° about x
     publish_and_wait(harness, node, 'set_pose', pose)
@@ -531,6 +531,40 @@ def test_commanded_force_moves_the_pose_as_the_core_predicts(ros, request):
     assert position.z == pytest.approx(force_body[2] * elapsed**2 / (2 * mass), rel=1e-12)
     assert position.x == pytest.approx(0.1 * elapsed + force_body[0] * elapsed**2 / (2 * mass),
                                        rel=1e-3)
+
+
+def test_a_refused_integration_resets_instead_of_crashing(ros, request):
+    harness = Harness(ros, unique_namespace(request))
+    node = start_node(harness, scene='commanded_torque', use_sim_time=True)
+    harness.publisher(Clock, '/clock')
+    harness.publisher(WrenchStamped, 'torque')
+    twists = harness.record(TwistStamped, 'twist')
+    diagnostics = harness.record(DiagnosticArray, '/diagnostics')
+    harness.wait_for_connections()
+    advance_clock(harness, 1000 * 10**9, twists, 1)
+    first_ns = nanoseconds(twists[0].header.stamp)
+    wrench = WrenchStamped()
+    wrench.header.stamp = stamp(first_ns)
+    wrench.wrench.torque.y = 1e12  # ω reaches 6e10 rad/s after one 1 ms step
+    publish_and_wait(harness, node, 'torque', wrench)
+    clock = Clock()
+    clock.clock = stamp(first_ns + 20 * MS)
+    harness.publishers['/clock'].publish(clock)
+    # RK4 would need > 1e6 substeps (h|ω| ≤ 2 rad each): refused, counted, scene reset.
+    assert harness.spin_until(lambda: node.shell_rejections['integration_failed'] == 1, 5.0)
+    assert len(twists) == 1
+    advance_clock(harness, first_ns + 40 * MS, twists, 2)
+    last = twists[-1]
+    assert nanoseconds(last.header.stamp) == first_ns + 40 * MS
+    assert (last.twist.angular.x, last.twist.angular.y, last.twist.angular.z) == (0., 0., 0.)
+
+    def error_reported() -> bool:
+        return any(m.status[0].level == DiagnosticStatus.ERROR
+                   and '1 integration_failed in the last period' in m.status[0].message
+                   for m in own_statuses(diagnostics, node))
+    assert harness.spin_until(error_reported, 3.0)
+    assert status_values(own_statuses(diagnostics, node)[-1])['rejected integration_failed'] \
+        == '1'
 
 
 def test_diagnostics_error_when_the_step_is_too_coarse(ros, request):
