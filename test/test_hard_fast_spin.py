@@ -104,11 +104,11 @@ def test_node_strapdown_step_matches_closed_form_after_a_million_steps(rate):
     for _ in range(steps):
         q = propagate(q, omega, omega, h)
     error = mp_attitude_error(q, mp_closed_form(Q0, omega, mpmath.mpf(h) * steps * rate))
-    # Round-off budget per step: the step quaternion exp(hω) is built from h·ω (one rounding
-    # per component, angle error ≤ h|ω|·u) and sin/cos/scale (≤ 4u): a systematic angle error
-    # ≤ (h|ω| + 4)u that repeats every step, plus the product and renormalisation (≤ 4u per
-    # step, random sign, √N growth). N(h|ω| + 4)u + 4√N u = 6.7e−10 for N = 10⁶, h|ω| = 2.
-    # Measured 1.6e−10 rad for both rates.
+    # Round-off budget per step: the step quaternion (cos(a/2), v sin(a/2)/a), a = h|ω|, has
+    # components within 3u (vector: h·ω, the angle, sin and the scale) and u/2 (scalar): an
+    # angle error ≤ 7u sin(a/2) that repeats every step, plus the product and renormalisation
+    # (≤ 4u per step, changing sign, √N growth). 7u sin(1) N + 4√N u = 6.5e−10 for N = 10⁶,
+    # a = 2. Measured 1.6e−10 rad for both rates.
     assert error <= 1e-9
     assert norm_error(q) <= 1e-12
 
