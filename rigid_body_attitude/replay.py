@@ -249,7 +249,8 @@ class ReplayResult:
         final_attitude: the last published attitude (w, x, y, z).
         diagnostics: the propagator's final diagnostics (energy, momentum, drift).
         series: the published values.
-        errors: attitude error against the ground truth (``None`` without ground truth).
+        errors: attitude error against the ground truth (``None`` without ground truth);
+            from the alignment on when the attitude was set from the ground truth.
         alignment_stamp_ns: where the attitude was set from the ground truth, if it was.
         gyro_messages: gyro messages processed (for the throughput).
         elapsed: seconds spent in the replay loop.
@@ -927,6 +928,8 @@ def _result(input_path: Path, output_path: Path, replay: _Replay, writer: _Write
     errors = None
     if truth is not None:
         errors = attitude_errors(stamps, attitudes, *truth)
+        if replay.aligned_at_ns is not None:
+            errors = errors.within(replay.aligned_at_ns, int(stamps[-1]))
     final_stamp = int(stamps[-1]) if stamps.size else None
     return ReplayResult(
         input_path=input_path, output_path=output_path, scene=replay.scene,
