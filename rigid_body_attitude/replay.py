@@ -931,6 +931,11 @@ def _result(input_path: Path, output_path: Path, replay: _Replay, writer: _Write
         if replay.aligned_at_ns is not None:
             errors = errors.within(replay.aligned_at_ns, int(stamps[-1]))
     final_stamp = int(stamps[-1]) if stamps.size else None
+    notes = list(replay.plan.notes)
+    if replay.is_dynamics and not replay.clock_driver.total:
+        notes.append(f'no clock tick within the bag\'s time span at publish_rate '
+                     f'{replay.options.publish_rate:g} Hz (ticks at multiples of '
+                     f'{replay.period_ns * 1e-9:g} s): nothing propagated')
     return ReplayResult(
         input_path=input_path, output_path=output_path, scene=replay.scene,
         read=dict(replay.read), used=replay.accepted_count(),
@@ -938,7 +943,7 @@ def _result(input_path: Path, output_path: Path, replay: _Replay, writer: _Write
         final_stamp_ns=final_stamp, final_attitude=replay.tracker.previous,
         diagnostics=replay.propagator.diagnostics(), series=writer.series, errors=errors,
         alignment_stamp_ns=replay.aligned_at_ns, gyro_messages=gyro_count, elapsed=elapsed,
-        notes=list(replay.plan.notes))
+        notes=notes)
 
 
 # -- reporting ------------------------------------------------------------------------------

@@ -160,6 +160,16 @@ def test_dynamics_ticks_at_the_period_multiples_within_the_bag(tmp_path, capsys)
     assert 'used: 119; rejected: none' in text
 
 
+def test_dynamics_bag_shorter_than_a_period_is_noted(tmp_path, capsys):
+    case = build_case('torque_free')
+    bag = tmp_path / 'in'
+    write_bag(bag, stamps=[100.001, 100.002], ground_truth=case.attitude(np.zeros(2)))
+    code, text, _ = run([str(bag), '-o', str(tmp_path / 'out'), '--scene', 'torque_free_box'],
+                        capsys)
+    assert code == 0 and 'written: orientation 0' in text
+    assert "note: no clock tick within the bag's time span at publish_rate 50 Hz" in text
+
+
 def test_ground_truth_statistics_csv_and_plot(tmp_path, capsys):
     bag = constant_rate_bag(tmp_path / 'in')
     out, table = tmp_path / 'out', tmp_path / 'values.csv'
