@@ -87,6 +87,8 @@ def main() -> int:
         stats = _paced_publish(publish_raw, message, args.rate, int(args.duration * args.rate))
         _emit(event='end', wall_ns=time.time_ns(), **stats)
         sys.stdin.read()
+    except KeyboardInterrupt:
+        pass  # stopped by the driver
     finally:
         node.destroy_node()
         rclpy.try_shutdown()

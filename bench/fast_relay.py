@@ -1,26 +1,29 @@
-"""Prototype fast relay: the same job as ``bench/relay.py`` done the fastest ways rclpy allows.
+"""Prototype fast relay: the job of ``bench/relay.py`` done the fastest ways rclpy 7.1 allows.
 
 ``imu`` (sensor_msgs/Imu) in, ``pose`` (geometry_msgs/PoseStamped, stamp = the gyro stamp) out,
-plus optional extra outputs (``orientation`` as geometry_msgs/QuaternionStamped and
-``imu_data`` as sensor_msgs/Imu) to price each extra publisher. ``--mode`` picks the technique:
+plus optional extra outputs (``orientation`` as geometry_msgs/QuaternionStamped, ``imu_data``
+as sensor_msgs/Imu with the orientation filled in) to price each extra publisher. ``--mode``
+picks the technique:
 
-``waitset`` (default, the fastest)
-    A hand-rolled loop over rclpy's own wait set (``_rclpy.WaitSet``, built once and reused):
-    wait, then take *every* queued message with ``subscription.handle.take_message(type,
-    raw=True)`` until it returns None, decode the CDR bytes with ``struct`` and publish
-    pre-laid-out CDR bytes with ``publisher.publish(bytes)``. No executor, no Python message
-    objects, one wait per burst instead of one per message.
+``waitset`` (default, the recipe in ``bench/NOTES.md``)
+    The gyro subscription is ``raw=True`` and sits in a callback group no executor runs. The
+    main thread waits on it with one reused ``_rclpy.WaitSet`` and, per wake-up, takes *every*
+    queued message (``subscription.handle.take_message(Imu, True)`` until None), decodes the
+    CDR bytes with ``struct`` and publishes pre-laid-out CDR bytes (``publisher.publish(bytes)``
+    is public API). A ``SingleThreadedExecutor`` in a daemon thread serves everything else the
+    node has (parameter services, timers); it sleeps in ``rcl_wait`` and costs nothing per
+    gyro message.
 ``waitset-obj``
     The same loop taking and publishing Python message objects (isolates the serialization
     cost from the executor cost).
 ``ste-raw``
     ``SingleThreadedExecutor`` with a ``raw=True`` subscription and bytes publishing.
 ``ste-drain``
-    ``SingleThreadedExecutor``; the callback handles its message and then drains the rest of
-    the queue with ``take_message`` (public objects only, no private import).
+    ``SingleThreadedExecutor``; the raw callback handles its message and then drains the rest of
+    the queue with ``take_message`` (public API only).
 ``events`` / ``events-raw``
-    ``rclpy.experimental.EventsExecutor`` (C++ executor, new in Jazzy 7.1) with message objects
-    / raw bytes.
+    ``rclpy.experimental.EventsExecutor`` (C++ executor, new in 7.1) with message objects /
+    raw bytes, spun with ``spin_once(timeout_sec=1.0)`` (its ``spin()`` busy-loops here).
 
 Usage: ``python bench/fast_relay.py [--mode M] [--outputs pose,orientation,imu_data]
 [--ros-args ...]``. Findings and numbers: ``bench/NOTES.md``.
@@ -29,12 +32,15 @@ Usage: ``python bench/fast_relay.py [--mode M] [--outputs pose,orientation,imu_d
 import argparse
 import struct
 import sys
+import threading
 from typing import Callable, List
 
 from _common import header_cdr, IMU_TOPIC, imu_gyro, POSE_TOPIC, reliable_qos
 from geometry_msgs.msg import PoseStamped, QuaternionStamped
 import rclpy
+from rclpy.callback_groups import CallbackGroup
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerGuardCondition
@@ -44,9 +50,26 @@ MODES = ('waitset', 'waitset-obj', 'ste-raw', 'ste-drain', 'events', 'events-raw
 OUTPUTS = ('pose', 'orientation', 'imu_data')
 
 _QUATERNION = struct.Struct('<4d')
+_IDENTITY_XYZW = (0.0, 0.0, 0.0, 1.0)
 
-#: The last decoded gyro rate: the prototype decodes it like the node would, then drops it.
-latest_omega_body = [(0.0, 0.0, 0.0)]
+
+class NeverExecuted(CallbackGroup):
+    """A callback group no executor runs: keeps an entity out of every executor's wait set.
+
+    ``Executor`` only waits on entities whose group ``can_execute`` them, so a subscription in
+    this group is left entirely to the caller's own loop (:func:`spin_draining`).
+    """
+
+    def can_execute(self, entity) -> bool:
+        """Never: the entity is served by a hand-written loop."""
+        return False
+
+    def beginning_execution(self, entity) -> bool:
+        """Never: the entity is served by a hand-written loop."""
+        return False
+
+    def ending_execution(self, entity) -> None:
+        """Nothing to release: execution never begins."""
 
 
 class RawOutputs:
@@ -60,37 +83,34 @@ class RawOutputs:
         """Create one publisher per requested output."""
         self.publishers = []
         frame = header_cdr('world')
-        self.body_start = len(frame)
         for name in outputs:
             if name == 'pose':
                 publisher = node.create_publisher(PoseStamped, POSE_TOPIC, reliable_qos())
                 buffer = bytearray(frame + struct.pack('<7d', 0, 0, 0, 0, 0, 0, 1))
-                offset = self.body_start + 24  # after the position
+                offset = len(frame) + 24  # after the position
             elif name == 'orientation':
                 publisher = node.create_publisher(QuaternionStamped, 'orientation',
                                                   reliable_qos())
-                buffer = bytearray(frame + _QUATERNION.pack(0, 0, 0, 1))
-                offset = self.body_start
+                buffer = bytearray(frame + _QUATERNION.pack(*_IDENTITY_XYZW))
+                offset = len(frame)
             else:
                 publisher = node.create_publisher(Imu, 'imu_data', reliable_qos())
-                buffer = None  # copied from the input message
-                offset = 0
-            self.publishers.append((publisher.handle.publish_raw, buffer, offset))
+                buffer, offset = None, 0  # a copy of the input message
+            self.publishers.append((publisher.publish, buffer, offset))
 
     def publish(self, imu_cdr: bytes, quaternion_xyzw) -> None:
-        """Publish every output for one input message with the input's stamp."""
+        """Publish every output for one input message, stamped with the input's stamp."""
         stamp = imu_cdr[4:12]
-        for publish_raw, buffer, offset in self.publishers:
+        for publish, buffer, offset in self.publishers:
             if buffer is None:
                 copy = bytearray(imu_cdr)
                 (length,) = struct.unpack_from('<I', imu_cdr, 12)
-                start = 4 + ((12 + length + 7) // 8) * 8
-                _QUATERNION.pack_into(copy, start, *quaternion_xyzw)
-                publish_raw(bytes(copy))
+                _QUATERNION.pack_into(copy, 4 + ((12 + length + 7) // 8) * 8, *quaternion_xyzw)
+                publish(bytes(copy))
             else:
                 buffer[4:12] = stamp
                 _QUATERNION.pack_into(buffer, offset, *quaternion_xyzw)
-                publish_raw(bytes(buffer))
+                publish(bytes(buffer))
 
 
 class ObjectOutputs:
@@ -108,7 +128,7 @@ class ObjectOutputs:
             self.imu_data = node.create_publisher(Imu, 'imu_data', reliable_qos())
 
     def publish(self, imu: Imu, quaternion_xyzw) -> None:
-        """Publish every output for one input message with the input's stamp."""
+        """Publish every output for one input message, stamped with the input's stamp."""
         x, y, z, w = quaternion_xyzw
         if self.pose is not None:
             pose = PoseStamped()
@@ -130,91 +150,116 @@ class ObjectOutputs:
             self.imu_data.publish(imu)
 
 
-def raw_handler(outputs: RawOutputs) -> Callable[[bytes], None]:
-    """Return the per-message work on serialized bytes: decode the gyro, publish outputs."""
-    def handle(imu_cdr: bytes) -> None:
-        latest_omega_body[0] = imu_gyro(imu_cdr)
-        outputs.publish(imu_cdr, (0.0, 0.0, 0.0, 1.0))
-    return handle
+class FastRelay(Node):
+    """The relay node: publishers, and the gyro subscription with its per-message callback.
 
+    The callback is the one place a gyro message is handled, whichever loop takes it.
+    """
 
-def object_handler(outputs: ObjectOutputs) -> Callable[[Imu], None]:
-    """Return the per-message work on an ``Imu`` object: read the gyro, publish outputs."""
-    def handle(imu: Imu) -> None:
+    def __init__(self, outputs: List[str], raw: bool, own_loop: bool) -> None:
+        """Create the outputs and the ``imu`` subscription (left to our loop if ``own_loop``)."""
+        super().__init__('bench_fast_relay')
+        self.omega_body = (0.0, 0.0, 0.0)
+        if raw:
+            self.outputs = RawOutputs(self, outputs)
+            callback = self.imu_raw_callback
+        else:
+            self.outputs = ObjectOutputs(self, outputs)
+            callback = self.imu_callback
+        self.imu_subscription = self.create_subscription(
+            Imu, IMU_TOPIC, callback, reliable_qos(), raw=raw,
+            callback_group=NeverExecuted() if own_loop else None)
+
+    def imu_raw_callback(self, imu_cdr: bytes) -> None:
+        """Decode the gyro rate from the CDR bytes and publish the outputs."""
+        self.omega_body = imu_gyro(imu_cdr)
+        self.outputs.publish(imu_cdr, _IDENTITY_XYZW)
+
+    def imu_callback(self, imu: Imu) -> None:
+        """Read the gyro rate from the message object and publish the outputs."""
         omega = imu.angular_velocity
-        latest_omega_body[0] = (omega.x, omega.y, omega.z)
-        outputs.publish(imu, (0.0, 0.0, 0.0, 1.0))
-    return handle
+        self.omega_body = (omega.x, omega.y, omega.z)
+        self.outputs.publish(imu, _IDENTITY_XYZW)
+
+    def imu_drain_callback(self, imu_cdr: bytes) -> None:
+        """Handle this message, then every other message already queued (``ste-drain``)."""
+        take = self.imu_subscription.handle.take_message
+        while imu_cdr is not None:
+            self.imu_raw_callback(imu_cdr)
+            taken = take(Imu, True)
+            imu_cdr = taken[0] if taken is not None else None
 
 
-def spin_draining(node: Node, subscription, handle: Callable, raw: bool) -> None:
+def spin_draining(node: Node, subscription, callback: Callable) -> None:
     """Wait on ``subscription``; after each wake-up take and handle every queued message.
 
-    The wait set is built once (one subscription, the SIGINT guard condition) and reused;
-    ``rcl_wait`` releases the GIL. Returns when the context shuts down (SIGINT).
+    One wait set (the subscription, the SIGINT guard condition and a guard condition triggered
+    on context shutdown) is built once and reused; ``rcl_wait`` releases the GIL. Returns when
+    the context shuts down.
     """
     context = node.context
     sigint_guard = SignalHandlerGuardCondition(context)
-    take = subscription.handle.take_message
-    msg_type = subscription.msg_type
-    subscription_handle = subscription.handle
-    wait_set = _rclpy.WaitSet(1, 1, 0, 0, 0, 0, context.handle)
+    shutdown_guard = GuardCondition(None, None, context=context)
+    context.on_shutdown(shutdown_guard.trigger)
+    handle = subscription.handle
+    take, msg_type, raw = handle.take_message, subscription.msg_type, subscription.raw
+    wait_set = _rclpy.WaitSet(1, 2, 0, 0, 0, 0, context.handle)
     try:
         while context.ok():
             wait_set.clear_entities()
-            wait_set.add_subscription(subscription_handle)
+            wait_set.add_subscription(handle)
             wait_set.add_guard_condition(sigint_guard.handle)
-            wait_set.wait(-1)
+            wait_set.add_guard_condition(shutdown_guard.handle)
+            wait_set.wait(1_000_000_000)
             taken = take(msg_type, raw)
             while taken is not None:
-                handle(taken[0])
+                callback(taken[0])
                 taken = take(msg_type, raw)
     finally:
-        sigint_guard.destroy()
         wait_set.destroy_when_not_in_use()
+        sigint_guard.destroy()
+        shutdown_guard.destroy()
+
+
+def serve_others(executor) -> None:
+    """Spin ``executor`` until it or the context shuts down (body of the helper thread)."""
+    try:
+        executor.spin()
+    except ExternalShutdownException:
+        pass
 
 
 def run(mode: str, outputs: List[str]) -> None:
-    """Build the relay node for ``mode`` and spin it until shutdown."""
-    node = rclpy.create_node('bench_fast_relay')
+    """Build the relay for ``mode`` and spin it until shutdown."""
     raw = mode in ('waitset', 'ste-raw', 'ste-drain', 'events-raw')
-    handle = raw_handler(RawOutputs(node, outputs)) if raw else object_handler(
-        ObjectOutputs(node, outputs))
-    if mode.startswith('waitset'):
-        subscription = node.create_subscription(Imu, IMU_TOPIC, handle, reliable_qos(),
-                                                raw=raw)
-        spin_draining(node, subscription, handle, raw)
-        return
+    own_loop = mode.startswith('waitset')
+    node = FastRelay(outputs, raw, own_loop)
     if mode == 'ste-drain':
-        subscription = None
-
-        def drain(imu_cdr: bytes) -> None:
-            handle(imu_cdr)
-            taken = subscription.handle.take_message(Imu, True)
-            while taken is not None:
-                handle(taken[0])
-                taken = subscription.handle.take_message(Imu, True)
-        subscription = node.create_subscription(Imu, IMU_TOPIC, drain, reliable_qos(),
-                                                raw=True)
-    else:
-        node.create_subscription(Imu, IMU_TOPIC, handle, reliable_qos(), raw=raw)
+        node.imu_subscription.callback = node.imu_drain_callback
     if mode.startswith('events'):
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
     else:
         executor = SingleThreadedExecutor()
     executor.add_node(node)
+    others = threading.Thread(target=serve_others, args=(executor,), daemon=True)
     try:
-        if mode.startswith('events'):
+        if own_loop:
+            # Everything but the gyro subscription (parameter services, timers) is served here.
+            others.start()
+            spin_draining(node, node.imu_subscription, node.imu_subscription.callback)
+        elif mode.startswith('events'):
             # EventsExecutor.spin() (and spin_once() without a timeout) busy-loops in rclpy
-            # 7.1.6 on this machine, runs no callback and ignores SIGINT; a finite timeout
-            # works (bench/NOTES.md).
+            # 7.1.6 here, runs no callback and ignores SIGINT; a finite timeout works.
             while rclpy.ok():
                 executor.spin_once(timeout_sec=1.0)
         else:
             executor.spin()
     finally:
         executor.shutdown()
+        if others.is_alive():
+            others.join()
+        node.destroy_node()
 
 
 def main() -> int:

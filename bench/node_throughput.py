@@ -107,18 +107,29 @@ class Process:
             raise ProcessCrashed(f'{shlex.join(self.argv)} exited with {self.popen.returncode}'
                                  f'\n{tail}')
 
-    def stop(self, sig: int = signal.SIGINT, grace: float = 3.0) -> Optional[int]:
-        """Send ``sig``, wait up to ``grace`` seconds, then SIGKILL; return the exit code."""
-        if self.popen.poll() is None:
-            try:
-                self.popen.stdin.close()
-                self.popen.send_signal(sig)
-                self.popen.wait(grace)
-            except subprocess.TimeoutExpired:
-                self.popen.kill()
-                self.popen.wait()
+    def stop(self, sig: int = signal.SIGINT, grace: float = 3.0) -> Optional[str]:
+        """Send ``sig``, wait up to ``grace`` s, then SIGKILL; return a problem or None.
+
+        A problem is an exit by a signal other than ``sig`` (a crash) or a process that had
+        to be killed (it ignored ``sig``).
+        """
+        if self.popen.poll() is not None:
+            self.log.close()
+            return None  # exited earlier; check_alive() reports that while it matters
+        problem = None
+        try:
+            self.popen.stdin.close()
+            self.popen.send_signal(sig)
+            self.popen.wait(grace)
+            code = self.popen.returncode
+            if code not in (0, -sig, 128 + sig):
+                problem = f'{shlex.join(self.argv)} exited with {code} on signal {sig}'
+        except subprocess.TimeoutExpired:
+            self.popen.kill()
+            self.popen.wait()
+            problem = f'{shlex.join(self.argv)} ignored signal {sig} for {grace} s; killed'
         self.log.close()
-        return self.popen.returncode
+        return problem
 
 
 def default_targets() -> Dict[str, List[str]]:
@@ -151,11 +162,11 @@ class Session:
         self.processes.append(process)
         return process
 
-    def close(self) -> None:
-        """Stop every process still running (SIGINT, then SIGKILL after a grace period)."""
-        for process in reversed(self.processes):
-            process.stop()
+    def close(self) -> List[str]:
+        """Stop every process still running (SIGINT, then SIGKILL); return the problems."""
+        problems = [process.stop() for process in reversed(self.processes)]
         self.processes.clear()
+        return [problem for problem in problems if problem]
 
 
 def measure(session: Session, target_argv: List[str], rate: float,
@@ -214,16 +225,24 @@ def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> d
                'warmup_s': args.warmup, 'drain_s': args.drain,
                'targets': {label: {'command': shlex.join(argv), 'rows': []}
                            for label, argv in targets.items()}}
+    problems = results['problems'] = []
     for rate in args.rates:
         for label, argv in targets.items():
             with tempfile.TemporaryDirectory(prefix='bench_') as tmp:
                 session = Session(args.domain_id, Path(tmp))
+                row = None
                 try:
                     row = measure(session, argv, rate, args)
+                except ProcessCrashed as err:
+                    problems.append(f'{label} at {rate:.0f} Hz: {err}')
                 finally:
-                    session.close()
-            results['targets'][label]['rows'].append(row)
-            print(_report.row_line(label, row), flush=True)
+                    problems.extend(f'{label} at {rate:.0f} Hz: {problem}'
+                                    for problem in session.close())
+            if row is not None:
+                results['targets'][label]['rows'].append(row)
+                print(_report.row_line(label, row), flush=True)
+    for problem in problems:
+        print(f'error: {problem}', file=sys.stderr)
     return results
 
 
@@ -250,10 +269,12 @@ def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
                 print(f'soak {label}: minute {minute} RSS {samples[-1]["rss_kib"]} KiB',
                       flush=True)
         finally:
-            session.close()
+            problems = session.close()
+    for problem in problems:
+        print(f'error: {problem}', file=sys.stderr)
     growth = samples[-1]['rss_kib'] - samples[0]['rss_kib']
     return {'label': label, 'command': shlex.join(argv), 'rate_hz': args.soak_rate,
-            'minutes': minutes, 'samples': samples, 'growth_kib': growth,
+            'minutes': minutes, 'samples': samples, 'growth_kib': growth, 'problems': problems,
             'machine': _report.machine_description()}
 
 
@@ -288,6 +309,9 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--results-dir', type=Path, default=BENCH / 'results')
     parser.add_argument('--report', type=Path, default=REPO / 'docs' / 'performance.md')
     args = parser.parse_args(argv)
+    if args.soak_minutes < 2:
+        parser.error(f'expected --soak-minutes >= 2 (RSS at 1 min vs the end), '
+                     f'got {args.soak_minutes}')
     args.rates = [float(rate) for rate in args.rates.split(',') if rate]
     return args
 
@@ -328,7 +352,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 1
     _report.write(args.results_dir, args.report)
     print(f'wrote {args.report}')
-    return 0
+    return 1 if result.get('problems') else 0
 
 
 if __name__ == '__main__':
