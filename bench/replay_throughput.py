@@ -11,7 +11,8 @@ rate) and measures, best of ``--repeat`` runs:
   decode the header stamp and rate, ``GyroStream.add`` (stream rules + propagator),
   ``OutputTracker.attitude``, encode orientation + pose + imu/data, and write three records;
   then the sum without bag I/O (decode, propagate, encode: the issue's throughput definition)
-  and the sum of all stages.
+  and the sum of all stages. For reference, the bare exp-map step in plain floats
+  (``quaternion.scalar_exp_step``, no stream rules): what the propagator's arithmetic costs.
 
 Usage: ``python bench/replay_throughput.py [--messages 200000] [--repeat 3]``. The machine is
 shared: run it when it is otherwise idle and read the best run.
@@ -35,6 +36,7 @@ from rigid_body_attitude.bag import (
 from rigid_body_attitude.messages import TimeBase
 from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import build_propagator
+from rigid_body_attitude.quaternion import scalar_exp_step
 from rigid_body_attitude.replay import ReplayOptions, _imu_with_orientation, replay_bag
 from rigid_body_attitude.scene import load_scene
 from rigid_body_attitude.stream import GyroStream
@@ -104,6 +106,13 @@ def stages(bag: Path, workdir: Path, repeat: int) -> dict[str, float]:
             add(seconds(sec, nanosec), omega)
     times['GyroStream.add (core)'] = best_of(repeat, propagate)
 
+    def plain_step() -> None:
+        q = (1.0, 0.0, 0.0, 0.0)
+        dt = 1.0 / RATE_HZ
+        for _, omega in decoded:
+            q = scalar_exp_step(q, omega, dt)
+    times['reference: exp step in plain floats'] = best_of(repeat, plain_step)
+
     propagator = build_propagator(scene)
 
     def attitude() -> None:
@@ -162,9 +171,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f'  {name:46s} {seconds:8.3f} {count / seconds:10,.0f} '
                   f'{seconds / count * 1e6:8.2f}')
         without_io = sum(seconds for name, seconds in times.items()
-                         if not name.startswith(('read', 'write')))
+                         if not name.startswith(('read', 'write', 'reference')))
+        stages_total = sum(seconds for name, seconds in times.items()
+                           if not name.startswith('reference'))
         for name, total in (('decode + propagate + encode (no bag I/O)', without_io),
-                            ('sum of all stages', sum(times.values()))):
+                            ('sum of the stages', stages_total)):
             print(f'  {name:46s} {total:8.3f} {count / total:10,.0f} '
                   f'{total / count * 1e6:8.2f}')
     finally:
