@@ -1078,8 +1078,10 @@ def _parser() -> argparse.ArgumentParser:
                       help='use bag (receive) times instead of header stamps')
     node.add_argument('--torque-timeout', type=float, default=defaults['torque_timeout'],
                       help='command hold time [s] (default: the scene\'s)')
-    node.add_argument('--world-frame', default=defaults['world_frame'])
-    node.add_argument('--body-frame', default=defaults['body_frame'])
+    node.add_argument('--world-frame', default=defaults['world_frame'],
+                      help='frame of orientation, pose, angular_momentum (default: %(default)s)')
+    node.add_argument('--body-frame', default=defaults['body_frame'],
+                      help='frame of twist (default: %(default)s)')
     topics = parser.add_argument_group('topics')
     topics.add_argument('--gyro-topic', default='',
                         help='Imu, Vector3Stamped or TwistStamped rates (default: imu, else '
