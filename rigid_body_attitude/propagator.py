@@ -20,8 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude import quaternion
-from rigid_body_attitude.diagnostics import (
-    Diagnostics, DiagnosticsTracker, kinetic_energy, world_angular_momentum)
+from rigid_body_attitude.diagnostics import Diagnostics, DiagnosticsTracker
 from rigid_body_attitude.dynamics import RigidBodyModel
 from rigid_body_attitude.effects import Effect, StatefulEffect
 from rigid_body_attitude.errors import InputError, IntegratorError
@@ -76,6 +75,8 @@ class _Propagator:
         self.scene = scene
         self.effects: list[Effect] = scene.build_effects()
         self.stateful = [e for e in self.effects if isinstance(e, StatefulEffect)]
+        self.rotors = [e for e in self.effects if hasattr(e, 'rotor_momentum')]
+        self._inertia_entries = tuple(scene.inertia.tensor.ravel().tolist())
         self.input_routes: dict[str, list[Effect]] = {}
         for effect in self.effects:
             for input_name in effect.input_names:
@@ -144,21 +145,35 @@ class _Propagator:
     def rotor_momentum(self, t: float) -> FloatArray:
         """Summed rotor momentum [N m s, body] at ``t`` (zero without rotors)."""
         total = np.zeros(3)
-        for effect in self.effects:
-            if hasattr(effect, 'rotor_momentum'):
-                total = total + effect.rotor_momentum(t)[0]
+        for effect in self.rotors:
+            total = total + effect.rotor_momentum(t)[0]
         return total
 
     def energy(self) -> float:
         """Kinetic energy [J]: rotation plus the effects' own (translation)."""
-        own = sum(effect.kinetic_energy() for effect in self.stateful)
-        return kinetic_energy(self.scene.inertia, self.state.omega_body) + own
+        p, q, r = self.state.omega_body.tolist()
+        j00, j01, j02, _, j11, j12, _, _, j22 = self._inertia_entries
+        rotation = 0.5 * (j00 * p * p + j11 * q * q + j22 * r * r) + (
+            j01 * p * q + j02 * p * r + j12 * q * r)
+        if self.stateful:
+            return rotation + sum(effect.kinetic_energy() for effect in self.stateful)
+        return rotation
 
     def world_momentum(self) -> FloatArray:
-        """World-frame angular momentum ``R(q)(J ω + h)`` [N m s]."""
-        return world_angular_momentum(self.state.attitude, self.scene.inertia,
-                                      self.state.omega_body,
-                                      self.rotor_momentum(self.state.time))
+        """World-frame angular momentum ``R(q)(J ω + h)`` [N m s] (plain float math)."""
+        p, q, r = self.state.omega_body.tolist()
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = self._inertia_entries
+        mx = j00 * p + j01 * q + j02 * r
+        my = j10 * p + j11 * q + j12 * r
+        mz = j20 * p + j21 * q + j22 * r
+        if self.rotors:
+            hx, hy, hz = self.rotor_momentum(self.state.time).tolist()
+            mx, my, mz = mx + hx, my + hy, mz + hz
+        w, x, y, z = self.state.attitude.tolist()
+        tx, ty, tz = 2.0 * (y * mz - z * my), 2.0 * (z * mx - x * mz), 2.0 * (x * my - y * mx)
+        return np.array([mx + w * tx + (y * tz - z * ty),
+                         my + w * ty + (z * tx - x * tz),
+                         mz + w * tz + (x * ty - y * tx)])
 
     def diagnostics(self) -> Diagnostics:
         """Energy, momentum and their drift, energy-balance residual, norm error."""
@@ -347,13 +362,28 @@ class GyroPropagator(_Propagator):
         self.has_sample = True
 
     def update(self, t: float, omega_measured: ArrayLike) -> None:
-        """Integrate from the previous sample's time to ``t`` with the new sample."""
-        omega = self.corrected(t, _checked_sample(t, omega_measured))
-        dt = float(t) - self.state.time
-        attitude = self.method.propagate(tuple(self.state.attitude),
-                                         tuple(self.state.omega_body), tuple(omega), dt)
-        self.state.attitude = np.array(attitude)
-        self.state.time, self.state.omega_body = float(t), omega
+        """Integrate from the previous sample's time to ``t`` with the new sample.
+
+        Raises :class:`InputError` for a non-finite ``t`` or a rate that is not 3 finite
+        numbers; the state is then unchanged.
+        """
+        self.advance(float(t), tuple(_checked_sample(t, omega_measured).tolist()))
+
+    def advance(self, t: float, omega_measured: tuple[float, float, float]) -> None:
+        """:meth:`update` for an already checked sample (finite float ``t``, 3 finite floats).
+
+        The hot path of the node and the replay tool (:class:`~.stream.GyroStream` checks each
+        sample before calling it): plain float math, no per-call validation.
+        """
+        state = self.state
+        if self.corrections:
+            omega = tuple(self.corrected(t, np.array(omega_measured)).tolist())
+        else:
+            omega = omega_measured
+        attitude = self.method.propagate(state.attitude.tolist(), state.omega_body.tolist(),
+                                         omega, t - state.time)
+        state.attitude = np.array(attitude)
+        state.time, state.omega_body = t, np.array(omega)
 
 
 def _norm(vector: FloatArray) -> float:

@@ -82,7 +82,9 @@ class _Counting:
 
 
 def _finite(stamp: float, values: Sequence[float]) -> bool:
-    return math.isfinite(stamp) and all(math.isfinite(v) for v in values)
+    isfinite = math.isfinite
+    return isfinite(stamp) and isfinite(values[0]) and isfinite(values[1]) and isfinite(
+        values[2])
 
 
 class GyroStream(_Counting):
@@ -121,13 +123,14 @@ class GyroStream(_Counting):
             propagator.start(stamp, omega_body)
             self.last_stamp = stamp
             return self._reject('gap')
+        sample = (float(omega_body[0]), float(omega_body[1]), float(omega_body[2]))
         if self.constant_dt > 0.0:
-            propagator.update(propagator.state.time + self.constant_dt, omega_body)
-            self.last_stamp = stamp
-            return self._accept(_INTEGRATED)
-        propagator.update(stamp, omega_body)
+            propagator.advance(propagator.state.time + self.constant_dt, sample)
+        else:
+            propagator.advance(float(stamp), sample)
         self.last_stamp = stamp
-        return self._accept(_INTEGRATED)
+        self.accepted += 1
+        return _INTEGRATED
 
     def _baseline(self, stamp: float, omega_body: Sequence[float]) -> Outcome:
         self.propagator.start(stamp, omega_body)

@@ -170,7 +170,7 @@ def test_unknown_integrator_lists_valid_ones():
     scene = dynamics_scene({'moments': [1, 2, 3]}, [0.1, 0.2, 0.3]).with_overrides(
         integrator='leapfrog')
     with pytest.raises(IntegratorError,
-                       match=r"Unknown dynamics integrator 'leapfrog'; valid choices: .*rk4"):
+                       match=r"Unknown dynamics integrator 'leapfrog'; expected one of .*rk4"):
         DynamicsPropagator(scene)
 
 
