@@ -341,6 +341,11 @@ class GyroPropagator(_Propagator):
         self.method.reset()
         self.has_sample = False
 
+    def set_attitude(self, attitude: ArrayLike, position: ArrayLike | None = None) -> None:
+        """Re-initialise the attitude; methods that group samples start a new group."""
+        super().set_attitude(attitude, position)
+        self.method.reset()
+
     def corrected(self, t: float, omega_measured: FloatArray) -> FloatArray:
         """Apply the scene's rate corrections in order (bias, Earth rate, ...)."""
         omega = omega_measured
