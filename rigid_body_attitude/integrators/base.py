@@ -65,7 +65,9 @@ class BodyModel(Protocol):
     ``rotor_momentum(t) -> (h [N m s], ḣ [N m])``. Optional: ``torque_depends_on_rate``
     (bool, taken as True when absent); False lets the splitting methods apply a torque kick
     exactly in one evaluation. ``has_rotor`` (bool, True when absent); False skips the rotor
-    query.
+    query. ``torque_takes_floats`` (bool, False when absent); True lets the splitting methods
+    call ``torque_body(t, (w, x, y, z), (ω₁, ω₂, ω₃))`` with plain-float tuples and take any
+    three numbers back (no NumPy conversion in their hot loop).
     """
 
     tensor_entries: tuple[float, ...]
@@ -96,12 +98,14 @@ class SimpleBodyModel:
     ``inertia`` is three principal moments or a symmetric (3, 3) tensor [kg m²];
     ``torque_body(t, attitude, omega_body) -> (3,)`` [N m] and
     ``rotor_momentum(t) -> (h, ḣ)`` are optional callables (absent means zero).
-    ``torque_depends_on_rate=False`` declares that the torque ignores ``omega_body``.
+    ``torque_depends_on_rate=False`` declares that the torque ignores ``omega_body``;
+    ``torque_takes_floats=True`` that it also accepts plain-float tuples for the attitude and
+    the rate (see :class:`BodyModel`).
     """
 
     def __init__(self, inertia: ArrayLike, torque_body: TorqueFunction | None = None,
                  rotor_momentum: RotorFunction | None = None,
-                 torque_depends_on_rate: bool = True):
+                 torque_depends_on_rate: bool = True, torque_takes_floats: bool = False):
         tensor = np.asarray(inertia, dtype=np.float64)
         if tensor.shape == (3,):
             tensor = np.diag(tensor)
@@ -120,6 +124,7 @@ class SimpleBodyModel:
         if torque_body is not None:
             self.torque_body = torque_body  # call the user's function directly (hot path)
         self.torque_depends_on_rate = bool(torque_depends_on_rate)
+        self.torque_takes_floats = bool(torque_takes_floats) and torque_body is not None
         self.has_rotor = rotor_momentum is not None
 
     @property

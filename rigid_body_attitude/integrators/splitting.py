@@ -21,7 +21,9 @@ RK4 (error O(τ⁵): the compositions then stay fourth order at most).
 A composition with weights ``w₁…w_s`` (symmetric, ``Σ w = 1``) is
 ``kick(w₁h/2) free(w₁h) kick((w₁+w₂)h/2) free(w₂h) … free(w_s h) kick(w_s h/2)``, with each
 kick at the time reached so far; adjacent half-kicks at the same (t, q) are merged. World
-angular momentum, ``|q|`` and ``|m|`` are kept exactly by every free piece.
+angular momentum, ``|q|`` and ``|m|`` are kept exactly by every free piece. For an
+axisymmetric body with exact kicks the Casimir and RKN methods run the same maps in the fused
+plain-float loop of :mod:`rigid_body_attitude.integrators.axisymmetric`.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from rigid_body_attitude import quaternion as quat
+from rigid_body_attitude.integrators.axisymmetric import compose, spin_frame, SpinFrame
 from rigid_body_attitude.integrators.base import (
     as_state, BodyModel, check_step, FloatArray, output, q_exp, q_multiply, q_normalize, Quat,
     SERIES_THRESHOLD, Vec)
@@ -315,10 +318,14 @@ class _Composition(DynamicsMethod):
     def __init__(self) -> None:
         self._model: BodyModel | None = None
         self._frame: PrincipalFrame | None = None
+        self._spin: SpinFrame | None = None
 
     def _frame_of(self, model: BodyModel) -> PrincipalFrame:
         if model is not self._model or self._frame is None:
             self._frame = PrincipalFrame(model)
+            exact_flow = type(self).free_flow in (casimir_free_flow, exact_free_flow)
+            self._spin = (spin_frame(model, self._frame.axes, self._frame.moments)
+                          if exact_flow else None)
             self._model = model
         return self._frame
 
@@ -352,6 +359,11 @@ class _Composition(DynamicsMethod):
     def _advance(self, q: Quat, omega: Vec, t: float, h: float,
                  model: BodyModel) -> tuple[Quat, Vec]:
         frame = self._frame_of(model)
+        if self._spin is not None:  # axisymmetric, exact kicks: the fused loop
+            q, m = self._spin.to_spin(q, omega)
+            q, m = compose(q, m, t, h, 1, self.free_weights, self.kick_weights, self._spin)
+            q, omega = self._spin.to_body(q, m)
+            return q_normalize(q), omega
         q, m = frame.to_principal(q, frame.momentum(omega))
         if model.torque_free:
             q, m = self._free_only(q, m, h, frame)
@@ -365,9 +377,16 @@ class _Composition(DynamicsMethod):
     def integrate(self, attitude: ArrayLike, omega_body: ArrayLike, t_start: float, h: float,
                   steps: int, model: BodyModel) -> tuple[FloatArray, FloatArray]:
         """``steps`` equal steps; with exact kicks the last kick of a step and the first of
-        the next (same time and attitude) are merged into one torque evaluation."""
+        the next (same time and attitude) are merged into one torque evaluation, and an
+        axisymmetric body runs the fused loop :func:`.axisymmetric.compose`."""
         self._check_model(model)
         frame = self._frame_of(model)
+        if self._spin is not None:
+            q, omega = as_state(attitude, omega_body)
+            q, m = self._spin.to_spin(q, omega)
+            q, m = compose(q, m, float(t_start), check_step(h), int(steps), self.free_weights,
+                           self.kick_weights, self._spin)
+            return output(*self._spin.to_body(q, m))
         if model.torque_free or self._kick_function(model) is not _exact_kick:
             return super().integrate(attitude, omega_body, t_start, h, steps, model)
         q, omega = as_state(attitude, omega_body)
