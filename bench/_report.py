@@ -209,7 +209,7 @@ def render(throughput: Optional[dict], soak: Optional[dict], png_name: str) -> s
         lines += [
             '## Throughput', '',
             f'Each row: fresh processes (target, `pose` subscriber, `imu` publisher; RELIABLE, '
-            f'KEEP_LAST 1000), {throughput["warmup_s"]} s warm-up, '
+            f'KEEP_LAST {throughput["depth"]}), {throughput["warmup_s"]} s warm-up, '
             f'{throughput["duration_s"]} s measured. *Lost* = published in the window but not '
             f'received within {throughput["drain_s"]} s after the last publish. CPU = utime + '
             'stime of the target process over the window. Latency = receive wall time − pose '

@@ -21,9 +21,10 @@ picks the technique:
 ``ste-drain``
     ``SingleThreadedExecutor``; the raw callback handles its message and then drains the rest of
     the queue with ``take_message`` (public API only).
-``events`` / ``events-raw``
+``events`` / ``events-raw`` / ``events-drain``
     ``rclpy.experimental.EventsExecutor`` (C++ executor, new in 7.1) with message objects /
-    raw bytes, spun with ``spin_once(timeout_sec=1.0)`` (its ``spin()`` busy-loops here).
+    raw bytes / raw bytes and the draining callback of ``ste-drain``, spun with
+    ``spin_once(timeout_sec=1.0)`` (its ``spin()`` busy-loops here).
 
 Usage: ``python bench/fast_relay.py [--mode M] [--outputs pose,orientation,imu_data]
 [--ros-args ...]``. Findings and numbers: ``bench/NOTES.md``.
@@ -46,7 +47,8 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerGuardCondition
 from sensor_msgs.msg import Imu
 
-MODES = ('waitset', 'waitset-obj', 'ste-raw', 'ste-drain', 'events', 'events-raw')
+MODES = ('waitset', 'waitset-obj', 'ste-raw', 'ste-drain', 'events', 'events-raw',
+         'events-drain')
 OUTPUTS = ('pose', 'orientation', 'imu_data')
 
 _QUATERNION = struct.Struct('<4d')
@@ -231,10 +233,10 @@ def serve_others(executor) -> None:
 
 def run(mode: str, outputs: List[str]) -> None:
     """Build the relay for ``mode`` and spin it until shutdown."""
-    raw = mode in ('waitset', 'ste-raw', 'ste-drain', 'events-raw')
+    raw = mode in ('waitset', 'ste-raw', 'ste-drain', 'events-raw', 'events-drain')
     own_loop = mode.startswith('waitset')
     node = FastRelay(outputs, raw, own_loop)
-    if mode == 'ste-drain':
+    if mode in ('ste-drain', 'events-drain'):
         node.imu_subscription.callback = node.imu_drain_callback
     if mode.startswith('events'):
         from rclpy.experimental import EventsExecutor
@@ -278,6 +280,10 @@ def main() -> int:
         run(args.mode, outputs)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except _rclpy.RCLError:
+        # SIGINT shuts the context down under a callback still publishing a backlog.
+        if rclpy.ok():
+            raise
     finally:
         rclpy.try_shutdown()
     return 0

@@ -4,7 +4,7 @@ For every rate and every target (the node, the bare ``SingleThreadedExecutor`` r
 ``bench/relay.py`` as the anchor, the prototype ``bench/fast_relay.py``) it starts three fresh
 processes exactly as a user would: the target executable, a subscriber of ``pose``
 (``bench/_subscriber.py``) and a publisher of ``sensor_msgs/Imu`` on ``imu``
-(``bench/_publisher.py``, RELIABLE, KEEP_LAST 1000). Targets alternate within each rate so
+(``bench/_publisher.py``, RELIABLE, KEEP_LAST ``--depth``). Targets alternate within each rate so
 background load on the shared machine hits them alike. Per run it reports:
 
 * sent: messages published in the measured window (after a warm-up), and the publisher's
@@ -49,7 +49,7 @@ BENCH = Path(__file__).resolve().parent
 REPO = BENCH.parent
 sys.path.insert(0, str(BENCH))
 
-from _common import busy_ticks, cpu_ticks, ros_env, rss_kib  # noqa: E402
+from _common import busy_ticks, cpu_ticks, QUEUE_DEPTH, ros_env, rss_kib  # noqa: E402
 import _report  # noqa: E402
 
 DEFAULT_RATES = [200, 500, 1000, 2000, 5000, 10000, 15000, 20000]
@@ -148,9 +148,10 @@ def default_targets() -> Dict[str, List[str]]:
 class Session:
     """Starts processes for one run and guarantees they are all stopped afterwards."""
 
-    def __init__(self, domain_id: int, workdir: Path) -> None:
-        """Use ``domain_id`` for every process; logs and recordings go to ``workdir``."""
+    def __init__(self, domain_id: int, depth: int, workdir: Path) -> None:
+        """Use ``domain_id`` and queue ``depth`` everywhere; logs and data go to ``workdir``."""
         self.env = ros_env(domain_id)
+        self.env['BENCH_QUEUE_DEPTH'] = str(depth)
         self.env['PYTHONPATH'] = os.pathsep.join(
             [str(REPO)] + [p for p in [os.environ.get('PYTHONPATH')] if p])
         self.workdir = workdir
@@ -222,14 +223,14 @@ def measure(session: Session, target_argv: List[str], rate: float,
 def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> dict:
     """Measure every target at every rate; return the results document."""
     results = {'machine': _report.machine_description(), 'duration_s': args.duration,
-               'warmup_s': args.warmup, 'drain_s': args.drain,
+               'warmup_s': args.warmup, 'drain_s': args.drain, 'depth': args.depth,
                'targets': {label: {'command': shlex.join(argv), 'rows': []}
                            for label, argv in targets.items()}}
     problems = results['problems'] = []
     for rate in args.rates:
         for label, argv in targets.items():
             with tempfile.TemporaryDirectory(prefix='bench_') as tmp:
-                session = Session(args.domain_id, Path(tmp))
+                session = Session(args.domain_id, args.depth, Path(tmp))
                 row = None
                 try:
                     row = measure(session, argv, rate, args)
@@ -250,7 +251,7 @@ def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
     """Run ``argv`` at ``--soak-rate`` for ``--soak-minutes``; sample its RSS every minute."""
     minutes = args.soak_minutes
     with tempfile.TemporaryDirectory(prefix='bench_soak_') as tmp:
-        session = Session(args.domain_id, Path(tmp))
+        session = Session(args.domain_id, args.depth, Path(tmp))
         try:
             subscriber = session.start('subscriber', [
                 sys.executable, str(BENCH / '_subscriber.py'), '--out',
@@ -299,6 +300,9 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         help='command line of the node target (default: propagation_node '
                              'or python -m rigid_body_attitude.node, with '
                              f'{" ".join(NODE_ARGS)})')
+    parser.add_argument('--depth', type=int, default=QUEUE_DEPTH,
+                        help='KEEP_LAST depth of the publisher, subscriber and relays '
+                             '(default %(default)s)')
     parser.add_argument('--domain-id', type=int,
                         default=int(os.environ.get('ROS_DOMAIN_ID', '64')))
     parser.add_argument('--match-timeout', type=float, default=30.0)

@@ -14,6 +14,7 @@ from _common import IMU_TOPIC, POSE_TOPIC, reliable_qos
 from geometry_msgs.msg import PoseStamped
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from sensor_msgs.msg import Imu
 
@@ -46,6 +47,10 @@ def main(args=None) -> int:
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except _rclpy.RCLError:
+        # SIGINT shuts the context down under a callback still publishing a backlog.
+        if rclpy.ok():
+            raise
     finally:
         executor.shutdown()
         relay.destroy_node()
