@@ -28,6 +28,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from rigid_body_attitude import quaternion as quat
+from rigid_body_attitude.errors import IntegratorError
 from rigid_body_attitude.integrators.base import (
     BodyModel, q_multiply, q_normalize, Quat, SERIES_THRESHOLD, Vec)
 
@@ -35,6 +36,8 @@ __all__ = ['SpinFrame', 'compose', 'spin_frame']
 
 #: ``torque(t, (w, x, y, z), (ω₁, ω₂, ω₃)) -> (M₁, M₂, M₃)`` in spin-frame components [N m].
 FloatTorque = Callable[[float, Quat, Vec], Sequence[float]]
+#: One stage of a step: kick τ [s], free-flow τ/J_t, half spin angle per unit m_s, time offset.
+Stage = tuple[float, float, float, float]
 
 
 class SpinFrame:
@@ -53,8 +56,8 @@ class SpinFrame:
         self.spin_coefficient = 1.0 / self.moments[2] - 1.0 / self.moments[0]
         self.inverse_moments = tuple(1.0 / j for j in self.moments)
         self.identity = self.axes == (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-        matrix = np.array(self.axes).reshape(3, 3)
-        self.rotation = tuple(quat.from_matrix(matrix).tolist())  # q_body ⊗ rotation = q_spin
+        self.rotation = ((1.0, 0.0, 0.0, 0.0) if self.identity  # q_body ⊗ rotation = q_spin
+                         else tuple(quat.from_matrix(np.array(self.axes).reshape(3, 3)).tolist()))
         self.torque = self._torque_function(model)
 
     def _torque_function(self, model: BodyModel) -> FloatTorque:
@@ -134,24 +137,41 @@ def compose(q: Quat, m: Vec, t_start: float, h: float, steps: int,
             free_weights: Sequence[float], kick_weights: Sequence[float],
             frame: SpinFrame) -> tuple[Quat, Vec]:
     """``steps`` steps ``B(b₀h) A(a₁h) B(b₁h) … A(a_s h) B(b_s h)`` from ``t_start`` (module
-    docstring); ``q`` and ``m`` are spin-frame, ``q`` renormalised after every step."""
-    transverse = frame.transverse
-    half_spin = 0.5 * frame.spin_coefficient
-    i1, i2, i3 = frame.inverse_moments
-    torque = frame.torque
+    docstring); ``q`` and ``m`` are spin-frame, ``q`` renormalised after every step.
+
+    A state that becomes non-finite raises :class:`IntegratorError`.
+    """
     offsets = []
     elapsed = 0.0
     for weight in free_weights:
         offsets.append(elapsed)
         elapsed += weight * h
 
-    def plan(first_kick: float) -> list[tuple[float, float, float, float]]:
+    def plan(first_kick: float) -> list[Stage]:
         """Per stage: kick τ, free-flow τ/J_t, half spin angle per unit m_s, time offset."""
         kicks = (first_kick,) + tuple(kick_weights[1:-1])
-        return [(b * h, a * h / transverse, half_spin * a * h, offset)
+        return [(b * h, a * h / frame.transverse, 0.5 * frame.spin_coefficient * a * h, offset)
                 for b, a, offset in zip(kicks, free_weights, offsets)]
-    first = plan(kick_weights[0])
-    merged = plan(kick_weights[-1] + kick_weights[0])
+    try:
+        q, m = _run(q, m, t_start, h, steps, plan(kick_weights[0]),
+                    plan(kick_weights[-1] + kick_weights[0]), frame)
+    except ValueError as err:  # math.sin/cos of an infinite angle
+        raise IntegratorError(f'Integration produced a non-finite state from attitude {q!r}, '
+                              f'momentum {m!r} (spin frame) over {steps} steps of {h!r} s; '
+                              f'reduce the step') from err
+    last = kick_weights[-1] * h
+    if steps > 0 and last != 0.0:
+        i1, i2, i3 = frame.inverse_moments
+        mx, my, mz = frame.torque(t_start + steps * h, q, (m[0] * i1, m[1] * i2, m[2] * i3))
+        m = (m[0] + last * mx, m[1] + last * my, m[2] + last * mz)
+    return q, m
+
+
+def _run(q: Quat, m: Vec, t_start: float, h: float, steps: int, first: list[Stage],
+         merged: list[Stage], frame: SpinFrame) -> tuple[Quat, Vec]:
+    """Every stage of ``steps`` steps but the final kick (hot loop, local floats only)."""
+    i1, i2, i3 = frame.inverse_moments
+    torque = frame.torque
     sqrt, sin, cos = math.sqrt, math.sin, math.cos
     w, x, y, z = q
     m1, m2, m3 = m
@@ -185,8 +205,4 @@ def compose(q: Quat, m: Vec, t_start: float, h: float, steps: int,
             q_normalize((w, x, y, z))  # raises IntegratorError naming the state
         inverse = 1.0 / norm
         w, x, y, z = w * inverse, x * inverse, y * inverse, z * inverse
-    last = kick_weights[-1] * h
-    if steps > 0 and last != 0.0:
-        mx, my, mz = torque(t_start + steps * h, (w, x, y, z), (m1 * i1, m2 * i2, m3 * i3))
-        m1, m2, m3 = m1 + last * mx, m2 + last * my, m3 + last * mz
     return (w, x, y, z), (m1, m2, m3)

@@ -102,8 +102,9 @@ class PrincipalFrame:
             self.order = (0, 1, 2)
         self.moments = tuple(float(x) for x in moments)
         self.axes = tuple(axes.ravel().tolist())  # row-major V: body = V · principal
-        self.rotation = tuple(quat.from_matrix(axes).tolist())  # q_body ⊗ rotation = q_p
         self.identity = bool(np.array_equal(axes, np.eye(3)))
+        self.rotation = ((1.0, 0.0, 0.0, 0.0) if self.identity  # q_body ⊗ rotation = q_p
+                         else tuple(quat.from_matrix(axes).tolist()))
         self.tensor = tuple(model.tensor_entries)
         self.inverse = tuple(model.inverse_entries)
         reference = self.moments[self.order[1]]
