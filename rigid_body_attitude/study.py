@@ -409,8 +409,9 @@ def heavy_top_energy(q: FloatArray, w: FloatArray) -> float:
     return float(0.5 * np.sum(np.array(HEAVY_TOP_MOMENTS) * w * w) + HEAVY_TOP_MGL * height)
 
 
-def _heavy_top_rhs(t: float, y: FloatArray) -> FloatArray:
-    """Euler + Poisson equations of the heavy top in plain floats (scipy's right-hand side)."""
+def heavy_top_rhs(t: float, y: FloatArray) -> FloatArray:
+    """Euler + Poisson equations of the heavy top in plain floats (scipy's right-hand side):
+    ``y = (q, ω)`` (7,), the same :func:`heavy_top_torque` called with plain floats."""
     qw, qx, qy, qz, p, q, r = y.tolist()
     mx, my, mz = heavy_top_torque(t, (qw, qx, qy, qz), None)
     j1, j2, j3 = HEAVY_TOP_MOMENTS
@@ -426,11 +427,12 @@ def heavy_top_jobs(quick: bool) -> list[Job]:
     initial = quat.exp([0.3, 0.0, 0.0])
     omega = np.array([0.0, 0.5, 25.0])
     start = np.concatenate([initial, omega])
-    reference, floor = _dop853_reference(_heavy_top_rhs, start, duration)
+    reference, floor = _dop853_reference(heavy_top_rhs, start, duration)
     expected_q = reference[:4]
     energy = heavy_top_energy(initial, omega)
+    # The same torque function as scipy's right-hand side, called the same way (plain floats).
     model = SimpleBodyModel(HEAVY_TOP_MOMENTS, torque_body=heavy_top_torque,
-                            torque_depends_on_rate=False)
+                            torque_depends_on_rate=False, torque_takes_floats=True)
 
     def evaluate(q: FloatArray, w: FloatArray) -> tuple[float, float]:
         return (quat.attitude_error(q, expected_q),
@@ -451,7 +453,7 @@ def heavy_top_jobs(quick: bool) -> list[Job]:
              for rtol in tolerances]
     for rtol in ((1e-8, 1e-10) if quick else (1e-8, 1e-9, 1e-10, 1e-11, 1e-12)):
         def measure(rtol=rtol) -> tuple[Any, ...]:
-            result = solve_ivp(_heavy_top_rhs, (0.0, duration), start, method='DOP853',
+            result = solve_ivp(heavy_top_rhs, (0.0, duration), start, method='DOP853',
                                rtol=rtol, atol=1e-3 * rtol)
             q, w = quat.normalize(result.y[:4, -1]), result.y[4:, -1]
             error, drift = evaluate(q, w)
@@ -614,8 +616,12 @@ def write_markdown(rows: Sequence[Row], path: Path, elapsed: float) -> None:
         lines += ['', f'Best project method: **{comparison["best"]}**, '
                   f'{_fmt(1e3 * comparison["best_cpu"])} ms vs scipy DOP853 '
                   f'{_fmt(1e3 * comparison["scipy_cpu"])} ms: ratio '
-                  f'**{comparison["ratio"]:.3f}** (target ≤ 0.1). Both call the same plain-float '
-                  'gravity torque; scipy integrates a plain-float right-hand side.', '']
+                  f'**{comparison["ratio"]:.3f}** (target ≤ 0.1), measured in the same run. '
+                  'Both call the same gravity torque (`study.heavy_top_torque`) with plain-float '
+                  'tuples: scipy through a plain-float right-hand side (`study.heavy_top_rhs`), '
+                  'the splitting methods through their fused loop for an axisymmetric body '
+                  '(the model declares `torque_takes_floats`). Same initial state, end time '
+                  'and error definition (attitude error against DOP853 at rtol 1e−13).', '']
     for case in cases:
         subset = [r for r in rows if r.case == case]
         invariant = next((r.invariant for r in subset if r.invariant), '')
