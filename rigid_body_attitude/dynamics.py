@@ -48,11 +48,15 @@ class RigidBodyModel:
             into ``M``; empty for a torque-free body.
         rotor_functions: callables ``t -> (h_body [N m s], ḣ_body [N m])`` summed into the
             gyrostat terms; empty when there is no rotor.
+        torque_depends_on_rate: False when no torque function uses ``omega_body`` (the
+            propagator sets it from its effects); the splitting methods then apply a torque
+            kick exactly, in one evaluation. True (the safe default) otherwise.
     """
 
     inertia: Inertia
     torque_functions: Sequence[TorqueFunction] = field(default_factory=tuple)
     rotor_functions: Sequence[RotorFunction] = field(default_factory=tuple)
+    torque_depends_on_rate: bool = True
     tensor_entries: tuple[float, ...] = field(init=False, repr=False)
     inverse_entries: tuple[float, ...] = field(init=False, repr=False)
 
@@ -65,6 +69,11 @@ class RigidBodyModel:
     def torque_free(self) -> bool:
         """True when no torque and no rotor act: the exact and splitting methods apply."""
         return not self.torque_functions and not self.rotor_functions
+
+    @property
+    def has_rotor(self) -> bool:
+        """True when a rotor (gyrostat momentum) acts."""
+        return bool(self.rotor_functions)
 
     @property
     def inverse_inertia(self) -> FloatArray:

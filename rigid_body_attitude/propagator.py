@@ -195,10 +195,11 @@ class DynamicsPropagator(_Propagator):
             raise IntegratorError(f'DynamicsPropagator needs a dynamics scene, got '
                                   f'rate_source {scene.rate_source!r}')
         super().__init__(scene)
+        torque_effects = [e for e in self.effects if hasattr(e, 'torque_body')]
         self.model = RigidBodyModel(
-            scene.inertia,
-            tuple(e.torque_body for e in self.effects if hasattr(e, 'torque_body')),
-            tuple(e.rotor_momentum for e in self.effects if hasattr(e, 'rotor_momentum')))
+            scene.inertia, tuple(e.torque_body for e in torque_effects),
+            tuple(e.rotor_momentum for e in self.effects if hasattr(e, 'rotor_momentum')),
+            torque_depends_on_rate=any(e.torque_depends_on_rate for e in torque_effects))
         self.force_effects = [e for e in self.effects if hasattr(e, 'force_world')]
         self.integrator = dynamics_integrator(scene.integrator)
         if not self.model.torque_free and not self.integrator.supports_torque:

@@ -139,7 +139,9 @@ class Effect:
 
     Subclasses set ``name``, ``description``, ``parameters``, ``rate_sources``, ``requires``
     (names of other effects the scene must also name) and, when they listen to a commanded
-    input, ``inputs`` (input name → description) and :meth:`accept_input`.
+    input, ``inputs`` (input name → description) and :meth:`accept_input`. A torque effect
+    whose ``torque_body`` uses ``omega_body`` sets ``torque_depends_on_rate`` True: otherwise
+    the splitting integrators apply its torque as an exact one-evaluation kick.
     """
 
     name: ClassVar[str] = ''
@@ -148,6 +150,7 @@ class Effect:
     rate_sources: ClassVar[frozenset[str]] = frozenset({'dynamics'})
     inputs: ClassVar[Mapping[str, str]] = {}
     requires: ClassVar[tuple[str, ...]] = ()
+    torque_depends_on_rate: ClassVar[bool] = False
 
     def __init__(self, params: Mapping[str, Any], body: BodyProperties) -> None:
         """Validate ``params`` against :attr:`parameters`; keep ``body``."""

@@ -31,6 +31,7 @@ class ViscousDamping(Effect):
     description = 'torque −c ω opposing the body rate'
     parameters = {'coefficient': Parameter(_coefficient, REQUIRED,
                                            'damping coefficient(s) [N m s/rad]')}
+    torque_depends_on_rate = True
 
     def torque_body(self, t: float, attitude: NDArray[Any],
                     omega_body: NDArray[Any]) -> NDArray[Any]:
