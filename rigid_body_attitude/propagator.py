@@ -24,6 +24,7 @@ from rigid_body_attitude.diagnostics import Diagnostics, DiagnosticsTracker
 from rigid_body_attitude.dynamics import RigidBodyModel
 from rigid_body_attitude.effects import Effect, StatefulEffect
 from rigid_body_attitude.errors import InputError, IntegratorError
+from rigid_body_attitude.integrators import torque_integrators
 from rigid_body_attitude.methods import dynamics_integrator, strapdown_method
 from rigid_body_attitude.scene import Scene
 
@@ -205,8 +206,8 @@ class DynamicsPropagator(_Propagator):
         if not self.model.torque_free and not self.integrator.supports_torque:
             raise IntegratorError(f'Integrator {scene.integrator!r} handles torque-free bodies '
                                   f'only; scene {scene.name!r} has torques or rotors '
-                                  f'({", ".join(e.name for e in self.effects)}). Use rk4, '
-                                  f'rkmk4, strang, yoshida4 or dopri45')
+                                  f'({", ".join(e.name for e in self.effects)}). Use one of '
+                                  f'{", ".join(torque_integrators())}')
         self._power_start: float | None = None
         self.rotation_limit = float(getattr(
             self.integrator, 'max_rotation_per_step',

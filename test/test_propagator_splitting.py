@@ -14,7 +14,9 @@ from scipy.integrate import solve_ivp
 
 from rigid_body_attitude import quaternion as quat
 from rigid_body_attitude.effects import BodyProperties, EFFECTS
+from rigid_body_attitude.errors import IntegratorError
 from rigid_body_attitude.inertia import Inertia
+from rigid_body_attitude.integrators import DYNAMICS_INTEGRATORS
 from rigid_body_attitude.propagator import DynamicsPropagator
 from rigid_body_attitude.scene import scene_from_mapping
 
@@ -109,3 +111,12 @@ def test_propagated_heavy_top_keeps_the_splitting_order(name, steps, order):
     measured = math.log(errors[0] / errors[1]) / math.log(steps[1] / steps[0])
     # Errors ≥ 1e−10 against a reference good to ~1e−12 (nutation 17 rad/s, h ≤ 0.04 s).
     assert abs(measured - order) <= 0.3, errors
+
+
+def test_torque_free_only_integrator_lists_the_torque_integrators():
+    torque_capable = sorted(name for name, cls in DYNAMICS_INTEGRATORS.items()
+                            if cls.supports_torque)
+    assert 'exact' not in torque_capable and 'casimir8' in torque_capable
+    with pytest.raises(IntegratorError, match="'exact' handles torque-free bodies only") as info:
+        DynamicsPropagator(top_scene('exact', 0.01))
+    assert str(info.value).endswith(f'Use one of {", ".join(torque_capable)}')

@@ -43,6 +43,7 @@ __all__ = [
     'dynamics_integrator',
     'kinematic_method',
     'strapdown_method',
+    'torque_integrators',
 ]
 
 #: Dynamics integrators by name (values are classes).
@@ -50,6 +51,13 @@ DYNAMICS_INTEGRATORS: dict[str, Any] = {cls.name: cls for cls in (
     RigidBodyRk4, RigidBodyRkmk4, StrangSplitting, Yoshida4Splitting, Casimir6Splitting,
     Casimir8Splitting, BlanesMoan4Splitting, BlanesMoan6Splitting, DormandPrince45,
     ExactTorqueFree)}
+
+
+def torque_integrators() -> tuple[str, ...]:
+    """Names of the dynamics integrators that handle torques and rotors (``supports_torque``),
+    sorted; the others handle torque-free bodies only."""
+    return tuple(sorted(name for name, cls in DYNAMICS_INTEGRATORS.items()
+                        if cls.supports_torque))
 
 
 def dynamics_integrator(name: str, **options: Any) -> Any:

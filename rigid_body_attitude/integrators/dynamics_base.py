@@ -29,9 +29,10 @@ class DynamicsMethod:
 
     def _check_model(self, model: BodyModel) -> None:
         if not self.supports_torque and not model.torque_free:
+            from rigid_body_attitude.integrators import torque_integrators  # registry: no cycle
             raise IntegratorError(f'Integrator {self.name!r} handles torque-free bodies only; '
-                                  f'this model has a torque or a rotor. Use rk4, rkmk4, '
-                                  f'strang, yoshida4 or dopri45')
+                                  f'this model has a torque or a rotor. Use one of '
+                                  f'{", ".join(torque_integrators())}')
 
     def step(self, attitude: ArrayLike, omega_body: ArrayLike, t: float, h: float,
              model: BodyModel) -> tuple[FloatArray, FloatArray]:
