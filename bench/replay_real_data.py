@@ -1,12 +1,13 @@
 """Real-data table: BROAD trials replayed with every strapdown method, error vs optical truth.
 
 For each shipped trial (07: fast rotation up to 25 rad/s; 15: translation, small rotations) and
-each strapdown method the propagator offers (:func:`rigid_body_attitude.methods.strapdown_method`),
-the trial is converted to a bag (``rigid_body_attitude.broad.trial_to_bag``) and replayed with
-``replay`` exactly as ``test/test_real_data.py`` does: the ``gyro_bias`` effect averages the
-initial rest phase, the attitude starts from the ground truth at the first motion sample, and
-the largest attitude error against the ground truth is reported for the first 10 s of motion
-and for the whole trial. Prints a Markdown table (the README's).
+each strapdown method the propagator offers
+(:func:`rigid_body_attitude.integrators.strapdown_method`), the trial is converted to a bag
+(``rigid_body_attitude.broad.trial_to_bag``) and replayed with ``replay`` exactly as
+``test/test_real_data.py`` does: the ``gyro_bias`` effect averages the initial rest phase, the
+attitude starts from the ground truth at the first motion sample, and the largest attitude error
+against the ground truth is reported for the first 10 s of motion and for the whole trial.
+Prints a Markdown table (the README's).
 
 Data: D. Laidig, M. Caruso, A. Cereatti, T. Seel, "BROAD — A Benchmark for Robust Inertial
 Orientation Estimation", Data 6(7):72, 2021, doi:10.3390/data6070072, CC BY 4.0.
@@ -28,8 +29,7 @@ import yaml
 
 from rigid_body_attitude import broad
 from rigid_body_attitude.errors import IntegratorError
-from rigid_body_attitude.integrators import STRAPDOWN_METHODS
-from rigid_body_attitude.methods import strapdown_method
+from rigid_body_attitude.integrators import STRAPDOWN_METHODS, strapdown_method
 from rigid_body_attitude.replay import ReplayOptions, replay_bag
 
 DEFAULT_DATA_DIR = Path('/work/shared/data/broad')

@@ -24,8 +24,8 @@ from rigid_body_attitude.diagnostics import Diagnostics, DiagnosticsTracker
 from rigid_body_attitude.dynamics import RigidBodyModel
 from rigid_body_attitude.effects import Effect, StatefulEffect
 from rigid_body_attitude.errors import InputError, IntegratorError
-from rigid_body_attitude.integrators import torque_integrators
-from rigid_body_attitude.methods import dynamics_integrator, strapdown_method
+from rigid_body_attitude.integrators import (
+    dynamics_integrator, strapdown_method, torque_integrators)
 from rigid_body_attitude.scene import Scene
 
 __all__ = ['DynamicsPropagator', 'GyroPropagator', 'PropagatorState', 'build_propagator']

@@ -41,7 +41,7 @@ import yaml
 from rigid_body_attitude import broad
 from rigid_body_attitude.bag import BagReader
 from rigid_body_attitude.errors import IntegratorError
-from rigid_body_attitude.methods import strapdown_method
+from rigid_body_attitude.integrators import strapdown_method
 from rigid_body_attitude.replay import ReplayOptions, replay_bag
 
 TRIAL_07 = '07_undisturbed_fast_rotation_B'
