@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.errors import InputError, IntegratorError
 from rigid_body_attitude.inertia import Inertia
+from rigid_body_attitude.integrators.rigid_body_rk4 import rk4_state_step
 
 __all__ = ['RigidBodyModel', 'euler_rate', 'rk4_step']
 
@@ -124,35 +125,6 @@ class RigidBodyModel:
         return torque
 
 
-def _derivative(model: RigidBodyModel, t: float,
-                state: tuple[float, ...]) -> tuple[float, ...]:
-    """``(q̇, ω̇)`` for the 7-float state ``(w, x, y, z, ω₁, ω₂, ω₃)`` in plain float math."""
-    qw, qx, qy, qz, p, q, r = state
-    j00, j01, j02, j10, j11, j12, j20, j21, j22 = model.tensor_entries
-    mx = j00 * p + j01 * q + j02 * r
-    my = j10 * p + j11 * q + j12 * r
-    mz = j20 * p + j21 * q + j22 * r
-    tx = ty = tz = 0.0
-    if not model.torque_free:
-        attitude = np.array(state[:4])
-        omega = np.array(state[4:])
-        tx, ty, tz = model.external_torque(t, attitude, omega).tolist()
-        if model.rotor_functions:
-            hx, hy, hz = model.rotor_momentum(t)[0].tolist()
-            mx, my, mz = mx + hx, my + hy, mz + hz
-    bx = tx - (q * mz - r * my)
-    by = ty - (r * mx - p * mz)
-    bz = tz - (p * my - q * mx)
-    i00, i01, i02, i10, i11, i12, i20, i21, i22 = model.inverse_entries
-    return (0.5 * (-qx * p - qy * q - qz * r),
-            0.5 * (qw * p + qy * r - qz * q),
-            0.5 * (qw * q - qx * r + qz * p),
-            0.5 * (qw * r + qx * q - qy * p),
-            i00 * bx + i01 * by + i02 * bz,
-            i10 * bx + i11 * by + i12 * bz,
-            i20 * bx + i21 * by + i22 * bz)
-
-
 def _all_finite(h: float, values: tuple[float, ...]) -> bool:
     """Whether ``h`` and every value are finite numbers (False for nested sequences)."""
     try:
@@ -163,10 +135,13 @@ def _all_finite(h: float, values: tuple[float, ...]) -> bool:
 
 def rk4_step(model: RigidBodyModel, t: float, attitude: FloatArray, omega_body: FloatArray,
              h: float) -> tuple[FloatArray, FloatArray]:
-    """Classical RK4 on ``(q, ω)`` jointly, then ``q`` renormalised.
+    """Classical RK4 on ``(q, ω)`` jointly, then ``q`` renormalised: the ``rk4`` integrator's
+    step (:func:`.integrators.rigid_body_rk4.rk4_state_step`) on arrays, with its checks.
 
-    Order 4; cost 4 evaluations of Euler's equations and of the torques per step, in plain
-    float math (no NumPy per-call overhead for a torque-free body). Keeps ``|q| = 1`` by
+    Raises :class:`InputError` for a non-finite ``h`` or state or wrong shapes and
+    :class:`IntegratorError` for a non-finite result. Order 4; cost 4 evaluations of Euler's
+    equations and of the torques per step, in plain float math (no NumPy per-call overhead
+    for a torque-free body). Keeps ``|q| = 1`` by
     projection only (RK4 alone shrinks ``|q|`` by about ``(h|ω|)⁶/9216`` per step,
     physics.md §6); energy and momentum drift at O(h⁴) per unit time. The baseline every other
     method is measured against (Kutta 1901; Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1).
@@ -176,13 +151,7 @@ def rk4_step(model: RigidBodyModel, t: float, attitude: FloatArray, omega_body: 
         raise InputError(f'Expected a finite step `h`, `attitude` (4,) and `omega_body` (3,), '
                          f'got h={h!r}, attitude={attitude.tolist()!r}, '
                          f'omega_body={omega_body.tolist()!r}')
-    half = 0.5 * h
-    k1 = _derivative(model, t, y0)
-    k2 = _derivative(model, t + half, tuple(a + half * b for a, b in zip(y0, k1)))
-    k3 = _derivative(model, t + half, tuple(a + half * b for a, b in zip(y0, k2)))
-    k4 = _derivative(model, t + h, tuple(a + h * b for a, b in zip(y0, k3)))
-    sixth = h / 6.0
-    y1 = [a + sixth * (b + 2.0 * (c + d) + e) for a, b, c, d, e in zip(y0, k1, k2, k3, k4)]
+    y1 = list(rk4_state_step(model, t, y0, h))
     norm = math.sqrt(y1[0] * y1[0] + y1[1] * y1[1] + y1[2] * y1[2] + y1[3] * y1[3])
     if not (norm > 0.0 and all(map(math.isfinite, y1))):
         raise IntegratorError(f'RK4 step of h={h!r} from attitude {list(y0[:4])!r}, omega_body '

@@ -10,7 +10,21 @@ from rigid_body_attitude.integrators.base import (
     body_derivative, BodyModel, q_normalize, Quat, Vec)
 from rigid_body_attitude.integrators.dynamics_base import DynamicsMethod
 
-__all__ = ['RigidBodyRk4']
+__all__ = ['RigidBodyRk4', 'rk4_state_step']
+
+
+def rk4_state_step(model: BodyModel, t: float, state: tuple[float, ...],
+                   h: float) -> tuple[float, ...]:
+    """One classical RK4 step of ``h`` from ``t`` on the 7-float state ``(q, ω)``, without
+    renormalisation (plain floats; :func:`.base.body_derivative` is the right-hand side)."""
+    half = 0.5 * h
+    k1 = body_derivative(model, t, state)
+    k2 = body_derivative(model, t + half, tuple(a + half * b for a, b in zip(state, k1)))
+    k3 = body_derivative(model, t + half, tuple(a + half * b for a, b in zip(state, k2)))
+    k4 = body_derivative(model, t + h, tuple(a + h * b for a, b in zip(state, k3)))
+    sixth = h / 6.0
+    return tuple(a + sixth * (b + 2.0 * (c + d) + e)
+                 for a, b, c, d, e in zip(state, k1, k2, k3, k4))
 
 
 class RigidBodyRk4(DynamicsMethod):
@@ -29,13 +43,5 @@ class RigidBodyRk4(DynamicsMethod):
 
     def _advance(self, q: Quat, omega: Vec, t: float, h: float,
                  model: BodyModel) -> tuple[Quat, Vec]:
-        y0 = q + omega
-        half = 0.5 * h
-        k1 = body_derivative(model, t, y0)
-        k2 = body_derivative(model, t + half, tuple(a + half * b for a, b in zip(y0, k1)))
-        k3 = body_derivative(model, t + half, tuple(a + half * b for a, b in zip(y0, k2)))
-        k4 = body_derivative(model, t + h, tuple(a + h * b for a, b in zip(y0, k3)))
-        sixth = h / 6.0
-        y1 = tuple(a + sixth * (b + 2.0 * (c + d) + e)
-                   for a, b, c, d, e in zip(y0, k1, k2, k3, k4))
+        y1 = rk4_state_step(model, t, q + omega, h)
         return q_normalize(y1[:4]), (y1[4], y1[5], y1[6])
