@@ -59,10 +59,10 @@ from numpy.typing import NDArray
 from rigid_body_attitude import quaternion
 from rigid_body_attitude.bag import (
     ATTITUDE_DECODERS, IMU, POSE_STAMPED, RATE_DECODERS, STORAGES, VECTOR3_STAMPED,
-    WRENCH_STAMPED, BagError, BagReader, BagWriter, DiagnosticStatus, encode_diagnostic_array,
-    encode_float64, encode_pose_stamped, encode_quaternion_stamped, encode_twist_stamped,
-    encode_vector3_stamped, header_stamp_ns, pose_orientation, pose_position, vector3_stamped,
-    wrench_force, wrench_torque)
+    WRENCH_STAMPED, BagError, BagReader, BagWriter, DiagnosticStatus, Record,
+    encode_diagnostic_array, encode_float64, encode_pose_stamped, encode_quaternion_stamped,
+    encode_twist_stamped, encode_vector3_stamped, header_stamp_ns, pose_orientation,
+    pose_position, vector3_stamped, wrench_force, wrench_torque)
 from rigid_body_attitude.errors import AttitudeError, InputError
 from rigid_body_attitude.messages import (
     NANOSECONDS_PER_SECOND, TimeBase, body_frame_velocity, diagnostic_report,
@@ -82,8 +82,11 @@ __all__ = ['ErrorStatistics', 'OutputSeries', 'ReplayOptions', 'ReplayResult',
 FloatArray = NDArray[np.float64]
 Quaternion = tuple[float, float, float, float]
 
-#: Progress-bar updates every this many messages (a tqdm update costs about a microsecond).
+#: Progress-bar updates and output flushes every this many messages (a tqdm update costs
+#: about a microsecond).
 PROGRESS_CHUNK = 4096
+#: Output records buffered at most before they are written (about 3 MB of messages).
+FLUSH_RECORDS = 4 * PROGRESS_CHUNK
 #: Output topics of each scene kind, in the order they are listed.
 _GYRO_OUTPUTS = ('orientation', 'pose', 'imu/data', 'energy', 'angular_momentum',
                  DIAGNOSTICS_TOPIC)
@@ -455,23 +458,38 @@ def attitude_errors(output_stamps_ns: NDArray[np.int64], output_attitudes: Float
 
 
 class _Writer:
-    """The output bag's connections, counts and the series kept in memory."""
+    """The output bag's connections, counts, the series kept in memory and a record buffer.
+
+    Every output goes into one buffer in write order (so the bag is the one single writes
+    would make) and reaches the bag in :meth:`BagWriter.write_many` batches: :meth:`write`
+    flushes at :data:`FLUSH_RECORDS`, the gyro loop every :data:`PROGRESS_CHUNK` messages,
+    :func:`replay_bag` at the end.
+    """
 
     def __init__(self, writer: BagWriter, outputs: Sequence[str], keep_series: bool) -> None:
         self.bag = writer
         self.connections = {name: writer.add_topic(name, OUTPUT_TOPICS[name])
                             for name in outputs}
+        self.ids = {name: connection.id for name, connection in self.connections.items()}
         self.counts = {name: 0 for name in outputs}
+        self.records: list[Record] = []
         self.invariants = 'energy' in outputs or 'angular_momentum' in outputs
         self.series = OutputSeries()
         self.keep_series = keep_series
 
     def write(self, topic: str, bag_time_ns: int, data: bytes) -> None:
         """Write ``data`` on ``topic`` (if selected) at ``bag_time_ns``."""
-        connection = self.connections.get(topic)
-        if connection is not None:
-            self.bag.write(connection, bag_time_ns, data)
+        connection_id = self.ids.get(topic)
+        if connection_id is not None:
+            self.records.append((connection_id, bag_time_ns, data))
             self.counts[topic] += 1
+            if len(self.records) >= FLUSH_RECORDS:
+                self.flush()
+
+    def flush(self) -> None:
+        """Write the buffered records to the bag (the buffer is emptied in place)."""
+        self.bag.write_many(self.records)
+        self.records.clear()
 
 
 class _Replay:
@@ -595,11 +613,11 @@ class _Replay:
         propagator = self.propagator
         use_header = self.options.use_header_stamps
         world = self.options.world_frame
-        connections = writer.connections
-        bag_write = writer.bag.write
-        orientation = connections.get('orientation')
-        pose = connections.get('pose')
-        imu_data = connections.get('imu/data') if plan.gyro_is_imu else None
+        ids = writer.ids
+        record = writer.records.append
+        orientation = ids.get('orientation')
+        pose = ids.get('pose')
+        imu_data = ids.get('imu/data') if plan.gyro_is_imu else None
         series = writer.series if writer.keep_series else None
         rejections = self.period_rejections
         next_event = self.next_event_ns() if self.started else -1
@@ -613,6 +631,7 @@ class _Replay:
             chunk += 1
             if chunk == PROGRESS_CHUNK:
                 progress.update(chunk)
+                writer.flush()
                 chunk = 0
             if topic != gyro_topic:
                 self.command(topic, bag_time_ns, data)
@@ -629,11 +648,12 @@ class _Replay:
                 self.align(stamp_ns)
             q = attitude_of(propagator)
             if orientation is not None:
-                bag_write(orientation, bag_time_ns, encode_quaternion_stamped(stamp_ns, world, q))
+                record((orientation, bag_time_ns,
+                        encode_quaternion_stamped(stamp_ns, world, q)))
             if pose is not None:
-                bag_write(pose, bag_time_ns, encode_pose_stamped(stamp_ns, world, _ZERO, q))
+                record((pose, bag_time_ns, encode_pose_stamped(stamp_ns, world, _ZERO, q)))
             if imu_data is not None:
-                bag_write(imu_data, bag_time_ns, _imu_with_orientation(data, q))
+                record((imu_data, bag_time_ns, _imu_with_orientation(data, q)))
             if series is not None:
                 series.attitude_stamps_ns.append(stamp_ns)
                 series.attitudes.extend(q)
@@ -644,9 +664,9 @@ class _Replay:
         progress.update(chunk)
         self.read[gyro_topic] += gyro_count
         self.input_messages += gyro_count
-        for name, connection in (('orientation', orientation), ('pose', pose),
-                                 ('imu/data', imu_data)):
-            if connection is not None:
+        for name, connection_id in (('orientation', orientation), ('pose', pose),
+                                    ('imu/data', imu_data)):
+            if connection_id is not None:
                 writer.counts[name] += published
         return gyro_count
 
@@ -662,6 +682,7 @@ class _Replay:
             chunk += 1
             if chunk == PROGRESS_CHUNK:
                 progress.update(chunk)
+                self.writer.flush()
                 chunk = 0
         progress.update(chunk)
 
@@ -904,6 +925,7 @@ def replay_bag(input_path: str | Path, output_path: str | Path,
                         gyro_count = 0
                         replay.dynamics_messages(messages, bar)
                     replay.finish()
+                    writer.flush()
                 finally:
                     bar.close()
                 elapsed = time.perf_counter() - begin

@@ -302,6 +302,104 @@ def test_bag_writer_output_topics_round_trip(tmp_path, storage):
         'rosbag2_bagfile_information']['custom_data'] == {'k': 'v'}
 
 
+def _mixed_records(count):
+    """``count`` (topic, bag time, CDR bytes) of three sizes with ties and times going back."""
+    rng = np.random.default_rng(5)
+    times = 1_000_000 + 1_000 * np.arange(count) - rng.integers(0, 3_000, count)
+    times[::40] = times[1::40]
+    records = []
+    for index, time_ns in enumerate(times.tolist()):
+        topic = ('imu', 'orientation', 'energy')[index % 3]
+        if topic == 'imu':
+            data = cdr.encode_imu(time_ns, 'imu_link', rng.normal(size=3).tolist())
+        elif topic == 'orientation':
+            data = cdr.encode_quaternion_stamped(time_ns, 'world', [1.0, 0.0, 0.0, 0.0])
+        else:
+            data = cdr.encode_float64(float(index))
+        records.append((topic, time_ns, data))
+    return records
+
+
+def _sqlite_rows(path):
+    import sqlite3  # the standard module, as other tools would read the file
+    connection = sqlite3.connect(next(path.glob('*.db3')))
+    try:
+        return (connection.execute('SELECT * FROM topics ORDER BY id').fetchall(),
+                connection.execute('SELECT id, topic_id, timestamp, data FROM messages '
+                                   'ORDER BY id').fetchall())
+    finally:
+        connection.close()
+
+
+@pytest.mark.parametrize('storage', STORAGES)
+def test_write_many_makes_the_bag_single_rosbags_writes_make(tmp_path, storage):
+    # 21000 records (about 3.3 MiB) span four MCAP chunks of 1 MiB; batches of varied sizes
+    # (one of 1, an empty one, single writes between them) end anywhere inside a chunk.
+    records = _mixed_records(21_000)
+    types = {'imu': bag.IMU, 'orientation': bag.QUATERNION_STAMPED, 'energy': bag.FLOAT64}
+    reference = tmp_path / 'reference' / 'bag'
+    with Writer(reference, version=9, storage_plugin=bag.STORAGES[storage]) as writer:
+        connections = {topic: writer.add_connection(topic, msgtype, typestore=bag.typestore())
+                       for topic, msgtype in types.items()}
+        for topic, time_ns, data in records:
+            writer.write(connections[topic], time_ns, data)
+    ours = tmp_path / 'ours' / 'bag'
+    with bag.BagWriter(ours, storage=storage) as writer:
+        connections = writer.add_topics(types)
+        begin = 0
+        for end, single_after in [(1, False), (1, False), (2, True), (700, False),
+                                  (9_001, False), (9_002, True), (15_000, False),
+                                  (21_000, False)]:
+            writer.write_many([(connections[topic].id, time_ns, data)
+                               for topic, time_ns, data in records[begin:end]])
+            begin = end
+            if single_after:
+                topic, time_ns, data = records[begin]
+                writer.write(connections[topic], time_ns, data)
+                begin += 1
+    assert (ours / 'metadata.yaml').read_text() == (reference / 'metadata.yaml').read_text()
+    metadata = yaml.safe_load((ours / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert metadata['message_count'] == len(records)
+    assert {entry['topic_metadata']['name']: entry['message_count']
+            for entry in metadata['topics_with_message_count']} == {
+        'imu': 7_000, 'orientation': 7_000, 'energy': 7_000}
+    times = [time_ns for _, time_ns, _ in records]
+    assert metadata['starting_time']['nanoseconds_since_epoch'] == min(times)
+    assert metadata['duration']['nanoseconds'] == max(times) - min(times)
+    if storage == 'mcap':
+        assert (ours / 'bag.mcap').read_bytes() == (reference / 'bag.mcap').read_bytes()
+    else:
+        assert _sqlite_rows(ours) == _sqlite_rows(reference)
+    expected = _rosbags_messages(reference, set(types))
+    assert len(expected) == len(records)
+    assert _rosbags_messages(ours, set(types)) == expected
+    with bag.BagReader(ours) as reader:
+        assert list(reader.messages(list(types))) == expected
+
+
+@pytest.mark.parametrize('storage', STORAGES)
+def test_write_many_rejects_a_bad_batch_whole(tmp_path, storage):
+    path = tmp_path / 'bag'
+    data = cdr.encode_float64(1.0)
+    with bag.BagWriter(path, storage=storage) as writer:
+        energy = writer.add_topic('energy', bag.FLOAT64).id
+        writer.write_many([(energy, 5, data)])
+        for batch, message in [
+                ([(energy, 6, data), (energy + 7, 7, data)],
+                 r'ids of its topics \[1\].* ids \[8\]'),
+                ([(energy, 6, data), (energy, -1, data)], r'times in \[0, 2\*\*63\).*\[-1, 6\]'),
+                ([(energy, 6, data), (energy, 2 ** 63, data)], 'integer bag times'),
+                ([(energy, 6, data), (energy, 7.0, data)], 'integer bag times')]:
+            with pytest.raises(bag.BagError, match=message):
+                writer.write_many(batch)
+    with pytest.raises(bag.BagError, match='expected an open bag'):
+        writer.write_many([(energy, 8, data)])
+    series = bag.read_series(path, 'energy')
+    assert series.bag_times_ns.tolist() == [5]
+    assert yaml.safe_load((path / 'metadata.yaml').read_text())[
+        'rosbag2_bagfile_information']['message_count'] == 1
+
+
 def test_reader_errors_missing_path_and_directory_without_metadata(tmp_path):
     with pytest.raises(bag.BagError, match='does not exist'):
         bag.BagReader(tmp_path / 'nowhere')

@@ -5,8 +5,8 @@
   are walked by :mod:`~rigid_body_attitude.bag.mcap`.
 * :mod:`~rigid_body_attitude.bag.cdr`: fast ``struct`` codecs of the fixed-layout messages
   (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped, Float64).
-* :mod:`~rigid_body_attitude.bag.writer`: :class:`BagWriter` for output bags and
-  :func:`write_bag` for arrays of samples.
+* :mod:`~rigid_body_attitude.bag.writer`: :class:`BagWriter` for output bags (one record or
+  a batch of :data:`Record` per call) and :func:`write_bag` for arrays of samples.
 * :mod:`~rigid_body_attitude.bag.msgtypes`: message type names, the Jazzy type store and the
   generic (slow) serialisation, including ``DiagnosticArray``.
 
@@ -67,7 +67,13 @@ from rigid_body_attitude.bag.reader import (
     read_messages,
     read_series,
 )
-from rigid_body_attitude.bag.writer import GROUND_TRUTH_TYPES, STORAGES, BagWriter, write_bag
+from rigid_body_attitude.bag.writer import (
+    GROUND_TRUTH_TYPES,
+    STORAGES,
+    BagWriter,
+    Record,
+    write_bag,
+)
 
 __all__ = [
     'ATTITUDE_DECODERS',
@@ -90,6 +96,7 @@ __all__ = [
     'BagWriter',
     'Decoder',
     'DiagnosticStatus',
+    'Record',
     'Series',
     'deserialize',
     'encode_diagnostic_array',

@@ -2,21 +2,41 @@
 
 :class:`BagWriter` registers each topic's connection once and then writes CDR bytes made by
 the fast encoders of :mod:`rigid_body_attitude.bag.cdr` (or any message object through the
-``rosbags`` type store). :func:`write_bag` turns arrays of samples into a bag of standard
-messages, for test fixtures and for users converting their own logs.
+``rosbags`` type store), one record at a time (:meth:`BagWriter.write`) or many per call
+(:meth:`BagWriter.write_many`). :func:`write_bag` turns arrays of samples into a bag of
+standard messages, for test fixtures and for users converting their own logs.
+
+Batched writing. ``rosbags``' writer costs about 3.7 µs per record (a membership scan of its
+connections, one ``sqlite3`` statement or a ``BytesIO`` record per message); the replay tool
+writes three records per gyro message and needs ≥ 10⁵ messages/s. The storages here are
+``rosbags``' own with a ``write_many`` added: the sqlite3 storage keeps ``rosbags``' schema and
+statements but runs on an ``apsw`` connection (the SQLite binding ``rosbags`` reads with; its
+``executemany`` inserts a row in about 1.1 µs against 2.0 µs for the standard ``sqlite3``
+module) in one transaction; the MCAP storage packs message records with one ``struct`` call
+each and closes chunks at the same 1 MiB boundary as ``rosbags``, so the file is byte for byte
+the one ``rosbags`` writes. Metadata (message counts, start, duration) is kept by ``rosbags``'
+``Writer`` as for single writes. ``bench/replay_throughput.py`` measures it.
 """
 
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable, Mapping
+from array import array
+from collections import Counter, defaultdict
+from collections.abc import Callable, Mapping, Sequence
+from io import BytesIO
+from itertools import chain
+from operator import itemgetter
 from pathlib import Path
 from types import TracebackType
 
+import apsw
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from rosbags.interfaces import Connection
-from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+from rosbags.rosbag2 import CompressionMode, StoragePlugin, Writer, WriterError
+from rosbags.rosbag2.storage_mcap import McapWriter, PendingChunk
+from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 
 from rigid_body_attitude.bag.cdr import (
     encode_imu,
@@ -38,9 +58,11 @@ from rigid_body_attitude.bag.msgtypes import (
 )
 from rigid_body_attitude.errors import InputError
 
-__all__ = ['GROUND_TRUTH_TYPES', 'STORAGES', 'BagWriter', 'write_bag']
+__all__ = ['GROUND_TRUTH_TYPES', 'STORAGES', 'BagWriter', 'Record', 'write_bag']
 
 FloatArray = NDArray[np.float64]
+#: One record for :meth:`BagWriter.write_many`: ``(connection.id, bag_time_ns, cdr_bytes)``.
+Record = tuple[int, int, bytes]
 
 #: Storage plugin names accepted by :class:`BagWriter` and :func:`write_bag`.
 STORAGES = {'sqlite3': StoragePlugin.SQLITE3, 'mcap': StoragePlugin.MCAP}
@@ -48,6 +70,136 @@ STORAGES = {'sqlite3': StoragePlugin.SQLITE3, 'mcap': StoragePlugin.MCAP}
 GROUND_TRUTH_TYPES = {'QuaternionStamped': QUATERNION_STAMPED, 'PoseStamped': POSE_STAMPED}
 #: Largest deviation of ``|q|`` from 1 accepted in ground truth (float32 sources give ~1e−7).
 UNIT_NORM_TOLERANCE = 1e-6
+
+
+_INSERT_MESSAGE = 'INSERT INTO messages (topic_id, timestamp, data) VALUES(?, ?, ?)'
+#: MCAP message record: opcode, record length, channel id, sequence, log time, publish time.
+_MCAP_MESSAGE = struct.Struct('<BQHIQQ')
+_MCAP_MESSAGE_OPCODE = 0x05
+_MCAP_CHUNK_OPCODE = 0x06
+_MCAP_MESSAGE_INDEX_OPCODE = 0x07
+_MCAP_RECORD = struct.Struct('<BQ')
+_MCAP_MESSAGE_FIELDS = _MCAP_MESSAGE.size - 9  # the record length counts what follows it
+#: ``rosbags``' McapWriter closes a chunk once it holds more than this many bytes.
+_MCAP_CHUNK_BYTES = 2 ** 20
+
+
+class _Sqlite3Storage(Sqlite3Writer):
+    """``rosbags``' sqlite3 storage (schema, topics, rows) on an ``apsw`` connection.
+
+    One transaction from creation to :meth:`close`, as ``rosbags``' own (the standard module
+    opens it implicitly at the first insert and commits on close).
+    """
+
+    def __init__(self, path: Path, compression: CompressionMode) -> None:
+        if compression == CompressionMode.STORAGE:
+            raise WriterError('SQLITE3 writer does not support storage-side compression.')
+        self.path = path / f'{path.name}.db3'
+        self.conn = apsw.Connection(str(self.path))
+        self.cursor = self.conn.cursor()
+        self.cursor.execute(self.SQLITE_SCHEMA)
+        self.cursor.execute('BEGIN')
+
+    def write_many(self, records: Sequence[Record], counts: Mapping[int, int]) -> None:
+        """Insert ``(topic_id, timestamp, data)`` rows in order (``counts``: per topic id)."""
+        self.cursor.executemany(_INSERT_MESSAGE, records)
+
+    def close(self, version: int, metadata: str) -> None:
+        """Store the metadata row, commit and close."""
+        self.cursor.execute('INSERT INTO metadata(metadata_version, metadata) VALUES(?, ?)',
+                            (version, metadata))
+        self.cursor.execute('COMMIT')
+        self.cursor.execute('PRAGMA optimize')
+        self.conn.close()
+
+    def abort(self) -> None:
+        """Roll back and close."""
+        try:
+            if not self.conn.getautocommit():
+                self.cursor.execute('ROLLBACK')
+        finally:
+            self.conn.close()
+
+
+class _McapStorage(McapWriter):
+    """``rosbags``' MCAP storage with a batched :meth:`write_many` giving the same bytes."""
+
+    def write_many(self, records: Sequence[Record], counts: Mapping[int, int]) -> None:
+        """Append message records in order, as :meth:`McapWriter.write` one by one would.
+
+        ``counts``: records per channel id in ``records``.
+        """
+        pack = _MCAP_MESSAGE.pack
+        chunk = self.chunk
+        lowest, highest = self.message_start_time, self.message_end_time
+        parts: list[bytes] = []
+        append = parts.append
+        index, position = chunk.msgs, chunk.bio.tell()
+        start, end = chunk.message_start_time, chunk.message_end_time
+        for channel_id, timestamp, data in records:
+            size = len(data)
+            append(pack(_MCAP_MESSAGE_OPCODE, _MCAP_MESSAGE_FIELDS + size, channel_id, 0,
+                        timestamp, timestamp))
+            append(data)
+            index[channel_id].append((timestamp, position))
+            position += _MCAP_MESSAGE.size + size
+            if timestamp < start:
+                start = timestamp
+            if timestamp > end:
+                end = timestamp
+            if position > _MCAP_CHUNK_BYTES:
+                chunk.bio.writelines(parts)
+                parts.clear()
+                chunk.message_start_time, chunk.message_end_time = start, end
+                lowest, highest = min(lowest, start), max(highest, end)
+                self.close_chunk()
+                chunk = self.chunk
+                index, position = chunk.msgs, chunk.bio.tell()
+                start, end = chunk.message_start_time, chunk.message_end_time
+        chunk.bio.writelines(parts)
+        chunk.message_start_time, chunk.message_end_time = start, end
+        self.message_start_time, self.message_end_time = min(lowest, start), max(highest, end)
+        for channel_id, count in counts.items():
+            self.channel_stats[channel_id] += count
+
+    def close_chunk(self) -> None:
+        """Write the pending chunk, its message indexes and keep its chunk index record.
+
+        :meth:`McapWriter.close_chunk` record for record, with each channel's message index
+        packed by one ``struct`` call (``rosbags`` writes two ``BytesIO`` fields per message).
+        """
+        chunk, bio = self.chunk, self.bio
+        uncompressed_size = chunk.bio.tell()
+        compressed = self.compressor(chunk.bio.getvalue())
+        compression = self.compression.encode()
+        compression_field = struct.pack('<I', len(compression)) + compression
+        times = struct.pack('<QQ', chunk.message_start_time, chunk.message_end_time)
+        content = b''.join((times, struct.pack('<QI', uncompressed_size, 0), compression_field,
+                            struct.pack('<Q', len(compressed)), compressed))
+        chunk_start = bio.tell()
+        bio.write(_MCAP_RECORD.pack(_MCAP_CHUNK_OPCODE, len(content)))
+        bio.write(content)
+        chunk_end = bio.tell()
+        offsets = []
+        for channel_id, messages in chunk.msgs.items():
+            offsets.append(struct.pack('<HQ', channel_id, bio.tell()))
+            entries = struct.pack(f'<{2 * len(messages)}Q', *chain.from_iterable(messages))
+            bio.write(_MCAP_RECORD.pack(_MCAP_MESSAGE_INDEX_OPCODE, 6 + len(entries)))
+            bio.write(struct.pack('<HI', channel_id, len(entries)))
+            bio.write(entries)
+        index = BytesIO()
+        index.write(b''.join((
+            times, struct.pack('<QQI', chunk_start, chunk_end - chunk_start, 10 * len(offsets)),
+            *offsets, struct.pack('<Q', bio.tell() - chunk_end), compression_field,
+            struct.pack('<QQ', len(compressed), uncompressed_size))))
+        self.chunks.append(index)
+        self.chunk = PendingChunk(2 ** 63 - 1, 0, BytesIO(), defaultdict(list))
+
+
+class _Rosbag2Writer(Writer):
+    """``rosbags``' writer with the storages above."""
+
+    STORAGE_PLUGINS = {StoragePlugin.SQLITE3: _Sqlite3Storage, StoragePlugin.MCAP: _McapStorage}
 
 
 def _storage_plugin(storage: str) -> StoragePlugin:
@@ -60,9 +212,10 @@ class BagWriter:
     """A new rosbag2 bag (format version 9) open for writing; use as a context manager.
 
     Register each topic once with :meth:`add_topic`, then :meth:`write` CDR bytes with the
-    returned connection. On leaving the ``with`` block the bag is closed (metadata written), or
-    aborted if an exception is propagating. ``custom_data`` (str → str) is stored in the bag's
-    metadata (``metadata.yaml`` and, for mcap, the file's own metadata record).
+    returned connection, or :meth:`write_many` records in one call. On leaving the ``with``
+    block the bag is closed (metadata written), or aborted if an exception is propagating.
+    ``custom_data`` (str → str) is stored in the bag's metadata (``metadata.yaml`` and, for
+    mcap, the file's own metadata record).
     """
 
     def __init__(self, path: str | Path, *, storage: str = 'sqlite3',
@@ -76,7 +229,7 @@ class BagWriter:
                                  f'{key!r}: {value!r}')
         self.path = Path(path)
         try:
-            self._writer = Writer(self.path, version=9, storage_plugin=plugin)
+            self._writer = _Rosbag2Writer(self.path, version=9, storage_plugin=plugin)
             for key, value in custom.items():
                 self._writer.set_custom_data(key, value)
             self._writer.open()
@@ -110,6 +263,35 @@ class BagWriter:
             raise BagError(f'Cannot write to bag {str(self.path)!r} at bag_time_ns='
                            f'{bag_time_ns!r} (expected a registered connection and an '
                            f'integer time in [0, 2**63) ns): {err}') from err
+
+    def write_many(self, records: Sequence[Record]) -> None:
+        """Append ``(connection.id, bag_time_ns, cdr_bytes)`` records in order, in one call.
+
+        The same bag as :meth:`write` of each record in turn, about ten times faster. Raises
+        :class:`BagError` for a connection id not registered here or a time that is not an
+        integer in ``[0, 2**63)`` ns; nothing of the batch is written then.
+        """
+        if not records:
+            return
+        writer = self._writer
+        try:
+            times = array('q', map(itemgetter(1), records))
+        except (TypeError, OverflowError) as err:
+            raise BagError(f'Cannot write to bag {str(self.path)!r}: expected integer bag times '
+                           f'in [0, 2**63) ns, got {err}') from err
+        first, last = min(times), max(times)
+        counts = Counter(map(itemgetter(0), records))
+        unknown = set(counts) - set(writer.counts)
+        if first < 0 or unknown or writer.storage is None:
+            raise BagError(f'Cannot write to bag {str(self.path)!r}: expected an open bag, '
+                           f'connection ids of its topics {sorted(writer.counts)} and bag times '
+                           f'in [0, 2**63) ns, got ids {sorted(unknown)} and times '
+                           f'[{first}, {last}]')
+        writer.storage.write_many(records, counts)
+        for connection_id, count in counts.items():
+            writer.counts[connection_id] += count
+        writer.min_timestamp = min(first, writer.min_timestamp)
+        writer.max_timestamp = max(last, writer.max_timestamp)
 
     def write_message(self, connection: Connection, bag_time_ns: int, message: object) -> None:
         """Serialise a ``rosbags`` message object of the connection's type and write it."""
