@@ -37,7 +37,8 @@ from rigid_body_attitude.messages import TimeBase
 from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import build_propagator
 from rigid_body_attitude.quaternion import scalar_exp_step
-from rigid_body_attitude.replay import ReplayOptions, _imu_with_orientation, replay_bag
+from rigid_body_attitude.replay import ReplayOptions, replay_bag
+from rigid_body_attitude.bag import imu_with_orientation as _imu_with_orientation
 from rigid_body_attitude.scene import load_scene
 from rigid_body_attitude.stream import GyroStream
 

@@ -44,7 +44,6 @@ import array
 import csv
 import math
 import shutil
-import struct
 import sys
 import time
 from collections import Counter
@@ -58,11 +57,12 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude import quaternion
 from rigid_body_attitude.bag import (
-    ATTITUDE_DECODERS, IMU, POSE_STAMPED, RATE_DECODERS, STORAGES, VECTOR3_STAMPED,
-    WRENCH_STAMPED, BagError, BagReader, BagWriter, DiagnosticStatus, Record,
+    ATTITUDE_DECODERS, IMU, POSE_STAMPED, RATE_SAMPLE_DECODERS, STORAGES, VECTOR3_STAMPED,
+    WRENCH_STAMPED, BagError, BagReader, BagWriter, DiagnosticStatus, Record, SampleDecoder,
     encode_diagnostic_array, encode_float64, encode_pose_stamped, encode_quaternion_stamped,
-    encode_twist_stamped, encode_vector3_stamped, header_stamp_ns, pose_orientation,
-    pose_position, vector3_stamped, wrench_force, wrench_torque)
+    encode_twist_stamped, encode_vector3_stamped, header_stamp_ns, imu_with_orientation,
+    pose_orientation, pose_position, pose_stamped_encoder, quaternion_stamped_encoder,
+    vector3_stamped, wrench_force, wrench_torque)
 from rigid_body_attitude.errors import AttitudeError, InputError
 from rigid_body_attitude.messages import (
     NANOSECONDS_PER_SECOND, TimeBase, body_frame_velocity, diagnostic_report,
@@ -283,7 +283,7 @@ class _Plan:
     """Topics resolved against the bag, with their decoders."""
 
     gyro_topic: str
-    gyro_decoder: Callable[[bytes], tuple[float, tuple[float, ...]]] | None
+    gyro_decoder: SampleDecoder | None
     gyro_is_imu: bool
     torque_topic: str
     rotor_torque_topic: str
@@ -328,7 +328,7 @@ def _gyro_plan(reader: BagReader, options: ReplayOptions
             raise BagError(f'No gyro topic in bag {str(reader.path)!r}: expected '
                            f'{" or ".join(repr(name) for name in GYRO_TOPICS)} (or name one '
                            f'with --gyro-topic); {_listing(reader)}')
-    decoder = reader.decoder(topic, RATE_DECODERS)
+    decoder = reader.decoder(topic, RATE_SAMPLE_DECODERS)
     return topic, decoder, reader.topics[topic] == IMU
 
 
@@ -604,7 +604,12 @@ class _Replay:
         self.alignment_ns = None
 
     def gyro_messages(self, messages: Iterator[Any], progress: Any) -> int:
-        """The gyro scene's loop (hot path): returns the gyro messages processed."""
+        """The gyro scene's loop (hot path): returns the gyro messages processed.
+
+        Per message: one decoder call (header stamp as integers and rate), the stream rules
+        and propagator, the attitude, one ``struct`` call per output with the header bytes
+        precomputed, and a record appended to the writer's buffer.
+        """
         plan, writer = self.plan, self.writer
         gyro_topic, decode = plan.gyro_topic, plan.gyro_decoder
         add = self.gyro_stream.add
@@ -612,7 +617,8 @@ class _Replay:
         attitude_of = self.tracker.attitude
         propagator = self.propagator
         use_header = self.options.use_header_stamps
-        world = self.options.world_frame
+        encode_orientation = quaternion_stamped_encoder(self.options.world_frame)
+        encode_pose = pose_stamped_encoder(self.options.world_frame)
         ids = writer.ids
         record = writer.records.append
         orientation = ids.get('orientation')
@@ -637,23 +643,27 @@ class _Replay:
                 self.command(topic, bag_time_ns, data)
                 continue
             gyro_count += 1
-            stamp_ns = header_stamp_ns(data) if use_header else bag_time_ns
-            sec, nanosec = divmod(stamp_ns, NANOSECONDS_PER_SECOND)
-            outcome = add(seconds(sec, nanosec), decode(data)[1])
+            sec, nanosec, rate = decode(data)
+            if not use_header:
+                sec, nanosec = divmod(bag_time_ns, NANOSECONDS_PER_SECOND)
+            elif nanosec >= NANOSECONDS_PER_SECOND:
+                sec, nanosec = divmod(sec * NANOSECONDS_PER_SECOND + nanosec,
+                                      NANOSECONDS_PER_SECOND)
+            outcome = add(seconds(sec, nanosec), rate)
             if outcome.reason:
                 rejections[outcome.reason] += 1
                 if not publishes(outcome):
                     continue
+            stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
             if self.alignment_ns is not None:
                 self.align(stamp_ns)
             q = attitude_of(propagator)
             if orientation is not None:
-                record((orientation, bag_time_ns,
-                        encode_quaternion_stamped(stamp_ns, world, q)))
+                record((orientation, bag_time_ns, encode_orientation(sec, nanosec, q)))
             if pose is not None:
-                record((pose, bag_time_ns, encode_pose_stamped(stamp_ns, world, _ZERO, q)))
+                record((pose, bag_time_ns, encode_pose(sec, nanosec, _ZERO, q)))
             if imu_data is not None:
-                record((imu_data, bag_time_ns, _imu_with_orientation(data, q)))
+                record((imu_data, bag_time_ns, imu_with_orientation(data, q)))
             if series is not None:
                 series.attitude_stamps_ns.append(stamp_ns)
                 series.attitudes.extend(q)
@@ -823,25 +833,6 @@ class _Replay:
                                   values=dict(report.values))
         self.writer.write(DIAGNOSTICS_TOPIC, now_ns,
                           encode_diagnostic_array(now_ns, '', [status]))
-
-
-_IMU_ORIENTATION = {0: struct.Struct('>13d'), 1: struct.Struct('<13d')}
-
-
-def _imu_with_orientation(data: bytes, attitude: Quaternion) -> bytes:
-    """The node's ``imu/data``: the input Imu with the orientation set, its covariance zero.
-
-    The body (orientation first) starts at the 8-aligned offset after the header
-    (:mod:`rigid_body_attitude.bag.cdr` describes the layout).
-    """
-    buffer = bytearray(data)
-    endian = data[1]
-    frame_length = struct.unpack_from('<I' if endian else '>I', data, 12)[0]
-    offset = 4 + ((12 + frame_length + 7) & -8)
-    w, x, y, z = attitude
-    _IMU_ORIENTATION[endian].pack_into(buffer, offset, x, y, z, w, 0.0, 0.0, 0.0, 0.0, 0.0,
-                                       0.0, 0.0, 0.0, 0.0)
-    return bytes(buffer)
 
 
 def _seconds_to_ns(seconds: float) -> int:

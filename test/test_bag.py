@@ -128,6 +128,75 @@ def test_decoders_read_rosbags_serialized_messages(frame_id, little_endian):
         assert cdr.header_frame_id(data) == frame_id
 
 
+@pytest.mark.parametrize('little_endian', [True, False])
+@pytest.mark.parametrize('frame_id', FRAME_IDS)
+def test_sample_decoders_read_the_integer_stamp_and_the_rate(frame_id, little_endian):
+    sec, nanosec = divmod(STAMP_NS, 1_000_000_000)
+    for msgtype, message, _ in _reference_messages(frame_id):
+        if msgtype not in bag.RATE_SAMPLE_DECODERS:
+            continue
+        data = bytes(bag.typestore().serialize_cdr(message, msgtype, little_endian=little_endian))
+        _, rate = bag.RATE_DECODERS[msgtype](data)
+        assert bag.RATE_SAMPLE_DECODERS[msgtype](data) == (sec, nanosec, rate), msgtype
+
+
+def test_sample_decoders_reject_what_the_rate_decoders_reject():
+    imu = cdr.encode_imu(0, 'base_link', [1.0, 2.0, 3.0])
+    decode = bag.RATE_SAMPLE_DECODERS[bag.IMU]
+    for data, message in [(cdr.encode_vector3_stamped(0, 'base_link', [1.0, 2.0, 3.0]),
+                           'sensor_msgs/msg/Imu message of 324 bytes'),
+                          (imu[:100], 'got 100 bytes'), (imu[:2], 'got 2 bytes'),
+                          (b'\x00\x03' + imu[2:], 'CDR-encoded sensor_msgs/msg/Imu')]:
+        with pytest.raises(bag.BagError, match=message):
+            decode(data)
+    with pytest.raises(bag.BagError, match='geometry_msgs/msg/Vector3Stamped message of 52 bytes'):
+        bag.RATE_SAMPLE_DECODERS[bag.VECTOR3_STAMPED](imu)
+
+
+@pytest.mark.parametrize('frame_id', FRAME_IDS)
+def test_frame_encoders_give_the_general_encoders_bytes(frame_id):
+    rng = np.random.default_rng(len(frame_id))
+    encode_orientation = cdr.quaternion_stamped_encoder(frame_id)
+    encode_pose = cdr.pose_stamped_encoder(frame_id)
+    for stamp_ns in (0, STAMP_NS, 2 ** 31 * 1_000_000_000 - 1):
+        sec, nanosec = divmod(stamp_ns, 1_000_000_000)
+        attitude = tuple(normalize(rng.normal(size=4)).tolist())
+        position = tuple(rng.normal(size=3).tolist())
+        assert encode_orientation(sec, nanosec, attitude) == cdr.encode_quaternion_stamped(
+            stamp_ns, frame_id, attitude)
+        assert encode_pose(sec, nanosec, position, attitude) == cdr.encode_pose_stamped(
+            stamp_ns, frame_id, position, attitude)
+
+
+def test_frame_encoders_reject_bad_frames_and_stamps():
+    with pytest.raises(InputError, match='`frame_id` to be a string without NUL'):
+        cdr.quaternion_stamped_encoder('a\x00b')
+    with pytest.raises(InputError, match='`frame_id` to be a string without NUL'):
+        cdr.pose_stamped_encoder(None)
+    with pytest.raises(InputError, match='`sec` in int32 .* got sec=2147483648'):
+        cdr.quaternion_stamped_encoder('world')(2 ** 31, 0, (1.0, 0.0, 0.0, 0.0))
+    with pytest.raises(InputError, match='nanosec=-1'):
+        cdr.pose_stamped_encoder('world')(0, -1, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+
+
+@pytest.mark.parametrize('little_endian', [True, False])
+@pytest.mark.parametrize('frame_id', FRAME_IDS)
+def test_imu_with_orientation_sets_the_orientation_and_nothing_else(frame_id, little_endian):
+    for msgtype, message, _ in _reference_messages(frame_id):
+        if msgtype != bag.IMU:
+            continue
+        data = bytes(bag.typestore().serialize_cdr(message, msgtype, little_endian=little_endian))
+        attitude = tuple(normalize([0.3, -0.1, 0.8, 0.5]).tolist())
+        message.orientation = _quaternion_msg(attitude)
+        message.orientation_covariance = np.zeros(9)
+        expected = bytes(bag.typestore().serialize_cdr(message, msgtype,
+                                                       little_endian=little_endian))
+        assert cdr.imu_with_orientation(data, attitude) == expected
+    with pytest.raises(bag.BagError, match='sensor_msgs/msg/Imu message of 324 bytes'):
+        cdr.imu_with_orientation(cdr.encode_vector3_stamped(0, 'base_link', [1.0, 2.0, 3.0]),
+                                 (1.0, 0.0, 0.0, 0.0))
+
+
 def test_quaternion_codecs_agree_with_to_ros_and_from_ros():
     attitude = normalize([0.1, -0.7, 0.3, 0.5])
     message = bag.deserialize(cdr.encode_quaternion_stamped(0, 'world', attitude),
