@@ -115,8 +115,9 @@ def cpu_ticks(pid: int) -> int:
 def busy_ticks() -> int:
     """Return the machine's non-idle clock ticks summed over all cores (/proc/stat)."""
     with open('/proc/stat') as stat:
-        user, nice, system, _idle, _iowait, irq, softirq = map(int, stat.readline().split()[1:8])
-    return user + nice + system + irq + softirq  # guest time is already inside user
+        user, nice, system, _idle, _iowait, irq, softirq, steal = map(
+            int, stat.readline().split()[1:9])
+    return user + nice + system + irq + softirq + steal  # guest time is inside user
 
 
 def rss_kib(pid: int) -> int:

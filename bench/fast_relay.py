@@ -27,7 +27,7 @@ picks the technique:
     ``spin_once(timeout_sec=1.0)`` (its ``spin()`` busy-loops here).
 
 Usage: ``python bench/fast_relay.py [--mode M] [--outputs pose,orientation,imu_data]
-[--ros-args ...]``. Findings and numbers: ``bench/NOTES.md``.
+[--best-effort-input] [--ros-args ...]``. Findings and numbers: ``bench/NOTES.md``.
 """
 
 import argparse
@@ -44,6 +44,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
+from rclpy.qos import ReliabilityPolicy
 from rclpy.signals import SignalHandlerGuardCondition
 from sensor_msgs.msg import Imu
 
@@ -158,8 +159,13 @@ class FastRelay(Node):
     The callback is the one place a gyro message is handled, whichever loop takes it.
     """
 
-    def __init__(self, outputs: List[str], raw: bool, own_loop: bool) -> None:
-        """Create the outputs and the ``imu`` subscription (left to our loop if ``own_loop``)."""
+    def __init__(self, outputs: List[str], raw: bool, own_loop: bool,
+                 best_effort_input: bool = False) -> None:
+        """Create the outputs and the ``imu`` subscription (left to our loop if ``own_loop``).
+
+        The subscription is RELIABLE unless ``best_effort_input`` (which also accepts
+        best-effort publishers, but lets the middleware drop samples it cannot deliver).
+        """
         super().__init__('bench_fast_relay')
         self.omega_body = (0.0, 0.0, 0.0)
         if raw:
@@ -168,8 +174,11 @@ class FastRelay(Node):
         else:
             self.outputs = ObjectOutputs(self, outputs)
             callback = self.imu_callback
+        input_qos = reliable_qos()
+        if best_effort_input:
+            input_qos.reliability = ReliabilityPolicy.BEST_EFFORT
         self.imu_subscription = self.create_subscription(
-            Imu, IMU_TOPIC, callback, reliable_qos(), raw=raw,
+            Imu, IMU_TOPIC, callback, input_qos, raw=raw,
             callback_group=NeverExecuted() if own_loop else None)
 
     def imu_raw_callback(self, imu_cdr: bytes) -> None:
@@ -231,11 +240,11 @@ def serve_others(executor) -> None:
         pass
 
 
-def run(mode: str, outputs: List[str]) -> None:
+def run(mode: str, outputs: List[str], best_effort_input: bool) -> None:
     """Build the relay for ``mode`` and spin it until shutdown."""
     raw = mode in ('waitset', 'ste-raw', 'ste-drain', 'events-raw', 'events-drain')
     own_loop = mode.startswith('waitset')
-    node = FastRelay(outputs, raw, own_loop)
+    node = FastRelay(outputs, raw, own_loop, best_effort_input)
     if mode in ('ste-drain', 'events-drain'):
         node.imu_subscription.callback = node.imu_drain_callback
     if mode.startswith('events'):
@@ -270,6 +279,8 @@ def main() -> int:
     parser.add_argument('--mode', choices=MODES, default='waitset')
     parser.add_argument('--outputs', default='pose',
                         help=f'comma-separated subset of {",".join(OUTPUTS)}')
+    parser.add_argument('--best-effort-input', action='store_true',
+                        help='subscribe to imu BEST_EFFORT instead of RELIABLE')
     args, ros_args = parser.parse_known_args()
     outputs = [name for name in args.outputs.split(',') if name]
     unknown = sorted(set(outputs) - set(OUTPUTS))
@@ -277,7 +288,7 @@ def main() -> int:
         parser.error(f'unknown outputs {unknown}; expected a subset of {list(OUTPUTS)}')
     rclpy.init(args=[sys.argv[0]] + ros_args)
     try:
-        run(args.mode, outputs)
+        run(args.mode, outputs, args.best_effort_input)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except _rclpy.RCLError:

@@ -206,7 +206,8 @@ def measure(session: Session, target_argv: List[str], rate: float,
     cpu = {name: 100.0 * (ticks1[name] - ticks0[name]) / CLOCK_TICKS / window_s
            for name in pids}
     ours = sum(ticks1.values()) - sum(ticks0.values())
-    other_cores = (machine1 - machine0 - ours) / CLOCK_TICKS / window_s
+    # Tick-sampled /proc/stat can undercount against per-process times: clamp at zero.
+    other_cores = max(0.0, (machine1 - machine0 - ours) / CLOCK_TICKS / window_s)
     return {
         'rate_hz': rate, 'sent': end['sent'], 'received': received,
         'lost': end['sent'] - received, 'publisher_hz': end['achieved_hz'],

@@ -1,18 +1,23 @@
 """Replay throughput: gyro messages per second through ``replay``, end to end and per stage.
 
 Writes a synthetic strapdown bag (``sensor_msgs/Imu`` on ``imu`` at 1 kHz, a slowly varying
-rate) and measures, best of ``--repeat`` runs:
+rate) and measures, best of ``--repeat`` runs, both wall time and the process's CPU time (on a
+shared machine the CPU time is the steadier figure; the wall time is what a user waits):
 
 * **end to end** — :func:`rigid_body_attitude.replay.replay_bag` as the ``replay`` command runs
-  it (read, decode, stream rules + propagator, published values, encode, write), for the
-  node's full output set (orientation, pose, imu/data per sample; energy and momentum at
-  50 Hz; diagnostics at 1 Hz) and for ``orientation`` only, with sqlite3 and MCAP storage;
-* **per stage**, the same work split up, each timed alone over all messages: read the bag,
-  decode the header stamp and rate, ``GyroStream.add`` (stream rules + propagator),
-  ``OutputTracker.attitude``, encode orientation + pose + imu/data, and write three records;
-  then the sum without bag I/O (decode, propagate, encode: the issue's throughput definition)
-  and the sum of all stages. For reference, the bare exp-map step in plain floats
-  (``quaternion.scalar_exp_step``, no stream rules): what the propagator's arithmetic costs.
+  it (read, decode, stream rules + propagator, published values, encode, write, including
+  opening and closing both bags), for the node's full output set (orientation, pose, imu/data
+  per sample; energy and momentum at 50 Hz; diagnostics at 1 Hz) and for ``orientation``
+  only, with sqlite3 and MCAP storage (input and output in the same storage);
+* **per stage**, the same work split up, each timed alone over all messages (CPU time): read
+  the bag (sqlite3, MCAP), decode the header stamp and rate (``RATE_SAMPLE_DECODERS``),
+  ``GyroStream.add`` (stream rules + propagator, core), ``OutputTracker.attitude`` (core),
+  encode orientation + pose + imu/data (the replay's per-frame encoders), and write the three
+  records per message with ``BagWriter.write_many`` (sqlite3, MCAP) and, for comparison, one
+  ``BagWriter.write`` call per record; then the sum decode + propagate + encode (no bag I/O)
+  and the sums of the stages with each storage. For reference, the bare exp-map step in
+  plain floats (``quaternion.scalar_exp_step``, no stream rules): what the propagator's
+  arithmetic costs.
 
 Usage: ``python bench/replay_throughput.py [--messages 200000] [--repeat 3]``. The machine is
 shared: run it when it is otherwise idle and read the best run.
@@ -31,18 +36,19 @@ from pathlib import Path
 import numpy as np
 
 from rigid_body_attitude.bag import (
-    BagReader, BagWriter, encode_pose_stamped, encode_quaternion_stamped, header_stamp_ns,
-    imu_rates, write_bag)
+    IMU, POSE_STAMPED, QUATERNION_STAMPED, RATE_SAMPLE_DECODERS, BagReader, BagWriter,
+    imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder, write_bag)
 from rigid_body_attitude.messages import TimeBase
 from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import build_propagator
 from rigid_body_attitude.quaternion import scalar_exp_step
 from rigid_body_attitude.replay import ReplayOptions, replay_bag
-from rigid_body_attitude.bag import imu_with_orientation as _imu_with_orientation
 from rigid_body_attitude.scene import load_scene
 from rigid_body_attitude.stream import GyroStream
 
 RATE_HZ = 1000.0
+STORAGES = ('sqlite3', 'mcap')
+OUTPUT_TYPES = {'orientation': QUATERNION_STAMPED, 'pose': POSE_STAMPED, 'imu/data': IMU}
 
 
 def make_bag(path: Path, count: int, storage: str) -> None:
@@ -54,19 +60,20 @@ def make_bag(path: Path, count: int, storage: str) -> None:
     write_bag(path, stamps=stamps, rates=rates, storage=storage)
 
 
-def best_of(repeat: int, run: Callable[[], None]) -> float:
-    """Shortest wall time of ``repeat`` runs [s]."""
-    times = []
+def best_of(repeat: int, run: Callable[[], None]) -> tuple[float, float]:
+    """Shortest wall time and shortest CPU time of ``repeat`` runs [s]."""
+    walls, cpus = [], []
     for _ in range(repeat):
-        begin = time.perf_counter()
+        wall, cpu = time.perf_counter(), time.process_time()
         run()
-        times.append(time.perf_counter() - begin)
-    return min(times)
+        cpus.append(time.process_time() - cpu)
+        walls.append(time.perf_counter() - wall)
+    return min(walls), min(cpus)
 
 
 def end_to_end(bag: Path, workdir: Path, outputs: tuple[str, ...], storage: str,
-               repeat: int) -> float:
-    """Best wall time of ``replay_bag`` (including opening and closing both bags)."""
+               repeat: int) -> tuple[float, float]:
+    """Best wall and CPU time of ``replay_bag`` (including opening and closing both bags)."""
     def run() -> None:
         out = workdir / 'out'
         shutil.rmtree(out, ignore_errors=True)
@@ -75,44 +82,60 @@ def end_to_end(bag: Path, workdir: Path, outputs: tuple[str, ...], storage: str,
     return best_of(repeat, run)
 
 
-def stages(bag: Path, workdir: Path, repeat: int) -> dict[str, float]:
-    """Best wall time of each stage over all messages of the bag [s]."""
-    with BagReader(bag) as reader:
-        messages = list(reader.messages(['imu']))
+def _write_stage(workdir: Path, storage: str, records: list[tuple[int, int, bytes]],
+                 batched: bool) -> Callable[[], None]:
+    """Write the three outputs of every message, in batches as the replay does, or singly."""
+    def write() -> None:
+        out = workdir / 'write'
+        shutil.rmtree(out, ignore_errors=True)
+        with BagWriter(out, storage=storage) as writer:
+            connections = writer.add_topics(OUTPUT_TYPES)
+            if batched:
+                for begin in range(0, len(records), 3 * 4096):
+                    writer.write_many(records[begin:begin + 3 * 4096])
+                return
+            by_id = {connection.id: connection for connection in connections.values()}
+            for connection_id, bag_time_ns, data in records:
+                writer.write(by_id[connection_id], bag_time_ns, data)
+    return write
+
+
+def stages(workdir: Path, repeat: int) -> dict[str, float]:
+    """Best CPU time of each stage over all messages of the bags [s]."""
     times: dict[str, float] = {}
-
-    def read() -> None:
-        with BagReader(bag) as reader:
-            for _ in reader.messages(['imu']):
-                pass
-    times['read bag'] = best_of(repeat, read)
-
-    decoded: list[tuple[int, tuple[float, ...]]] = []
+    for storage in STORAGES:
+        def read(storage: str = storage) -> None:
+            with BagReader(workdir / f'in_{storage}') as reader:
+                for _ in reader.messages(['imu']):
+                    pass
+        times[f'read bag ({storage})'] = best_of(repeat, read)[1]
+    with BagReader(workdir / 'in_sqlite3') as reader:
+        messages = list(reader.messages(['imu']))
+    decode_sample = RATE_SAMPLE_DECODERS[IMU]
+    decoded: list[tuple[int, int, tuple[float, ...]]] = []
 
     def decode() -> None:
         decoded.clear()
         for _, _, _, data in messages:
-            decoded.append((header_stamp_ns(data), imu_rates(data)[1]))
-    times['decode stamp + rate'] = best_of(repeat, decode)
+            decoded.append(decode_sample(data))
+    times['decode stamp + rate'] = best_of(repeat, decode)[1]
 
     scene = load_scene('strapdown')
 
     def propagate() -> None:
-        propagator = build_propagator(scene)
-        stream = GyroStream(propagator, 0.1, 1.0)
+        stream = GyroStream(build_propagator(scene), 0.1, 1.0)
         seconds = TimeBase().seconds
         add = stream.add
-        for stamp_ns, omega in decoded:
-            sec, nanosec = divmod(stamp_ns, 1_000_000_000)
+        for sec, nanosec, omega in decoded:
             add(seconds(sec, nanosec), omega)
-    times['GyroStream.add (core)'] = best_of(repeat, propagate)
+    times['GyroStream.add (core)'] = best_of(repeat, propagate)[1]
 
     def plain_step() -> None:
         q = (1.0, 0.0, 0.0, 0.0)
         dt = 1.0 / RATE_HZ
-        for _, omega in decoded:
+        for _, _, omega in decoded:
             q = scalar_exp_step(q, omega, dt)
-    times['reference: exp step in plain floats'] = best_of(repeat, plain_step)
+    times['reference: exp step in plain floats'] = best_of(repeat, plain_step)[1]
 
     propagator = build_propagator(scene)
 
@@ -120,31 +143,35 @@ def stages(bag: Path, workdir: Path, repeat: int) -> dict[str, float]:
         tracker = OutputTracker()
         for _ in decoded:
             tracker.attitude(propagator)
-    times['OutputTracker.attitude (core)'] = best_of(repeat, attitude)
+    times['OutputTracker.attitude (core)'] = best_of(repeat, attitude)[1]
 
     q = (0.5, 0.5, 0.5, 0.5)
-    encoded: list[tuple[bytes, bytes, bytes]] = []
+    zero = (0.0, 0.0, 0.0)
+    encode_orientation = quaternion_stamped_encoder('world')
+    encode_pose = pose_stamped_encoder('world')
+    records: list[tuple[int, int, bytes]] = []
 
     def encode() -> None:
-        encoded.clear()
-        for (stamp_ns, _), (_, _, _, data) in zip(decoded, messages):
-            encoded.append((encode_quaternion_stamped(stamp_ns, 'world', q),
-                            encode_pose_stamped(stamp_ns, 'world', (0.0, 0.0, 0.0), q),
-                            _imu_with_orientation(data, q)))
-    times['encode 3 outputs'] = best_of(repeat, encode)
+        records.clear()
+        record = records.append
+        for (sec, nanosec, _), (_, bag_time_ns, _, data) in zip(decoded, messages):
+            record((1, bag_time_ns, encode_orientation(sec, nanosec, q)))
+            record((2, bag_time_ns, encode_pose(sec, nanosec, zero, q)))
+            record((3, bag_time_ns, imu_with_orientation(data, q)))
+    times['encode 3 outputs'] = best_of(repeat, encode)[1]
 
-    def write() -> None:
-        out = workdir / 'write'
-        shutil.rmtree(out, ignore_errors=True)
-        with BagWriter(out) as writer:
-            connections = [writer.add_topic('orientation', 'geometry_msgs/msg/QuaternionStamped'),
-                           writer.add_topic('pose', 'geometry_msgs/msg/PoseStamped'),
-                           writer.add_topic('imu/data', 'sensor_msgs/msg/Imu')]
-            for (_, bag_ns, _, _), records in zip(messages, encoded):
-                for connection, data in zip(connections, records):
-                    writer.write(connection, bag_ns, data)
-    times['write 3 records (sqlite3)'] = best_of(repeat, write)
+    for storage in STORAGES:
+        times[f'write 3 records, write_many ({storage})'] = best_of(
+            repeat, _write_stage(workdir, storage, records, batched=True))[1]
+    for storage in STORAGES:
+        times[f'reference: 3 single writes ({storage})'] = best_of(
+            repeat, _write_stage(workdir, storage, records, batched=False))[1]
     return times
+
+
+def _row(name: str, seconds: float, count: int) -> str:
+    return (f'  {name:46s} {seconds:8.3f} {count / seconds:10,.0f} '
+            f'{seconds / count * 1e6:8.2f}')
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -157,28 +184,29 @@ def main(argv: list[str] | None = None) -> int:
     try:
         count = args.messages
         print(f'{count} Imu messages at 1 kHz; best of {args.repeat} runs; msgs/s = gyro '
-              f'messages per second of wall time')
-        print(f'{"end to end (replay_bag)":48s} {"s":>8s} {"msgs/s":>10s}')
-        for storage in ('sqlite3', 'mcap'):
+              f'messages per second')
+        print(f'{"end to end (replay_bag)":48s} {"wall s":>8s} {"msgs/s":>10s} '
+              f'{"CPU s":>8s} {"msgs/s":>10s}')
+        for storage in STORAGES:
             bag = workdir / f'in_{storage}'
             make_bag(bag, count, storage)
             for label, outputs in (('all node outputs', ()), ('orientation only',
                                                               ('orientation',))):
-                seconds = end_to_end(bag, workdir, outputs, storage, args.repeat)
-                print(f'  {storage:7s} {label:38s} {seconds:8.3f} {count / seconds:10,.0f}')
-        print(f'{"per stage (sqlite3 input)":48s} {"s":>8s} {"msgs/s":>10s} {"µs/msg":>8s}')
-        times = stages(workdir / 'in_sqlite3', workdir, args.repeat)
+                wall, cpu = end_to_end(bag, workdir, outputs, storage, args.repeat)
+                print(f'  {storage:7s} {label:38s} {wall:8.3f} {count / wall:10,.0f} '
+                      f'{cpu:8.3f} {count / cpu:10,.0f}')
+        print(f'{"per stage (CPU time)":48s} {"s":>8s} {"msgs/s":>10s} {"µs/msg":>8s}')
+        times = stages(workdir, args.repeat)
         for name, seconds in times.items():
-            print(f'  {name:46s} {seconds:8.3f} {count / seconds:10,.0f} '
-                  f'{seconds / count * 1e6:8.2f}')
-        without_io = sum(seconds for name, seconds in times.items()
-                         if not name.startswith(('read', 'write', 'reference')))
-        stages_total = sum(seconds for name, seconds in times.items()
-                           if not name.startswith('reference'))
-        for name, total in (('decode + propagate + encode (no bag I/O)', without_io),
-                            ('sum of the stages', stages_total)):
-            print(f'  {name:46s} {total:8.3f} {count / total:10,.0f} '
-                  f'{total / count * 1e6:8.2f}')
+            print(_row(name, seconds, count))
+        core = ('decode stamp + rate', 'GyroStream.add (core)', 'OutputTracker.attitude (core)',
+                'encode 3 outputs')
+        without_io = sum(times[name] for name in core)
+        print(_row('decode + propagate + encode (no bag I/O)', without_io, count))
+        for storage in STORAGES:
+            total = without_io + times[f'read bag ({storage})'] + times[
+                f'write 3 records, write_many ({storage})']
+            print(_row(f'sum of the stages ({storage})', total, count))
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
     return 0
