@@ -6,6 +6,8 @@ itself burns, less sensitive to other load on the machine than wall time) of: bu
 publishing (object vs serialized bytes, with and without a matched subscriber in another
 process), a wait-set wake-up, and one ``SingleThreadedExecutor`` / ``EventsExecutor``
 dispatch of a ready message. Prints a Markdown table (median of ``--repeats`` batches).
+First it checks the hand-written CDR helpers of ``_common.py`` against rclpy's serializer
+(exit 1 on a mismatch), since the fast path relies on them.
 
 Usage: ``python bench/op_costs.py [--repeats 5] [--batch 2000]``; findings in ``NOTES.md``.
 """
@@ -30,6 +32,33 @@ from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Imu
 
 BENCH = Path(__file__).resolve().parent
+
+
+def check_cdr_helpers() -> None:
+    """Check the hand-written CDR layouts against rclpy's serializer before timing them.
+
+    For frame_ids of every length 0..17 (all paddings) the hand-built Imu and PoseStamped
+    must deserialize to the intended fields and have the serializer's length, and the
+    hand decoders must read back the serializer's stamp and gyro rate exactly.
+    """
+    omega_body = (0.125, -2.5e-3, 31.0)
+    for length in range(18):
+        frame_id = 'f' * length
+        imu_buffer = imu_cdr(omega_body, frame_id)
+        set_stamp_ns(imu_buffer, 1_700_000_000_123_456_789)
+        imu = deserialize_message(bytes(imu_buffer), Imu)
+        rate = imu.angular_velocity
+        if (imu.header.frame_id != frame_id or (rate.x, rate.y, rate.z) != omega_body
+                or imu.header.stamp.sec != 1_700_000_000
+                or imu.header.stamp.nanosec != 123_456_789):
+            raise SystemExit(f'error: hand-built Imu wrong for frame_id {frame_id!r}: {imu}')
+        reserialized = serialize_message(imu)
+        if (len(reserialized) != len(imu_buffer) or imu_gyro(reserialized) != omega_body
+                or stamp_ns(reserialized) != 1_700_000_000_123_456_789):
+            raise SystemExit(f'error: hand decoding wrong for frame_id {frame_id!r}')
+        pose = deserialize_message(bytes(pose_cdr(frame_id)), PoseStamped)
+        if pose.header.frame_id != frame_id or pose.pose.orientation.w != 1.0:
+            raise SystemExit(f'error: hand-built PoseStamped wrong for {frame_id!r}: {pose}')
 
 
 def cost_us(operation: Callable[[], object], batch: int, repeats: int) -> float:
@@ -190,6 +219,7 @@ def main() -> int:
     parser.add_argument('--batch', type=int, default=2000)
     args = parser.parse_args()
     os.environ.update(ros_env(int(os.environ.get('ROS_DOMAIN_ID', '64'))))
+    check_cdr_helpers()
     rclpy.init()
     node = rclpy.create_node('bench_op_costs')
     rows = message_costs(args.batch, args.repeats)
