@@ -457,8 +457,11 @@ def test_write_many_rejects_a_bad_batch_whole(tmp_path, storage):
                 ([(energy, 6, data), (energy + 7, 7, data)],
                  r'ids of its topics \[1\].* ids \[8\]'),
                 ([(energy, 6, data), (energy, -1, data)], r'times in \[0, 2\*\*63\).*\[-1, 6\]'),
-                ([(energy, 6, data), (energy, 2 ** 63, data)], 'integer bag times'),
-                ([(energy, 6, data), (energy, 7.0, data)], 'integer bag times')]:
+                ([(energy, 6, data), (energy, 2 ** 63, data)],
+                 r'times \[6, 9223372036854775808\]'),
+                ([(energy, 6, data), (energy, 7.0, data)], 'integer bag time in'),
+                ([(energy, 6, data), (energy, 7)], 'expected records'),
+                ([(energy, 6, data), (energy, 7, 'text')], r"data of types \['bytes', 'str'\]")]:
             with pytest.raises(bag.BagError, match=message):
                 writer.write_many(batch)
     with pytest.raises(bag.BagError, match='expected an open bag'):

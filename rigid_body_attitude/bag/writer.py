@@ -21,12 +21,12 @@ the one ``rosbags`` writes. Metadata (message counts, start, duration) is kept b
 from __future__ import annotations
 
 import struct
-from array import array
-from collections import Counter, defaultdict
+from bisect import bisect_right
+from collections import defaultdict
 from collections.abc import Callable, Mapping, Sequence
 from io import BytesIO
-from itertools import chain
-from operator import itemgetter
+from itertools import accumulate, chain, repeat
+from operator import add, itemgetter
 from pathlib import Path
 from types import TracebackType
 
@@ -72,6 +72,10 @@ GROUND_TRUTH_TYPES = {'QuaternionStamped': QUATERNION_STAMPED, 'PoseStamped': PO
 UNIT_NORM_TOLERANCE = 1e-6
 
 
+_FIRST, _SECOND, _THIRD = itemgetter(0), itemgetter(1), itemgetter(2)
+_TIME_LIMIT = 2 ** 63
+#: Types accepted as message data (``bytes`` from the encoders; views of read messages).
+_DATA_TYPES = {bytes, bytearray, memoryview}
 _INSERT_MESSAGE = 'INSERT INTO messages (topic_id, timestamp, data) VALUES(?, ?, ?)'
 #: MCAP message record: opcode, record length, channel id, sequence, log time, publish time.
 _MCAP_MESSAGE = struct.Struct('<BQHIQQ')
@@ -100,8 +104,8 @@ class _Sqlite3Storage(Sqlite3Writer):
         self.cursor.execute(self.SQLITE_SCHEMA)
         self.cursor.execute('BEGIN')
 
-    def write_many(self, records: Sequence[Record], counts: Mapping[int, int]) -> None:
-        """Insert ``(topic_id, timestamp, data)`` rows in order (``counts``: per topic id)."""
+    def write_many(self, records: Sequence[Record]) -> None:
+        """Insert ``(topic_id, timestamp, data)`` rows in order."""
         self.cursor.executemany(_INSERT_MESSAGE, records)
 
     def close(self, version: int, metadata: str) -> None:
@@ -122,68 +126,87 @@ class _Sqlite3Storage(Sqlite3Writer):
 
 
 class _McapStorage(McapWriter):
-    """``rosbags``' MCAP storage with a batched :meth:`write_many` giving the same bytes."""
+    """``rosbags``' MCAP storage writing batches of message records (the same bytes).
 
-    def write_many(self, records: Sequence[Record], counts: Mapping[int, int]) -> None:
-        """Append message records in order, as :meth:`McapWriter.write` one by one would.
+    The pending chunk's message index is kept as three flat lists (channel ids, log times,
+    record offsets) instead of ``rosbags``' per-channel lists of pairs, so that a batch is
+    laid out by C-level ``map``/``accumulate`` calls and the index packed by NumPy per chunk.
+    Chunks close after the record that takes them past 1 MiB, as in ``rosbags``.
+    """
 
-        ``counts``: records per channel id in ``records``.
+    def __init__(self, path: Path, compression: CompressionMode) -> None:
+        super().__init__(path, compression)
+        self.index_channels: list[int] = []
+        self.index_times: list[int] = []
+        self.index_offsets: list[int] = []
+
+    def write(self, connection: Connection, timestamp: int, data: bytes | memoryview) -> None:
+        """One message record (through :meth:`write_many`)."""
+        self.write_many((connection.id,), (timestamp,), (data,), {connection.id: 1})
+
+    def write_many(self, channel_ids: Sequence[int], times: Sequence[int],
+                   datas: Sequence[bytes], counts: Mapping[int, int]) -> None:
+        """Append message records, as :meth:`McapWriter.write` of each in turn would.
+
+        ``channel_ids``, ``times`` and ``datas`` are the records' columns; ``counts`` the
+        records per channel id.
         """
-        pack = _MCAP_MESSAGE.pack
-        chunk = self.chunk
-        lowest, highest = self.message_start_time, self.message_end_time
-        parts: list[bytes] = []
-        append = parts.append
-        index, position = chunk.msgs, chunk.bio.tell()
-        start, end = chunk.message_start_time, chunk.message_end_time
-        for channel_id, timestamp, data in records:
-            size = len(data)
-            append(pack(_MCAP_MESSAGE_OPCODE, _MCAP_MESSAGE_FIELDS + size, channel_id, 0,
-                        timestamp, timestamp))
-            append(data)
-            index[channel_id].append((timestamp, position))
-            position += _MCAP_MESSAGE.size + size
-            if timestamp < start:
-                start = timestamp
-            if timestamp > end:
-                end = timestamp
-            if position > _MCAP_CHUNK_BYTES:
-                chunk.bio.writelines(parts)
-                parts.clear()
-                chunk.message_start_time, chunk.message_end_time = start, end
-                lowest, highest = min(lowest, start), max(highest, end)
+        sizes = list(map(len, datas))
+        headers = list(map(_MCAP_MESSAGE.pack, repeat(_MCAP_MESSAGE_OPCODE),
+                           map(add, sizes, repeat(_MCAP_MESSAGE_FIELDS)), channel_ids, repeat(0),
+                           times, times))
+        # starts[i]: where record i starts if the whole batch went into the pending chunk.
+        starts = list(accumulate(map(add, sizes, repeat(_MCAP_MESSAGE.size)),
+                                 initial=self.chunk.bio.tell()))
+        count, begin = len(sizes), 0
+        while begin < count:
+            chunk = self.chunk
+            shift = chunk.bio.tell() - starts[begin]
+            # The chunk closes after the first record ending beyond the limit.
+            end = min(bisect_right(starts, _MCAP_CHUNK_BYTES - shift, begin + 1), count)
+            chunk.bio.writelines(chain.from_iterable(zip(headers[begin:end], datas[begin:end])))
+            self.index_channels.extend(channel_ids[begin:end])
+            self.index_times.extend(times[begin:end])
+            self.index_offsets.extend(map(add, starts[begin:end], repeat(shift)))
+            chunk.message_start_time = min(chunk.message_start_time, min(times[begin:end]))
+            chunk.message_end_time = max(chunk.message_end_time, max(times[begin:end]))
+            if chunk.bio.tell() > _MCAP_CHUNK_BYTES:
                 self.close_chunk()
-                chunk = self.chunk
-                index, position = chunk.msgs, chunk.bio.tell()
-                start, end = chunk.message_start_time, chunk.message_end_time
-        chunk.bio.writelines(parts)
-        chunk.message_start_time, chunk.message_end_time = start, end
-        self.message_start_time, self.message_end_time = min(lowest, start), max(highest, end)
-        for channel_id, count in counts.items():
-            self.channel_stats[channel_id] += count
+            begin = end
+        self.message_start_time = min(self.message_start_time, min(times))
+        self.message_end_time = max(self.message_end_time, max(times))
+        for channel_id, records in counts.items():
+            self.channel_stats[channel_id] += records
 
     def close_chunk(self) -> None:
         """Write the pending chunk, its message indexes and keep its chunk index record.
 
-        :meth:`McapWriter.close_chunk` record for record, with each channel's message index
-        packed by one ``struct`` call (``rosbags`` writes two ``BytesIO`` fields per message).
+        :meth:`McapWriter.close_chunk` record for record; each channel's message index
+        (``(log time, offset)`` pairs in write order) is packed by NumPy.
         """
         chunk, bio = self.chunk, self.bio
         uncompressed_size = chunk.bio.tell()
-        compressed = self.compressor(chunk.bio.getvalue())
+        compressed = self.compressor(chunk.bio.getbuffer())
         compression = self.compression.encode()
         compression_field = struct.pack('<I', len(compression)) + compression
         times = struct.pack('<QQ', chunk.message_start_time, chunk.message_end_time)
-        content = b''.join((times, struct.pack('<QI', uncompressed_size, 0), compression_field,
-                            struct.pack('<Q', len(compressed)), compressed))
+        header = b''.join((times, struct.pack('<QI', uncompressed_size, 0), compression_field,
+                           struct.pack('<Q', len(compressed))))
         chunk_start = bio.tell()
-        bio.write(_MCAP_RECORD.pack(_MCAP_CHUNK_OPCODE, len(content)))
-        bio.write(content)
+        compressed_size = len(compressed)
+        bio.write(_MCAP_RECORD.pack(_MCAP_CHUNK_OPCODE, len(header) + compressed_size))
+        bio.write(header)
+        bio.write(compressed)
+        del compressed  # a view of the chunk's buffer
         chunk_end = bio.tell()
+        channels = np.array(self.index_channels, dtype=np.int64)
+        pairs = np.empty((channels.size, 2), dtype='<u8')
+        pairs[:, 0] = self.index_times
+        pairs[:, 1] = self.index_offsets
         offsets = []
-        for channel_id, messages in chunk.msgs.items():
+        for channel_id in dict.fromkeys(self.index_channels):  # in order of first message
             offsets.append(struct.pack('<HQ', channel_id, bio.tell()))
-            entries = struct.pack(f'<{2 * len(messages)}Q', *chain.from_iterable(messages))
+            entries = pairs[channels == channel_id].tobytes()
             bio.write(_MCAP_RECORD.pack(_MCAP_MESSAGE_INDEX_OPCODE, 6 + len(entries)))
             bio.write(struct.pack('<HI', channel_id, len(entries)))
             bio.write(entries)
@@ -191,9 +214,10 @@ class _McapStorage(McapWriter):
         index.write(b''.join((
             times, struct.pack('<QQI', chunk_start, chunk_end - chunk_start, 10 * len(offsets)),
             *offsets, struct.pack('<Q', bio.tell() - chunk_end), compression_field,
-            struct.pack('<QQ', len(compressed), uncompressed_size))))
+            struct.pack('<QQ', compressed_size, uncompressed_size))))
         self.chunks.append(index)
         self.chunk = PendingChunk(2 ** 63 - 1, 0, BytesIO(), defaultdict(list))
+        self.index_channels, self.index_times, self.index_offsets = [], [], []
 
 
 class _Rosbag2Writer(Writer):
@@ -275,19 +299,32 @@ class BagWriter:
             return
         writer = self._writer
         try:
-            times = array('q', map(itemgetter(1), records))
-        except (TypeError, OverflowError) as err:
-            raise BagError(f'Cannot write to bag {str(self.path)!r}: expected integer bag times '
-                           f'in [0, 2**63) ns, got {err}') from err
-        first, last = min(times), max(times)
-        counts = Counter(map(itemgetter(0), records))
-        unknown = set(counts) - set(writer.counts)
-        if first < 0 or unknown or writer.storage is None:
+            if set(map(len, records)) != {3}:
+                raise ValueError(f'records of lengths {sorted(set(map(len, records)))}')
+            channel_ids = list(map(_FIRST, records))
+            times = list(map(_SECOND, records))
+            datas = list(map(_THIRD, records))
+            if not set(map(type, times)) <= {int}:
+                raise TypeError(f'times of types {sorted(set(map(type, times)), key=str)}')
+            first, last = min(times), max(times)
+        except (TypeError, ValueError) as err:
+            raise BagError(f'Cannot write to bag {str(self.path)!r}: expected records '
+                           f'(connection id, integer bag time in [0, 2**63) ns, bytes), got '
+                           f'{err}') from err
+        counts = {connection_id: channel_ids.count(connection_id)
+                  for connection_id in writer.counts}
+        if (first < 0 or last >= _TIME_LIMIT or sum(counts.values()) != len(channel_ids)
+                or writer.storage is None or not set(map(type, datas)) <= _DATA_TYPES):
+            unknown = sorted(set(channel_ids) - set(writer.counts))
+            types = sorted({type(data).__name__ for data in datas})
             raise BagError(f'Cannot write to bag {str(self.path)!r}: expected an open bag, '
-                           f'connection ids of its topics {sorted(writer.counts)} and bag times '
-                           f'in [0, 2**63) ns, got ids {sorted(unknown)} and times '
-                           f'[{first}, {last}]')
-        writer.storage.write_many(records, counts)
+                           f'connection ids of its topics {sorted(writer.counts)}, bag times '
+                           f'in [0, 2**63) ns and bytes, got ids {unknown} not registered, '
+                           f'times [{first}, {last}], data of types {types}')
+        if isinstance(writer.storage, _McapStorage):
+            writer.storage.write_many(channel_ids, times, datas, counts)
+        else:
+            writer.storage.write_many(records)
         for connection_id, count in counts.items():
             writer.counts[connection_id] += count
         writer.min_timestamp = min(first, writer.min_timestamp)
