@@ -1,12 +1,13 @@
 """Tests of rigid_body_attitude.bag: codecs against rosbags' serialiser, round trips, errors."""
 
+import apsw
 import numpy as np
 import pytest
-from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, StoragePlugin, Writer
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, Writer
 import yaml
 
 from rigid_body_attitude import bag
-from rigid_body_attitude.bag import cdr, mcap
+from rigid_body_attitude.bag import cdr, mcap, sqlite
 from rigid_body_attitude.errors import AttitudeError, InputError
 from rigid_body_attitude.quaternion import from_ros, normalize, to_ros
 
@@ -439,6 +440,10 @@ def test_write_many_makes_the_bag_single_rosbags_writes_make(tmp_path, storage):
         assert (ours / 'bag.mcap').read_bytes() == (reference / 'bag.mcap').read_bytes()
     else:
         assert _sqlite_rows(ours) == _sqlite_rows(reference)
+        database = apsw.Connection(str(next(ours.glob('*.db3'))))
+        assert database.execute('PRAGMA page_size').fetchall() == [(32768,)]
+        assert database.execute('PRAGMA integrity_check').fetchall() == [('ok',)]
+        database.close()
     expected = _rosbags_messages(reference, set(types))
     assert len(expected) == len(records)
     assert _rosbags_messages(ours, set(types)) == expected
@@ -606,19 +611,53 @@ def test_mcap_fast_iteration_matches_rosbags(tmp_path, receive_order):
     assert [t for _, t, _, _ in ours] == sorted(t for _, t, _, _ in ours)
 
 
+@pytest.mark.parametrize('receive_order', ['monotonic', 'shuffled'])
+def test_sqlite_fast_iteration_matches_rosbags(tmp_path, receive_order):
+    # Every 50th receive time repeats its neighbour's (ties across topics and within one);
+    # 'shuffled' records out of time order. Also the bare .db3 file and a topic subset.
+    count = 3000
+    rng = np.random.default_rng(12)
+    receive = 1.0 + 1e-3 * np.arange(count)
+    if receive_order == 'shuffled':
+        receive = 1.0 + 1e-3 * rng.permutation(count)
+    receive[::50] = receive[1::50]
+    path = tmp_path / 'bag'
+    bag.write_bag(path, stamps=np.arange(count) * 1e-3, rates=rng.normal(size=(count, 3)),
+                  torques=rng.normal(size=(count, 3)),
+                  ground_truth=np.tile([1.0, 0.0, 0.0, 0.0], (count, 1)), receive_times=receive)
+    topics = ['imu', 'torque', 'ground_truth']
+    for target in (path, next(path.glob('*.db3'))):
+        with bag.BagReader(target) as reader:
+            assert sqlite.fast_messages(reader._reader.storage, reader.connections(topics))
+            ours = list(reader.messages(topics))
+            subset = list(reader.messages(['ground_truth', 'imu']))
+        assert ours == _rosbags_messages(target, set(topics))
+        assert subset == _rosbags_messages(target, {'imu', 'ground_truth'})
+        assert len(ours) == 3 * count and len(subset) == 2 * count
+        assert [t for _, t, _, _ in ours] == sorted(t for _, t, _, _ in ours)
+
+
 def test_fast_iteration_declines_what_it_does_not_handle(tmp_path):
-    compressed = tmp_path / 'message_compressed'
-    writer = Writer(compressed, version=9, storage_plugin=StoragePlugin.MCAP)
-    writer.set_compression(CompressionMode.MESSAGE, CompressionFormat.ZSTD)
-    with writer:
-        connection = writer.add_connection('imu', bag.IMU, typestore=bag.typestore())
-        for step in range(3):
-            writer.write(connection, step, cdr.encode_imu(step, 'imu', [step, 0.0, 0.0]))
-    sqlite = tmp_path / 'sqlite'
-    bag.write_bag(sqlite, stamps=[0.0, 1.0], rates=np.zeros((2, 3)))
-    for path in (compressed, sqlite):
+    paths = {}
+    for storage in ('mcap', 'sqlite3'):
+        paths[storage] = tmp_path / f'message_compressed_{storage}'
+        writer = Writer(paths[storage], version=9, storage_plugin=bag.STORAGES[storage])
+        writer.set_compression(CompressionMode.MESSAGE, CompressionFormat.ZSTD)
+        with writer:
+            connection = writer.add_connection('imu', bag.IMU, typestore=bag.typestore())
+            for step in range(3):
+                writer.write(connection, step, cdr.encode_imu(step, 'imu', [step, 0.0, 0.0]))
+    plain_sqlite = tmp_path / 'sqlite'
+    bag.write_bag(plain_sqlite, stamps=[0.0, 1.0], rates=np.zeros((2, 3)))
+    plain_mcap = tmp_path / 'mcap'
+    bag.write_bag(plain_mcap, stamps=[0.0, 1.0], rates=np.zeros((2, 3)), storage='mcap')
+    for path, module in [(paths['mcap'], mcap), (paths['sqlite3'], mcap),
+                         (paths['sqlite3'], sqlite), (paths['mcap'], sqlite),
+                         (plain_sqlite, mcap), (plain_mcap, sqlite)]:
         with bag.BagReader(path) as reader:
-            assert mcap.fast_messages(reader._reader.storage, reader.connections(['imu'])) is None
+            storage = reader._reader.storage
+            assert module.fast_messages(storage, reader.connections(['imu'])) is None
             assert list(reader.messages(['imu'])) == _rosbags_messages(path, {'imu'})
-    rates = bag.read_series(compressed, 'imu').values
-    assert rates[:, 0].tolist() == [0.0, 1.0, 2.0]
+    for path in paths.values():
+        rates = bag.read_series(path, 'imu').values
+        assert rates[:, 0].tolist() == [0.0, 1.0, 2.0]

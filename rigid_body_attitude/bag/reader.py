@@ -4,7 +4,8 @@ Messages come out as plain tuples ``(topic, bag_time_ns, msgtype, data)`` in bag
 (the recorder's receive time; ties keep their write order). ``data`` is the CDR bytes: decode
 the per-sample fields with :mod:`rigid_body_attitude.bag.cdr` (fast) or a full message object
 with :func:`rigid_body_attitude.bag.msgtypes.deserialize` (slow). Indexed MCAP files are
-walked by :mod:`rigid_body_attitude.bag.mcap` (same output as ``rosbags``' iterator, faster).
+walked by :mod:`rigid_body_attitude.bag.mcap`, sqlite3 files queried by
+:mod:`rigid_body_attitude.bag.sqlite` (same output as ``rosbags``' iterator, faster).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from rigid_body_attitude.bag.cdr import (
     wrench_torque,
 )
 from rigid_body_attitude.bag.errors import BagError
-from rigid_body_attitude.bag.mcap import fast_messages
+from rigid_body_attitude.bag import mcap, sqlite
 from rigid_body_attitude.bag.msgtypes import (
     FLOAT64,
     IMU,
@@ -156,7 +157,10 @@ class BagReader:
 
     def _iterate(self, connections: list[Connection]) -> Iterator[BagMessage]:
         try:
-            fast = fast_messages(self._reader.storage, connections)
+            storage = self._reader.storage
+            fast = mcap.fast_messages(storage, connections)
+            if fast is None:
+                fast = sqlite.fast_messages(storage, connections)
             if fast is not None:
                 yield from fast
                 return

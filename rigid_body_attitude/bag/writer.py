@@ -9,13 +9,14 @@ standard messages, for test fixtures and for users converting their own logs.
 Batched writing. ``rosbags``' writer costs about 3.7 µs per record (a membership scan of its
 connections, one ``sqlite3`` statement or a ``BytesIO`` record per message); the replay tool
 writes three records per gyro message and needs ≥ 10⁵ messages/s. The storages here are
-``rosbags``' own with a ``write_many`` added: the sqlite3 storage keeps ``rosbags``' schema and
-statements but runs on an ``apsw`` connection (the SQLite binding ``rosbags`` reads with; its
-``executemany`` inserts a row in about 1.1 µs against 2.0 µs for the standard ``sqlite3``
-module) in one transaction; the MCAP storage packs message records with one ``struct`` call
-each and closes chunks at the same 1 MiB boundary as ``rosbags``, so the file is byte for byte
-the one ``rosbags`` writes. Metadata (message counts, start, duration) is kept by ``rosbags``'
-``Writer`` as for single writes. ``bench/replay_throughput.py`` measures it.
+``rosbags``' own with a ``write_many`` added. The sqlite3 storage keeps ``rosbags``' schema
+and statements but runs on an ``apsw`` connection (the SQLite binding ``rosbags`` reads with;
+its ``executemany`` inserts a row in about 1.1 µs against 2.0 µs for the standard ``sqlite3``
+module) in one transaction, with 32 KiB pages (0.85 µs a row). The MCAP storage lays out a
+batch of message records with C-level ``map`` calls and closes chunks at the same 1 MiB
+boundary as ``rosbags``, so the file is byte for byte the one ``rosbags`` writes. Metadata
+(message counts, start, duration) is kept by ``rosbags``' ``Writer`` as for single writes.
+``bench/replay_throughput.py`` measures it.
 """
 
 from __future__ import annotations
@@ -74,6 +75,10 @@ UNIT_NORM_TOLERANCE = 1e-6
 
 _FIRST, _SECOND, _THIRD = itemgetter(0), itemgetter(1), itemgetter(2)
 _TIME_LIMIT = 2 ** 63
+#: Page size of the sqlite3 files written [bytes]. SQLite's default (4096) makes an insert of
+#: the replay's three outputs cost 3.2 µs; 32 KiB pages (fewer page splits and b-tree levels)
+#: 2.6 µs; 64 KiB gains no more. Any SQLite reader opens any page size.
+SQLITE_PAGE_SIZE = 32768
 #: Types accepted as message data (``bytes`` from the encoders; views of read messages).
 _DATA_TYPES = {bytes, bytearray, memoryview}
 _INSERT_MESSAGE = 'INSERT INTO messages (topic_id, timestamp, data) VALUES(?, ?, ?)'
@@ -92,7 +97,8 @@ class _Sqlite3Storage(Sqlite3Writer):
     """``rosbags``' sqlite3 storage (schema, topics, rows) on an ``apsw`` connection.
 
     One transaction from creation to :meth:`close`, as ``rosbags``' own (the standard module
-    opens it implicitly at the first insert and commits on close).
+    opens it implicitly at the first insert and commits on close); pages of
+    :data:`SQLITE_PAGE_SIZE` bytes.
     """
 
     def __init__(self, path: Path, compression: CompressionMode) -> None:
@@ -101,6 +107,7 @@ class _Sqlite3Storage(Sqlite3Writer):
         self.path = path / f'{path.name}.db3'
         self.conn = apsw.Connection(str(self.path))
         self.cursor = self.conn.cursor()
+        self.cursor.execute(f'PRAGMA page_size={SQLITE_PAGE_SIZE}')
         self.cursor.execute(self.SQLITE_SCHEMA)
         self.cursor.execute('BEGIN')
 

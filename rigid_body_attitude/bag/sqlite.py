@@ -1,0 +1,57 @@
+"""Fast message iteration over sqlite3 bags opened by ``rosbags``.
+
+``rosbags``' sqlite3 reader runs one query over the selected topics and wraps every row in a
+generator that maps the topic id to a ``Connection`` (our reader then builds the
+``(topic, time, msgtype, data)`` tuple in a second generator): about 1 µs per message. Here the
+same query (same tables, join, filter and ``ORDER BY timestamp``, so the same plan and the
+same order of equal times) selects the topic name and type itself, so ``apsw`` returns the
+finished tuples and no Python code runs per message.
+
+:func:`fast_messages` returns ``None`` for what it does not handle (per-message compression,
+another storage plugin); the caller then uses ``rosbags``' own iterator. ``test/test_bag.py``
+checks that both give identical sequences, ties included.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Iterator
+from itertools import chain
+from typing import Any
+
+from rosbags.interfaces import Connection
+from rosbags.rosbag2.reader import DirectoryReader
+from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
+
+__all__ = ['fast_messages']
+
+Message = tuple[str, int, str, bytes]
+
+#: ``rosbags``' query (``Sqlite3Reader.messages``) with the name and type selected.
+_QUERY = ('SELECT topics.name,messages.timestamp,topics.type,messages.data FROM messages JOIN '
+          'topics ON messages.topic_id=topics.id WHERE topics.id IN ({}) ORDER BY timestamp')
+
+
+def fast_messages(storage: Any, connections: Collection[Connection]) -> Iterator[Message] | None:
+    """``(topic, time_ns, msgtype, data)`` of ``connections``, or None if not applicable.
+
+    ``storage`` is the ``storage`` attribute of an open ``rosbags.rosbag2.Reader``.
+    """
+    if isinstance(storage, DirectoryReader):
+        if storage.metadata.compression_mode == 'message':
+            return None
+        files = list(storage.storages)
+    else:
+        files = [storage]
+    if not files or not all(isinstance(f, Sqlite3Reader) and f.dbconn for f in files):
+        return None
+    return chain.from_iterable(_file_messages(reader, connections) for reader in files)
+
+
+def _file_messages(reader: Sqlite3Reader, connections: Collection[Connection]
+                   ) -> Iterator[Message]:
+    """One file's messages in time order (files follow one another, as in ``rosbags``)."""
+    selected = {(c.topic, c.msgtype) for c in connections}
+    ids = sorted({c.id for c in reader.connections if (c.topic, c.msgtype) in selected})
+    if not ids:
+        return iter(())
+    return reader.dbconn.execute(_QUERY.format(','.join('?' * len(ids))), ids)
