@@ -608,12 +608,14 @@ class _Replay:
 
         Per message: one decoder call (header stamp as integers and rate), the stream rules
         and propagator, the attitude, one ``struct`` call per output with the header bytes
-        precomputed, and a record appended to the writer's buffer.
+        precomputed, and a record appended to the writer's buffer. The stamp of the last
+        output is kept in locals and handed over before anything else can read it (clock
+        ticks, the end).
         """
         plan, writer = self.plan, self.writer
         gyro_topic, decode = plan.gyro_topic, plan.gyro_decoder
         add = self.gyro_stream.add
-        seconds = self.time_base.seconds
+        time_base = self.time_base
         attitude_of = self.tracker.attitude
         propagator = self.propagator
         use_header = self.options.use_header_stamps
@@ -626,10 +628,16 @@ class _Replay:
         imu_data = ids.get('imu/data') if plan.gyro_is_imu else None
         series = writer.series if writer.keep_series else None
         rejections = self.period_rejections
+        aligning = self.alignment_ns is not None
         next_event = self.next_event_ns() if self.started else -1
         gyro_count = published = chunk = 0
+        pending = False  # an output whose stamp (last_sec, last_nanosec) is not handed over
+        last_sec = last_nanosec = 0
         for topic, bag_time_ns, _, data in messages:
             if bag_time_ns >= next_event:
+                if pending:
+                    self.output_published(last_sec, last_nanosec)
+                    pending = False
                 if not self.started:
                     self.start(bag_time_ns)
                 self.events_until(bag_time_ns)
@@ -649,14 +657,18 @@ class _Replay:
             elif nanosec >= NANOSECONDS_PER_SECOND:
                 sec, nanosec = divmod(sec * NANOSECONDS_PER_SECOND + nanosec,
                                       NANOSECONDS_PER_SECOND)
-            outcome = add(seconds(sec, nanosec), rate)
+            epoch = time_base.epoch_sec
+            if epoch is None:
+                outcome = add(time_base.seconds(sec, nanosec), rate)
+            else:  # TimeBase.seconds inlined: the epoch never changes once set
+                outcome = add((sec - epoch) + nanosec * 1e-9, rate)
             if outcome.reason:
                 rejections[outcome.reason] += 1
                 if not publishes(outcome):
                     continue
-            stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
-            if self.alignment_ns is not None:
-                self.align(stamp_ns)
+            if aligning:
+                self.align(sec * NANOSECONDS_PER_SECOND + nanosec)
+                aligning = self.alignment_ns is not None
             q = attitude_of(propagator)
             if orientation is not None:
                 record((orientation, bag_time_ns, encode_orientation(sec, nanosec, q)))
@@ -665,12 +677,13 @@ class _Replay:
             if imu_data is not None:
                 record((imu_data, bag_time_ns, imu_with_orientation(data, q)))
             if series is not None:
-                series.attitude_stamps_ns.append(stamp_ns)
+                series.attitude_stamps_ns.append(sec * NANOSECONDS_PER_SECOND + nanosec)
                 series.attitudes.extend(q)
                 series.positions.extend(_ZERO)
             published += 1
-            self.last_output_ns = stamp_ns
-            self.fresh_output = True
+            pending, last_sec, last_nanosec = True, sec, nanosec
+        if pending:
+            self.output_published(last_sec, last_nanosec)
         progress.update(chunk)
         self.read[gyro_topic] += gyro_count
         self.input_messages += gyro_count
@@ -679,6 +692,11 @@ class _Replay:
             if connection_id is not None:
                 writer.counts[name] += published
         return gyro_count
+
+    def output_published(self, sec: int, nanosec: int) -> None:
+        """An attitude was published with stamp ``(sec, nanosec)`` (for the next tick)."""
+        self.last_output_ns = sec * NANOSECONDS_PER_SECOND + nanosec
+        self.fresh_output = True
 
     def dynamics_messages(self, messages: Iterator[Any], progress: Any) -> None:
         """The dynamics scene's loop: every message advances the clock; commands are used."""

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Collection, Iterator
+from itertools import chain, repeat
 from operator import itemgetter
 from typing import Any
 
@@ -59,22 +60,36 @@ def fast_messages(storage: Any, connections: Collection[Connection]) -> Iterator
 
 
 def _iterate(files: list[McapReader], connections: Collection[Connection]) -> Iterator[Message]:
-    """Files one after the other (as rosbags does), each in log-time order."""
-    for reader in files:
-        wanted = {channel.id: (selected.topic, selected.msgtype)
-                  for channel in reader.connections for selected in connections
-                  if channel.topic == selected.topic and channel.msgtype == selected.msgtype}
-        chunks = [chunk for chunk in reader.chunks
-                  if any(chunk.channel_count.get(channel_id) for channel_id in wanted)]
-        for group in _time_groups(chunks):
-            if len(group) == 1:
-                yield from _chunk_messages(reader, group[0], wanted)
-                continue
-            merged: list[Message] = []
-            for chunk in sorted(group, key=lambda chunk: chunk.chunk_start_offset):
-                merged.extend(_chunk_messages(reader, chunk, wanted))
-            merged.sort(key=itemgetter(1))  # stable: ties in file order, as rosbags' merge
-            yield from merged
+    """Files one after the other (as rosbags does), each in log-time order.
+
+    Messages come from per-chunk lists chained at C level (no Python code per message).
+    """
+    return chain.from_iterable(_group_messages(reader, group, wanted)
+                               for reader, wanted, groups in map(_plan, files, repeat(connections))
+                               for group in groups)
+
+
+def _plan(reader: McapReader, connections: Collection[Connection]
+          ) -> tuple[McapReader, dict[int, tuple[str, str]], list[list[Any]]]:
+    """The file's wanted channels and its chunks holding them, grouped disjoint in time."""
+    wanted = {channel.id: (selected.topic, selected.msgtype)
+              for channel in reader.connections for selected in connections
+              if channel.topic == selected.topic and channel.msgtype == selected.msgtype}
+    chunks = [chunk for chunk in reader.chunks
+              if any(chunk.channel_count.get(channel_id) for channel_id in wanted)]
+    return reader, wanted, _time_groups(chunks)
+
+
+def _group_messages(reader: McapReader, group: list[Any],
+                    wanted: dict[int, tuple[str, str]]) -> list[Message]:
+    """The messages of chunks overlapping in time, merged by a stable sort."""
+    if len(group) == 1:
+        return _chunk_messages(reader, group[0], wanted)
+    merged: list[Message] = []
+    for chunk in sorted(group, key=lambda chunk: chunk.chunk_start_offset):
+        merged.extend(_chunk_messages(reader, chunk, wanted))
+    merged.sort(key=itemgetter(1))  # stable: ties in file order, as rosbags' merge
+    return merged
 
 
 def _time_groups(chunks: list[Any]) -> list[list[Any]]:
