@@ -251,7 +251,7 @@ class ReplayResult:
         final_stamp_ns: stamp of the last attitude output [ns] (``None``: no output).
         final_attitude: the last published attitude (w, x, y, z).
         diagnostics: the propagator's final diagnostics (energy, momentum, drift).
-        series: the published values.
+        series: the published values (empty unless kept, see :func:`replay_bag`).
         errors: attitude error against the ground truth (``None`` without ground truth);
             from the alignment on when the attitude was set from the ground truth.
         alignment_stamp_ns: where the attitude was set from the ground truth, if it was.
@@ -898,8 +898,9 @@ def replay_bag(input_path: str | Path, output_path: str | Path,
     topic not in it (the message lists the bag's topics) or one of an unusable type;
     :class:`InputError` or :class:`~rigid_body_attitude.errors.SceneError` for bad options or
     scene. On any error no output bag is left behind. ``progress``: ``None`` shows a bar on
-    a terminal only. ``scene_given=False`` adds a note when the default dynamics scene meets
-    a gyro bag.
+    a terminal only. ``keep_series``: keep the published values in memory (``series``; always
+    with a ground-truth topic, whose error statistics need them). ``scene_given=False`` adds
+    a note when the default dynamics scene meets a gyro bag.
     """
     _check_options(options)
     input_path, output_path = Path(input_path), Path(output_path)
@@ -922,7 +923,8 @@ def replay_bag(input_path: str | Path, output_path: str | Path,
         custom = _output_custom_data(reader, scene, options, input_path)
         try:
             with BagWriter(output_path, storage=options.storage, custom_data=custom) as bag:
-                writer = _Writer(bag, plan.outputs, keep_series)
+                writer = _Writer(bag, plan.outputs,
+                                 keep_series or bool(plan.ground_truth_topic))
                 replay = _Replay(scene, options, plan, writer, truth)
                 bar = _progress_bar(progress, total)
                 begin = time.perf_counter()
@@ -961,7 +963,6 @@ def _result(input_path: Path, output_path: Path, replay: _Replay, writer: _Write
         errors = attitude_errors(stamps, attitudes, *truth)
         if replay.aligned_at_ns is not None:
             errors = errors.within(replay.aligned_at_ns, int(stamps[-1]))
-    final_stamp = int(stamps[-1]) if stamps.size else None
     notes = list(replay.plan.notes)
     if replay.is_dynamics and not replay.clock_driver.total:
         notes.append(f'no clock tick within the bag\'s time span at publish_rate '
@@ -971,7 +972,7 @@ def _result(input_path: Path, output_path: Path, replay: _Replay, writer: _Write
         input_path=input_path, output_path=output_path, scene=replay.scene,
         read=dict(replay.read), used=replay.accepted_count(),
         rejected=replay.rejection_counts(), written=dict(writer.counts),
-        final_stamp_ns=final_stamp, final_attitude=replay.tracker.previous,
+        final_stamp_ns=replay.last_output_ns, final_attitude=replay.tracker.previous,
         diagnostics=replay.propagator.diagnostics(), series=writer.series, errors=errors,
         alignment_stamp_ns=replay.aligned_at_ns, gyro_messages=gyro_count, elapsed=elapsed,
         notes=notes)
@@ -1171,7 +1172,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         options = _options(args)
         result = replay_bag(args.bag, output, options, progress=args.progress,
-                            keep_series=True, scene_given=args.scene is not None)
+                            keep_series=bool(args.csv or args.plot),
+                            scene_given=args.scene is not None)
         print(summary(result))
         if args.csv:
             write_csv(result, Path(args.csv))

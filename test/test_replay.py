@@ -81,6 +81,27 @@ def test_main_writes_the_node_outputs_and_a_summary(tmp_path, capsys, storage):
         assert expected_text in text
 
 
+def test_series_are_kept_when_asked_or_needed_and_change_nothing_else(tmp_path):
+    bag = constant_rate_bag(tmp_path / 'in')
+    kept = replay_bag(bag, tmp_path / 'kept', ReplayOptions(scene=GYRO_SCENE))
+    lean = replay_bag(bag, tmp_path / 'lean', ReplayOptions(scene=GYRO_SCENE),
+                      keep_series=False)
+    assert len(kept.series.attitude_stamps_ns) == 200
+    assert len(lean.series.attitude_stamps_ns) == len(lean.series.energies) == 0
+    assert lean.final_stamp_ns == kept.final_stamp_ns == kept.series.attitude_stamps_ns[-1]
+    assert lean.final_attitude == kept.final_attitude
+    assert lean.written == kept.written
+    # The summaries differ only in the output path and the timing line.
+    assert summary(lean).splitlines()[1:-1] == summary(kept).splitlines()[1:-1]
+    with BagReader(tmp_path / 'kept') as first, BagReader(tmp_path / 'lean') as second:
+        topics = list(first.topics)
+        assert list(first.messages(topics)) == list(second.messages(topics))
+    truth = replay_bag(bag, tmp_path / 'truth',
+                       ReplayOptions(scene=GYRO_SCENE, ground_truth_topic='ground_truth'),
+                       keep_series=False)
+    assert len(truth.series.attitude_stamps_ns) == 200 and truth.errors.count == 200
+
+
 def test_imu_data_is_the_input_with_the_propagated_orientation(tmp_path, capsys):
     stamps = 3.0 + np.arange(5) / RATE
     acceleration = np.array([[0.1, -9.8, 0.3]] * 5)
