@@ -8,7 +8,14 @@ time; the replay tool feeds the same core, so a replayed bag gives the same numb
 
 * Gyro scenes advance on each ``imu`` (sensor_msgs/Imu) or ``angular_velocity``
   (geometry_msgs/Vector3Stamped) message and publish ``orientation``, ``pose`` and (for Imu
-  input) ``imu/data`` per message, stamped with the gyro stamp.
+  input) ``imu/data`` per message, stamped with the gyro stamp. This is the hot path, so it
+  handles serialized messages: the gyro subscriptions are raw, the stamp and rate are read
+  from the CDR bytes and the outputs are written as CDR bytes with the header packed once
+  (:mod:`rigid_body_attitude.bag.cdr`, the replay tool's codecs). :func:`main` serves them
+  with :class:`~rigid_body_attitude.node_loop.GyroLoop` (every queued message per wake-up)
+  and everything else with a ``SingleThreadedExecutor`` in a second thread; a lock keeps
+  the two threads' changes of the state apart. Spun in-process by any executor, the node
+  works the same, one message per callback as executors do.
 * Dynamics scenes advance on a timer of the node clock (``use_sim_time`` works) at
   ``publish_rate`` and publish ``orientation``, ``pose`` and ``twist`` per tick, stamped with
   the propagated time; commanded inputs arrive on ``torque`` (geometry_msgs/WrenchStamped)
@@ -24,10 +31,11 @@ Parameters and topics are documented in the README ("The node").
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 import math
 import sys
+import threading
 import time
 from typing import Any
 
@@ -38,7 +46,8 @@ from geometry_msgs.msg import (
 import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidParameterTypeException, ParameterException
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
@@ -48,10 +57,15 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 
+from rigid_body_attitude.bag.cdr import (
+    imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder,
+    RATE_SAMPLE_DECODERS)
+from rigid_body_attitude.bag.msgtypes import IMU, VECTOR3_STAMPED
 from rigid_body_attitude.errors import AttitudeError, InputError
 from rigid_body_attitude.messages import (
     body_frame_velocity, diagnostic_report, LEVEL_ERROR, LEVEL_WARN,
-    stale_command_count, TimeBase)
+    NANOSECONDS_PER_SECOND, stale_command_count, TimeBase)
+from rigid_body_attitude.node_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import (
     build_propagator, DynamicsPropagator, MAX_STEPS_PER_CALL)
@@ -60,7 +74,7 @@ from rigid_body_attitude.settings import (
     DIAGNOSTICS_PERIOD, load_node_scene, NODE_DEFAULTS, NODE_NAME, publishes)
 from rigid_body_attitude.stream import ClockDriver, CommandStream, GyroStream, Outcome
 
-__all__ = ['AttitudePropagatorNode', 'NodeSettings', 'check_parameters', 'main']
+__all__ = ['AttitudePropagatorNode', 'NodeSettings', 'check_parameters', 'main', 'spin']
 
 #: Seconds between repeated warnings about the same rejection reason.
 WARNING_INTERVAL = 5.0
@@ -75,6 +89,9 @@ _LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN,
 INPUT_QOS = qos_profile_sensor_data
 #: Outputs: reliable, keep last 10 (reaches reliable and best-effort subscribers).
 OUTPUT_QOS = QoSProfile(depth=10)
+
+#: Position published in the pose of gyro scenes (they carry no translation).
+_ZERO_POSITION = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -185,11 +202,15 @@ class AttitudePropagatorNode(Node):
     ``parameter_overrides``, ``cli_args``, ...), so tests and tools can build the node
     in-process. Bad parameters or a bad scene raise :class:`InputError` or
     :class:`~rigid_body_attitude.errors.SceneError` (or another project error) from here.
+
+    Every callback that reads or changes the propagation state holds :attr:`state_lock`, so
+    the gyro loop of :func:`main` and the executor thread serving the rest never interleave.
     """
 
     def __init__(self, **node_options: Any) -> None:
         """Declare the parameters, load the scene, create topics, timers and the service."""
         super().__init__(NODE_NAME, **node_options)
+        self.state_lock = threading.Lock()
         values = self._declare_parameters()
         self.settings = load_settings(values)
         self.scene = self.settings.scene
@@ -239,6 +260,8 @@ class AttitudePropagatorNode(Node):
         """Take the parameters that may change at run time."""
         self.use_header_stamps = values['use_header_stamps']
         self.world_header.frame_id = values['world_frame']
+        self.encode_orientation = quaternion_stamped_encoder(values['world_frame'])
+        self.encode_pose = pose_stamped_encoder(values['world_frame'])
         self.twist_message.header.frame_id = values['body_frame']
         if self.clock_driver is not None:
             self.clock_driver.time_jump_threshold = values['time_jump_threshold']
@@ -252,10 +275,13 @@ class AttitudePropagatorNode(Node):
             message_type, topic, OUTPUT_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
 
-    def _subscription(self, message_type: Any, topic: str, callback: Any) -> Any:
+    def _subscription(self, message_type: Any, topic: str, callback: Any,
+                      gyro_group: DedicatedGroup | None = None) -> Any:
+        """A subscription; with ``gyro_group`` a raw one (CDR bytes) in that group."""
         return self.create_subscription(
             message_type, topic, callback, INPUT_QOS,
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+            qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+            callback_group=gyro_group, raw=gyro_group is not None)
 
     def _create_outputs(self) -> None:
         """Publishers and the messages they reuse (only the stamp and values change)."""
@@ -279,19 +305,29 @@ class AttitudePropagatorNode(Node):
         self.energy_message = Float64()
         self.twist_message = TwistStamped()
         self._fresh_output = False
+        self._output_stamp = (0, 0)  # (sec, nanosec) of the last gyro output
 
     def get_parameters_values(self) -> dict[str, Any]:
         """Current values of the node's own parameters by name."""
         return {name: self.get_parameter(name).value for name in PARAMETERS}
 
     def _create_inputs(self) -> None:
-        """Subscriptions for the inputs the scene uses (and set_pose)."""
+        """Subscriptions for the inputs the scene uses (and set_pose).
+
+        The gyro subscriptions are raw and share a :class:`DedicatedGroup`, so :func:`main`'s
+        :class:`GyroLoop` can take them over (:meth:`gyro_handlers`).
+        """
         self.subscriptions_by_topic = {}
+        self.gyro_group: DedicatedGroup | None = None
         if not self.is_dynamics:
+            self.gyro_group = DedicatedGroup()
+            self._decode_imu = RATE_SAMPLE_DECODERS[IMU]
+            self._decode_rate = RATE_SAMPLE_DECODERS[VECTOR3_STAMPED]
             self.subscriptions_by_topic['imu'] = self._subscription(
-                Imu, 'imu', self.imu_callback)
+                Imu, 'imu', self.imu_callback, self.gyro_group)
             self.subscriptions_by_topic['angular_velocity'] = self._subscription(
-                Vector3Stamped, 'angular_velocity', self.angular_velocity_callback)
+                Vector3Stamped, 'angular_velocity', self.angular_velocity_callback,
+                self.gyro_group)
         inputs = self.propagator.input_names
         self.wrench_inputs = tuple(name for name in ('torque', 'force') if name in inputs)
         if self.wrench_inputs:
@@ -326,59 +362,74 @@ class AttitudePropagatorNode(Node):
 
     def parameters_set_callback(self, parameters: list[Parameter]) -> None:
         """Apply accepted run-time changes (frames, stamps, max_dt, thresholds)."""
-        self._apply_runtime_parameters(self.get_parameters_values())
+        values = self.get_parameters_values()
+        with self.state_lock:
+            self._apply_runtime_parameters(values)
 
     # -- inputs ---------------------------------------------------------------------------
 
-    def imu_callback(self, imu: Imu) -> None:
-        """Propagate with the Imu's angular velocity; publish it back with orientation."""
-        rate = imu.angular_velocity
-        if self._gyro_sample(imu.header.stamp, rate.x, rate.y, rate.z):
-            orientation = imu.orientation
-            q = self.orientation_message.quaternion
-            orientation.x, orientation.y, orientation.z, orientation.w = q.x, q.y, q.z, q.w
-            imu.orientation_covariance.fill(0.0)  # REP-145: all zeros = covariance unknown
-            self.imu_publisher.publish(imu)
+    def gyro_handlers(self) -> list[tuple[Any, Callable[[bytes], None]]]:
+        """The raw gyro subscriptions with their per-message callbacks (empty for dynamics)."""
+        if self.is_dynamics:
+            return []
+        return [(self.subscriptions_by_topic['imu'], self.imu_callback),
+                (self.subscriptions_by_topic['angular_velocity'],
+                 self.angular_velocity_callback)]
 
-    def angular_velocity_callback(self, rate: Vector3Stamped) -> None:
-        """Propagate with a Vector3Stamped body rate."""
-        vector = rate.vector
-        self._gyro_sample(rate.header.stamp, vector.x, vector.y, vector.z)
+    def imu_callback(self, imu_cdr: bytes) -> None:
+        """Propagate with a serialized Imu's angular velocity; publish it back with the
+        orientation filled in (``imu/data``)."""
+        sec, nanosec, rate = self._decode_imu(imu_cdr)
+        with self.state_lock:
+            attitude = self._gyro_sample(sec, nanosec, rate)
+            if attitude is not None:
+                # REP-145: orientation covariance all zeros = unknown (not -1: provided).
+                self.imu_publisher.publish(imu_with_orientation(imu_cdr, attitude))
+
+    def angular_velocity_callback(self, rate_cdr: bytes) -> None:
+        """Propagate with a serialized Vector3Stamped body rate."""
+        sec, nanosec, rate = self._decode_rate(rate_cdr)
+        with self.state_lock:
+            self._gyro_sample(sec, nanosec, rate)
 
     def torque_callback(self, wrench: WrenchStamped) -> None:
         """Hold the commanded torque (and force, with translation) from the stamp on."""
         torque, force = wrench.wrench.torque, wrench.wrench.force
         vectors = {'torque': (torque.x, torque.y, torque.z),
                    'force': (force.x, force.y, force.z)}
-        self._command(self.wrench_inputs, self._command_time(wrench.header.stamp), vectors)
+        with self.state_lock:
+            self._command(self.wrench_inputs, self._command_time(wrench.header.stamp), vectors)
 
     def rotor_torque_callback(self, rotor_torque: Vector3Stamped) -> None:
         """Hold the commanded motor torque on the rotor from the stamp on."""
         vector = rotor_torque.vector
-        self._command(('rotor_torque',), self._command_time(rotor_torque.header.stamp),
-                      {'rotor_torque': (vector.x, vector.y, vector.z)})
+        with self.state_lock:
+            self._command(('rotor_torque',), self._command_time(rotor_torque.header.stamp),
+                          {'rotor_torque': (vector.x, vector.y, vector.z)})
 
     def set_pose_callback(self, pose: PoseStamped) -> None:
         """Re-initialise the attitude (and the position, when the scene has translation)."""
-        self.input_messages += 1
         o, p = pose.pose.orientation, pose.pose.position
         attitude, position = (o.w, o.x, o.y, o.z), (p.x, p.y, p.z)
-        if not all(math.isfinite(value) for value in attitude + position):
-            self._reject_pose('non_finite', attitude + position)
-            return
-        try:
-            self.propagator.set_attitude(
-                attitude, position if self.propagator.has_translation else None)
-        except InputError as err:
-            self._reject_pose('invalid_pose', str(err))
-            return
+        with self.state_lock:
+            self.input_messages += 1
+            if not all(math.isfinite(value) for value in attitude + position):
+                self._reject_pose('non_finite', attitude + position)
+                return
+            try:
+                self.propagator.set_attitude(
+                    attitude, position if self.propagator.has_translation else None)
+            except InputError as err:
+                self._reject_pose('invalid_pose', str(err))
+                return
         where = f', position {position}' if self.propagator.has_translation else ''
         self.get_logger().info(f'set_pose: attitude (w, x, y, z) {attitude}{where}')
 
     def reset_callback(self, request: Trigger.Request,
                        response: Trigger.Response) -> Trigger.Response:
         """Back to the scene's initial state (gyro: the next sample is a new baseline)."""
-        self._reset_state()
+        with self.state_lock:
+            self._reset_state()
         response.success = True
         response.message = f'reset to the initial state of scene {self.scene.name!r}'
         self.get_logger().info(response.message)
@@ -394,21 +445,27 @@ class AttitudePropagatorNode(Node):
             self.propagator.reset(self.propagator.state.time)
         self.command_stream.reset()
 
-    def _gyro_sample(self, stamp: Time, x: float, y: float, z: float) -> bool:
-        """Feed one gyro sample to the stream; publish orientation and pose if it moved."""
+    def _gyro_sample(self, sec: int, nanosec: int, rate: tuple[float, ...]
+                     ) -> tuple[float, float, float, float] | None:
+        """Feed one gyro sample stamped ``(sec, nanosec)`` to the stream; if the state moved,
+        publish orientation and pose and return the attitude (w, x, y, z), else None.
+
+        Called with :attr:`state_lock` held.
+        """
         self.input_messages += 1
         if not self.use_header_stamps:
-            stamp = self.get_clock().now().to_msg()
-        outcome = self.gyro_stream.add(self.time_base.seconds(stamp.sec, stamp.nanosec),
-                                       (x, y, z))
+            sec, nanosec = divmod(self.get_clock().now().nanoseconds, NANOSECONDS_PER_SECOND)
+        outcome = self.gyro_stream.add(self.time_base.seconds(sec, nanosec), rate)
         if outcome.reason:
-            self._rejected('gyro', outcome, stamp)
+            self._rejected('gyro', outcome, sec == 0 and nanosec == 0)
             if not publishes(outcome):
-                return False
-        qw, qx, qy, qz = self.output_tracker.attitude(self.propagator)
-        self._publish_attitude(stamp, qx, qy, qz, qw)
+                return None
+        attitude = self.output_tracker.attitude(self.propagator)
+        self.orientation_publisher.publish(self.encode_orientation(sec, nanosec, attitude))
+        self.pose_publisher.publish(self.encode_pose(sec, nanosec, _ZERO_POSITION, attitude))
+        self._output_stamp = (sec, nanosec)
         self._fresh_output = True
-        return True
+        return attitude
 
     def _command_time(self, stamp: Time) -> float:
         """The command's time: its stamp, or the receive time (no header stamps, zero stamp)."""
@@ -424,7 +481,7 @@ class AttitudePropagatorNode(Node):
         for name in bad[:1] or names:
             outcome = self.command_stream.add(name, t, vectors[name])
             if outcome.reason:
-                self._rejected(name, outcome, None)
+                self._rejected(name, outcome, False)
                 return
 
     def _integration_failed(self, err: AttitudeError) -> None:
@@ -445,8 +502,14 @@ class AttitudePropagatorNode(Node):
 
     def tick_callback(self) -> None:
         """Dynamics: integrate up to the node clock and publish; gyro: energy and momentum."""
+        with self.state_lock:
+            self._tick()
+
+    def _tick(self) -> None:
         if self.clock_driver is None:
             if self._fresh_output:
+                sec, nanosec = self._output_stamp
+                self.world_header.stamp = Time(sec=sec, nanosec=nanosec)
                 self._publish_invariants()
             return
         now = self.get_clock().now().nanoseconds
@@ -456,7 +519,7 @@ class AttitudePropagatorNode(Node):
             self._integration_failed(err)
             return
         if outcome.reason:
-            self._rejected('clock', outcome, None)
+            self._rejected('clock', outcome, False)
             if outcome.reset:
                 self.command_stream.reset()
             if not publishes(outcome):
@@ -504,8 +567,9 @@ class AttitudePropagatorNode(Node):
 
     # -- rejections and diagnostics -------------------------------------------------------
 
-    def _rejected(self, source: str, outcome: Outcome, stamp: Time | None) -> None:
-        """Count and report a rejection (a time jump once per jump, others throttled)."""
+    def _rejected(self, source: str, outcome: Outcome, zero_stamp: bool) -> None:
+        """Count and report a rejection (a time jump once per jump, others throttled);
+        ``zero_stamp``: the message had a zero header stamp (hinted at in the warning)."""
         self._period_rejections[outcome.reason] += 1
         if outcome.reset:
             self.get_logger().warning(
@@ -518,7 +582,7 @@ class AttitudePropagatorNode(Node):
             'gap': 'a gap longer than max_dt; not integrated across, attitude held',
         }[outcome.reason]
         hint = ''
-        if stamp is not None and stamp.sec == 0 and stamp.nanosec == 0:
+        if zero_stamp:
             hint = ' (zero header stamps: set use_header_stamps:=false)'
         self._warn(outcome.reason, f'{source}: {detail}{hint}')
 
@@ -556,6 +620,10 @@ class AttitudePropagatorNode(Node):
 
     def diagnostics_callback(self) -> None:
         """Publish ``/diagnostics``; every :data:`LOG_EVERY_PERIODS` periods log a summary."""
+        with self.state_lock:
+            self._diagnostics()
+
+    def _diagnostics(self) -> None:
         now, inputs = time.monotonic(), self.input_messages
         rate = (inputs - self._period_start_inputs) / max(now - self._period_start, 1e-9)
         self._period_start_inputs, self._period_start = inputs, now
@@ -591,6 +659,46 @@ def _error_text(err: BaseException) -> str:
     return str(err).splitlines()[0].split(', at /')[0] if str(err) else type(err).__name__
 
 
+def _serve_rest(executor: SingleThreadedExecutor, loop: GyroLoop,
+                failures: list[BaseException]) -> None:
+    """Body of the executor thread: spin; a callback's exception stops the gyro loop too."""
+    try:
+        executor.spin()
+    except ExternalShutdownException:
+        pass
+    except BaseException as err:  # handed to the main thread, which re-raises it
+        failures.append(err)
+        loop.stop()
+
+
+def spin(node: AttitudePropagatorNode) -> None:
+    """Serve ``node`` until SIGINT or shutdown: gyro messages in a :class:`GyroLoop` on this
+    thread, everything else (timers, services, parameters, set_pose, commands) with a
+    ``SingleThreadedExecutor`` in a daemon thread. Dynamics scenes: ``rclpy.spin``.
+
+    An exception of a callback in either thread ends both and propagates.
+    """
+    gyro = node.gyro_handlers()
+    if not gyro:
+        rclpy.spin(node)
+        return
+    loop = GyroLoop(node.context, gyro)  # claims the gyro subscriptions before any spin
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    failures: list[BaseException] = []
+    rest = threading.Thread(target=_serve_rest, args=(executor, loop, failures),
+                            name='executor', daemon=True)
+    rest.start()
+    try:
+        loop.run()
+    finally:
+        executor.shutdown()
+        rest.join()
+        loop.close()
+    if failures:
+        raise failures[0]
+
+
 def main(args: list[str] | None = None) -> int:
     """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2."""
     try:
@@ -601,12 +709,16 @@ def main(args: list[str] | None = None) -> int:
     node = None
     try:
         node = AttitudePropagatorNode()
-        rclpy.spin(node)
+        spin(node)
     except (AttitudeError, ParameterException, OSError) as err:
         print(f'error: {_error_text(err)}', file=sys.stderr)
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except _rclpy.RCLError:
+        # SIGINT shut the context down while a gyro message was being taken or published.
+        if rclpy.ok():
+            raise
     finally:
         if node is not None:
             node.destroy_node()

@@ -1,0 +1,132 @@
+"""The node's own loop for its gyro subscriptions: every queued message per wake-up.
+
+rclpy's executors handle one message per wake-up and rebuild their wait set each time (about
+60 µs of Python per message with a ``SingleThreadedExecutor``); at kHz gyro rates that is the
+whole budget. :class:`GyroLoop` instead waits on one reused ``rcl`` wait set holding only the
+gyro subscriptions and, after each wake-up, takes *every* queued message from each of them
+(``take_message`` on the raw subscription until it returns None) and hands the CDR bytes to
+the subscription's handler. Everything else a node has (parameter services, timers, other
+subscriptions) stays with an ordinary executor in another thread; ``rcl_wait`` releases the
+GIL, so neither costs the other anything while idle.
+
+Subscriptions served this way belong to a :class:`DedicatedGroup`: an executor runs them like
+any mutually exclusive callback group until a :class:`GyroLoop` claims the group, after which
+no executor waits on them. A node built in-process and spun by someone else's executor therefore
+still works (its raw callbacks run there, one message each); :func:`rigid_body_attitude.node.main`
+claims them.
+
+The wait set also holds rclpy's SIGINT guard condition and a guard condition triggered on
+context shutdown or :meth:`GyroLoop.stop`, so the loop ends as promptly as ``rclpy.spin``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+import threading
+from typing import Any
+
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.context import Context
+from rclpy.exceptions import InvalidHandle
+from rclpy.guard_condition import GuardCondition
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.signals import SignalHandlerGuardCondition
+from rclpy.subscription import Subscription
+
+__all__ = ['DedicatedGroup', 'GyroLoop']
+
+#: Nanoseconds one wait may last before the loop re-checks its context (guards wake it first).
+WAIT_TIMEOUT_NS = 1_000_000_000
+
+#: A handler gets one message's serialized (CDR) bytes.
+Handler = Callable[[bytes], Any]
+
+
+class DedicatedGroup(MutuallyExclusiveCallbackGroup):
+    """A mutually exclusive callback group whose entities a :class:`GyroLoop` can claim.
+
+    Until :attr:`claimed` is set, executors run the entities as usual; afterwards they leave
+    them out of their wait sets and never begin executing them.
+    """
+
+    def __init__(self) -> None:
+        """Unclaimed: executors serve the entities."""
+        super().__init__()
+        self.claimed = False
+
+    def can_execute(self, entity: Any) -> bool:
+        """Executors may wait on ``entity`` only while the group is unclaimed."""
+        return not self.claimed and super().can_execute(entity)
+
+    def beginning_execution(self, entity: Any) -> bool:
+        """An executor may run ``entity``'s callback only while the group is unclaimed."""
+        return not self.claimed and super().beginning_execution(entity)
+
+
+class GyroLoop:
+    """Waits on raw subscriptions and hands every queued message to its handler.
+
+    Creating the loop claims the subscriptions' :class:`DedicatedGroup`, so create it before
+    an executor that serves the rest of the node starts spinning (an executor that already
+    began one of their callbacks would otherwise take from them concurrently).
+    """
+
+    def __init__(self, context: Context,
+                 served: Sequence[tuple[Subscription, Handler]]) -> None:
+        """Serve ``served`` (raw subscriptions in :class:`DedicatedGroup` s, handlers)."""
+        for subscription, _ in served:
+            if not subscription.raw or not isinstance(subscription.callback_group,
+                                                      DedicatedGroup):
+                raise ValueError(f'Expected raw subscriptions in a DedicatedGroup, got '
+                                 f'{subscription.topic_name!r} (raw={subscription.raw})')
+            subscription.callback_group.claimed = True
+        self.context = context
+        self.served = [(subscription.handle, subscription.msg_type, handler)
+                       for subscription, handler in served]
+        self.handled = 0
+        self._stopping = threading.Event()
+        self._sigint_guard = SignalHandlerGuardCondition(context)
+        self._wake_guard = GuardCondition(None, None, context=context)
+        self._closed = False
+        context.on_shutdown(self.stop)
+
+    def stop(self) -> None:
+        """Make :meth:`run` return after the messages of its current wake-up (any thread)."""
+        self._stopping.set()
+        if not self._closed:
+            try:
+                self._wake_guard.trigger()
+            except InvalidHandle:  # closed meanwhile: run() has returned already
+                pass
+
+    def run(self) -> None:
+        """Wait and handle messages until :meth:`stop`, SIGINT or context shutdown.
+
+        A handler's exception ends the loop and propagates.
+        """
+        context, served, stopping = self.context, self.served, self._stopping
+        wait_set = _rclpy.WaitSet(len(served), 2, 0, 0, 0, 0, context.handle)
+        sigint_handle, wake_handle = self._sigint_guard.handle, self._wake_guard.handle
+        try:
+            while context.ok() and not stopping.is_set():
+                wait_set.clear_entities()
+                for handle, _, _ in served:
+                    wait_set.add_subscription(handle)
+                wait_set.add_guard_condition(sigint_handle)
+                wait_set.add_guard_condition(wake_handle)
+                wait_set.wait(WAIT_TIMEOUT_NS)
+                for handle, msg_type, handler in served:
+                    taken = handle.take_message(msg_type, True)
+                    while taken is not None:
+                        handler(taken[0])
+                        self.handled += 1
+                        taken = handle.take_message(msg_type, True)
+        finally:
+            wait_set.destroy_when_not_in_use()
+
+    def close(self) -> None:
+        """Release the guard conditions (after :meth:`run` returned)."""
+        if not self._closed:
+            self._closed = True
+            self._sigint_guard.destroy()
+            self._wake_guard.destroy()
