@@ -123,7 +123,10 @@ class Process:
             self.popen.wait(grace)
             code = self.popen.returncode
             if code not in (0, -sig, 128 + sig):
-                problem = f'{shlex.join(self.argv)} exited with {code} on signal {sig}'
+                self.log.flush()
+                tail = self.log_path.read_text(errors='replace')[-1500:]
+                problem = (f'{shlex.join(self.argv)} exited with {code} on signal {sig}; '
+                           f'log tail:\n{tail}')
         except subprocess.TimeoutExpired:
             self.popen.kill()
             self.popen.wait()
