@@ -169,6 +169,10 @@ def _soak_section(soak: dict) -> List[str]:
             f'- growth {soak["growth_kib"] / 1024:+.2f} MiB (target: within 5 MiB) — '
             f'{"met" if ok else "NOT met"}',
             '- per minute (MiB): ' + ', '.join(f'{s["rss_kib"] / 1024:.1f}' for s in samples),
+            f'- sent {soak["sent"]}, received {soak["received"]}, lost {soak["lost"]}; '
+            f'publisher {soak["publisher_hz"]:.1f} Hz; latency p50 '
+            f'{_fmt(soak["latency_p50_ms"], 3)} ms, p99 {_fmt(soak["latency_p99_ms"], 3)} ms, '
+            f'max {_fmt(soak["latency_max_ms"], 1)} ms',
             '']
 
 

@@ -173,22 +173,50 @@ class Session:
         return [problem for problem in problems if problem]
 
 
-def measure(session: Session, target_argv: List[str], rate: float,
-            args: argparse.Namespace) -> dict:
-    """Run one target at one rate and return its row (counts, CPU, latency, RSS)."""
-    import numpy as np
-    recording = session.workdir / 'poses.bin'
+def start_processes(session: Session, target_argv: List[str], rate: float, duration: float,
+                    warmup: float, args: argparse.Namespace) -> Dict[str, Process]:
+    """Start subscriber, target and publisher; return once the publisher is matched."""
     python = sys.executable
-    subscriber = session.start('subscriber', [python, str(BENCH / '_subscriber.py'),
-                                              '--out', str(recording)], json_stdout=True)
+    subscriber = session.start('subscriber', [
+        python, str(BENCH / '_subscriber.py'), '--out', str(session.workdir / 'poses.bin')],
+        json_stdout=True)
     target = session.start('target', target_argv)
     subscriber.wait_event('matched', args.match_timeout)
     publisher = session.start('publisher', [
-        python, str(BENCH / '_publisher.py'), '--rate', str(rate), '--duration',
-        str(args.duration), '--warmup', str(args.warmup)], json_stdout=True)
+        python, str(BENCH / '_publisher.py'), '--rate', str(rate), '--duration', str(duration),
+        '--warmup', str(warmup)], json_stdout=True)
     publisher.wait_event('matched', args.match_timeout)
-    pids = {'target': target.popen.pid, 'publisher': publisher.popen.pid,
-            'subscriber': subscriber.popen.pid}
+    return {'target': target, 'publisher': publisher, 'subscriber': subscriber}
+
+
+def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> dict:
+    """Stop the subscriber; count the poses of the window received in time, and latencies.
+
+    A pose counts if its stamp lies in the publisher's measured window and it arrived at most
+    ``drain`` seconds after the last publish.
+    """
+    import numpy as np
+    subscriber.stop(signal.SIGTERM, grace=10.0)
+    data = np.fromfile(session.workdir / 'poses.bin', dtype='<i8')
+    stamps, received_at = data[:data.size // 2], data[data.size // 2:]
+    counted = ((stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
+               & (received_at <= end['last_stamp_ns'] + int(drain * 1e9)))
+    latency_ms = (received_at - stamps)[counted] * 1e-6
+    received = int(np.unique(stamps[counted]).size)
+
+    def percentile(q: float) -> Optional[float]:
+        return float(np.percentile(latency_ms, q)) if received else None
+    return {'sent': end['sent'], 'received': received, 'lost': end['sent'] - received,
+            'latency_p50_ms': percentile(50), 'latency_p99_ms': percentile(99),
+            'latency_max_ms': percentile(100)}
+
+
+def measure(session: Session, target_argv: List[str], rate: float,
+            args: argparse.Namespace) -> dict:
+    """Run one target at one rate and return its row (counts, CPU, latency, RSS)."""
+    processes = start_processes(session, target_argv, rate, args.duration, args.warmup, args)
+    publisher, target = processes['publisher'], processes['target']
+    pids = {name: process.popen.pid for name, process in processes.items()}
     publisher.wait_event('start', args.match_timeout + args.warmup + 5)
     ticks0 = {name: cpu_ticks(pid) for name, pid in pids.items()}
     machine0, wall0 = busy_ticks(), time.monotonic()
@@ -198,28 +226,16 @@ def measure(session: Session, target_argv: List[str], rate: float,
     rss = rss_kib(target.popen.pid)
     time.sleep(args.drain)
     target.check_alive()
-    subscriber.stop(signal.SIGTERM, grace=10.0)
-    data = np.fromfile(recording, dtype='<i8')
-    stamps, received_at = data[:data.size // 2], data[data.size // 2:]
-    in_window = (stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
-    in_time = received_at <= end['last_stamp_ns'] + int(args.drain * 1e9)
-    stamps, latency_ms = stamps[in_window & in_time], (received_at - stamps)[
-        in_window & in_time] * 1e-6
-    received = int(np.unique(stamps).size)
     cpu = {name: 100.0 * (ticks1[name] - ticks0[name]) / CLOCK_TICKS / window_s
            for name in pids}
     ours = sum(ticks1.values()) - sum(ticks0.values())
     # Tick-sampled /proc/stat can undercount against per-process times: clamp at zero.
     other_cores = max(0.0, (machine1 - machine0 - ours) / CLOCK_TICKS / window_s)
     return {
-        'rate_hz': rate, 'sent': end['sent'], 'received': received,
-        'lost': end['sent'] - received, 'publisher_hz': end['achieved_hz'],
-        'publisher_max_lag_ms': end['max_lag_ms'], 'cpu_percent': cpu['target'],
-        'publisher_cpu_percent': cpu['publisher'],
+        'rate_hz': rate, **delivery(session, processes['subscriber'], end, args.drain),
+        'publisher_hz': end['achieved_hz'], 'publisher_max_lag_ms': end['max_lag_ms'],
+        'cpu_percent': cpu['target'], 'publisher_cpu_percent': cpu['publisher'],
         'subscriber_cpu_percent': cpu['subscriber'], 'other_load_cores': other_cores,
-        'latency_p50_ms': float(np.percentile(latency_ms, 50)) if received else None,
-        'latency_p99_ms': float(np.percentile(latency_ms, 99)) if received else None,
-        'latency_max_ms': float(latency_ms.max()) if received else None,
         'rss_kib': rss,
     }
 
@@ -254,25 +270,24 @@ def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> d
 def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
     """Run ``argv`` at ``--soak-rate`` for ``--soak-minutes``; sample its RSS every minute."""
     minutes = args.soak_minutes
+    samples = []
     with tempfile.TemporaryDirectory(prefix='bench_soak_') as tmp:
         session = Session(args.domain_id, args.depth, Path(tmp))
         try:
-            subscriber = session.start('subscriber', [
-                sys.executable, str(BENCH / '_subscriber.py'), '--out',
-                str(Path(tmp) / 'poses.bin')], json_stdout=True)
-            target = session.start('target', argv)
-            subscriber.wait_event('matched', args.match_timeout)
-            publisher = session.start('publisher', [
-                sys.executable, str(BENCH / '_publisher.py'), '--rate', str(args.soak_rate),
-                '--duration', str(minutes * 60 + 5), '--warmup', '0'], json_stdout=True)
-            publisher.wait_event('start', args.match_timeout + 5)
-            samples = []
-            for minute in range(1, int(minutes) + 1):
-                time.sleep(60.0)
+            processes = start_processes(session, argv, args.soak_rate, minutes * 60.0, 0.0,
+                                        args)
+            target = processes['target']
+            processes['publisher'].wait_event('start', args.match_timeout + 5)
+            started = time.monotonic()
+            for minute in range(1, minutes + 1):
+                time.sleep(max(0.0, started + 60.0 * minute - time.monotonic()))
                 target.check_alive()
                 samples.append({'minute': minute, 'rss_kib': rss_kib(target.popen.pid)})
                 print(f'soak {label}: minute {minute} RSS {samples[-1]["rss_kib"]} KiB',
                       flush=True)
+            end = processes['publisher'].wait_event('end', 60.0)
+            time.sleep(args.drain)
+            counts = delivery(session, processes['subscriber'], end, args.drain)
         finally:
             problems = session.close()
     for problem in problems:
@@ -280,6 +295,7 @@ def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
     growth = samples[-1]['rss_kib'] - samples[0]['rss_kib']
     return {'label': label, 'command': shlex.join(argv), 'rate_hz': args.soak_rate,
             'minutes': minutes, 'samples': samples, 'growth_kib': growth, 'problems': problems,
+            'publisher_hz': end['achieved_hz'], **counts,
             'machine': _report.machine_description()}
 
 
