@@ -202,6 +202,7 @@ class DynamicsPropagator(_Propagator):
             tuple(e.rotor_momentum for e in self.effects if hasattr(e, 'rotor_momentum')),
             torque_depends_on_rate=any(e.torque_depends_on_rate for e in torque_effects))
         self.force_effects = [e for e in self.effects if hasattr(e, 'force_world')]
+        self.switching = [e for e in self.effects if hasattr(e, 'switch_times')]
         self.integrator = dynamics_integrator(scene.integrator)
         if not self.model.torque_free and not self.integrator.supports_torque:
             raise IntegratorError(f'Integrator {scene.integrator!r} handles torque-free bodies '
@@ -263,12 +264,18 @@ class DynamicsPropagator(_Propagator):
     def _single_step(self, h: float) -> None:
         state = self.state
         t, attitude, omega = state.time, state.attitude, state.omega_body
-        new_attitude, new_omega = self.integrator.step(attitude, omega, t, h, self.model)
-        if not self.model.torque_free:
-            self.tracker.add_work(self._rotational_work(t, h, attitude, omega,
-                                                        new_attitude, new_omega))
-        for effect in self.stateful:
-            self.tracker.add_work(effect.advance(t, h, attitude, new_attitude, self._force))
+        for effect in self.switching:
+            effect.begin_step(t, t + h)
+        try:
+            new_attitude, new_omega = self.integrator.step(attitude, omega, t, h, self.model)
+            if not self.model.torque_free:
+                self.tracker.add_work(self._rotational_work(t, h, attitude, omega,
+                                                            new_attitude, new_omega))
+            for effect in self.stateful:
+                self.tracker.add_work(effect.advance(t, h, attitude, new_attitude, self._force))
+        finally:
+            for effect in self.switching:
+                effect.end_step()
         state.time, state.attitude, state.omega_body = t + h, new_attitude, new_omega
         if self.stateful:
             self._sync_position()
@@ -276,20 +283,28 @@ class DynamicsPropagator(_Propagator):
     def advance_to(self, t_end: float) -> int:
         """Integrate with the scene's step up to ``t_end`` (the last step may be shorter).
 
-        Returns the number of steps taken. Raises :class:`InputError` for a non-finite time
-        or one needing more than :data:`MAX_STEPS_PER_CALL` steps; the state is unchanged.
+        Steps end exactly where a commanded input switches (a new command's stamp, a timeout),
+        so no step straddles a jump of the torque and the integrator keeps its order. Returns
+        the number of steps taken. Raises :class:`InputError` for a non-finite time or one
+        needing more than :data:`MAX_STEPS_PER_CALL` steps; the state is unchanged.
         """
         if not math.isfinite(t_end):
             raise InputError(f'Expected `t_end` to be finite, got {t_end!r}')
+        if (t_end - self.state.time) / self.scene.step > MAX_STEPS_PER_CALL:
+            raise InputError(f'Advancing to t_end={t_end!r} from {self.state.time!r} needs '
+                             f'more than {MAX_STEPS_PER_CALL} steps of {self.scene.step} s')
+        start = self.state.time
+        switches = sorted({time for effect in self.switching for time in effect.switch_times()
+                           if start < time < t_end})
+        return sum(self._advance_steps(boundary) for boundary in switches + [t_end])
+
+    def _advance_steps(self, t_end: float) -> int:
+        """Steps of the scene's step up to ``t_end``, the last one shorter."""
         step = self.scene.step
         remaining = t_end - self.state.time
-        if remaining / step > MAX_STEPS_PER_CALL:
-            raise InputError(f'Advancing to t_end={t_end!r} from {self.state.time!r} needs '
-                             f'more than {MAX_STEPS_PER_CALL} steps of {step} s')
         steps = 0
         while remaining > 1e-12 * max(1.0, abs(t_end)):
-            h = min(step, remaining)
-            self.step(h)
+            self.step(min(step, remaining))
             steps += 1
             remaining = t_end - self.state.time
         if steps:

@@ -19,6 +19,7 @@ import, so adding an effect means adding a module, never editing the propagator.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -31,6 +32,7 @@ from rigid_body_attitude.inertia import Inertia
 
 __all__ = [
     'BodyProperties',
+    'CommandedEffect',
     'Effect',
     'EFFECTS',
     'HeldInput',
@@ -46,6 +48,8 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+
+_ZERO3 = np.zeros(3)
 
 #: Marks a parameter without default.
 REQUIRED: Any = object()
@@ -229,11 +233,19 @@ def validate_parameters(effect_name: str, spec: Mapping[str, Parameter],
 
 
 class HeldInput:
-    """A commanded vector held from its stamp until ``timeout`` seconds later, then zero.
+    """Commanded vectors, each held from its stamp until ``timeout`` seconds later, then zero.
 
-    Each command that expires without a newer one counts once as ``stale`` on the owning
-    effect, so the diagnostics can report stale torques.
+    The commands form a piecewise-constant function of time: a newer command ends the previous
+    one at its own stamp, and a command stamped ahead of the propagated time takes effect only
+    at its stamp. :meth:`switch_times` lists where the function jumps, so the propagator can
+    end a step exactly there; during a step, :meth:`begin_step` pins the evaluation to the
+    command in force inside the step (its midpoint decides), so the integrator's stages at the
+    step's end points never see the other side of a jump. Each command that expires without a
+    newer one counts once as ``stale`` on the owning effect.
     """
+
+    #: Commands kept; older ones can no longer be in force once this many newer ones exist.
+    KEPT = 8
 
     def __init__(self, owner: Effect, timeout: float) -> None:
         """Hold commands for ``timeout`` [s]; count expiries on ``owner``."""
@@ -242,26 +254,109 @@ class HeldInput:
         self.reset()
 
     def reset(self) -> None:
-        """Forget the held command."""
-        self.value = np.zeros(3)
-        self.stamp = -np.inf
-        self.expired = True
+        """Forget every command."""
+        self.segments: list[tuple[float, float, FloatArray]] = []
+        self.folded = np.zeros(3)
+        self.window: float | None = None
+        self.expiry_counted = True
+
+    @property
+    def value(self) -> FloatArray:
+        """The latest command (zero before any)."""
+        return self.segments[-1][2] if self.segments else np.zeros(3)
+
+    @property
+    def stamp(self) -> float:
+        """Stamp of the latest command (−inf before any)."""
+        return self.segments[-1][0] if self.segments else -math.inf
 
     def set(self, t: float, value: FloatArray) -> None:
-        """Hold ``value`` from time ``t``."""
-        self.value = np.array(value, dtype=np.float64)
-        self.stamp = float(t)
-        self.expired = False
+        """Hold ``value`` from time ``t`` (ending the previous command there)."""
+        t = float(t)
+        while self.segments and self.segments[-1][0] >= t:
+            self.segments.pop()
+        if self.segments and self.segments[-1][1] > t:
+            start, _, previous = self.segments[-1]
+            self.segments[-1] = (start, t, previous)
+        self.segments.append((t, t + self.timeout, np.array(value, dtype=np.float64)))
+        for start, end, old in self.segments[:-self.KEPT]:
+            self.folded = self.folded + old * (end - start)
+        del self.segments[:-self.KEPT]
+        self.expiry_counted = False
+
+    def switch_times(self) -> list[float]:
+        """Times where the held command jumps (starts and ends of the kept commands)."""
+        return [time for start, end, _ in self.segments for time in (start, end)]
+
+    def begin_step(self, t_start: float, t_end: float) -> None:
+        """Evaluate as the command in force inside ``(t_start, t_end)`` until :meth:`end_step`."""
+        self.window = 0.5 * (t_start + t_end)
+
+    def end_step(self) -> None:
+        """Evaluate at the times asked again."""
+        self.window = None
+
+    def segment_at(self, t: float) -> tuple[float, float, FloatArray] | None:
+        """The command in force at ``t`` (the step's midpoint during a step), or None."""
+        probe = t if self.window is None else self.window
+        for segment in reversed(self.segments):
+            if segment[0] <= probe:
+                if probe <= segment[1]:
+                    return segment
+                break
+        if self.segments and probe > self.segments[-1][1] and not self.expiry_counted:
+            self.expiry_counted = True
+            self.owner.count('stale')
+        return None
 
     def active(self, t: float) -> bool:
-        """Whether the command is still held at ``t``; counts an expiry once."""
-        if t - self.stamp <= self.timeout:
-            return True
-        if not self.expired:
-            self.expired = True
-            self.owner.count('stale')
-        return False
+        """Whether a command is in force at ``t``; counts an expiry once."""
+        return self.segment_at(t) is not None
 
     def value_at(self, t: float) -> FloatArray:
-        """The held command at ``t``, or zero after the timeout."""
-        return self.value if self.active(t) else np.zeros(3)
+        """The command in force at ``t``, or zero."""
+        segment = self.segment_at(t)
+        return _ZERO3 if segment is None else segment[2]
+
+    def integral(self, t: float) -> FloatArray:
+        """``∫ command dt`` from the first command to ``t`` (exact for the piecewise constant)."""
+        total = self.folded
+        for start, end, value in self.segments:
+            if t <= start:
+                break
+            total = total + value * (min(t, end) - start)
+        return total
+
+
+class CommandedEffect(Effect):
+    """An effect driven by one commanded input held in a :class:`HeldInput`.
+
+    Subclasses declare a ``timeout`` parameter and one entry in ``inputs``; this base keeps the
+    commands and tells the propagator where they switch (:meth:`switch_times`) and which
+    command is in force during a step (:meth:`begin_step`, :meth:`end_step`).
+    """
+
+    def __init__(self, params: Mapping[str, Any], body: BodyProperties) -> None:
+        """Validate the parameters; no command is held initially."""
+        super().__init__(params, body)
+        self.command = HeldInput(self, self.params['timeout'])
+
+    def reset(self) -> None:
+        """Drop every held command."""
+        self.command.reset()
+
+    def accept_input(self, input_name: str, t: float, value: FloatArray) -> None:
+        """Hold ``value`` from ``t``."""
+        self.command.set(t, value)
+
+    def switch_times(self) -> list[float]:
+        """Times where the commanded input jumps."""
+        return self.command.switch_times()
+
+    def begin_step(self, t_start: float, t_end: float) -> None:
+        """Evaluate with the command in force inside the step."""
+        self.command.begin_step(t_start, t_end)
+
+    def end_step(self) -> None:
+        """Evaluate at the times asked again."""
+        self.command.end_step()
