@@ -4,6 +4,8 @@ References: Hairer & Vilmart (2006) numbers in physics.md §2.5, conservation la
 themselves (finite differences) and scipy's DOP853 at rtol 1e−13 on Euler + Poisson equations.
 """
 
+import math
+
 import mpmath
 import numpy as np
 import pytest
@@ -14,6 +16,7 @@ from rigid_body_attitude.errors import InertiaError, InputError
 from rigid_body_attitude.integrators.exact_torque_free import (
     jacobi_elliptic, principal_frame, torque_free_invariants, TorqueFreeMotion)
 
+EPS = np.finfo(float).eps
 HV_MOMENTS = np.array([0.6, 0.8, 1.0])
 HV_MOMENTUM = np.array([1.8, 0.4, -0.9])
 HV_MOMENTUM_10 = np.array([1.765962508518209, -0.695464197033084, 0.779554981481874])
@@ -238,6 +241,118 @@ def test_principal_frame_right_handed_and_sorted():
     assert np.linalg.det(axes) == pytest.approx(1.0, abs=1e-15)
     np.testing.assert_allclose(axes @ np.diag(moments) @ axes.T, np.diag([3.0, 1.0, 2.0]),
                                atol=1e-15)
+
+
+#: Powers of two: ω·2^k at time t/2^k is the same motion as ω at t, bit for bit once the
+#: closed form scales the momentum back to O(1) (module docstring); 2^−1074 puts the smallest
+#: component of HV_OMEGA_TINY below the subnormal threshold's precision, so it is checked
+#: separately. Before the scaling, 2^−530 (ω ≈ 3e−160) gave |q| − 1 = 1.5e−6 and 2^−1000
+#: raised ZeroDivisionError.
+SCALES = [-530, -1000]
+
+
+@pytest.mark.parametrize('exponent', SCALES)
+@pytest.mark.parametrize('kind_of_orbit, moments, omega_body', [
+    ('minor_axis', [0.6, 0.8, 1.0], HV_MOMENTUM / HV_MOMENTS),
+    ('major_axis', [1.0, 2.0, 3.0], [0.1, 0.3, 1.0]),
+    ('axisymmetric', [1.0, 1.0, 2.0], [0.3, -0.4, 1.1]),
+    ('steady', [1.0, 2.0, 3.0], [0.0, 0.0, 1.5]),
+])
+def test_state_tiny_rates_are_the_scaled_motion(exponent, kind_of_orbit, moments, omega_body):
+    scale = 2.0 ** exponent
+    omega_body = np.array(omega_body, dtype=float)
+    times = np.array([0.0, 0.7, 13.0])
+    attitude = quat.normalize([0.9, 0.1, -0.3, 0.2])
+    unit = TorqueFreeMotion(moments, attitude, omega_body=omega_body)
+    tiny = TorqueFreeMotion(moments, attitude, omega_body=omega_body * scale)
+    assert tiny.kind == unit.kind == kind_of_orbit
+    q_unit, omega_unit = unit.state(times)
+    q_tiny, omega_tiny = tiny.state(times / scale)
+    np.testing.assert_array_equal(q_tiny, q_unit)
+    np.testing.assert_array_equal(omega_tiny, omega_unit * scale)
+    # At ordinary times a rate of 1e−160 rad/s does not move the body (beyond round-off).
+    q_now, _ = tiny.state(times)
+    assert np.max(np.abs(np.linalg.norm(q_now, axis=-1) - 1.0)) <= 2.0 * EPS
+    assert np.max([quat.attitude_error(q, attitude) for q in q_now]) <= 4.0 * EPS
+
+
+@pytest.mark.parametrize('omega_body', [[0.0, 0.0, 0.0], [5e-324, 0.0, 0.0],
+                                        [5e-324, -1e-320, 3e-310], [1e-300, 2e-300, -3e-300]])
+def test_state_zero_and_subnormal_rates(omega_body):
+    # Squares of these components underflow (before: 0/0 → ZeroDivisionError, or NaN).
+    attitude = quat.normalize([0.9, 0.1, -0.3, 0.2])
+    motion = TorqueFreeMotion([1.0, 2.0, 3.0], attitude, omega_body=omega_body)
+    times = np.array([0.0, 1.0, 1e6])
+    q, omega = motion.state(times)
+    assert np.all(np.isfinite(q)) and np.all(np.isfinite(omega))
+    # The rotation |ω| t ≤ 4e−294 rad is below round-off: q stays q₀ to a few ulps; the
+    # rate keeps its magnitude (|m| is an invariant; math.hypot does not underflow) to
+    # round-off and to the subnormal spacing 5e−324 of the output.
+    assert max(quat.attitude_error(x, attitude) for x in q) <= 4.0 * EPS
+    moments = np.array([1.0, 2.0, 3.0])
+    momentum_norm = math.hypot(*(moments * omega_body))
+    for rate in omega:
+        assert abs(math.hypot(*(moments * rate)) - momentum_norm) <= (
+            1e-15 * momentum_norm + 1e-322)
+    # ω(0) is recomputed from sn, cn, dn at u₀: a few ulps of |ω| (or the subnormal spacing).
+    np.testing.assert_allclose(motion.omega_body(0.0), omega_body, rtol=0.0,
+                               atol=4.0 * EPS * np.max(np.abs(omega_body)) + 1e-322)
+
+
+def test_state_intermediate_axis_with_a_1e_300_perturbation():
+    # Spin about the middle axis with components 1e−300 off it: their squares underflow, so
+    # Δ₂ would be 0 (the separatrix) and the body would never leave the axis. Until they
+    # reach ~1e−8 (t ≲ 1100 s here) the off-axis rates follow the linearised equations,
+    # ω̇₁ = −ω₃, ω̇₃ = −ω₁/3 (J = 1, 2, 3, ω₂ = 1), to double precision:
+    # ω₁ = ω₁₀ cosh σt − (ω₃₀/σ) sinh σt, ω₃ = ω₃₀ cosh σt − σ ω₁₀ sinh σt, σ = 1/√3.
+    attitude = quat.normalize([0.9, 0.1, -0.3, 0.2])
+    start = np.array([1e-300, 1.0, 3e-301])
+    motion = TorqueFreeMotion([1.0, 2.0, 3.0], attitude, omega_body=start)
+    assert motion.kind == 'minor_axis'
+    sigma = 1.0 / np.sqrt(3.0)
+    times = np.array([10.0, 300.0, 900.0])
+    q, omega = motion.state(times)
+    cosh, sinh = np.cosh(sigma * times), np.sinh(sigma * times)
+    expected_1 = start[0] * cosh - start[2] / sigma * sinh
+    expected_3 = start[2] * cosh - sigma * start[0] * sinh
+    # Relative error of the tiny components: u = u₀ + λt is known to ε(|u₀| + λt) ≈ 1e−13
+    # and they go like e^{±u}; measured ≤ 2.6e−14. Bound 1e−12.
+    np.testing.assert_allclose(omega[:, 0], expected_1, rtol=1e-12, atol=0.0)
+    np.testing.assert_allclose(omega[:, 2], expected_3, rtol=1e-12, atol=0.0)
+    np.testing.assert_allclose(omega[:, 1], 1.0, rtol=2.0 * EPS, atol=0.0)
+    # The attitude is the spin about e₂ up to the off-axis wobble (≤ 1e−150 rad). The phase
+    # is [F(u) − F(u₀)]/λ with |u₀| ≈ K = ln(4/k') ≈ 690 here, so its round-off is a few ulps
+    # of (2K + |λ| t)/|λ| = period/2 + t rad: bound 8ε(period/2 + t) (measured ≤ 3.4e−13).
+    half_period = 0.5 * motion.momentum_period
+    for time, attitude_t in zip(times, q):
+        spin = quat.multiply(attitude, quat.exp([0.0, time, 0.0]))
+        assert quat.attitude_error(attitude_t, spin) <= 8.0 * EPS * (half_period + time)
+    # The motion then leaves the axis: after the first flip m₂ has changed sign.
+    assert motion.momentum_body(2000.0)[1] < 0.0
+
+
+def test_state_tensor_with_tiny_products_of_inertia():
+    # Off-diagonal terms of 1e−239 (their squares underflow): the motion is that of the
+    # diagonal body to round-off, whichever way eigh resolves the axes.
+    tensor = np.array([[1.0, 1e-239, 0.0], [1e-239, 2.0, 1e-239], [0.0, 1e-239, 3.0]])
+    attitude = quat.normalize([0.9, 0.1, -0.3, 0.2])
+    for omega_body in ([0.0, 0.0, 1.0], [0.1, 0.3, 1.0], [1e-200, 1.0, 0.0]):
+        general = TorqueFreeMotion(tensor, attitude, omega_body=omega_body)
+        diagonal = TorqueFreeMotion([1.0, 2.0, 3.0], attitude, omega_body=omega_body)
+        q, omega = general.state(np.array([1.0, 50.0]))
+        q_diagonal, omega_diagonal = diagonal.state(np.array([1.0, 50.0]))
+        assert np.all(np.isfinite(q)) and np.all(np.isfinite(omega))
+        np.testing.assert_allclose(omega, omega_diagonal, rtol=0.0, atol=1e-14)
+        for a, b in zip(q, q_diagonal):
+            assert quat.attitude_error(a, b) <= 1e-13
+
+
+def test_state_refuses_an_overflowing_rotation_angle():
+    motion = TorqueFreeMotion([1.0, 2.0, 3.0], quat.identity(), omega_body=[1e300, 0.0, 2e300])
+    q, omega = motion.state(1e-300)
+    assert np.all(np.isfinite(q)) and np.all(np.isfinite(omega))
+    with pytest.raises(InputError, match='rotation angle'):
+        motion.state(1e300)
 
 
 def test_bad_inertia_raises():
