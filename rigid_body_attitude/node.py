@@ -12,10 +12,10 @@ time; the replay tool feeds the same core, so a replayed bag gives the same numb
   handles serialized messages: the gyro subscriptions are raw, the stamp and rate are read
   from the CDR bytes and the outputs are written as CDR bytes with the header packed once
   (:mod:`rigid_body_attitude.bag.cdr`, the replay tool's codecs). :func:`main` serves them
-  with :class:`~rigid_body_attitude.node_loop.GyroLoop` (every queued message per wake-up)
-  and everything else with a ``SingleThreadedExecutor`` in a second thread; a lock keeps
-  the two threads' changes of the state apart. Spun in-process by any executor, the node
-  works the same, one message per callback as executors do.
+  and the two timers with :class:`~rigid_body_attitude.node_loop.GyroLoop` (every queued
+  message per wake-up) and everything else with a ``SingleThreadedExecutor`` in a second
+  thread; a lock keeps the two threads' changes of the state apart. Spun in-process by any
+  executor, the node works the same, one message per callback as executors do.
 * Dynamics scenes advance on a timer of the node clock (``use_sim_time`` works) at
   ``publish_rate`` and publish ``orientation``, ``pose`` and ``twist`` per tick, stamped with
   the propagated time; commanded inputs arrive on ``torque`` (geometry_msgs/WrenchStamped)
@@ -31,7 +31,7 @@ Parameters and topics are documented in the README ("The node").
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 import math
 import sys
@@ -340,12 +340,13 @@ class AttitudePropagatorNode(Node):
             PoseStamped, 'set_pose', self.set_pose_callback)
 
     def _create_timers(self) -> None:
-        """The output timer (node clock) and the diagnostics timer (steady clock)."""
+        """The output timer (node clock) and the diagnostics timer (steady clock); for gyro
+        scenes in the gyro group, so :func:`main`'s gyro loop serves them too."""
         self.output_timer = self.create_timer(1.0 / self.settings.publish_rate,
-                                              self.tick_callback)
+                                              self.tick_callback, self.gyro_group)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self.diagnostics_timer = self.create_timer(DIAGNOSTICS_PERIOD,
-                                                   self.diagnostics_callback, clock=steady)
+        self.diagnostics_timer = self.create_timer(
+            DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.gyro_group, clock=steady)
         self._diagnostics_count = 0
         self._period_start = time.monotonic()
         self._period_start_inputs = 0
@@ -368,13 +369,15 @@ class AttitudePropagatorNode(Node):
 
     # -- inputs ---------------------------------------------------------------------------
 
-    def gyro_handlers(self) -> list[tuple[Any, Callable[[bytes], None]]]:
-        """The raw gyro subscriptions with their per-message callbacks (empty for dynamics)."""
+    def gyro_loop(self) -> GyroLoop | None:
+        """A :class:`GyroLoop` serving the gyro subscriptions and the timers (None for
+        dynamics scenes); creating it takes them away from every executor."""
         if self.is_dynamics:
-            return []
-        return [(self.subscriptions_by_topic['imu'], self.imu_callback),
-                (self.subscriptions_by_topic['angular_velocity'],
-                 self.angular_velocity_callback)]
+            return None
+        return GyroLoop(self.context, [
+            (self.subscriptions_by_topic['imu'], self.imu_callback),
+            (self.subscriptions_by_topic['angular_velocity'], self.angular_velocity_callback),
+        ], [self.output_timer, self.diagnostics_timer])
 
     def imu_callback(self, imu_cdr: bytes) -> None:
         """Propagate with a serialized Imu's angular velocity; publish it back with the
@@ -672,17 +675,16 @@ def _serve_rest(executor: SingleThreadedExecutor, loop: GyroLoop,
 
 
 def spin(node: AttitudePropagatorNode) -> None:
-    """Serve ``node`` until SIGINT or shutdown: gyro messages in a :class:`GyroLoop` on this
-    thread, everything else (timers, services, parameters, set_pose, commands) with a
+    """Serve ``node`` until SIGINT or shutdown. Gyro scenes: gyro messages and timers in a
+    :class:`GyroLoop` on this thread, the rest (services, parameters, set_pose) with a
     ``SingleThreadedExecutor`` in a daemon thread. Dynamics scenes: ``rclpy.spin``.
 
     An exception of a callback in either thread ends both and propagates.
     """
-    gyro = node.gyro_handlers()
-    if not gyro:
+    loop = node.gyro_loop()  # claims the gyro subscriptions and timers before any spin
+    if loop is None:
         rclpy.spin(node)
         return
-    loop = GyroLoop(node.context, gyro)  # claims the gyro subscriptions before any spin
     executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)
     failures: list[BaseException] = []

@@ -3,13 +3,15 @@
 rclpy's executors handle one message per wake-up and rebuild their wait set each time (about
 60 µs of Python per message with a ``SingleThreadedExecutor``); at kHz gyro rates that is the
 whole budget. :class:`GyroLoop` instead waits on one reused ``rcl`` wait set holding only the
-gyro subscriptions and, after each wake-up, takes *every* queued message from each of them
-(``take_message`` on the raw subscription until it returns None) and hands the CDR bytes to
-the subscription's handler. Everything else a node has (parameter services, timers, other
-subscriptions) stays with an ordinary executor in another thread; ``rcl_wait`` releases the
-GIL, so neither costs the other anything while idle.
+gyro subscriptions and the node's periodic timers and, after each wake-up, takes *every*
+queued message from each subscription (``take_message`` on the raw subscription until it
+returns None), hands the CDR bytes to the subscription's handler, then runs the timers that
+are due. Everything else a node has (parameter services, other subscriptions) stays with an
+ordinary executor in another thread, which then sleeps in ``rcl_wait`` (GIL released) nearly
+all the time: an executor wake-up costs about a millisecond of Python here and holds the GIL
+meanwhile, so timers served there would also delay gyro messages.
 
-Subscriptions served this way belong to a :class:`DedicatedGroup`: an executor runs them like
+Entities served this way belong to a :class:`DedicatedGroup`: an executor runs them like
 any mutually exclusive callback group until a :class:`GyroLoop` claims the group, after which
 no executor waits on them. A node built in-process and spun by someone else's executor therefore
 still works (its raw callbacks run there, one message each); :func:`rigid_body_attitude.node.main`
@@ -32,6 +34,7 @@ from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.signals import SignalHandlerGuardCondition
 from rclpy.subscription import Subscription
+from rclpy.timer import Timer
 
 __all__ = ['DedicatedGroup', 'GyroLoop']
 
@@ -64,25 +67,29 @@ class DedicatedGroup(MutuallyExclusiveCallbackGroup):
 
 
 class GyroLoop:
-    """Waits on raw subscriptions and hands every queued message to its handler.
+    """Waits on raw subscriptions and timers; hands every queued message to its handler and
+    runs the timers that are due.
 
-    Creating the loop claims the subscriptions' :class:`DedicatedGroup`, so create it before
-    an executor that serves the rest of the node starts spinning (an executor that already
-    began one of their callbacks would otherwise take from them concurrently).
+    Creating the loop claims the entities' :class:`DedicatedGroup`, so create it before an
+    executor that serves the rest of the node starts spinning (an executor that already began
+    one of their callbacks would otherwise run it concurrently).
     """
 
-    def __init__(self, context: Context,
-                 served: Sequence[tuple[Subscription, Handler]]) -> None:
-        """Serve ``served`` (raw subscriptions in :class:`DedicatedGroup` s, handlers)."""
+    def __init__(self, context: Context, served: Sequence[tuple[Subscription, Handler]],
+                 timers: Sequence[Timer] = ()) -> None:
+        """Serve ``served`` (raw subscriptions, handlers) and ``timers`` (their callbacks),
+        all in :class:`DedicatedGroup` s."""
         for subscription, _ in served:
-            if not subscription.raw or not isinstance(subscription.callback_group,
-                                                      DedicatedGroup):
-                raise ValueError(f'Expected raw subscriptions in a DedicatedGroup, got '
-                                 f'{subscription.topic_name!r} (raw={subscription.raw})')
-            subscription.callback_group.claimed = True
+            if not subscription.raw:
+                raise ValueError(f'Expected raw subscriptions, got {subscription.topic_name!r}')
+        for entity in [subscription for subscription, _ in served] + list(timers):
+            if not isinstance(entity.callback_group, DedicatedGroup):
+                raise ValueError(f'Expected entities in a DedicatedGroup, got {entity!r}')
+            entity.callback_group.claimed = True
         self.context = context
         self.served = [(subscription.handle, subscription.msg_type, handler)
                        for subscription, handler in served]
+        self.timers = [(timer.handle, timer.callback) for timer in timers]
         self.handled = 0
         self._stopping = threading.Event()
         self._sigint_guard = SignalHandlerGuardCondition(context)
@@ -104,14 +111,17 @@ class GyroLoop:
 
         A handler's exception ends the loop and propagates.
         """
-        context, served, stopping = self.context, self.served, self._stopping
-        wait_set = _rclpy.WaitSet(len(served), 2, 0, 0, 0, 0, context.handle)
+        context, served, timers = self.context, self.served, self.timers
+        stopping = self._stopping
+        wait_set = _rclpy.WaitSet(len(served), 2, len(timers), 0, 0, 0, context.handle)
         sigint_handle, wake_handle = self._sigint_guard.handle, self._wake_guard.handle
         try:
             while context.ok() and not stopping.is_set():
                 wait_set.clear_entities()
                 for handle, _, _ in served:
                     wait_set.add_subscription(handle)
+                for handle, _ in timers:
+                    wait_set.add_timer(handle)
                 wait_set.add_guard_condition(sigint_handle)
                 wait_set.add_guard_condition(wake_handle)
                 wait_set.wait(WAIT_TIMEOUT_NS)
@@ -121,6 +131,10 @@ class GyroLoop:
                         handler(taken[0])
                         self.handled += 1
                         taken = handle.take_message(msg_type, True)
+                for handle, callback in timers:
+                    if handle.is_timer_ready():
+                        handle.call_timer()
+                        callback()
         finally:
             wait_set.destroy_when_not_in_use()
 
