@@ -13,13 +13,16 @@ background load on the shared machine hits them alike. Per run it reports:
   after the last publish; anything later or never counts as lost;
 * CPU: the target's utime + stime over the window (/proc/<pid>/stat, all threads), in % of one
   core;
-* latency p50 / p99: receive wall time minus pose stamp (= the gyro stamp = publish wall time).
+* latency p50 / p99: receive wall time minus pose stamp (= the gyro stamp = publish wall time);
+* other load: the machine's busy cores minus the three processes (approximate), since the
+  machine is shared.
 
 ``--soak`` instead runs one target at 1 kHz for ``--soak-minutes`` and reports its RSS
-(/proc/<pid>/status VmRSS) at 1 minute and at the end.
+(/proc/<pid>/status VmRSS) every minute, plus sent / received / lost over the whole soak.
 
 Results go to ``bench/results/*.json``; ``docs/performance.md`` and ``docs/performance.png``
-are regenerated from them after every run. Exit code 0 unless a process crashed.
+are regenerated from them after every run. Exit code 0 unless a process crashed, could not be
+started, or ignored SIGINT (measured losses are results, not errors).
 
 Examples::
 
