@@ -519,8 +519,9 @@ class TorqueFreeMotion:
     difference δ) are routed to the axisymmetric form with their harmonic mean (:attr:`kind`
     ``'axisymmetric'``) when the momentum is within 45° of their symmetry axis: the model
     error is then at most ``δ |ω| t`` rad in the attitude and ``δ |ω| max(1, |ω| t)`` in the
-    rate (energy likewise, relative δ); world ``H`` and ``|m|`` stay exact. Cost: construction ≈ 0.3 ms (``K``, ``R_F`` and the phase table); evaluation
-    ≈ 0.25 ms + ~1 µs per time. Invariants: world angular momentum to round-off at every ``t``
+    rate (energy likewise, relative δ); world ``H`` and ``|m|`` stay exact. Cost:
+    construction ≈ 0.3 ms (``K``, ``R_F`` and the phase table); evaluation ≈ 0.25 ms + ~1 µs
+    per time. Invariants: world angular momentum to round-off at every ``t``
     (independent of the ψ error), energy and ``|m|`` to round-off, ``|q| = 1``.
     Source: Celledoni, Fassò, Säfström & Zanna (2008); Principia's Celledoni.tex; Bulirsch (1965).
     """
