@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 import math
+import threading
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -271,6 +272,71 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
     assert (last.angular_velocity.x, last.angular_velocity.y, last.angular_velocity.z) == OMEGA
     assert not np.any(last.orientation_covariance)  # all zeros: covariance unknown
     assert node.gyro_stream.accepted == count and not node.gyro_stream.rejected
+
+
+def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request):
+    """main()'s structure in-process: the node's GyroLoop in a thread of its own takes every
+    queued gyro message and runs the timers; the harness executor serves the rest (set_pose,
+    the reset service) and never the claimed gyro subscriptions."""
+    namespace = unique_namespace(request)
+    harness = Harness(ros, namespace)
+    node = start_node(harness, scene='strapdown', publish_rate=100.0, **deep_qos(
+        namespace, {'imu': 'subscription', 'angular_velocity': 'subscription',
+                    'orientation': 'publisher', 'pose': 'publisher', 'imu/data': 'publisher'}))
+    imu_publisher = harness.publisher(Imu, 'imu')
+    rate_publisher = harness.publisher(Vector3Stamped, 'angular_velocity')
+    harness.publisher(PoseStamped, 'set_pose')
+    orientations = harness.record(QuaternionStamped, 'orientation')
+    poses = harness.record(PoseStamped, 'pose')
+    imu_outputs = harness.record(Imu, 'imu/data')
+    energies = harness.record(Float64, 'energy')
+    diagnostics = harness.record(DiagnosticArray, '/diagnostics')
+    harness.wait_for_connections()
+    loop = node.gyro_loop()
+    thread = threading.Thread(target=loop.run, daemon=True)
+    thread.start()
+    try:
+        count = 1001
+        stamps_ns = [BASE_NS + k * MS for k in range(count)]
+        for at_ns in stamps_ns:  # one burst: the loop takes many per wake-up
+            imu_publisher.publish(imu_message(at_ns, OMEGA))
+        assert harness.spin_until(lambda: min(len(orientations), len(poses),
+                                              len(imu_outputs)) >= count, 30.0)
+        # Exact for a constant rate up to round-off over 1000 steps (as the test above).
+        closed_form = quaternion.exp(np.arange(count)[:, None] * 1e-3 * np.array(OMEGA))
+        assert np.max(np.abs(scalar_first(orientations) - closed_form)) <= 1e-9
+        assert np.array_equal(scalar_first(poses), scalar_first(orientations))
+        assert [nanoseconds(m.header.stamp) for m in imu_outputs] == stamps_ns
+        assert loop.handled == count
+        # Timers run in the loop: energy at publish_rate after new samples, diagnostics.
+        assert harness.spin_until(lambda: len(energies) >= 1 and any(
+            status_values(m)['accepted'] == str(count) for m in own_statuses(diagnostics,
+                                                                             node)), 5.0)
+        # set_pose goes through the executor, the next gyro sample through the loop.
+        pose = PoseStamped()
+        pose.pose.orientation.x, pose.pose.orientation.w = 1.0, 0.0  # 180° about x
+        publish_and_wait(harness, node, 'set_pose', pose)
+        rate = Vector3Stamped()
+        rate.header.stamp = stamp(stamps_ns[-1] + MS)
+        rate.vector.x, rate.vector.y, rate.vector.z = OMEGA
+        rate_publisher.publish(rate)
+        assert harness.spin_until(lambda: len(orientations) > count, 5.0)
+        expected = quaternion.multiply([0.0, 1.0, 0.0, 0.0],
+                                       quaternion.exp(1e-3 * np.array(OMEGA)))
+        expected = quaternion.continuous(expected, scalar_first(orientations[count - 1:count])[0])
+        # One exp step in another operation order than the reference: 1e-14 (as above).
+        assert np.max(np.abs(scalar_first(orientations[-1:])[0] - expected)) <= 1e-14
+        assert len(imu_outputs) == count  # Vector3Stamped input: no imu/data
+    finally:
+        loop.stop()
+        thread.join(5.0)
+    assert not thread.is_alive()
+    # Claimed: with the loop stopped nothing serves the gyro topics, although the harness
+    # executor spins the node.
+    imu_publisher.publish(imu_message(stamps_ns[-1] + 2 * MS, OMEGA))
+    harness.spin_for(0.3)
+    assert len(orientations) == count + 1
+    loop.close()
 
 
 def test_angular_velocity_topic_drives_gyro_scenes(ros, request):

@@ -15,11 +15,14 @@ import signal
 import subprocess
 
 from ament_index_python.packages import get_package_prefix
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, QuaternionStamped
 import numpy as np
 import pytest
 from ros_helpers import Harness, ros_session, RosContext, unique_namespace
 from sensor_msgs.msg import Imu
+from std_msgs.msg import Float64
+from std_srvs.srv import Trigger
 
 from rigid_body_attitude import quaternion
 
@@ -107,6 +110,59 @@ def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes):
         expected = quaternion.multiply(
             first_attitude, quaternion.exp((seconds(message) - seconds(first)) * omega))
         assert np.max(np.abs(np.array([q.w, q.x, q.y, q.z]) - expected)) <= 1e-12
+
+
+def test_services_set_pose_and_timers_work_beside_the_gyro_loop(ros, request, processes):
+    """The executable serves gyro topics and timers in its gyro loop and the rest with an
+    executor thread: reset, set_pose, energy and /diagnostics all answer while it runs."""
+    namespace = unique_namespace(request)
+    process = start('--ros-args', '-p', 'scene:=strapdown', '-p', 'publish_rate:=100.0',
+                    '-r', f'__ns:={namespace}')
+    processes.append(process)
+    harness = Harness(ros, namespace)
+    imu_publisher = harness.publisher(Imu, 'imu')
+    harness.publisher(PoseStamped, 'set_pose')
+    orientations = harness.record(QuaternionStamped, 'orientation')
+    energies = harness.record(Float64, 'energy')
+    diagnostics = harness.record(DiagnosticArray, '/diagnostics')
+    harness.wait_for_connections(START_TIMEOUT)
+    omega = np.array([0.0, 0.0, 1.0])
+    base_ns = 1_700_000_000 * 10**9
+    sent = 0
+
+    def send_until(condition) -> bool:
+        """100 Hz stamps at a pace a best-effort queue of 5 keeps up with."""
+        nonlocal sent
+        for _ in range(300):
+            imu = Imu()
+            imu.header.stamp.sec, imu.header.stamp.nanosec = divmod(base_ns + sent * 10**7,
+                                                                    10**9)
+            imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z = omega
+            imu_publisher.publish(imu)
+            sent += 1
+            if harness.spin_until(condition, 0.02):
+                return True
+        return False
+
+    assert send_until(lambda: len(orientations) >= 5 and len(energies) >= 1 and any(
+        s.name.endswith('attitude_propagator') for m in diagnostics for s in m.status))
+    response = harness.call(Trigger, 'attitude_propagator/reset', Trigger.Request())
+    assert response is not None and response.success
+    pose = PoseStamped()
+    pose.pose.orientation.x, pose.pose.orientation.w = 1.0, 0.0  # 180° about x
+    harness.publishers['set_pose'].publish(pose)
+    harness.spin_for(0.5)  # the pose reaches the node before the next gyro samples
+    after = len(orientations)
+    assert send_until(lambda: len(orientations) >= after + 3)
+    q = orientations[-1].quaternion
+    # Before set_pose the attitude was exp(θ z): x = y = 0. After it, turning about z at
+    # 1 rad/s from (0, 1, 0, 0): (0, 1, 0, 0) ⊗ exp(θ z) = (0, cos θ/2, −sin θ/2, 0), so
+    # w = z = 0 whatever θ (round-off of a few steps: 1e-12), with θ a few 10 ms steps.
+    assert abs(q.w) <= 1e-12 and abs(q.z) <= 1e-12
+    assert q.x >= 0.99 and -0.05 <= q.y < 0.0
+    code, stderr = stop_with_sigint(process)
+    assert code == 0, stderr
+    assert 'Traceback' not in stderr and 'set_pose: attitude' in stderr
 
 
 def test_default_scene_with_the_params_file_publishes_pose_alone(ros, request, processes):
