@@ -9,7 +9,7 @@ largest attitude error against the ground truth at the sample stamps. Updates co
 * ``exp, ω_{k+1}``: ``q_{k+1} = q_k ⊗ exp(h ω_{k+1})`` (rate sample at the end),
 * ``trapezoid + coning``: ``q_{k+1} = q_k ⊗ exp(½h(ω_k + ω_{k+1}) + (h²/12) ω_k × ω_{k+1})``.
 
-Usage: ``python bench/broad_strapdown.py [DATA_DIR]`` (default ``/work/shared/data/broad``).
+Usage: ``python bench/broad_strapdown.py [DATA_DIR]`` (default the repository's ``data/broad``).
 Data: BROAD, Laidig et al., Data 6(7):72, 2021, doi:10.3390/data6070072, CC BY 4.0.
 """
 
@@ -24,7 +24,7 @@ import numpy as np
 from rigid_body_attitude.broad import BroadTrial, load_trial
 from rigid_body_attitude.quaternion import attitude_error, scalar_exp_step
 
-DEFAULT_DATA_DIR = Path('/work/shared/data/broad')
+DEFAULT_DATA_DIR = Path(__file__).resolve().parent.parent / 'data' / 'broad'
 TRIALS = ('07_undisturbed_fast_rotation_B', '15_undisturbed_fast_translation_A')
 SCHEMES = ('exp, ω_k', 'exp, ω_{k+1}', 'trapezoid + coning')
 WINDOW_S = 10.0

@@ -13,7 +13,7 @@ Data: D. Laidig, M. Caruso, A. Cereatti, T. Seel, "BROAD — A Benchmark for Rob
 Orientation Estimation", Data 6(7):72, 2021, doi:10.3390/data6070072, CC BY 4.0.
 
 Usage: ``python bench/replay_real_data.py [DATA_DIR] [--methods a,b,...]``
-(default ``/work/shared/data/broad``, all methods).
+(default the repository's ``data/broad``, all methods).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from rigid_body_attitude.errors import IntegratorError
 from rigid_body_attitude.integrators import STRAPDOWN_METHODS, strapdown_method
 from rigid_body_attitude.replay import ReplayOptions, replay_bag
 
-DEFAULT_DATA_DIR = Path('/work/shared/data/broad')
+DEFAULT_DATA_DIR = Path(__file__).resolve().parent.parent / 'data' / 'broad'
 TRIALS = ('07_undisturbed_fast_rotation_B', '15_undisturbed_fast_translation_A')
 WINDOW_NS = 10 * 10**9
 

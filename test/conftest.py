@@ -89,3 +89,9 @@ def ros_domain_id() -> int:
 def repo_root() -> Path:
     """Return the root of the source tree the tests belong to."""
     return REPO_ROOT
+
+
+@pytest.fixture(scope='session')
+def data_dir(repo_root: Path) -> Path:
+    """The BROAD trials shipped in data/broad (CC BY 4.0; attribution in its README)."""
+    return repo_root / 'data' / 'broad'

@@ -1,8 +1,6 @@
 """Tests of rigid_body_attitude.broad on the shipped BROAD trials (CC BY 4.0, docs/data.md)."""
 
 import math
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,19 +11,6 @@ from rigid_body_attitude.quaternion import attitude_error, scalar_exp_step
 
 TRIAL_07 = '07_undisturbed_fast_rotation_B'
 TRIAL_15 = '15_undisturbed_fast_translation_A'
-DATA_DIR_VARIABLE = 'RIGID_BODY_ATTITUDE_BROAD_DIR'
-
-
-@pytest.fixture(scope='module')
-def data_dir(repo_root):
-    """The directory with the BROAD trial archives ($RIGID_BODY_ATTITUDE_BROAD_DIR first)."""
-    candidates = [Path(os.environ[DATA_DIR_VARIABLE])] if DATA_DIR_VARIABLE in os.environ else []
-    candidates += [repo_root / 'data' / 'broad', Path('/work/shared/data/broad')]
-    for candidate in candidates:
-        if (candidate / f'{TRIAL_07}.npz').is_file():
-            return candidate
-    pytest.fail(f'BROAD trials not found in {[str(c) for c in candidates]}; set '
-                f'{DATA_DIR_VARIABLE}')
 
 
 @pytest.fixture(scope='module')

@@ -31,7 +31,6 @@ the figures may move by round-off only.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -46,7 +45,6 @@ from rigid_body_attitude.replay import ReplayOptions, replay_bag
 
 TRIAL_07 = '07_undisturbed_fast_rotation_B'
 TRIAL_15 = '15_undisturbed_fast_translation_A'
-DATA_DIR_VARIABLE = 'RIGID_BODY_ATTITUDE_BROAD_DIR'
 WINDOW_NS = 10 * 10**9
 #: Methods of the real-data table, when the propagator offers them (methods.strapdown_method).
 METHODS = ('exp_map', 'trapezoid_coning')
@@ -58,18 +56,6 @@ MEASURED_DEG = {
     (TRIAL_15, 'trapezoid_coning'): (1.031, 6.509),
 }
 MARGIN = 1.03
-
-
-@pytest.fixture(scope='module')
-def data_dir(repo_root: Path) -> Path:
-    """The directory with the BROAD trial archives ($RIGID_BODY_ATTITUDE_BROAD_DIR first)."""
-    candidates = [Path(os.environ[DATA_DIR_VARIABLE])] if DATA_DIR_VARIABLE in os.environ else []
-    candidates += [repo_root / 'data' / 'broad', Path('/work/shared/data/broad')]
-    for candidate in candidates:
-        if (candidate / f'{TRIAL_07}.npz').is_file():
-            return candidate
-    pytest.fail(f'BROAD trials not found in {[str(c) for c in candidates]}; set '
-                f'{DATA_DIR_VARIABLE}')
 
 
 def available_methods() -> list[str]:
