@@ -173,7 +173,15 @@ def _soak_section(soak: dict) -> List[str]:
             f'publisher {soak["publisher_hz"]:.1f} Hz; latency p50 '
             f'{_fmt(soak["latency_p50_ms"], 3)} ms, p99 {_fmt(soak["latency_p99_ms"], 3)} ms, '
             f'max {_fmt(soak["latency_max_ms"], 1)} ms',
-            '']
+            ''] + _problems(soak.get('problems', []))
+
+
+def _problems(problems: List[str]) -> List[str]:
+    """Crashes and hangs of the run (first line of each), or nothing."""
+    if not problems:
+        return []
+    return ['Problems in this run:', ''] + [
+        f'- {problem.splitlines()[0]}' for problem in problems] + ['']
 
 
 def plot(throughput: dict, png_path: Path) -> None:
@@ -220,7 +228,9 @@ def render(throughput: Optional[dict], soak: Optional[dict], png_name: str) -> s
             'stamp (the publish wall time). "(short)" marks a publisher that fell more than '
             f'{100 * (1 - PUBLISHER_SHORTFALL):.0f} % short of the asked rate.', '']
         lines += _summary(throughput['targets']) + ['', '### Node targets', '']
-        lines += _node_verdict(throughput['targets']) + ['', f'![throughput]({png_name})', '']
+        lines += _node_verdict(throughput['targets']) + ['']
+        lines += _problems(throughput.get('problems', []))
+        lines += [f'![throughput]({png_name})', '']
         for label, target in throughput['targets'].items():
             lines += [f'### {label}', '', f'`{target["command"]}`', '']
             lines += _table(target['rows']) + ['']
