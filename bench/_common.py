@@ -44,6 +44,7 @@ def ros_env(domain_id: int) -> Dict[str, str]:
     env['ROS_DOMAIN_ID'] = str(domain_id)
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     env['PYTHONUNBUFFERED'] = '1'
+    env['PYTHONFAULTHANDLER'] = '1'  # a crash of a Python target leaves its traceback in the log
     return env
 
 
