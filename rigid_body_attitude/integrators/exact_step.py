@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rigid_body_attitude.integrators.base import BodyModel, q_normalize, Quat, Vec
+from rigid_body_attitude.integrators.base import BodyModel, q_multiply, q_normalize, Quat, Vec
 from rigid_body_attitude.integrators.dynamics_base import DynamicsMethod
 from rigid_body_attitude.integrators.exact_torque_free import TorqueFreeMotion
 from rigid_body_attitude.integrators.splitting import PrincipalFrame
@@ -34,10 +34,9 @@ class ExactTorqueFree(DynamicsMethod):
             self._frame = PrincipalFrame(model)
             self._model = model
         frame = self._frame
-        qp, mp = frame.to_principal(q, frame.momentum(omega))
-        motion = TorqueFreeMotion(frame.moments, qp, momentum_body=mp)
+        # Rates are rotated, never multiplied by J and J⁻¹: no κ(J)ε loss per step.
+        qp = q if frame.identity else q_multiply(q, frame.rotation)
+        motion = TorqueFreeMotion(frame.moments, qp, omega_body=frame.principal_vector(omega))
         qp1, omega_p1 = motion.state(h)
-        moments = frame.moments
-        mp1 = tuple(float(w) * j for w, j in zip(omega_p1, moments))
-        q1, m1 = frame.to_body(tuple(float(x) for x in qp1), mp1)
-        return q_normalize(q1), frame.rate(m1)
+        q1 = frame.body_attitude(tuple(float(x) for x in qp1))
+        return q_normalize(q1), frame.body_vector(tuple(float(w) for w in omega_p1))

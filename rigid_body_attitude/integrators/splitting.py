@@ -105,8 +105,6 @@ class PrincipalFrame:
         self.identity = bool(np.array_equal(axes, np.eye(3)))
         self.rotation = ((1.0, 0.0, 0.0, 0.0) if self.identity  # q_body ⊗ rotation = q_p
                          else tuple(quat.from_matrix(axes).tolist()))
-        self.tensor = tuple(model.tensor_entries)
-        self.inverse = tuple(model.inverse_entries)
         reference = self.moments[self.order[1]]
         self.reference = reference
         self.casimir = tuple(1.0 / j - 1.0 / reference for j in self.moments)
@@ -134,40 +132,26 @@ class PrincipalFrame:
         r = self.rotation
         return q_multiply(q, (r[0], -r[1], -r[2], -r[3]))
 
-    def to_principal(self, q: Quat, m: Vec) -> tuple[Quat, Vec]:
-        """Body-frame ``(q, m)`` to principal-frame ``(q ⊗ r, Vᵀ m)``."""
+    def to_principal(self, q: Quat, omega: Vec) -> tuple[Quat, Vec]:
+        """Body-frame ``(q, ω)`` to the principal-frame attitude and momentum
+        ``(q ⊗ r, J_p ⊙ (Vᵀ ω))``.
+
+        The rate is rotated, then scaled by the principal moments: no product with the full
+        tensor (whose rounding, amplified by ``J⁻¹`` on the way back, cost ~κ(J)ε per step).
+        """
+        j = self.moments
         if self.identity:
-            return q, m
-        v = self.axes
-        return (q_multiply(q, self.rotation),
-                (v[0] * m[0] + v[3] * m[1] + v[6] * m[2],
-                 v[1] * m[0] + v[4] * m[1] + v[7] * m[2],
-                 v[2] * m[0] + v[5] * m[1] + v[8] * m[2]))
+            return q, (j[0] * omega[0], j[1] * omega[1], j[2] * omega[2])
+        p = self.principal_vector(omega)
+        return q_multiply(q, self.rotation), (j[0] * p[0], j[1] * p[1], j[2] * p[2])
 
     def to_body(self, q: Quat, m: Vec) -> tuple[Quat, Vec]:
-        """Principal-frame ``(q, m)`` back to the body frame."""
+        """Principal-frame ``(q, m)`` back to body-frame ``(q ⊗ r*, V (m ⊘ J_p))``."""
+        j = self.moments
+        rate = (m[0] / j[0], m[1] / j[1], m[2] / j[2])
         if self.identity:
-            return q, m
-        v = self.axes
-        r = self.rotation
-        return (q_multiply(q, (r[0], -r[1], -r[2], -r[3])),
-                (v[0] * m[0] + v[1] * m[1] + v[2] * m[2],
-                 v[3] * m[0] + v[4] * m[1] + v[5] * m[2],
-                 v[6] * m[0] + v[7] * m[1] + v[8] * m[2]))
-
-    def momentum(self, omega: Vec) -> Vec:
-        """``J ω`` in body axes."""
-        j = self.tensor
-        return (j[0] * omega[0] + j[1] * omega[1] + j[2] * omega[2],
-                j[3] * omega[0] + j[4] * omega[1] + j[5] * omega[2],
-                j[6] * omega[0] + j[7] * omega[1] + j[8] * omega[2])
-
-    def rate(self, m: Vec) -> Vec:
-        """``J⁻¹ m`` in body axes."""
-        j = self.inverse
-        return (j[0] * m[0] + j[1] * m[1] + j[2] * m[2],
-                j[3] * m[0] + j[4] * m[1] + j[5] * m[2],
-                j[6] * m[0] + j[7] * m[1] + j[8] * m[2])
+            return q, rate
+        return self.body_attitude(q), self.body_vector(rate)
 
 
 def _rotation(q: Quat, m: Vec, axis: int, theta: float) -> tuple[Quat, Vec]:
@@ -365,15 +349,15 @@ class _Composition(DynamicsMethod):
             q, m = compose(q, m, t, h, 1, self.free_weights, self.kick_weights, self._spin)
             q, omega = self._spin.to_body(q, m)
             return q_normalize(q), omega
-        q, m = frame.to_principal(q, frame.momentum(omega))
+        q, m = frame.to_principal(q, omega)
         if model.torque_free:
             q, m = self._free_only(q, m, h, frame)
         else:
             kick = self._kick_function(model)
             q, m = self._stages(q, m, t, h, model, frame, kick, self.kick_weights[0])
             m = kick(q, m, t + h, self.kick_weights[-1] * h, model, frame)
-        q, m = frame.to_body(q, m)
-        return q_normalize(q), frame.rate(m)
+        q, omega = frame.to_body(q, m)
+        return q_normalize(q), omega
 
     def integrate(self, attitude: ArrayLike, omega_body: ArrayLike, t_start: float, h: float,
                   steps: int, model: BodyModel) -> tuple[FloatArray, FloatArray]:
@@ -392,7 +376,7 @@ class _Composition(DynamicsMethod):
             return super().integrate(attitude, omega_body, t_start, h, steps, model)
         q, omega = as_state(attitude, omega_body)
         h = check_step(h)
-        q, m = frame.to_principal(q, frame.momentum(omega))
+        q, m = frame.to_principal(q, omega)
         kicks = self.kick_weights
         merged = kicks[-1] + kicks[0]
         for k in range(int(steps)):
@@ -401,8 +385,7 @@ class _Composition(DynamicsMethod):
             q = q_normalize(q)
         if steps > 0:
             m = _exact_kick(q, m, t_start + steps * h, kicks[-1] * h, model, frame)
-        q, m = frame.to_body(q, m)
-        return output(q, frame.rate(m))
+        return output(*frame.to_body(q, m))
 
 
 class StrangSplitting(_Composition):
