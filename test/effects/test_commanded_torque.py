@@ -85,4 +85,3 @@ def test_switch_inside_a_step_keeps_the_energy_balance():
     diagnostics = propagator.diagnostics()
     assert abs(diagnostics.energy_balance_residual) <= 1e-12 * diagnostics.kinetic_energy
     assert propagator.counters() == {'commanded_torque.stale': 1}
-
