@@ -127,7 +127,7 @@ class Process:
             code = self.popen.returncode
             if code not in (0, -sig, 128 + sig):
                 self.log.flush()
-                tail = self.log_path.read_text(errors='replace')[-1500:]
+                tail = self.log_path.read_text(errors='replace')[-6000:]
                 problem = (f'{shlex.join(self.argv)} exited with {code} on signal {sig}; '
                            f'log tail:\n{tail}')
         except subprocess.TimeoutExpired:
