@@ -291,8 +291,10 @@ def main() -> int:
         run(args.mode, outputs, args.best_effort_input)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except _rclpy.RCLError:
-        # SIGINT shuts the context down under a callback still publishing a backlog.
+    except RuntimeError:
+        # SIGINT shuts the context down under a callback still publishing a backlog (RCLError,
+        # "publisher's context is invalid") or under a take (RuntimeError "Unable to convert
+        # call argument"); after shutdown neither is a failure.
         if rclpy.ok():
             raise
     finally:

@@ -14,7 +14,6 @@ from _common import IMU_TOPIC, POSE_TOPIC, reliable_qos
 from geometry_msgs.msg import PoseStamped
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from sensor_msgs.msg import Imu
 
@@ -47,8 +46,10 @@ def main(args=None) -> int:
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except _rclpy.RCLError:
-        # SIGINT shuts the context down under a callback still publishing a backlog.
+    except RuntimeError:
+        # SIGINT shuts the context down under a callback still publishing a backlog (RCLError,
+        # "publisher's context is invalid") or under a take (RuntimeError "Unable to convert
+        # call argument"); after shutdown neither is a failure.
         if rclpy.ok():
             raise
     finally:
