@@ -243,11 +243,18 @@ def measure(session: Session, target_argv: List[str], rate: float,
     }
 
 
+def display(argv: List[str]) -> str:
+    """Return ``argv`` as a command line with this interpreter as ``python``, paths relative."""
+    words = ['python' if word == sys.executable else word for word in argv]
+    return shlex.join(words).replace(f'{REPO}/', '')
+
+
 def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> dict:
     """Measure every target at every rate; return the results document."""
     results = {'machine': _report.machine_description(), 'duration_s': args.duration,
                'warmup_s': args.warmup, 'drain_s': args.drain, 'depth': args.depth,
-               'targets': {label: {'command': shlex.join(argv), 'rows': []}
+               'invocation': display([sys.executable] + sys.argv),
+               'targets': {label: {'command': display(argv), 'rows': []}
                            for label, argv in targets.items()}}
     problems = results['problems'] = []
     for rate in args.rates:
@@ -296,7 +303,7 @@ def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
     for problem in problems:
         print(f'error: {problem}', file=sys.stderr)
     growth = samples[-1]['rss_kib'] - samples[0]['rss_kib']
-    return {'label': label, 'command': shlex.join(argv), 'rate_hz': args.soak_rate,
+    return {'label': label, 'command': display(argv), 'rate_hz': args.soak_rate,
             'minutes': minutes, 'samples': samples, 'growth_kib': growth, 'problems': problems,
             'publisher_hz': end['achieved_hz'], **counts,
             'machine': _report.machine_description()}
