@@ -46,7 +46,7 @@ import sys
 import tempfile
 import threading
 import time
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Sequence
 
 BENCH = Path(__file__).resolve().parent
 REPO = BENCH.parent
@@ -87,14 +87,19 @@ class Process:
             except ValueError:
                 self.log.write(line)
 
-    def wait_event(self, name: str, timeout: float) -> dict:
-        """Return the next event called ``name``; raise ProcessCrashed if the child died."""
+    def wait_event(self, name: str, timeout: float, watch: Sequence['Process'] = ()) -> dict:
+        """Return the next event called ``name``.
+
+        Raises ProcessCrashed if this process or one in ``watch`` exits meanwhile, or on
+        timeout.
+        """
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             try:
                 event = self.events.get(timeout=0.05)
             except queue.Empty:
-                self.check_alive()
+                for process in (self, *watch):
+                    process.check_alive()
                 continue
             if event.get('event') == 'error':
                 raise ProcessCrashed(f'{self.argv[1]}: {event}')
@@ -184,11 +189,11 @@ def start_processes(session: Session, target_argv: List[str], rate: float, durat
         python, str(BENCH / '_subscriber.py'), '--out', str(session.workdir / 'poses.bin')],
         json_stdout=True)
     target = session.start('target', target_argv)
-    subscriber.wait_event('matched', args.match_timeout)
+    subscriber.wait_event('matched', args.match_timeout, watch=[target])
     publisher = session.start('publisher', [
         python, str(BENCH / '_publisher.py'), '--rate', str(rate), '--duration', str(duration),
         '--warmup', str(warmup)], json_stdout=True)
-    publisher.wait_event('matched', args.match_timeout)
+    publisher.wait_event('matched', args.match_timeout, watch=[target])
     return {'target': target, 'publisher': publisher, 'subscriber': subscriber}
 
 
@@ -220,10 +225,10 @@ def measure(session: Session, target_argv: List[str], rate: float,
     processes = start_processes(session, target_argv, rate, args.duration, args.warmup, args)
     publisher, target = processes['publisher'], processes['target']
     pids = {name: process.popen.pid for name, process in processes.items()}
-    publisher.wait_event('start', args.match_timeout + args.warmup + 5)
+    publisher.wait_event('start', args.match_timeout + args.warmup + 5, watch=[target])
     ticks0 = {name: cpu_ticks(pid) for name, pid in pids.items()}
     machine0, wall0 = busy_ticks(), time.monotonic()
-    end = publisher.wait_event('end', 2 * args.duration + 10)
+    end = publisher.wait_event('end', 2 * args.duration + 10, watch=[target])
     ticks1 = {name: cpu_ticks(pid) for name, pid in pids.items()}
     machine1, window_s = busy_ticks(), time.monotonic() - wall0
     rss = rss_kib(target.popen.pid)
@@ -287,7 +292,8 @@ def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
             processes = start_processes(session, argv, args.soak_rate, minutes * 60.0, 0.0,
                                         args)
             target = processes['target']
-            processes['publisher'].wait_event('start', args.match_timeout + 5)
+            processes['publisher'].wait_event('start', args.match_timeout + 5,
+                                              watch=[target])
             started = time.monotonic()
             for minute in range(1, minutes + 1):
                 time.sleep(max(0.0, started + 60.0 * minute - time.monotonic()))
@@ -295,7 +301,7 @@ def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
                 samples.append({'minute': minute, 'rss_kib': rss_kib(target.popen.pid)})
                 print(f'soak {label}: minute {minute} RSS {samples[-1]["rss_kib"]} KiB',
                       flush=True)
-            end = processes['publisher'].wait_event('end', 60.0)
+            end = processes['publisher'].wait_event('end', 60.0, watch=[target])
             time.sleep(args.drain)
             counts = delivery(session, processes['subscriber'], end, args.drain)
         finally:
