@@ -11,8 +11,8 @@ Bounds held here:
 * the torque-free box (the ``torque_free_box`` scene, 10⁶ steps of 1 ms): | |q| − 1 | ≤ 1e−12
   for every method; world angular momentum and energy to ≤ 1e−12 relative with the exact
   solution (at all 10⁶ step times) and with the scene's RK4 (its error at h|ω| = 0.003 is below
-  round-off); with the splitting methods the energy is bounded with no secular trend (first
-  vs last 10 % of the run) and world H is kept to the round-off drift stated below.
+  round-off); with the splitting methods (Strang, Yoshida-4) the energy is bounded with no
+  secular trend (first vs last 10 % of the run) and world H is kept to 1e−12 as well.
 """
 
 import math
@@ -157,19 +157,24 @@ def test_scene_rk4_over_a_million_steps():
     assert np.max(np.abs(energy_drift)) <= 1e-12
 
 
-@pytest.mark.parametrize('name', ['strang'])
+@pytest.mark.parametrize('name', ['strang', 'yoshida4'])
 def test_splitting_over_a_million_steps(name):
     momentum_drift, energy_drift, norm_drift = run_dynamics(name)
     assert np.max(norm_drift) <= 1e-12
-    # Energy: the splitting error oscillates with the momentum period (amplitude 1.1e−7,
-    # O(h²)) and does not drift.
-    assert np.max(np.abs(energy_drift)) <= 2e-7
-    assert_no_secular_trend(energy_drift)
-    # World H: each axis rotation keeps H in exact arithmetic, but the rounded rotations
-    # shrink |m| by a systematic ~1.6e−17 per step (5 rotations), so the drift is linear in
-    # N: measured 1.65e−11 after 10⁶ steps (the direction of H only moves by 1.5e−13). This
-    # misses the issue's 1e−12 (the exact solution and RK4 above meet it); the bound here is
-    # the measured linear round-off growth, 2e−17 per step.
-    assert np.max(momentum_drift) <= 2e-17 * DYNAMICS_STEPS
-    steps = np.arange(1, SAMPLES + 1) * (DYNAMICS_STEPS // SAMPLES)
-    assert np.all(momentum_drift <= 2e-17 * steps + 1e-13)
+    # Energy: Strang's error oscillates with the momentum period (amplitude 1.1e−7, O(h²)) and
+    # does not drift. Yoshida-4's O(h⁴) oscillation is at round-off level here, so the check
+    # is its size: ≤ 2e−12 over the whole run (measured 1.3e−12; before, a linear round-off
+    # drift reached −6e−11).
+    if name == 'strang':
+        assert np.max(np.abs(energy_drift)) <= 2e-7
+        assert_no_secular_trend(energy_drift)
+    else:
+        assert np.max(np.abs(energy_drift)) <= 2e-12
+    # World H: each axis rotation keeps H in exact arithmetic; the issue's bound is 1e−12
+    # after 10⁶ steps. Torque-free steps rotate the principal rate ω (ω_j ← ω_j c + (J_k/J_j)
+    # ω_k s …) with cos θ = 1 − 2 sin²(θ/2): before, the m ↔ ω conversion of every step
+    # (m/J and J ω round trips are biased for this box, +6e−18 per step) and the rounding of
+    # cos²(θ/2) − sin²(θ/2) (≈ −(θ²/8)² per small rotation) drifted |m| linearly: 1.65e−11
+    # (Strang) and 2.8e−11 (Yoshida-4, energy −6e−11). Measured now 2.4e−13 and 2.5e−13
+    # (through DynamicsPropagator.step: 2.4e−13 both).
+    assert np.max(momentum_drift) <= 1e-12
