@@ -13,6 +13,8 @@ picks the technique:
     is public API). A ``SingleThreadedExecutor`` in a daemon thread serves everything else the
     node has (parameter services, timers); it sleeps in ``rcl_wait`` and costs nothing per
     gyro message.
+``waitset-one``
+    The same loop taking one message per wake-up (isolates the gain of draining).
 ``waitset-obj``
     The same loop taking and publishing Python message objects (isolates the serialization
     cost from the executor cost).
@@ -48,8 +50,8 @@ from rclpy.qos import ReliabilityPolicy
 from rclpy.signals import SignalHandlerGuardCondition
 from sensor_msgs.msg import Imu
 
-MODES = ('waitset', 'waitset-obj', 'ste-raw', 'ste-drain', 'events', 'events-raw',
-         'events-drain')
+MODES = ('waitset', 'waitset-one', 'waitset-obj', 'ste-raw', 'ste-drain', 'events',
+         'events-raw', 'events-drain')
 OUTPUTS = ('pose', 'orientation', 'imu_data')
 
 _QUATERNION = struct.Struct('<4d')
@@ -201,8 +203,10 @@ class FastRelay(Node):
             imu_cdr = taken[0] if taken is not None else None
 
 
-def spin_draining(node: Node, subscription, callback: Callable) -> None:
+def spin_draining(node: Node, subscription, callback: Callable, drain: bool = True) -> None:
     """Wait on ``subscription``; after each wake-up take and handle every queued message.
+
+    With ``drain`` false only one message is taken per wake-up (for comparison).
 
     One wait set (the subscription, the SIGINT guard condition and a guard condition triggered
     on context shutdown) is built once and reused; ``rcl_wait`` releases the GIL. Returns when
@@ -225,7 +229,7 @@ def spin_draining(node: Node, subscription, callback: Callable) -> None:
             taken = take(msg_type, raw)
             while taken is not None:
                 callback(taken[0])
-                taken = take(msg_type, raw)
+                taken = take(msg_type, raw) if drain else None
     finally:
         wait_set.destroy_when_not_in_use()
         sigint_guard.destroy()
@@ -242,7 +246,8 @@ def serve_others(executor) -> None:
 
 def run(mode: str, outputs: List[str], best_effort_input: bool) -> None:
     """Build the relay for ``mode`` and spin it until shutdown."""
-    raw = mode in ('waitset', 'ste-raw', 'ste-drain', 'events-raw', 'events-drain')
+    raw = mode in ('waitset', 'waitset-one', 'ste-raw', 'ste-drain', 'events-raw',
+                   'events-drain')
     own_loop = mode.startswith('waitset')
     node = FastRelay(outputs, raw, own_loop, best_effort_input)
     if mode in ('ste-drain', 'events-drain'):
@@ -258,7 +263,8 @@ def run(mode: str, outputs: List[str], best_effort_input: bool) -> None:
         if own_loop:
             # Everything but the gyro subscription (parameter services, timers) is served here.
             others.start()
-            spin_draining(node, node.imu_subscription, node.imu_subscription.callback)
+            spin_draining(node, node.imu_subscription, node.imu_subscription.callback,
+                          drain=mode != 'waitset-one')
         elif mode.startswith('events'):
             # EventsExecutor.spin() (and spin_once() without a timeout) busy-loops in rclpy
             # 7.1.6 here, runs no callback and ignores SIGINT; a finite timeout works.
