@@ -113,6 +113,36 @@ def cpu_ticks(pid: int) -> int:
     return int(fields[11]) + int(fields[12])  # fields 14 and 15 of proc(5)
 
 
+def thread_ticks(pid: int) -> Dict[int, Tuple[str, int]]:
+    """Return {tid: (thread name, utime + stime ticks)} for every thread of ``pid``."""
+    threads = {}
+    for task in os.listdir(f'/proc/{pid}/task'):
+        try:
+            with open(f'/proc/{pid}/task/{task}/stat') as stat:
+                text = stat.read()
+        except FileNotFoundError:
+            continue  # the thread ended meanwhile
+        name = text[text.index('(') + 1:text.rindex(')')]
+        fields = text.rsplit(')', 1)[1].split()
+        threads[int(task)] = (name, int(fields[11]) + int(fields[12]))
+    return threads
+
+
+def cpu_by_thread_name(before: Dict[int, Tuple[str, int]], after: Dict[int, Tuple[str, int]],
+                       seconds: float, ticks_per_second: int) -> Dict[str, float]:
+    """Return % of one core per thread name between two :func:`thread_ticks` snapshots.
+
+    Threads with the same name (several ``python`` threads) are summed; names with a Fast DDS
+    port or index suffix (``dds.shm.7413``) are kept whole.
+    """
+    percent: Dict[str, float] = {}
+    for tid, (name, ticks) in after.items():
+        delta = ticks - before.get(tid, (name, 0))[1]
+        if delta > 0:
+            percent[name] = percent.get(name, 0.0) + 100.0 * delta / ticks_per_second / seconds
+    return dict(sorted(percent.items(), key=lambda item: -item[1]))
+
+
 def busy_ticks() -> int:
     """Return the machine's non-idle clock ticks summed over all cores (/proc/stat)."""
     with open('/proc/stat') as stat:

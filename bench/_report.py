@@ -119,6 +119,21 @@ def _summary(targets: dict) -> List[str]:
     return lines
 
 
+def _threads_at_1khz(targets: dict) -> List[str]:
+    """One line per target: its CPU by thread at 1 kHz (where the middleware's share shows)."""
+    lines = []
+    for label, target in targets.items():
+        row = _row_at(target['rows'], 1000.0)
+        if row is not None and row.get('cpu_by_thread'):
+            parts = ', '.join(f'{name} {percent:.1f} %'
+                              for name, percent in row['cpu_by_thread'].items())
+            lines.append(f'- {label}: {parts}')
+    if not lines:
+        return []
+    return ['CPU by thread at 1 kHz (% of one core; `python` = the interpreter\'s threads, '
+            '`dds.*` = Fast DDS):', ''] + lines + ['']
+
+
 def _node_verdict(targets: dict) -> List[str]:
     node = targets.get('node')
     if node is None:
@@ -236,7 +251,8 @@ def render(throughput: Optional[dict], soak: Optional[dict], png_name: str) -> s
             'stime of the target process over the window. Latency = receive wall time − pose '
             'stamp (the publish wall time). "(short)" marks a publisher that fell more than '
             f'{100 * (1 - PUBLISHER_SHORTFALL):.0f} % short of the asked rate.', '']
-        lines += _summary(throughput['targets']) + ['', '### Node targets', '']
+        lines += _summary(throughput['targets']) + ['']
+        lines += _threads_at_1khz(throughput['targets']) + ['### Node targets', '']
         lines += _node_verdict(throughput['targets']) + ['']
         lines += _problems(throughput.get('problems', []))
         lines += [f'![throughput]({png_name})', '']

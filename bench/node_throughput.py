@@ -52,7 +52,8 @@ BENCH = Path(__file__).resolve().parent
 REPO = BENCH.parent
 sys.path.insert(0, str(BENCH))
 
-from _common import busy_ticks, cpu_ticks, QUEUE_DEPTH, ros_env, rss_kib  # noqa: E402
+from _common import (busy_ticks, cpu_by_thread_name, cpu_ticks, QUEUE_DEPTH,  # noqa: E402
+                     ros_env, rss_kib, thread_ticks)
 import _report  # noqa: E402
 
 DEFAULT_RATES = [200, 500, 1000, 2000, 5000, 10000, 15000, 20000]
@@ -226,11 +227,13 @@ def measure(session: Session, target_argv: List[str], rate: float,
     publisher, target = processes['publisher'], processes['target']
     pids = {name: process.popen.pid for name, process in processes.items()}
     publisher.wait_event('start', args.match_timeout + args.warmup + 5, watch=[target])
+    threads0 = thread_ticks(pids['target'])
     ticks0 = {name: cpu_ticks(pid) for name, pid in pids.items()}
     machine0, wall0 = busy_ticks(), time.monotonic()
     end = publisher.wait_event('end', 2 * args.duration + 10, watch=[target])
     ticks1 = {name: cpu_ticks(pid) for name, pid in pids.items()}
     machine1, window_s = busy_ticks(), time.monotonic() - wall0
+    threads1 = thread_ticks(pids['target'])
     rss = rss_kib(target.popen.pid)
     time.sleep(args.drain)
     target.check_alive()
@@ -245,6 +248,7 @@ def measure(session: Session, target_argv: List[str], rate: float,
         'cpu_percent': cpu['target'], 'publisher_cpu_percent': cpu['publisher'],
         'subscriber_cpu_percent': cpu['subscriber'], 'other_load_cores': other_cores,
         'rss_kib': rss,
+        'cpu_by_thread': cpu_by_thread_name(threads0, threads1, window_s, CLOCK_TICKS),
     }
 
 
