@@ -12,10 +12,11 @@ Bounds held here:
   form q₀ ⊗ exp(ω t) after 10⁶ steps (round-off bound below);
 * every strapdown method follows its own per-step rotation formula at h|ω| = 2 (no method
   drifts away silently);
-* explicit dynamics methods take equal substeps when h|ω| exceeds their stability limit
-  (``propagator.MAX_ROTATION_PER_STEP``) and refuse with an ``IntegratorError`` when that
-  would need more than ``MAX_SUBSTEPS``; the implicit-free splitting and exact methods need
-  neither.
+* explicit dynamics methods declare their stability limit (``max_rotation_per_step``, the
+  value of ``propagator.MAX_ROTATION_PER_STEP``): their own ``step`` and ``integrate`` refuse a
+  step above it with an ``IntegratorError`` (before, they diverged silently until overflow),
+  the propagator takes equal substeps instead and refuses only when that would need more than
+  ``MAX_SUBSTEPS``; the implicit-free splitting and exact methods need neither.
 """
 
 import math
@@ -243,16 +244,43 @@ def near_axis_state(rate):
     return Q0, omega, float(0.5 * np.sum(INERTIA * omega * omega))
 
 
-def test_direct_rk4_diverges_above_its_stability_limit():
-    # Why the propagator substeps: RK4 on Euler's equations at h|ω| = 3 > 2√2 multiplies the
-    # nutation by |R(3i)| ≈ 1.4 per step: measured, the energy grows 11-fold in 10 steps and
-    # the next 10 overflow to NaN, which the integrator reports only then.
-    q0, omega0, energy = near_axis_state(1000.0)
+@pytest.mark.parametrize('name', sorted(MAX_ROTATION_PER_STEP))
+def test_direct_step_refuses_above_the_stability_limit(name):
+    # RK4 on Euler's equations at h|ω| = 3 > 2√2 multiplies the nutation by |R(3i)| ≈ 1.4 per
+    # step: the energy grew 11-fold in 10 steps and overflowed in the next 10, reported only
+    # then. The integrator now refuses the step itself, naming h, |ω| and the limit, and
+    # leaves its inputs alone.
+    q0, omega0, _ = near_axis_state(1000.0)
+    integrator = dynamics_integrator(name)
+    assert integrator.max_rotation_per_step == MAX_ROTATION_PER_STEP[name] == 2.0
     model = SimpleBodyModel(INERTIA)
-    with pytest.raises(IntegratorError):
-        q, omega = dynamics_integrator('rk4').integrate(q0, omega0, 0.0, 3e-3, 10, model)
-        assert 0.5 * np.sum(INERTIA * omega * omega) >= 10.0 * energy
-        dynamics_integrator('rk4').integrate(q, omega, 0.0, 3e-3, 10, model)
+    attitude, omega = q0.copy(), omega0.copy()
+    message = (rf"'{name}' is stable only for h·\|ω\| <= 2\.0 rad; got h = 0\.003 s at "
+               r"\|ω\| = 1000 rad/s, h·\|ω\| = 3 rad.*DynamicsPropagator \(it splits such "
+               r"steps into substeps\).*exact")
+    with pytest.raises(IntegratorError, match=message):
+        integrator.step(attitude, omega, 0.0, 3e-3, model)
+    with pytest.raises(IntegratorError, match=r'h·\|ω\| = 3 rad \(step 1 of the run\)'):
+        integrator.integrate(attitude, omega, 0.0, 3e-3, 10, model)
+    np.testing.assert_array_equal(attitude, q0)
+    np.testing.assert_array_equal(omega, omega0)
+    # At the limit (h|ω| = 2, up to the propagator's rounding) the step is taken.
+    q, _ = integrator.step(attitude, omega, 0.0, 2e-3 * (1.0 + 1e-9), model)
+    assert abs(np.linalg.norm(q) - 1.0) <= 1e-15
+
+
+@pytest.mark.parametrize('name', sorted(MAX_ROTATION_PER_STEP))
+def test_integrate_refuses_the_first_step_whose_rate_passes_the_limit(name):
+    # Spin about the major axis under a constant torque about it: ω₃ = 1905 + 10⁴ t rad/s
+    # (ω × Jω = 0, so RK4 is exact up to round-off). With h = 1 ms, h|ω| = 1.995 after 9
+    # steps and 2.005 after 10: the 11th step is refused.
+    spin_up = 1e4 * INERTIA[2]
+    model = SimpleBodyModel(INERTIA, torque_body=lambda t, q, w: np.array([0.0, 0.0, spin_up]))
+    integrator = dynamics_integrator(name)
+    q, omega = integrator.integrate(Q0, [0.0, 0.0, 1905.0], 0.0, 1e-3, 10, model)
+    assert omega[2] == pytest.approx(2005.0, rel=1e-12)
+    with pytest.raises(IntegratorError, match=r'\|ω\| = 2005 rad/s.*\(step 11 of the run\)'):
+        integrator.integrate(Q0, [0.0, 0.0, 1905.0], 0.0, 1e-3, 11, model)
 
 
 def scene_with(integrator, step, inertia, omega_body):

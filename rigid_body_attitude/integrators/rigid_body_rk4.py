@@ -34,12 +34,17 @@ class RigidBodyRk4(DynamicsMethod):
     float math (≈10 µs torque-free). Invariants: ``|q| = 1`` by projection only (RK4 alone
     shrinks ``|q|`` by ``(h|ω|)⁶/9216`` per step); energy, ``|m|`` and world momentum drift at
     O(h⁴) per unit time (Hairer–Vilmart body, T = 1000, h = 0.05: energy −6e−7,
-    physics.md §6). Source: Kutta (1901); Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1.
+    physics.md §6). Steps with h·|ω| > 2 rad are refused (:class:`IntegratorError`; RK4
+    diverges above 2√2, silently until it overflows). Source: Kutta (1901); Hairer, Nørsett &
+    Wanner, *Solving ODEs I*, §II.1.
     """
 
     name = 'rk4'
     order = 4
     supports_torque = True
+    #: Stable for h·|ω| < 2√2 (RK4 on the imaginary axis; every |λ| ≤ |ω| torque-free);
+    #: steps above 2 rad are refused (:class:`.dynamics_base.DynamicsMethod`).
+    max_rotation_per_step = 2.0
 
     def _advance(self, q: Quat, omega: Vec, t: float, h: float,
                  model: BodyModel) -> tuple[Quat, Vec]:
