@@ -563,16 +563,18 @@ class AttitudePropagatorNode(Node):
 
     def _publish_invariants(self, energy: float | None = None,
                             world_momentum: tuple[float, float, float] | None = None) -> None:
-        """Publish ``energy`` and ``angular_momentum`` at the last output stamp."""
-        if energy is None:
-            energy = self.propagator.energy()
-            world_momentum = tuple(self.propagator.world_momentum().tolist())
+        """Publish ``energy`` and ``angular_momentum`` at the last output stamp (each only
+        when subscribed: gyro scenes compute them here, at ``publish_rate``)."""
         self._fresh_output = False
-        self.energy_message.data = energy
-        momentum = self.momentum_message
-        momentum.vector.x, momentum.vector.y, momentum.vector.z = world_momentum
-        self.energy_publisher.publish(self.energy_message)
-        self.momentum_publisher.publish(momentum)
+        if _listened(self.energy_publisher):
+            self.energy_message.data = self.propagator.energy() if energy is None else energy
+            self.energy_publisher.publish(self.energy_message)
+        if _listened(self.momentum_publisher):
+            if world_momentum is None:
+                world_momentum = tuple(self.propagator.world_momentum().tolist())
+            momentum = self.momentum_message
+            momentum.vector.x, momentum.vector.y, momentum.vector.z = world_momentum
+            self.momentum_publisher.publish(momentum)
 
     # -- rejections and diagnostics -------------------------------------------------------
 
