@@ -11,11 +11,9 @@ time; the replay tool feeds the same core, so a replayed bag gives the same numb
   input) ``imu/data`` per message, stamped with the gyro stamp. This is the hot path, so it
   handles serialized messages: the gyro subscriptions are raw, the stamp and rate are read
   from the CDR bytes and the outputs are written as CDR bytes with the header packed once
-  (:mod:`rigid_body_attitude.bag.cdr`, the replay tool's codecs). :func:`main` serves them
-  and the two timers with :class:`~rigid_body_attitude.node_loop.GyroLoop` (every queued
-  message per wake-up) and everything else with a ``SingleThreadedExecutor`` in a second
-  thread; a lock keeps the two threads' changes of the state apart. Spun in-process by any
-  executor, the node works the same, one message per callback as executors do.
+  (:mod:`rigid_body_attitude.bag.cdr`, the replay tool's codecs); outputs nobody subscribes
+  to are not built. Spun in-process by any executor the node works as usual, one message per
+  callback; :func:`main` serves it faster (below).
 * Dynamics scenes advance on a timer of the node clock (``use_sim_time`` works) at
   ``publish_rate`` and publish ``orientation``, ``pose`` and ``twist`` per tick, stamped with
   the propagated time; commanded inputs arrive on ``torque`` (geometry_msgs/WrenchStamped)
@@ -26,12 +24,28 @@ time; the replay tool feeds the same core, so a replayed bag gives the same numb
   initial state.
 
 Parameters and topics are documented in the README ("The node").
+
+**The gyro loop.** rclpy's executors handle one message per wake-up and rebuild their wait set
+each time (about 100 µs of Python per message with a ``SingleThreadedExecutor`` on this
+project's machine); at kHz gyro rates that is the whole budget. :func:`main` therefore serves
+gyro scenes with a :class:`GyroLoop` on the main thread: one reused ``rcl`` wait set holding
+the gyro subscriptions and the node's two timers; after each wake-up it takes *every* queued
+message of each subscription (``take_message`` on the raw subscription until it returns
+None), hands the CDR bytes to the node's callback, then runs the timers that are due.
+Everything else (parameter services, ``~/reset``, ``set_pose``) stays with a
+``SingleThreadedExecutor`` in a second thread, which then sleeps in ``rcl_wait`` (GIL
+released) nearly all the time; :attr:`AttitudePropagatorNode.state_lock` keeps the two
+threads' changes of the state apart. The entities the loop serves belong to a
+:class:`DedicatedGroup`: executors run them like any mutually exclusive group until a
+:class:`GyroLoop` claims the group. The loop's wait set also holds rclpy's SIGINT guard
+condition and one triggered on context shutdown or :meth:`GyroLoop.stop`, so it ends as
+promptly as ``rclpy.spin``. Measurements: ``docs/performance.md``, ``bench/NOTES.md``.
 """
 
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 import gc
 import math
@@ -45,15 +59,21 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import (
     PoseStamped, QuaternionStamped, TwistStamped, Vector3Stamped, WrenchStamped)
 import rclpy
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import InvalidParameterTypeException, ParameterException
+from rclpy.context import Context
+from rclpy.exceptions import InvalidHandle, InvalidParameterTypeException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.signals import SignalHandlerGuardCondition
+from rclpy.subscription import Subscription
 from rclpy.task import Future
+from rclpy.timer import Timer
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
@@ -67,7 +87,6 @@ from rigid_body_attitude.errors import AttitudeError, InputError
 from rigid_body_attitude.messages import (
     body_frame_velocity, diagnostic_report, LEVEL_ERROR, LEVEL_WARN,
     NANOSECONDS_PER_SECOND, stale_command_count, TimeBase)
-from rigid_body_attitude.node_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import (
     build_propagator, DynamicsPropagator, MAX_STEPS_PER_CALL)
@@ -76,7 +95,8 @@ from rigid_body_attitude.settings import (
     DIAGNOSTICS_PERIOD, load_node_scene, NODE_DEFAULTS, NODE_NAME, publishes)
 from rigid_body_attitude.stream import ClockDriver, CommandStream, GyroStream, Outcome
 
-__all__ = ['AttitudePropagatorNode', 'NodeSettings', 'check_parameters', 'main', 'spin']
+__all__ = ['AttitudePropagatorNode', 'DedicatedGroup', 'GyroLoop', 'NodeSettings',
+           'check_parameters', 'main', 'spin']
 
 #: Seconds between repeated warnings about the same rejection reason.
 WARNING_INTERVAL = 5.0
@@ -663,6 +683,116 @@ class AttitudePropagatorNode(Node):
             f'{math.sqrt(sum(h * h for h in diagnostics.world_angular_momentum)):.9g} N m s '
             f'(drift {diagnostics.momentum_drift:.2e}), inputs {rate:.1f} Hz, '
             f'rejected {rejected}')
+
+
+# -- the gyro loop ------------------------------------------------------------------------
+
+#: Nanoseconds one wait may last before the loop re-checks its context (guards wake it first).
+WAIT_TIMEOUT_NS = 1_000_000_000
+
+#: A handler gets one message's serialized (CDR) bytes.
+Handler = Callable[[bytes], Any]
+
+
+class DedicatedGroup(MutuallyExclusiveCallbackGroup):
+    """A mutually exclusive callback group whose entities a :class:`GyroLoop` can claim.
+
+    Until :attr:`claimed` is set, executors run the entities as usual; afterwards they leave
+    them out of their wait sets and never begin executing them.
+    """
+
+    def __init__(self) -> None:
+        """Unclaimed: executors serve the entities."""
+        super().__init__()
+        self.claimed = False
+
+    def can_execute(self, entity: Any) -> bool:
+        """Executors may wait on ``entity`` only while the group is unclaimed."""
+        return not self.claimed and super().can_execute(entity)
+
+    def beginning_execution(self, entity: Any) -> bool:
+        """An executor may run ``entity``'s callback only while the group is unclaimed."""
+        return not self.claimed and super().beginning_execution(entity)
+
+
+class GyroLoop:
+    """Waits on raw subscriptions and timers; hands every queued message to its handler and
+    runs the timers that are due.
+
+    Creating the loop claims the entities' :class:`DedicatedGroup`, so create it before an
+    executor that serves the rest of the node starts spinning (an executor that already began
+    one of their callbacks would otherwise run it concurrently).
+    """
+
+    def __init__(self, context: Context, served: Sequence[tuple[Subscription, Handler]],
+                 timers: Sequence[Timer] = ()) -> None:
+        """Serve ``served`` (raw subscriptions, handlers) and ``timers`` (their callbacks),
+        all in :class:`DedicatedGroup` s."""
+        for subscription, _ in served:
+            if not subscription.raw:
+                raise ValueError(f'Expected raw subscriptions, got {subscription.topic_name!r}')
+        for entity in [subscription for subscription, _ in served] + list(timers):
+            if not isinstance(entity.callback_group, DedicatedGroup):
+                raise ValueError(f'Expected entities in a DedicatedGroup, got {entity!r}')
+            entity.callback_group.claimed = True
+        self.context = context
+        self.served = [(subscription.handle, subscription.msg_type, handler)
+                       for subscription, handler in served]
+        self.timers = [(timer.handle, timer.callback) for timer in timers]
+        self.handled = 0
+        self._stopping = threading.Event()
+        self._sigint_guard = SignalHandlerGuardCondition(context)
+        self._wake_guard = GuardCondition(None, None, context=context)
+        self._closed = False
+        context.on_shutdown(self.stop)
+
+    def stop(self) -> None:
+        """Make :meth:`run` return after the messages of its current wake-up (any thread)."""
+        self._stopping.set()
+        if not self._closed:
+            try:
+                self._wake_guard.trigger()
+            except InvalidHandle:  # closed meanwhile: run() has returned already
+                pass
+
+    def run(self) -> None:
+        """Wait and handle messages until :meth:`stop`, SIGINT or context shutdown.
+
+        A handler's exception ends the loop and propagates.
+        """
+        context, served, timers = self.context, self.served, self.timers
+        stopping = self._stopping
+        wait_set = _rclpy.WaitSet(len(served), 2, len(timers), 0, 0, 0, context.handle)
+        sigint_handle, wake_handle = self._sigint_guard.handle, self._wake_guard.handle
+        try:
+            while context.ok() and not stopping.is_set():
+                wait_set.clear_entities()
+                for handle, _, _ in served:
+                    wait_set.add_subscription(handle)
+                for handle, _ in timers:
+                    wait_set.add_timer(handle)
+                wait_set.add_guard_condition(sigint_handle)
+                wait_set.add_guard_condition(wake_handle)
+                wait_set.wait(WAIT_TIMEOUT_NS)
+                for handle, msg_type, handler in served:
+                    taken = handle.take_message(msg_type, True)
+                    while taken is not None:
+                        handler(taken[0])
+                        self.handled += 1
+                        taken = handle.take_message(msg_type, True)
+                for handle, callback in timers:
+                    if handle.is_timer_ready():
+                        handle.call_timer()
+                        callback()
+        finally:
+            wait_set.destroy_when_not_in_use()
+
+    def close(self) -> None:
+        """Release the guard conditions (after :meth:`run` returned)."""
+        if not self._closed:
+            self._closed = True
+            self._sigint_guard.destroy()
+            self._wake_guard.destroy()
 
 
 def _listened(publisher: Any) -> bool:
