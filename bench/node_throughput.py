@@ -20,8 +20,10 @@ background load on the shared machine hits them alike. Per run it reports:
 ``--soak`` instead runs one target at 1 kHz for ``--soak-minutes`` and reports its RSS
 (/proc/<pid>/status VmRSS) every minute, plus sent / received / lost over the whole soak.
 
-Results go to ``bench/results/*.json``; ``docs/performance.md`` and ``docs/performance.png``
-are regenerated from them after every run. Exit code 0 unless a process crashed, could not be
+Results go to ``bench/results/*.json`` and a throughput report (``--report``, by default
+``bench/results/throughput.md``); ``bench/performance_report.py`` composes
+``docs/performance.md`` and its plot from the node's results, the core step costs and the
+batch figures. Exit code 0 unless a process crashed, could not be
 started, or ignored SIGINT (measured losses are results, not errors).
 
 Examples::
@@ -351,7 +353,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--soak-minutes', type=int, default=10)
     parser.add_argument('--soak-rate', type=float, default=1000.0)
     parser.add_argument('--results-dir', type=Path, default=BENCH / 'results')
-    parser.add_argument('--report', type=Path, default=REPO / 'docs' / 'performance.md')
+    parser.add_argument('--report', type=Path, default=BENCH / 'results' / 'throughput.md')
     args = parser.parse_args(argv)
     if args.soak_minutes < 2:
         parser.error(f'expected --soak-minutes >= 2 (RSS at 1 min vs the end), '
