@@ -28,8 +28,9 @@ from operator import itemgetter
 from typing import Any
 
 from rosbags.interfaces import Connection
-from rosbags.rosbag2.reader import DirectoryReader
 from rosbags.rosbag2.storage_mcap import McapReader, decompress
+
+from rigid_body_attitude.bag.storage import storage_files
 
 __all__ = ['fast_messages']
 
@@ -48,13 +49,9 @@ def fast_messages(storage: Any, connections: Collection[Connection]) -> Iterator
 
     ``storage`` is the ``storage`` attribute of an open ``rosbags.rosbag2.Reader``.
     """
-    if isinstance(storage, DirectoryReader):
-        if storage.metadata.compression_mode == 'message':
-            return None
-        files = list(storage.storages)
-    else:
-        files = [storage]
-    if not files or not all(isinstance(f, McapReader) and f.chunks and f.bio for f in files):
+    files = storage_files(storage,
+                          lambda f: bool(isinstance(f, McapReader) and f.chunks and f.bio))
+    if files is None:
         return None
     return _iterate(files, connections)
 

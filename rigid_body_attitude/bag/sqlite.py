@@ -19,8 +19,9 @@ from itertools import chain
 from typing import Any
 
 from rosbags.interfaces import Connection
-from rosbags.rosbag2.reader import DirectoryReader
 from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
+
+from rigid_body_attitude.bag.storage import storage_files
 
 __all__ = ['fast_messages']
 
@@ -36,13 +37,8 @@ def fast_messages(storage: Any, connections: Collection[Connection]) -> Iterator
 
     ``storage`` is the ``storage`` attribute of an open ``rosbags.rosbag2.Reader``.
     """
-    if isinstance(storage, DirectoryReader):
-        if storage.metadata.compression_mode == 'message':
-            return None
-        files = list(storage.storages)
-    else:
-        files = [storage]
-    if not files or not all(isinstance(f, Sqlite3Reader) and f.dbconn for f in files):
+    files = storage_files(storage, lambda f: bool(isinstance(f, Sqlite3Reader) and f.dbconn))
+    if files is None:
         return None
     return chain.from_iterable(_file_messages(reader, connections) for reader in files)
 
