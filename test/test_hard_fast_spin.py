@@ -25,6 +25,8 @@ import mpmath
 import numpy as np
 import pytest
 
+from high_precision import mp_attitude_error
+
 from rigid_body_attitude import quaternion as quat
 from rigid_body_attitude.errors import IntegratorError
 from rigid_body_attitude.integrators import (
@@ -75,17 +77,6 @@ def mp_closed_form(q0, axis, angle):
             p[0] * e[1] + p[1] * e[0] + p[2] * e[3] - p[3] * e[2],
             p[0] * e[2] - p[1] * e[3] + p[2] * e[0] + p[3] * e[1],
             p[0] * e[3] + p[1] * e[2] - p[2] * e[1] + p[3] * e[0]]
-
-
-def mp_attitude_error(q, reference):
-    """``2 atan2(|vec(q_ref* ⊗ q)|, |scalar|)`` in 40 digits (sign-invariant)."""
-    r = [mpmath.mpf(float(c)) for c in q]
-    a = reference
-    w = a[0] * r[0] + a[1] * r[1] + a[2] * r[2] + a[3] * r[3]
-    x = a[0] * r[1] - a[1] * r[0] - a[2] * r[3] + a[3] * r[2]
-    y = a[0] * r[2] + a[1] * r[3] - a[2] * r[0] - a[3] * r[1]
-    z = a[0] * r[3] - a[1] * r[2] + a[2] * r[1] - a[3] * r[0]
-    return float(2 * mpmath.atan2(mpmath.sqrt(x * x + y * y + z * z), abs(w)))
 
 
 def norm_error(q):

@@ -21,6 +21,8 @@ import mpmath
 import numpy as np
 import pytest
 
+from high_precision import mp_attitude_error
+
 from rigid_body_attitude import quaternion as quat
 from rigid_body_attitude.integrators import dynamics_integrator
 from rigid_body_attitude.integrators.exact_torque_free import TorqueFreeMotion
@@ -100,17 +102,6 @@ def test_ten_million_strapdown_steps():
     exact = [mpmath.cos(half)] + [mpmath.sin(half) * mpmath.mpf(float(a)) / norm for a in axis]
     u = EPS / 2
     assert mp_attitude_error(q, exact) <= steps * 3.5 * h * u + 4.0 * math.sqrt(steps) * u
-
-
-def mp_attitude_error(q, reference):
-    """``2 atan2(|vec(q_ref* ⊗ q)|, |scalar|)`` in 40 digits (sign-invariant)."""
-    r = [mpmath.mpf(float(c)) for c in q]
-    a = reference
-    w = a[0] * r[0] + a[1] * r[1] + a[2] * r[2] + a[3] * r[3]
-    x = a[0] * r[1] - a[1] * r[0] - a[2] * r[3] + a[3] * r[2]
-    y = a[0] * r[2] + a[1] * r[3] - a[2] * r[0] - a[3] * r[1]
-    z = a[0] * r[3] - a[1] * r[2] + a[2] * r[1] - a[3] * r[0]
-    return float(2 * mpmath.atan2(mpmath.sqrt(x * x + y * y + z * z), abs(w)))
 
 
 def test_exact_solution_at_a_million_step_times():
