@@ -39,7 +39,9 @@ threads' changes of the state apart. The entities the loop serves belong to a
 :class:`DedicatedGroup`: executors run them like any mutually exclusive group until a
 :class:`GyroLoop` claims the group. The loop's wait set also holds rclpy's SIGINT guard
 condition and one triggered on context shutdown or :meth:`GyroLoop.stop`, so it ends as
-promptly as ``rclpy.spin``. Measurements: ``docs/performance.md``, ``bench/NOTES.md``.
+promptly as ``rclpy.spin``. :func:`main` also sets Fast DDS and the scheduler up for kHz
+rates (:mod:`rigid_body_attitude.middleware`). Measurements: ``docs/performance.md``,
+``bench/NOTES.md``.
 """
 
 from __future__ import annotations
@@ -87,6 +89,8 @@ from rigid_body_attitude.errors import AttitudeError, InputError
 from rigid_body_attitude.messages import (
     body_frame_velocity, diagnostic_report, LEVEL_ERROR, LEVEL_WARN,
     NANOSECONDS_PER_SECOND, stale_command_count, TimeBase)
+from rigid_body_attitude.middleware import (
+    apply_cpu_scheduling, check_cpu_scheduling, use_packaged_fastdds_profile)
 from rigid_body_attitude.outputs import OutputTracker
 from rigid_body_attitude.propagator import (
     build_propagator, DynamicsPropagator, MAX_STEPS_PER_CALL)
@@ -150,6 +154,8 @@ PARAMETERS: dict[str, ParameterSpec] = {
                                 'the scene\'s ("" = the scene\'s)'),
     'step': ParameterSpec('s: integration step of dynamics scenes (0 = the scene\'s)',
                           (0.0, 10.0)),
+    'cpu_scheduling': ParameterSpec('policy of the node\'s threads: batch (SCHED_BATCH, no '
+                                    'wake-up preemption) or default (as started)'),
 }
 
 _TYPE_NAMES = {float: 'double (written with a decimal point, e.g. 50.0)',
@@ -174,6 +180,9 @@ def check_parameters(values: Mapping[str, Any], dynamics_step: float = 0.0) -> s
         value = values[name]
         if not (math.isfinite(value) and value >= 0.0):
             return f'Expected parameter `{name}` to be a finite number >= 0, got {value!r}'
+    problem = check_cpu_scheduling(values['cpu_scheduling'])
+    if problem:
+        return problem
     for name in ('scene', 'world_frame', 'body_frame'):
         if not values[name].strip():
             return f'Expected parameter `{name}` to be a non-empty name, got {values[name]!r}'
@@ -235,6 +244,7 @@ class AttitudePropagatorNode(Node):
         self.state_lock = threading.Lock()
         values = self._declare_parameters()
         self.settings = load_settings(values)
+        self.cpu_scheduling: str = values['cpu_scheduling']
         self.scene = self.settings.scene
         self.propagator = build_propagator(self.scene)
         self.is_dynamics = isinstance(self.propagator, DynamicsPropagator)
@@ -833,10 +843,14 @@ def spin(node: AttitudePropagatorNode) -> None:
     the objects of the start-up (about 60 000: rclpy, NumPy, SciPy, the scene) are collected
     once and frozen out of the garbage collector's reach: a full collection would otherwise
     scan them all (35 ms here, so dozens of gyro messages delayed at once); afterwards it
-    scans only what the run itself keeps.
+    scans only what the run itself keeps. The node's threads then take the
+    ``cpu_scheduling`` policy (:func:`~rigid_body_attitude.middleware.apply_cpu_scheduling`).
     """
     gc.collect()
     gc.freeze()
+    changed = apply_cpu_scheduling(node.cpu_scheduling)  # later threads inherit it
+    if changed:
+        node.get_logger().info(f'cpu_scheduling {node.cpu_scheduling!r}: {changed} threads')
     loop = node.gyro_loop()  # claims the gyro subscriptions and timers before any spin
     if loop is None:
         rclpy.spin(node)
@@ -875,6 +889,7 @@ def _stop(done: Future, thread: threading.Thread) -> None:
 
 def main(args: list[str] | None = None) -> int:
     """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2."""
+    profile_note = use_packaged_fastdds_profile()  # before the participant exists
     try:
         rclpy.init(args=args)
     except RuntimeError as err:  # rcl could not parse the ROS arguments
@@ -883,6 +898,7 @@ def main(args: list[str] | None = None) -> int:
     node = None
     try:
         node = AttitudePropagatorNode()
+        node.get_logger().info(profile_note)
         spin(node)
     except (AttitudeError, ParameterException, OSError) as err:
         print(f'error: {_error_text(err)}', file=sys.stderr)

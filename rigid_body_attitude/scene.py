@@ -25,7 +25,6 @@ Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`sce
 from __future__ import annotations
 
 import os
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -40,6 +39,7 @@ from rigid_body_attitude.effects import EFFECTS, BodyProperties, Effect
 from rigid_body_attitude.effects.base import real
 from rigid_body_attitude.errors import AttitudeError, SceneError
 from rigid_body_attitude.inertia import Inertia
+from rigid_body_attitude.paths import config_folders
 
 __all__ = ['RATE_SOURCES', 'Scene', 'builtin_scenes', 'load_scene', 'scene_from_mapping',
            'scene_path']
@@ -113,20 +113,10 @@ class Scene:
 def builtin_scenes() -> dict[str, Path]:
     """Names and files of the shipped scenes (``config/scenes/*.yaml``)."""
     found: dict[str, Path] = {}
-    for folder in reversed(_scene_folders()):
+    for folder in reversed(config_folders('scenes')):
         for path in sorted(folder.glob('*.yaml')):
             found[path.stem] = path
     return found
-
-
-def _scene_folders() -> list[Path]:
-    """Where built-in scenes are looked for, first match wins."""
-    folders = [Path(sys.prefix) / 'share' / 'rigid_body_attitude' / 'config' / 'scenes']
-    for prefix in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep):
-        if prefix:
-            folders.append(Path(prefix) / 'share' / 'rigid_body_attitude' / 'config' / 'scenes')
-    folders.append(Path(__file__).resolve().parent.parent / 'config' / 'scenes')
-    return [folder for folder in folders if folder.is_dir()]
 
 
 def scene_path(name_or_path: str) -> Path:

@@ -54,6 +54,7 @@ NODE_DEFAULTS: dict[str, Any] = {
     'torque_timeout': 0.0,
     'integrator': '',
     'step': 0.0,
+    'cpu_scheduling': 'batch',
 }
 
 #: Gyro input topics (relative names) → message type.

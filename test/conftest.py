@@ -9,7 +9,9 @@ imports rclpy (rclpy reads these variables when a context is initialised):
   people usually use), held with a lock file for the process's lifetime, so concurrent test runs
   on one machine (several checkouts, pytest-xdist workers) never see each other's topics.
   ``RIGID_BODY_ATTITUDE_TEST_DOMAIN_ID=<id>`` chooses one instead. The user's own
-  ``ROS_DOMAIN_ID``, ``ROS_LOCALHOST_ONLY`` and ``ROS_STATIC_PEERS`` are not used. Tests and
+  ``ROS_DOMAIN_ID``, ``ROS_LOCALHOST_ONLY`` and ``ROS_STATIC_PEERS`` are not used, nor a Fast DDS
+  profile of theirs (``FASTRTPS_DEFAULT_PROFILES_FILE``, ``FASTDDS_DEFAULT_PROFILES_FILE``,
+  ``RMW_FASTRTPS_USE_QOS_FROM_XML``): the node under test loads the package's own. Tests and
   fixtures get the value from the ``ros_domain_id`` fixture; subprocesses inherit it.
 * ``AMENT_PREFIX_PATH`` starts with ``sys.prefix`` (the virtual env the package is installed
   in), so ``get_package_prefix('rigid_body_attitude')`` resolves there, as ``ros2 run`` would.
@@ -18,10 +20,12 @@ imports rclpy (rclpy reads these variables when a context is initialised):
   source tree put on ``sys.path``.
 """
 
+from collections.abc import Iterator
 import fcntl
 import importlib.util
 import os
 from pathlib import Path
+import subprocess
 import sys
 import tempfile
 from typing import IO
@@ -69,7 +73,8 @@ def _ament_prefix_path_with(prefix: str) -> str:
 
 
 TEST_DOMAIN_ID = _reserve_domain_id()
-for _variable in ('ROS_LOCALHOST_ONLY', 'ROS_STATIC_PEERS'):
+for _variable in ('ROS_LOCALHOST_ONLY', 'ROS_STATIC_PEERS', 'FASTRTPS_DEFAULT_PROFILES_FILE',
+                  'FASTDDS_DEFAULT_PROFILES_FILE', 'RMW_FASTRTPS_USE_QOS_FROM_XML'):
     os.environ.pop(_variable, None)
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ['ROS_DOMAIN_ID'] = str(TEST_DOMAIN_ID)
@@ -95,3 +100,14 @@ def repo_root() -> Path:
 def data_dir(repo_root: Path) -> Path:
     """The BROAD trials shipped in data/broad (CC BY 4.0; attribution in its README)."""
     return repo_root / 'data' / 'broad'
+
+
+@pytest.fixture
+def processes() -> Iterator[list[subprocess.Popen]]:
+    """Processes a test starts; any still running afterwards is killed."""
+    started: list[subprocess.Popen] = []
+    yield started
+    for process in started:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()

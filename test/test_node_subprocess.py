@@ -62,17 +62,6 @@ def stop_with_sigint(process: subprocess.Popen, timeout: float = 15.0) -> tuple[
     return process.returncode, stderr
 
 
-@pytest.fixture
-def processes() -> Iterator[list[subprocess.Popen]]:
-    """Processes a test starts; any still running afterwards is killed."""
-    started: list[subprocess.Popen] = []
-    yield started
-    for process in started:
-        if process.poll() is None:
-            process.kill()
-            process.communicate()
-
-
 def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes):
     namespace = unique_namespace(request)
     process = start('--ros-args', '-p', 'scene:=strapdown', '-r', f'__ns:={namespace}')
