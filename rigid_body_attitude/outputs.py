@@ -50,7 +50,7 @@ class OutputTracker:
     def attitude(self, propagator: DynamicsPropagator | GyroPropagator
                  ) -> tuple[float, float, float, float]:
         """The propagator's attitude, unit-norm and on the side of the previous output."""
-        w, x, y, z = propagator.state.attitude.tolist()
+        w, x, y, z = propagator.state.attitude_tuple()
         scale = 1.0 / math.sqrt(w * w + x * x + y * y + z * z)
         previous = self.previous
         if previous is not None and (w * previous[0] + x * previous[1] + y * previous[2]
@@ -66,7 +66,7 @@ class OutputTracker:
             stamp=state.time,
             attitude=self.attitude(propagator),
             position=tuple(state.position.tolist()),
-            omega_body=tuple(state.omega_body.tolist()),
+            omega_body=state.omega_tuple(),
             energy=propagator.energy(),
             world_momentum=tuple(propagator.world_momentum().tolist()),
         )

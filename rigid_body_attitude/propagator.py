@@ -68,9 +68,85 @@ class PropagatorState:
     omega_body: FloatArray
     position: FloatArray = field(default_factory=lambda: np.zeros(3))
 
+    def attitude_tuple(self) -> tuple[float, float, float, float]:
+        """The attitude (w, x, y, z) as floats."""
+        w, x, y, z = self.attitude.tolist()
+        return w, x, y, z
+
+    def omega_tuple(self) -> tuple[float, float, float]:
+        """The body rate as floats [rad/s]."""
+        p, q, r = self.omega_body.tolist()
+        return p, q, r
+
+
+class GyroState(PropagatorState):
+    """A :class:`PropagatorState` that keeps attitude and rate as float tuples.
+
+    The gyro hot path (:meth:`GyroPropagator.advance`, once per sample) writes tuples with
+    :meth:`set_sample` and reads them with :meth:`attitude_tuple` / :meth:`omega_tuple`, so no
+    array is built per sample (each costs about 1 µs, more with a cold cache). ``attitude``
+    and ``omega_body`` are built when read and are read-only: assign a new value to change
+    them.
+    """
+
+    _attitude_floats: tuple[float, float, float, float]
+    _omega_floats: tuple[float, float, float]
+    _attitude_array: FloatArray | None
+    _omega_array: FloatArray | None
+
+    @property  # type: ignore[override]
+    def attitude(self) -> FloatArray:
+        """Unit quaternion (w, x, y, z), body → world (read-only array)."""
+        if self._attitude_array is None:
+            self._attitude_array = _read_only(self._attitude_floats)
+        return self._attitude_array
+
+    @attitude.setter
+    def attitude(self, value: ArrayLike) -> None:
+        self._attitude_array = _read_only(value)
+        w, x, y, z = self._attitude_array.tolist()
+        self._attitude_floats = (w, x, y, z)
+
+    @property  # type: ignore[override]
+    def omega_body(self) -> FloatArray:
+        """Body rate [rad/s] (read-only array)."""
+        if self._omega_array is None:
+            self._omega_array = _read_only(self._omega_floats)
+        return self._omega_array
+
+    @omega_body.setter
+    def omega_body(self, value: ArrayLike) -> None:
+        self._omega_array = _read_only(value)
+        p, q, r = self._omega_array.tolist()
+        self._omega_floats = (p, q, r)
+
+    def attitude_tuple(self) -> tuple[float, float, float, float]:
+        """The attitude (w, x, y, z) as floats."""
+        return self._attitude_floats
+
+    def omega_tuple(self) -> tuple[float, float, float]:
+        """The body rate as floats [rad/s]."""
+        return self._omega_floats
+
+    def set_sample(self, time: float, attitude: tuple[float, float, float, float],
+                   omega_body: tuple[float, float, float]) -> None:
+        """Time, attitude and rate after one sample, as floats (arrays built when read)."""
+        self.time = time
+        self._attitude_floats, self._attitude_array = attitude, None
+        self._omega_floats, self._omega_array = omega_body, None
+
+
+def _read_only(values: ArrayLike) -> FloatArray:
+    """A float array copy of ``values`` that cannot be changed in place."""
+    array = np.array(values, dtype=float)
+    array.flags.writeable = False
+    return array
+
 
 class _Propagator:
     """Shared parts: effects, commanded inputs, reset, diagnostics."""
+
+    _state_type: type[PropagatorState] = PropagatorState
 
     def __init__(self, scene: Scene) -> None:
         self.scene = scene
@@ -98,8 +174,8 @@ class _Propagator:
         """Back to the scene's initial state at ``time``; every effect resets too."""
         for effect in self.effects:
             effect.reset()
-        self.state = PropagatorState(time, self.scene.initial_attitude.copy(),
-                                     self.scene.initial_omega_body.copy())
+        self.state = self._state_type(time, self.scene.initial_attitude.copy(),
+                                      self.scene.initial_omega_body.copy())
         self._sync_position()
         self.tracker = DiagnosticsTracker(self.energy(), self.world_momentum())
 
@@ -152,7 +228,7 @@ class _Propagator:
 
     def energy(self) -> float:
         """Kinetic energy [J]: rotation plus the effects' own (translation)."""
-        p, q, r = self.state.omega_body.tolist()
+        p, q, r = self.state.omega_tuple()
         j00, j01, j02, _, j11, j12, _, _, j22 = self._inertia_entries
         rotation = 0.5 * (j00 * p * p + j11 * q * q + j22 * r * r) + (
             j01 * p * q + j02 * p * r + j12 * q * r)
@@ -162,7 +238,7 @@ class _Propagator:
 
     def world_momentum(self) -> FloatArray:
         """World-frame angular momentum ``R(q)(J ω + h)`` [N m s] (plain float math)."""
-        p, q, r = self.state.omega_body.tolist()
+        p, q, r = self.state.omega_tuple()
         j00, j01, j02, j10, j11, j12, j20, j21, j22 = self._inertia_entries
         mx = j00 * p + j01 * q + j02 * r
         my = j10 * p + j11 * q + j12 * r
@@ -170,7 +246,7 @@ class _Propagator:
         if self.rotors:
             hx, hy, hz = self.rotor_momentum(self.state.time).tolist()
             mx, my, mz = mx + hx, my + hy, mz + hz
-        w, x, y, z = self.state.attitude.tolist()
+        w, x, y, z = self.state.attitude_tuple()
         tx, ty, tz = 2.0 * (y * mz - z * my), 2.0 * (z * mx - x * mz), 2.0 * (x * my - y * mx)
         return np.array([mx + w * tx + (y * tz - z * ty),
                          my + w * ty + (z * tx - x * tz),
@@ -343,6 +419,9 @@ class DynamicsPropagator(_Propagator):
 class GyroPropagator(_Propagator):
     """Strapdown integration of measured body rates with the scene's strapdown method."""
 
+    _state_type = GyroState
+    state: GyroState
+
     def __init__(self, scene: Scene) -> None:
         """Build the rate corrections and the strapdown method named by the scene."""
         if scene.rate_source != 'gyro':
@@ -402,10 +481,9 @@ class GyroPropagator(_Propagator):
             omega = tuple(self.corrected(t, np.array(omega_measured)).tolist())
         else:
             omega = omega_measured
-        attitude = self.method.propagate(state.attitude.tolist(), state.omega_body.tolist(),
-                                         omega, t - state.time)
-        state.attitude = np.array(attitude)
-        state.time, state.omega_body = t, np.array(omega)
+        attitude = self.method.propagate(state.attitude_tuple(), state.omega_tuple(), omega,
+                                         t - state.time)
+        state.set_sample(t, attitude, omega)
 
 
 def _norm(vector: FloatArray) -> float:

@@ -186,6 +186,30 @@ def test_gyro_propagator_holds_the_previous_rate():
     np.testing.assert_array_equal(propagator.state.omega_body, [0.0, 3.0, 0.0])
 
 
+def test_gyro_state_arrays_follow_the_float_samples_and_refuse_in_place_writes():
+    propagator = GyroPropagator(gyro_scene())
+    propagator.start(0.0, [0.1, 0.0, 0.0])
+    before = propagator.state.attitude
+    propagator.advance(0.5, (0.0, 0.2, 0.0))
+    state = propagator.state
+    # The array read after a float-only sample is the new one, equal to the floats exactly.
+    assert state.attitude is not before
+    assert state.attitude.tolist() == list(state.attitude_tuple())
+    assert state.omega_body.tolist() == [0.0, 0.2, 0.0] == list(state.omega_tuple())
+    np.testing.assert_array_equal(state.attitude, quat.exp([0.05, 0.0, 0.0]))
+    with pytest.raises(ValueError, match='read-only'):
+        state.attitude[0] = 0.0
+    with pytest.raises(ValueError, match='read-only'):
+        state.omega_body[1] = 1.0
+    # Assigning an array (set_attitude) updates the floats the hot path reads.
+    propagator.set_attitude([0.0, 1.0, 0.0, 0.0])
+    assert state.attitude_tuple() == (0.0, 1.0, 0.0, 0.0)
+    propagator.advance(1.0, (0.0, 0.0, 0.0))
+    np.testing.assert_allclose(state.attitude, quat.multiply([0.0, 1.0, 0.0, 0.0],
+                                                             quat.exp([0.0, 0.1, 0.0])),
+                               rtol=0, atol=1e-16)
+
+
 def test_gyro_propagator_long_run_keeps_unit_norm_and_closed_form():
     # a constant rate for 10⁴ samples: exact per step, round-off only (10⁴ × 2.2e−16)
     propagator = GyroPropagator(gyro_scene())
