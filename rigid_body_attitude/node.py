@@ -327,6 +327,9 @@ class AttitudePropagatorNode(Node):
             self.twist_publisher = self._publisher(TwistStamped, 'twist')
         else:
             self.imu_publisher = self._publisher(Imu, 'imu/data')
+        self.orientation_raw = RawOutput(self.orientation_publisher)
+        self.pose_raw = RawOutput(self.pose_publisher)
+        self.imu_raw = None if self.is_dynamics else RawOutput(self.imu_publisher)
         # Messages built once; pose, orientation and angular_momentum share one header
         # (world frame, output stamp) and pose shares the orientation's quaternion.
         self.orientation_message = QuaternionStamped()
@@ -419,8 +422,8 @@ class AttitudePropagatorNode(Node):
             attitude = self._gyro_sample(sec, nanosec, rate)
             if attitude is not None:
                 # REP-145: orientation covariance all zeros = unknown (not -1: provided).
-                if _listened(self.imu_publisher):
-                    self.imu_publisher.publish(imu_with_orientation(imu_cdr, attitude))
+                if self.imu_raw.subscription_count():
+                    self.imu_raw.publish(imu_with_orientation(imu_cdr, attitude))
 
     def angular_velocity_callback(self, rate_cdr: bytes) -> None:
         """Propagate with a serialized Vector3Stamped body rate."""
@@ -497,11 +500,11 @@ class AttitudePropagatorNode(Node):
             if not publishes(outcome):
                 return None
         attitude = self.output_tracker.attitude(self.propagator)
-        if _listened(self.orientation_publisher):
-            self.orientation_publisher.publish(self.encode_orientation(sec, nanosec, attitude))
-        if _listened(self.pose_publisher):
-            self.pose_publisher.publish(self.encode_pose(sec, nanosec, _ZERO_POSITION,
-                                                         attitude))
+        orientation, pose = self.orientation_raw, self.pose_raw
+        if orientation.subscription_count():
+            orientation.publish(self.encode_orientation(sec, nanosec, attitude))
+        if pose.subscription_count():
+            pose.publish(self.encode_pose(sec, nanosec, _ZERO_POSITION, attitude))
         self._output_stamp = (sec, nanosec)
         self._fresh_output = True
         return attitude
@@ -806,7 +809,7 @@ class GyroLoop:
 
 
 def _listened(publisher: Any) -> bool:
-    """Whether a gyro-rate output is worth building and publishing: a subscription is matched.
+    """Whether an output is worth building and publishing: a subscription is matched.
 
     Outputs are VOLATILE (``qos_overrides`` cannot change durability), so a sample published
     with no matched subscription reaches nobody, ever; Fast DDS still stores it in the
@@ -814,6 +817,27 @@ def _listened(publisher: Any) -> bool:
     against about 2 µs for the count (docs/performance.md).
     """
     return publisher.get_subscription_count() > 0
+
+
+class RawOutput:
+    """A gyro-rate output: its subscription count and CDR-bytes publish, bound once.
+
+    Both go straight to rclpy's publisher handle, without :class:`rclpy.publisher.Publisher`'s
+    per-call wrapper (it enters the handle as a context manager, against destruction by
+    another thread, and checks the message type). That is safe here because the node's
+    publishers are destroyed only after its gyro loop has returned. Publish only when
+    :meth:`subscription_count` is non-zero (see :func:`_listened`).
+    """
+
+    __slots__ = ('subscription_count', 'publish')
+
+    def __init__(self, publisher: Any) -> None:
+        """Bind ``publisher``'s handle."""
+        handle = publisher.handle
+        #: Matched subscriptions now (``int``; call it).
+        self.subscription_count: Callable[[], int] = handle.get_subscription_count
+        #: Publish serialized (CDR) ``bytes``.
+        self.publish: Callable[[bytes], None] = handle.publish_raw
 
 
 def _error_text(err: BaseException) -> str:

@@ -151,8 +151,10 @@ def _wait_for_line(process: subprocess.Popen, text: str, timeout: float = 30.0) 
     ((), os.SCHED_BATCH, "cpu_scheduling 'batch': "),
     (('-p', 'cpu_scheduling:=default'), os.SCHED_OTHER, 'Fast DDS profile'),
 ])
-def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(processes, arguments,
-                                                                    policy, logged):
+def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(processes, monkeypatch,
+                                                                    arguments, policy, logged):
+    for variable in FASTDDS_PROFILE_VARIABLES:  # set by an in-process main() of another test
+        monkeypatch.delenv(variable, raising=False)
     process = start('--ros-args', '-p', 'scene:=strapdown', *arguments)
     processes.append(process)
     lines = _wait_for_line(process, logged)
