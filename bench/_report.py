@@ -233,8 +233,10 @@ def render(throughput: Optional[dict], soak: Optional[dict], png_name: str) -> s
              'Method, techniques and the recipe for a fast rclpy node: `bench/NOTES.md`.', '',
              'Reading the numbers: at 1 kHz every gyro message is its own wake-up, and on this '
              'VM receiving one reliable message and publishing one to another process costs '
-             'about 11 % of a core in the middleware alone (`bench/NOTES.md`, section 3), so '
-             'the fast relay is the floor a node can approach. From 15 kHz on, the publisher, '
+             '9–12 % of a core in the middleware alone (`bench/NOTES.md`, sections 3 and 3a), '
+             'so the fast relay (the same loop with no physics, on Fast DDS\'s defaults; the node '
+             'also sets Fast DDS and the scheduler up, section 3a) is the yardstick. From 15 kHz '
+             'on, the publisher, '
              'the target and the subscriber together need about two cores: those rows also '
              'measure how three processes share this 2-core machine with whatever else runs '
              '(see the other-load column). Compare targets within one run.', '']

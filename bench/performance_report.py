@@ -39,36 +39,40 @@ sys.path.insert(0, str(BENCH))
 
 import _report  # noqa: E402
 
-#: What limits the 1 kHz CPU figure, from the profiles of the final node (py-spy 0.4.3,
-#: ``record --native`` at 200 Hz for 8 s at 1 kHz, and ``/proc/<pid>/task/*/stat``).
+#: What limits the 1 kHz CPU figure, from per-thread CPU and context switches
+#: (``/proc/<pid>/task/*``), gdb, perf and py-spy at 1 kHz: ``bench/NOTES.md`` sections 3 and 3a.
 LIMITS = """\
 **What limits the 1 kHz CPU figure.** At 1 kHz every gyro message is its own wake-up (a 1 ms
-batch would break the 1 ms latency target), so the cost per message is the middleware's
-fixed cost plus the node's code run with a cold cache:
+batch would break the 1 ms latency target), and on this VM each wake-up of a thread costs
+tens of µs whatever the thread then does (the node idling with only its 50 Hz timer uses
+1 % of a core: ~200 µs per wake-up). The figure is therefore set by how many threads wake
+per message, not by the node's arithmetic:
 
-- In the same run the fast relay of `bench/fast_relay.py` (the same loop with no physics and
-  one output) used about as much CPU as the node (table above): the node's own work is no
-  longer what sets the figure. `bench/NOTES.md` (section 3) measures the floor: taking one
-  reliable message and publishing one to another process costs ≈ 11 % of a core here, of which
-  the Fast DDS shared-memory receive thread takes 2–4 % and its event thread 1.5–2.5 %
-  (restarting the reliable writer's heartbeat timer on every write).
-- py-spy on the node's main thread at 1 kHz (samples while not idle): publishing `pose` to
-  the subscriber process 43 % (half of it the cross-process notification, `sem_post` /
-  `pthread_cond_signal`), the wait set (clear, add, `rcl_wait`, take) 23 %, `GyroStream.add`
-  (stream rules + exp-map step) 12 %, CDR decode 3 %, output tracker 2 %, CDR encode 1 %.
-- The node's gyro callback costs 10 µs in a warm loop but 20–60 µs when called once per
-  millisecond on this shared VM (the caches are cold at every wake-up); a CPU that idles
-  between messages pays that per message at 1 kHz but not at 10 kHz, where each wake-up takes
-  several queued messages.
-- Already removed: the executor (≈ 100 µs of Python per message; the node's timers moved into
-  the gyro loop, so the executor thread only wakes for services and `set_pose`), message
-  objects (raw CDR in and out), outputs nobody subscribes to (not built or published), and
-  garbage-collector pauses (start-up objects frozen: a full collection took 35 ms).
-  `RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS` and UDP instead of shared memory were both
-  worse (`bench/NOTES.md`).
+- Fast DDS with its defaults woke its event thread on every reliable sample sent to another
+  process (`nackSupressionDuration` 0: the suppression timer restarts per sample; gdb caught
+  1 791 of 1 849 event-thread notifications there), and the Linux scheduler let each woken
+  thread preempt its waker, so the gyro loop woke, blocked on the reader's mutex still held by
+  the receive thread, and woke again: ≈ 6.5 context switches per message in the node. The node
+  now ships a Fast DDS profile (10 ms NACK suppression) and runs its threads under
+  `SCHED_BATCH` (`cpu_scheduling`, `bench/NOTES.md` section 3a): ≈ 3 switches per message, and
+  in the same runs 11.2–12.5 % of a core against 14.3–15.5 % with Fast DDS's defaults and the
+  default policy.
+- What is left per message: the receive thread's wake-up (≈ 2–3 % of a core), the gyro loop's
+  wake-up, take and publish (≈ 8–9 %; publishing wakes the subscriber process, which then
+  preempts the loop about twice per message: that process's threads are not ours to set),
+  and the event thread (≈ 0.3 %). A stripped relay with the same settings and no physics
+  measured 8.8–11.5 % on this machine in this session, so the floor under this middleware is
+  at about the target; the node sits 1–2 points above it (the Python of the gyro path,
+  ≈ 7 µs warm, 20–30 µs with cold caches once per millisecond).
+- Already removed: the executor (≈ 100 µs of Python per message), message objects (raw CDR
+  in and out), outputs nobody subscribes to, NumPy arrays per sample (the gyro state is plain
+  floats), rclpy's per-call publisher wrapper, garbage-collector pauses. Tried without gain:
+  handling messages in the receive thread itself (`rcl_subscription_set_on_new_message_callback`),
+  pinning the process to one core, `RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS`, UDP instead
+  of shared memory.
 
-Reaching ≤ 10 % at 1 kHz would need a cheaper middleware path per message (another rmw, or a
-C++ component), not a change in the node's Python."""
+Under 10 % at 1 kHz on this machine would need fewer wake-ups per message than rclpy over
+rmw_fastrtps allows (another rmw, or the gyro path in a C++ component)."""
 
 
 #: How the node was configured for the throughput runs, and why.

@@ -20,8 +20,8 @@ avoided without touching the ROS QoS:
   On a busy CPU a batch thread can wait up to one scheduler slice (a few ms) before it runs;
   ``cpu_scheduling: default`` keeps the usual policy.
 
-Measured on this project's machine at 1 kHz (fast relay, same run): Fast DDS defaults 12.5 %
-of a core; with the profile 10.0–10.3 %; with the profile and SCHED_BATCH 8.8–9.2 %, p99
+Measured on this project's machine at 1 kHz (``bench/fast_relay.py``): Fast DDS defaults 12.5 %
+of a core; with the profile 9.8–10.3 %; with the profile and SCHED_BATCH 8.8–9.2 %, p99
 latency unchanged (0.31 ms).
 """
 
