@@ -52,9 +52,9 @@ per message, not by the node's arithmetic:
   process (`nackSupressionDuration` 0: the suppression timer restarts per sample; gdb caught
   1 791 of 1 849 event-thread notifications there), and the Linux scheduler let each woken
   thread preempt its waker, so the gyro loop woke, blocked on the reader's mutex still held by
-  the receive thread, and woke again: ≈ 6.5 context switches per message in the node. The node
+  the receive thread, and woke again: ≈ 10 context switches per message in the node. The node
   now ships a Fast DDS profile (10 ms NACK suppression) and runs its threads under
-  `SCHED_BATCH` (`cpu_scheduling`, `bench/NOTES.md` section 3a): ≈ 3 switches per message, and
+  `SCHED_BATCH` (`cpu_scheduling`, `bench/NOTES.md` section 3a): ≈ 4 switches per message, and
   in the same runs 11.2–12.5 % of a core against 14.3–15.5 % with Fast DDS's defaults and the
   default policy.
 - What is left per message: the receive thread's wake-up (≈ 2–3 % of a core), the gyro loop's
@@ -83,17 +83,18 @@ matching the publisher's and the relays' deep queues. With the documented defaul
 best effort, keep last 5; outputs keep last 10) a wake-up late by 5 ms at 1 kHz loses samples:
 `bench/NOTES.md` (section 5) counts 2 028 of 600 000 lost over a 10-minute soak at 1 kHz and
 thousands at 10 kHz, against none with the deep input queue. At 20 kHz the publisher, the node
-and the subscriber together need more than the two cores (the publisher falls short of the
-rate, marked "(short)"), so that row measures the machine, not the node."""
+and the subscriber together need about the two cores (a publisher that falls short of the
+rate is marked "(short)"), so that row also measures the machine, not the node alone."""
 
 
-#: What the soak's RSS steps were (the committed run), from its per-minute samples.
+#: What the soak's RSS did (the committed run), from its per-minute samples.
 SOAK_NOTE = """\
-**Memory.** In the committed soak the RSS rose by 12–20 KiB a minute, with two steps (+0.3 and
-+0.8 MiB at minutes 7 and 8) while test suites loaded the machine: stalled wake-ups let the
-deep `imu` queue fill, and Fast DDS keeps the sample buffers it grew (bounded by the queue
-depths: 10 000 Imu samples are about 4 MB). The p99 latency of the soak (whole 10 min) includes
-those stalls; the 1 kHz row of the sweep is the figure for an unloaded window."""
+**Memory.** In the committed soak (600 000 messages at 1 kHz, none lost, p99 0.36 ms over the
+10 minutes) the RSS rose by 32 KiB in the second minute and by 12–16 KiB a minute at the end,
+188 KiB in all from minute 1 to 10. The previous soak (first session) crept by 12–20 KiB a
+minute with two steps of +0.3 and +0.8 MiB while test suites loaded the machine: stalled
+wake-ups let the deep `imu` queue fill, and Fast DDS keeps the sample buffers it grew
+(bounded by the queue depths: 10 000 Imu samples are about 4 MB)."""
 
 
 def _load(path: Path) -> Optional[dict]:
