@@ -191,3 +191,22 @@ def test_bad_parameters_give_one_error_line_and_exit_2(processes, arguments, exp
     assert process.returncode == 2
     assert stderr.startswith(expected)
     assert stderr.count('\n') == 1 and 'Traceback' not in stderr
+
+
+@pytest.mark.parametrize('scene', ['strapdown', 'torque_free_box'])
+def test_sigint_right_as_serving_starts_exits_0_without_a_traceback(processes, scene):
+    """Ctrl-C while the executor is being built (just after the ``cpu_scheduling`` line):
+    before the fix, half-built rclpy objects printed ``Exception ignored in:
+    Executor.__del__`` tracebacks at exit. Three starts per scene."""
+    for _ in range(3):
+        process = start('--ros-args', '-p', f'scene:={scene}')
+        processes.append(process)
+        head = []
+        for line in process.stderr:
+            head.append(line)
+            if "cpu_scheduling 'batch'" in line:
+                break
+        code, stderr = stop_with_sigint(process)
+        stderr = ''.join(head) + stderr
+        assert code == 0, stderr
+        assert 'Traceback' not in stderr and 'Exception ignored' not in stderr, stderr
