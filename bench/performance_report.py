@@ -58,8 +58,9 @@ per message, not by the node's arithmetic:
   in the same runs 11.2–12.5 % of a core against 14.3–15.5 % with Fast DDS's defaults and the
   default policy.
 - What is left per message: the receive thread's wake-up (≈ 2–3 % of a core), the gyro loop's
-  wake-up, take and publish (≈ 8–9 %; publishing wakes the subscriber process, which then
-  preempts the loop about twice per message: that process's threads are not ours to set),
+  wake-up, take and publish (≈ 8–9 %; publishing wakes the subscriber process, whose receive
+  thread then preempts the loop 1.6 times per message, `perf sched`: that process's threads
+  are not ours to set),
   and the event thread (≈ 0.3 %). A stripped relay with the same settings and no physics
   measured 8.8–11.5 % on this machine in this session, so the floor under this middleware is
   at about the target; the node sits 1–2 points above it (the Python of the gyro path,
@@ -68,8 +69,8 @@ per message, not by the node's arithmetic:
   in and out), outputs nobody subscribes to, NumPy arrays per sample (the gyro state is plain
   floats), rclpy's per-call publisher wrapper, garbage-collector pauses. Tried without gain:
   handling messages in the receive thread itself (`rcl_subscription_set_on_new_message_callback`),
-  pinning the process to one core, `RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS`, UDP instead
-  of shared memory.
+  pinning the process to one core, a 100 µs scheduler slice for the node's threads,
+  `RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS`, UDP instead of shared memory.
 
 Under 10 % at 1 kHz on this machine would need fewer wake-ups per message than rclpy over
 rmw_fastrtps allows (another rmw, or the gyro path in a C++ component)."""
