@@ -47,12 +47,10 @@ rates (:mod:`rigid_body_attitude.middleware`). Measurements: ``docs/performance.
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from contextlib import contextmanager
 import gc
 import math
-import signal
 import sys
 import threading
 import time
@@ -869,58 +867,42 @@ def spin(node: AttitudePropagatorNode) -> None:
     the objects of the start-up (about 60 000: rclpy, NumPy, SciPy, the scene) are collected
     once and frozen out of the garbage collector's reach: a full collection would otherwise
     scan them all (35 ms here, so dozens of gyro messages delayed at once); afterwards it
-    scans only what the run itself keeps. The node's threads then take the
-    ``cpu_scheduling`` policy (:func:`~rigid_body_attitude.middleware.apply_cpu_scheduling`).
-    Executors and the loop are built with SIGINT held back (:func:`_sigint_deferred`).
+    scans only what the run itself keeps. Everything that serves is built before the node's
+    threads take the ``cpu_scheduling`` policy
+    (:func:`~rigid_body_attitude.middleware.apply_cpu_scheduling`) and the node logs it: a
+    KeyboardInterrupt inside an rclpy constructor would leave a half-built object whose
+    finaliser fails at exit, so after that line a Ctrl-C always exits cleanly.
     """
     gc.collect()
     gc.freeze()
-    changed = apply_cpu_scheduling(node.cpu_scheduling)  # later threads inherit it
-    if changed:
-        node.get_logger().info(f'cpu_scheduling {node.cpu_scheduling!r}: {changed} threads')
-    if node.is_dynamics:
-        with _sigint_deferred():
-            timer_executor = SingleThreadedExecutor(context=node.context)
-        rclpy.spin(node, timer_executor)
+    loop = node.gyro_loop()  # claims the gyro subscriptions and timers before any spin
+    executor = SingleThreadedExecutor(context=node.context)
+    if loop is None:
+        _apply_cpu_scheduling(node)
+        rclpy.spin(node, executor)
         return
+    executor.add_node(node)
     done, failures = Future(), []
-    executor: SingleThreadedExecutor | None = None
-    rest: threading.Thread | None = None
-    loop: GyroLoop | None = None
+    rest = threading.Thread(target=_serve_rest, args=(executor, done, loop, failures),
+                            name='executor', daemon=True)
     try:
-        with _sigint_deferred():
-            loop = node.gyro_loop()  # claims the gyro subscriptions and timers before any spin
-            executor = SingleThreadedExecutor(context=node.context)
-            executor.add_node(node)
-            rest = threading.Thread(target=_serve_rest, args=(executor, done, loop, failures),
-                                    name='executor', daemon=True)
-            rest.start()
+        rest.start()
+        _apply_cpu_scheduling(node)
         loop.run()
     finally:
-        if rest is not None:
+        if rest.ident is not None:  # started
             _stop(done, rest)
-        if executor is not None:
-            executor.shutdown()  # only now: its thread no longer waits (rclpy issue #968)
-        if loop is not None:
-            loop.close()
+        executor.shutdown()  # only now: its thread no longer waits (rclpy issue #968)
+        loop.close()
     if failures:
         raise failures[0]
 
 
-@contextmanager
-def _sigint_deferred() -> Iterator[None]:
-    """Hold SIGINT back while the serving objects are built; it arrives when the block ends.
-
-    A KeyboardInterrupt inside an rclpy constructor leaves a half-built object whose
-    finaliser fails at exit (an ``Exception ignored in: Executor.__del__`` traceback after a
-    Ctrl-C right at start-up). Threads started inside the block keep SIGINT blocked, so the
-    signal always reaches the main thread.
-    """
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+def _apply_cpu_scheduling(node: AttitudePropagatorNode) -> None:
+    """Give every thread of the process the node's ``cpu_scheduling`` policy; log it."""
+    changed = apply_cpu_scheduling(node.cpu_scheduling)
+    node.get_logger().info(f'cpu_scheduling {node.cpu_scheduling!r}: {changed} threads '
+                           f'changed; serving')
 
 
 def _stop(done: Future, thread: threading.Thread) -> None:

@@ -149,7 +149,7 @@ def _wait_for_line(process: subprocess.Popen, text: str, timeout: float = 30.0) 
 
 @pytest.mark.parametrize('arguments, policy, logged', [
     ((), os.SCHED_BATCH, "cpu_scheduling 'batch': "),
-    (('-p', 'cpu_scheduling:=default'), os.SCHED_OTHER, 'Fast DDS profile'),
+    (('-p', 'cpu_scheduling:=default'), os.SCHED_OTHER, "cpu_scheduling 'default': 0 threads"),
 ])
 def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(processes, monkeypatch,
                                                                     arguments, policy, logged):

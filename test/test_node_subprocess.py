@@ -195,9 +195,10 @@ def test_bad_parameters_give_one_error_line_and_exit_2(processes, arguments, exp
 
 @pytest.mark.parametrize('scene', ['strapdown', 'torque_free_box'])
 def test_sigint_right_as_serving_starts_exits_0_without_a_traceback(processes, scene):
-    """Ctrl-C while the executor is being built (just after the ``cpu_scheduling`` line):
-    before the fix, half-built rclpy objects printed ``Exception ignored in:
-    Executor.__del__`` tracebacks at exit. Three starts per scene."""
+    """Ctrl-C as soon as the node logs its ``cpu_scheduling`` line (the last before serving):
+    before the fix the executor was still being built then, and the half-built rclpy objects
+    printed ``Exception ignored in: Executor.__del__`` tracebacks at exit. Three starts per
+    scene."""
     for _ in range(3):
         process = start('--ros-args', '-p', f'scene:={scene}')
         processes.append(process)
