@@ -30,12 +30,14 @@ from __future__ import annotations
 from collections.abc import MutableMapping
 import os
 from pathlib import Path
+from typing import NamedTuple
 
 from rigid_body_attitude.errors import InputError
 from rigid_body_attitude.paths import config_folders
 
-__all__ = ['CPU_SCHEDULING', 'FASTDDS_PROFILE_VARIABLES', 'apply_cpu_scheduling',
-           'check_cpu_scheduling', 'packaged_fastdds_profile', 'use_packaged_fastdds_profile']
+__all__ = ['CPU_SCHEDULING', 'FASTDDS_PROFILE_VARIABLES', 'SchedulingOutcome',
+           'apply_cpu_scheduling', 'check_cpu_scheduling', 'packaged_fastdds_profile',
+           'use_packaged_fastdds_profile']
 
 #: RMW implementations that read Fast DDS XML profiles ('' = the default RMW, rmw_fastrtps_cpp).
 FASTDDS_RMWS = ('', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp')
@@ -106,20 +108,31 @@ def check_cpu_scheduling(value: str) -> str:
     return ''
 
 
-def apply_cpu_scheduling(value: str, task_folder: Path = Path('/proc/self/task')) -> int:
+class SchedulingOutcome(NamedTuple):
+    """What :func:`apply_cpu_scheduling` did: threads changed, and why it stopped early."""
+
+    changed: int
+    #: '' or the system's refusal (e.g. a container's seccomp policy); the threads not yet
+    #: changed keep their policy.
+    refused: str = ''
+
+
+def apply_cpu_scheduling(value: str, task_folder: Path = Path('/proc/self/task')
+                         ) -> SchedulingOutcome:
     """Move this process's threads on SCHED_OTHER to the policy named by ``value``.
 
-    Threads created later by one of them inherit the policy. Returns how many threads were
-    changed; raises :class:`InputError` for a value :func:`check_cpu_scheduling` refuses.
+    Threads created later by one of them inherit the policy. A refusal by the system is
+    returned, not raised (the node then runs as started); a value
+    :func:`check_cpu_scheduling` refuses raises :class:`InputError`.
     """
     problem = check_cpu_scheduling(value)
     if problem:
         raise InputError(problem)
     policy = CPU_SCHEDULING[value]
     if policy is None or not task_folder.is_dir():
-        return 0
+        return SchedulingOutcome(0)
     changed = 0
-    for entry in task_folder.iterdir():
+    for entry in sorted(task_folder.iterdir()):
         thread_id = int(entry.name)
         try:
             if os.sched_getscheduler(thread_id) != os.SCHED_OTHER:
@@ -127,5 +140,7 @@ def apply_cpu_scheduling(value: str, task_folder: Path = Path('/proc/self/task')
             os.sched_setscheduler(thread_id, policy, os.sched_param(0))
         except ProcessLookupError:  # the thread ended meanwhile
             continue
+        except OSError as err:
+            return SchedulingOutcome(changed, f'thread {thread_id}: {err}')
         changed += 1
-    return changed
+    return SchedulingOutcome(changed)

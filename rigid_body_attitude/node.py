@@ -900,9 +900,13 @@ def spin(node: AttitudePropagatorNode) -> None:
 
 def _apply_cpu_scheduling(node: AttitudePropagatorNode) -> None:
     """Give every thread of the process the node's ``cpu_scheduling`` policy; log it."""
-    changed = apply_cpu_scheduling(node.cpu_scheduling)
-    node.get_logger().info(f'cpu_scheduling {node.cpu_scheduling!r}: {changed} threads '
-                           f'changed; serving')
+    outcome = apply_cpu_scheduling(node.cpu_scheduling)
+    if outcome.refused:
+        node.get_logger().warning(
+            f'cpu_scheduling {node.cpu_scheduling!r} refused by the system '
+            f'({outcome.refused}); the other threads keep their policy')
+    node.get_logger().info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} '
+                           f'threads changed; serving')
 
 
 def _stop(done: Future, thread: threading.Thread) -> None:

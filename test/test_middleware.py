@@ -105,7 +105,7 @@ def test_batch_moves_every_normal_thread_leaves_others_and_is_inherited():
         for thread in threads:
             thread.start()
         idle_ready.wait()
-        print('changed', apply_cpu_scheduling('batch'))
+        print('changed', apply_cpu_scheduling('batch').changed)
         later = threading.Thread(target=release.wait)
         later.start()
         for thread in threads + [later]:
@@ -122,9 +122,23 @@ def test_default_leaves_every_thread_as_it_started():
     lines = _policies_after("""
         import os
         from rigid_body_attitude.middleware import apply_cpu_scheduling
-        print(apply_cpu_scheduling('default'), os.sched_getscheduler(0))
+        print(apply_cpu_scheduling('default').changed, os.sched_getscheduler(0))
     """)
     assert lines == ['0', str(os.SCHED_OTHER)]
+
+
+def test_a_refusal_by_the_system_is_returned_not_raised(tmp_path):
+    # A thread id the kernel refuses with EINVAL (sched_getscheduler(-1)) stands for any
+    # OSError other than "no such thread", e.g. EPERM from a container's seccomp policy.
+    (tmp_path / '-1').mkdir()
+    outcome = apply_cpu_scheduling('batch', tmp_path)
+    assert outcome.changed == 0
+    assert outcome.refused.startswith('thread -1: [Errno 22] Invalid argument')
+
+
+def test_a_thread_that_ended_is_skipped(tmp_path):
+    (tmp_path / str(2**22 + 12345)).mkdir()  # above pid_max: no such thread
+    assert apply_cpu_scheduling('batch', tmp_path) == (0, '')
 
 
 def _thread_policies(pid: int) -> dict[str, int]:
