@@ -325,11 +325,11 @@ class AttitudePropagatorNode(Node):
             DiagnosticArray, '/diagnostics', OUTPUT_QOS)
         if self.is_dynamics:
             self.twist_publisher = self._publisher(TwistStamped, 'twist')
-        else:
+        else:  # gyro-rate outputs, published as CDR bytes
             self.imu_publisher = self._publisher(Imu, 'imu/data')
-        self.orientation_raw = RawOutput(self.orientation_publisher)
-        self.pose_raw = RawOutput(self.pose_publisher)
-        self.imu_raw = None if self.is_dynamics else RawOutput(self.imu_publisher)
+            self.orientation_raw = RawOutput(self.orientation_publisher)
+            self.pose_raw = RawOutput(self.pose_publisher)
+            self.imu_raw = RawOutput(self.imu_publisher)
         # Messages built once; pose, orientation and angular_momentum share one header
         # (world frame, output stamp) and pose shares the orientation's quaternion.
         self.orientation_message = QuaternionStamped()

@@ -12,11 +12,10 @@ from pathlib import Path
 import subprocess
 import sys
 import textwrap
-import time
 import xml.etree.ElementTree as ElementTree
 
 import pytest
-from test_node_subprocess import start, stop_with_sigint
+from test_node_subprocess import read_until, start, stop_with_sigint
 
 from rigid_body_attitude.errors import InputError
 from rigid_body_attitude.middleware import (
@@ -147,20 +146,6 @@ def _thread_policies(pid: int) -> dict[str, int]:
             for entry in Path(f'/proc/{pid}/task').iterdir()}
 
 
-def _wait_for_line(process: subprocess.Popen, text: str, timeout: float = 30.0) -> list[str]:
-    """Read ``process``'s stderr until a line contains ``text``; the lines read."""
-    lines: list[str] = []
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        line = process.stderr.readline()
-        if not line:
-            break
-        lines.append(line)
-        if text in line:
-            return lines
-    pytest.fail(f'no line with {text!r} within {timeout} s; stderr so far:\n{"".join(lines)}')
-
-
 @pytest.mark.parametrize('arguments, policy, logged', [
     ((), os.SCHED_BATCH, "cpu_scheduling 'batch': "),
     (('-p', 'cpu_scheduling:=default'), os.SCHED_OTHER, "cpu_scheduling 'default': 0 threads"),
@@ -171,7 +156,7 @@ def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(processes, m
         monkeypatch.delenv(variable, raising=False)
     process = start('--ros-args', '-p', 'scene:=strapdown', *arguments)
     processes.append(process)
-    lines = _wait_for_line(process, logged)
+    lines = read_until(process, logged)
     policies = _thread_policies(process.pid)
     assert len(policies) >= 5  # Python, the executor thread and Fast DDS's threads
     assert set(policies.values()) == {policy}, policies

@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 import signal
 import subprocess
+import time
 
 from ament_index_python.packages import get_package_prefix
 from diagnostic_msgs.msg import DiagnosticArray
@@ -48,6 +49,20 @@ def start(*arguments: str) -> subprocess.Popen:
     """Start the installed node with ``arguments``; stdout and stderr are captured."""
     return subprocess.Popen([str(executable()), *arguments], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
+
+
+def read_until(process: subprocess.Popen, text: str, timeout: float = 30.0) -> list[str]:
+    """Read ``process``'s stderr until a line contains ``text``; the lines read."""
+    lines: list[str] = []
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        line = process.stderr.readline()
+        if not line:
+            break
+        lines.append(line)
+        if text in line:
+            return lines
+    pytest.fail(f'no line with {text!r} within {timeout} s; stderr so far:\n{"".join(lines)}')
 
 
 def stop_with_sigint(process: subprocess.Popen, timeout: float = 15.0) -> tuple[int, str]:
@@ -202,11 +217,7 @@ def test_sigint_right_as_serving_starts_exits_0_without_a_traceback(processes, s
     for _ in range(3):
         process = start('--ros-args', '-p', f'scene:={scene}')
         processes.append(process)
-        head = []
-        for line in process.stderr:
-            head.append(line)
-            if "cpu_scheduling 'batch'" in line:
-                break
+        head = read_until(process, "cpu_scheduling 'batch'")
         code, stderr = stop_with_sigint(process)
         stderr = ''.join(head) + stderr
         assert code == 0, stderr
