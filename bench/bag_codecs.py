@@ -27,7 +27,7 @@ from rosbags.rosbag2 import Reader
 
 from rigid_body_attitude import bag
 from rigid_body_attitude.bag import cdr
-from rigid_body_attitude.quaternion import scalar_exp_step
+from rigid_body_attitude.core.quaternion import scalar_exp_step
 
 
 def best_rate(count: int, repeats: int, run: Callable[[], object]) -> float:

@@ -4,7 +4,7 @@ A Monte-Carlo dispersion (per-body inertia tensors with random principal axes, r
 attitudes and rates) of ``--bodies`` bodies (default 10⁵) is advanced ``--steps`` RK4 steps of
 1 ms per repetition; the best of ``--repeats`` repetitions gives body-steps per second (the
 issue asks for ≥ 10⁷ at N = 10⁵). The same run checks ``--check`` bodies, spread over the
-batch, against the single-body ``rk4`` integrator (``test/test_batch.py`` does the same on a
+batch, against the single-body ``rk4`` integrator (``test/core/test_batch.py`` does the same on a
 small dispersion): every component within 1e-12, or exit 1. ``--bodies`` takes a list, so the
 scaling with N shows too.
 
@@ -25,10 +25,10 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from rigid_body_attitude import quaternion  # noqa: E402
-from rigid_body_attitude.batch import TorqueFreeBatch  # noqa: E402
-from rigid_body_attitude.integrators import dynamics_integrator  # noqa: E402
-from rigid_body_attitude.integrators.base import SimpleBodyModel  # noqa: E402
+from rigid_body_attitude.core import quaternion  # noqa: E402
+from rigid_body_attitude.core.batch import TorqueFreeBatch  # noqa: E402
+from rigid_body_attitude.core.integrators import dynamics_integrator  # noqa: E402
+from rigid_body_attitude.core.integrators.base import SimpleBodyModel  # noqa: E402
 
 STEP = 1e-3
 TARGET_BODY_STEPS_PER_S = 1e7

@@ -46,11 +46,12 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from rigid_body_attitude import quaternion  # noqa: E402
-from rigid_body_attitude.dynamics import RigidBodyModel, rk4_step  # noqa: E402
-from rigid_body_attitude.inertia import Inertia  # noqa: E402
-from rigid_body_attitude.integrators import dynamics_integrator, strapdown_method  # noqa: E402
-from rigid_body_attitude.integrators.base import SimpleBodyModel  # noqa: E402
+from rigid_body_attitude.core import quaternion  # noqa: E402
+from rigid_body_attitude.core.dynamics import RigidBodyModel, rk4_step  # noqa: E402
+from rigid_body_attitude.core.inertia import Inertia  # noqa: E402
+from rigid_body_attitude.core.integrators import (  # noqa: E402
+    dynamics_integrator, strapdown_method)
+from rigid_body_attitude.core.integrators.base import SimpleBodyModel  # noqa: E402
 
 #: The issue's targets [µs per step] and the required speed-up over every baseline.
 TARGET_STRAPDOWN_US = 3.0

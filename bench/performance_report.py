@@ -158,7 +158,7 @@ def batch_section(batch: dict) -> list[str]:
              f'with random principal axes, random attitudes and rates up to 3 rad/s), '
              f'{batch["step_s"] * 1e3:g} ms steps; best and median of the repetitions. Checked '
              'bodies are integrated again one by one with the single-body `rk4` integrator '
-             '(`test/test_batch.py` asserts the same to 1e-12).', '',
+             '(`test/core/test_batch.py` asserts the same to 1e-12).', '',
              '| N bodies | steps per call | body-steps/s (best) | body-steps/s (median) | '
              'max abs. difference vs single-body rk4 | checked bodies × steps |',
              '|---:|---:|---:|---:|---:|---:|']

@@ -2,11 +2,11 @@
 
 For each shipped trial (07: fast rotation up to 25 rad/s; 15: translation, small rotations) and
 each strapdown method the propagator offers
-(:func:`rigid_body_attitude.integrators.strapdown_method`), the trial is converted to a bag
-(``rigid_body_attitude.broad.trial_to_bag``) and replayed with ``replay`` exactly as
-``test/test_real_data.py`` does: the ``gyro_bias`` effect averages the initial rest phase, the
-attitude starts from the ground truth at the first motion sample, and the largest attitude error
-against the ground truth is reported for the first 10 s of motion and for the whole trial.
+(:func:`rigid_body_attitude.core.integrators.strapdown_method`), the trial is converted to a bag
+(``rigid_body_attitude.tools.broad.trial_to_bag``) and replayed with ``replay`` exactly as
+``test/tools/test_real_data.py`` does: the ``gyro_bias`` effect averages the initial rest phase,
+the attitude starts from the ground truth at the first motion sample, and the largest attitude
+error against the ground truth is reported for the first 10 s of motion and for the whole trial.
 Prints a Markdown table (the README's).
 
 Data: D. Laidig, M. Caruso, A. Cereatti, T. Seel, "BROAD — A Benchmark for Robust Inertial
@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from rigid_body_attitude import broad
-from rigid_body_attitude.integrators import STRAPDOWN_METHODS
-from rigid_body_attitude.replay import ReplayOptions, replay_bag
+from rigid_body_attitude.tools import broad
+from rigid_body_attitude.core.integrators import STRAPDOWN_METHODS
+from rigid_body_attitude.tools.replay import ReplayOptions, replay_bag
 
 DEFAULT_DATA_DIR = Path(__file__).resolve().parent.parent / 'data' / 'broad'
 TRIALS = ('07_undisturbed_fast_rotation_B', '15_undisturbed_fast_translation_A')

@@ -4,8 +4,8 @@ Writes a synthetic strapdown bag (``sensor_msgs/Imu`` on ``imu`` at 1 kHz, a slo
 rate) and measures, best of ``--repeat`` runs, both wall time and the process's CPU time (on a
 shared machine the CPU time is the steadier figure; the wall time is what a user waits):
 
-* **end to end** — :func:`rigid_body_attitude.replay.replay_bag` as the ``replay`` command runs
-  it (read, decode, stream rules + propagator, published values, encode, write, including
+* **end to end** — :func:`rigid_body_attitude.tools.replay.replay_bag` as the ``replay`` command
+  runs it (read, decode, stream rules + propagator, published values, encode, write, including
   opening and closing both bags), for the node's full output set (orientation, pose, imu/data
   per sample; energy and momentum at 50 Hz; diagnostics at 1 Hz) and for ``orientation``
   only, with sqlite3 and MCAP storage (input and output in the same storage);
@@ -38,13 +38,13 @@ import numpy as np
 from rigid_body_attitude.bag import (
     IMU, POSE_STAMPED, QUATERNION_STAMPED, RATE_SAMPLE_DECODERS, BagReader, BagWriter,
     imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder, write_bag)
-from rigid_body_attitude.messages import TimeBase
-from rigid_body_attitude.outputs import OutputTracker
-from rigid_body_attitude.propagator import build_propagator
-from rigid_body_attitude.quaternion import scalar_exp_step
-from rigid_body_attitude.replay import ReplayOptions, replay_bag
-from rigid_body_attitude.scene import load_scene
-from rigid_body_attitude.stream import GyroStream
+from rigid_body_attitude.session.reports import TimeBase
+from rigid_body_attitude.session.outputs import OutputTracker
+from rigid_body_attitude.core.propagator import build_propagator
+from rigid_body_attitude.core.quaternion import scalar_exp_step
+from rigid_body_attitude.tools.replay import ReplayOptions, replay_bag
+from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.session.stream import GyroStream
 
 RATE_HZ = 1000.0
 STORAGES = ('sqlite3', 'mcap')

@@ -31,14 +31,14 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 
 # What `ros2 run rigid_body_attitude <name>` starts, and the function it runs.
 EXECUTABLES = {
-    'propagation_node': 'rigid_body_attitude.node:main',
-    'replay': 'rigid_body_attitude.replay:main',
-    'accuracy_study': 'rigid_body_attitude.study:main',
+    'propagation_node': 'rigid_body_attitude.ros.node:main',
+    'replay': 'rigid_body_attitude.tools.replay:main',
+    'accuracy_study': 'rigid_body_attitude.tools.study:main',
 }
 
-# The rclpy shells. Every other module of the package is core and must import without rclpy.
-SHELL_MODULES = {'rigid_body_attitude.node', 'rigid_body_attitude.replay'}
-SHELL_PACKAGES = {'bench', 'tools'}  # subpackages of CLIs over the core, also allowed rclpy
+# rclpy is imported in one subpackage only: every other module must import without rclpy.
+SHELL_MODULES: set[str] = set()
+SHELL_PACKAGES = {'ros'}
 
 REQUIRED_EXEC_DEPENDS = {
     'rclpy', 'geometry_msgs', 'sensor_msgs', 'std_msgs', 'diagnostic_msgs', 'std_srvs',
@@ -185,7 +185,7 @@ def test_launcher_prefers_python_of_its_own_prefix(tmp_path):
     assert result.returncode == 0, result.stderr
     assert lines[0] == 'prefix-python'
     assert lines[1] == '[-c]'
-    assert 'from rigid_body_attitude.node import main' in result.stdout
+    assert 'from rigid_body_attitude.ros.node import main' in result.stdout
     assert lines[-4:] == [f'[{launcher}]', '[--ros-args]', '[-p]', '[scene:=a b]']
 
 
@@ -204,7 +204,7 @@ def test_launcher_code_passes_argv_and_exit_code_and_skips_cwd(tmp_path):
     # The launcher's own Python code, with the entry point swapped for one that reports what it
     # sees: argv as a console script gets it, the exit code passed on, the cwd not importable.
     text = (LIBEXEC_DIR / 'accuracy_study').read_text()
-    import_line = 'from rigid_body_attitude.study import main\n'
+    import_line = 'from rigid_body_attitude.tools.study import main\n'
     assert import_line in text
     reporter = ('import json, os\n'
                 'def main():\n'
@@ -246,8 +246,8 @@ def test_package_xml_format_3_with_dependencies():
 
 def test_core_module_discovery_finds_the_core_and_leaves_out_shells():
     names = core_module_names()
-    assert {'rigid_body_attitude', 'rigid_body_attitude.quaternion',
-            'rigid_body_attitude.errors'} <= set(names)
+    assert {'rigid_body_attitude', 'rigid_body_attitude.core.quaternion',
+            'rigid_body_attitude.core.errors'} <= set(names)
     assert not SHELL_MODULES & set(names)
 
 

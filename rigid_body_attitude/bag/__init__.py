@@ -11,7 +11,7 @@
   generic (slow) serialisation, including ``DiagnosticArray``.
 
 Quaternions cross this API scalar-first ``(w, x, y, z)`` as everywhere in the package
-(:mod:`rigid_body_attitude.quaternion`); only the CDR bytes hold ``(x, y, z, w)``. Decoders
+(:mod:`rigid_body_attitude.core.quaternion`); only the CDR bytes hold ``(x, y, z, w)``. Decoders
 return header stamps as float seconds (resolution 2.4·10⁻⁷ s at epoch times);
 :func:`header_stamp_ns` gives the exact integer nanoseconds.
 """

@@ -3,7 +3,7 @@
 ``rosbags``' generic ``deserialize_cdr``/``serialize_cdr`` build full message objects (about
 6.5 µs and 4.6 µs per ``sensor_msgs/msg/Imu``); the replay tool needs ≥ 10⁵ messages/s end to
 end, so the per-sample fields are read and written here with one precompiled ``struct`` call
-(``bench/bag_codecs.py`` measures both; ``test/test_bag.py`` proves byte equality with
+(``bench/bag_codecs.py`` measures both; ``test/bag/test_bag.py`` proves byte equality with
 ``rosbags``' serialiser for every message type and frame-id padding).
 
 Layout (OMG CDR / XCDR1, as written by ROS 2 and ``rosbags``): a 4-byte encapsulation header
@@ -13,8 +13,8 @@ primitive aligned to its own size relative to the payload start. ``std_msgs/msg/
 terminating NUL) and the frame id at 12; the float64 body follows at the next multiple of 8.
 
 Quaternions: decoders return and encoders take **scalar-first** ``(w, x, y, z)``; the message
-order is ``(x, y, z, w)``. This is :func:`rigid_body_attitude.quaternion.to_ros` /
-:func:`~rigid_body_attitude.quaternion.from_ros` done inside the ``struct`` argument list,
+order is ``(x, y, z, w)``. This is :func:`rigid_body_attitude.core.quaternion.to_ros` /
+:func:`~rigid_body_attitude.core.quaternion.from_ros` done inside the ``struct`` argument list,
 because the NumPy versions cost microseconds per call (the tests check the codecs against
 them). Decoders return stamps in seconds (``sec + nanosec·10⁻⁹``); encoders take integer
 nanoseconds. Encoders do not check finiteness (fault-injection bags need NaN values);
@@ -44,7 +44,7 @@ from rigid_body_attitude.bag.msgtypes import (
     VECTOR3_STAMPED,
     WRENCH_STAMPED,
 )
-from rigid_body_attitude.errors import InputError
+from rigid_body_attitude.core.errors import InputError
 
 __all__ = [
     'ATTITUDE_DECODERS',

@@ -2,13 +2,13 @@
 
 Errors raised by the ``rosbags`` library (``ReaderError``, ``WriterError``, ``SerdeError``,
 ``FileNotFoundError``) are translated into :class:`BagError` at this package's boundary, so a
-caller catches one type (or :class:`~rigid_body_attitude.errors.AttitudeError`) for every bad
+caller catches one type (or :class:`~rigid_body_attitude.core.errors.AttitudeError`) for every bad
 bag, topic or message.
 """
 
 from __future__ import annotations
 
-from rigid_body_attitude.errors import AttitudeError
+from rigid_body_attitude.core.errors import AttitudeError
 
 __all__ = ['BagError']
 

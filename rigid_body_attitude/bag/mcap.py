@@ -10,7 +10,7 @@ opened the file (channels and the chunk index from the summary section) and its 
 Same output as ``rosbags``: messages in log-time order, ties in file order, only the chunks of
 the index. Chunks that overlap in time are merged by a stable sort. :func:`fast_messages`
 returns ``None`` for what it does not handle (an unindexed file, per-message compression,
-another storage plugin); the caller then uses ``rosbags``' own iterator. ``test/test_bag.py``
+another storage plugin); the caller then uses ``rosbags``' own iterator. ``test/bag/test_bag.py``
 checks that both give identical sequences, with and without overlapping chunks.
 
 MCAP record framing (https://mcap.dev/spec): ``opcode u8, length u64, content``. Chunk (0x06):

@@ -17,7 +17,7 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
 from rigid_body_attitude.bag.errors import BagError
-from rigid_body_attitude.errors import InputError
+from rigid_body_attitude.core.errors import InputError
 
 __all__ = [
     'DIAGNOSTIC_ARRAY',

@@ -8,7 +8,7 @@ same order of equal times) selects the topic name and type itself, so ``apsw`` r
 finished tuples and no Python code runs per message.
 
 :func:`fast_messages` returns ``None`` for what it does not handle (per-message compression,
-another storage plugin); the caller then uses ``rosbags``' own iterator. ``test/test_bag.py``
+another storage plugin); the caller then uses ``rosbags``' own iterator. ``test/bag/test_bag.py``
 checks that both give identical sequences, ties included.
 """
 

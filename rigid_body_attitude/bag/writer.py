@@ -58,7 +58,7 @@ from rigid_body_attitude.bag.msgtypes import (
     serialize,
     typestore,
 )
-from rigid_body_attitude.errors import InputError
+from rigid_body_attitude.core.errors import InputError
 
 __all__ = ['GROUND_TRUTH_TYPES', 'STORAGES', 'BagWriter', 'Record', 'write_bag']
 

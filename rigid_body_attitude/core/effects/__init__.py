@@ -1,0 +1,18 @@
+"""Effects a scene may name; each module registers one effect class in :data:`EFFECTS`.
+
+Importing this package imports every module in it, so a new effect module is found without
+editing any other file.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from rigid_body_attitude.core.effects.base import EFFECTS, BodyProperties, Effect, StatefulEffect
+
+__all__ = ['EFFECTS', 'BodyProperties', 'Effect', 'StatefulEffect']
+
+for _module in pkgutil.iter_modules(__path__):
+    if _module.name != 'base':
+        importlib.import_module(f'{__name__}.{_module.name}')

@@ -1,0 +1,51 @@
+"""rotor: a gyrostat rotor (momentum wheel) with constant or commanded momentum.
+
+The rotor's momentum ``h`` relative to the body (body axes) enters Euler's equations as
+``J ω̇ + ω × (J ω + h) = M − ḣ`` (physics.md §1; Hughes §3.4; Basilisk reaction wheels). With
+``commanded: false`` ``h`` is constant and the rotor only adds gyroscopic stiffness. With
+``commanded: true`` the ``rotor_torque`` input ``u`` (the motor torque on the rotor, body axes)
+drives ``ḣ = u``, held until ``timeout`` (or the next command) and then zero; the body feels
+``−u``. ``h(t)`` is piecewise linear in time, so it is evaluated exactly at every integrator
+stage, and the propagator ends its steps where ``u`` switches. ``J`` is the
+inertia of the whole gyrostat with the rotor locked; the rotor's own spin energy is not in
+``T``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigid_body_attitude.core.effects.base import (
+    REQUIRED, BodyProperties, CommandedEffect, Parameter, boolean, positive, register, vector3)
+
+
+@register
+class Rotor(CommandedEffect):
+    """Gyrostat rotor momentum ``h`` [N m s] and its rate ``ḣ`` [N m], body axes."""
+
+    name = 'rotor'
+    description = 'gyrostat rotor: constant momentum, or driven by the rotor_torque input'
+    parameters = {
+        'momentum': Parameter(vector3, REQUIRED, 'initial rotor momentum, body [N m s]'),
+        'commanded': Parameter(boolean, False, 'drive ḣ from the rotor_torque input'),
+        'timeout': Parameter(positive, 0.5, 'seconds a rotor torque command is held [s]'),
+    }
+    inputs = {'rotor_torque': 'motor torque on the rotor, body [N m]'}
+
+    def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
+        """Start at the initial momentum with no motor torque."""
+        super().__init__(params, body)
+        self.initial_momentum = np.array(self.params['momentum'])
+
+    @property
+    def input_names(self) -> frozenset[str]:
+        """``rotor_torque`` only when the rotor is commanded."""
+        return frozenset(self.inputs) if self.params['commanded'] else frozenset()
+
+    def rotor_momentum(self, t: float) -> tuple[NDArray[Any], NDArray[Any]]:
+        """``(h(t), ḣ(t))``: ``h₀ + ∫ u dt`` over the held commands, ``ḣ`` the one in force."""
+        momentum = self.initial_momentum + self.command.integral(t)
+        return momentum, self.command.value_at(t)

@@ -1,0 +1,74 @@
+"""Integrators: the exact torque-free solution, strapdown (gyro-driven) updates, dynamics.
+
+Conventions are those of :mod:`rigid_body_attitude.core.quaternion`. Three registries, each a
+mapping name → class (instantiate for a fresh, independent integrator):
+
+* :data:`DYNAMICS_INTEGRATORS` — ``step(attitude, omega_body, t, h, model)`` on the coupled
+  attitude/Euler equations, with ``model`` a :class:`~.base.BodyModel`: ``rk4``, ``rkmk4``,
+  ``strang``, ``yoshida4``, ``casimir6``, ``casimir8``, ``rkn4``, ``rkn6``, ``dopri45``,
+  ``exact`` (torque-free only);
+* :data:`STRAPDOWN_METHODS` — ``propagate(q, omega_previous, omega_current, dt)`` on a
+  stream of gyro samples (:mod:`.strapdown`);
+* :data:`KINEMATIC_METHODS` — ``step(q, omega_of_time, t, h)`` for a rate known as a function
+  of time (:mod:`.kinematic`), the study's menu.
+
+Every class documents its equation, order, cost, invariants and source.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rigid_body_attitude.core.errors import IntegratorError
+from rigid_body_attitude.core.integrators.adaptive import DormandPrince45
+from rigid_body_attitude.core.integrators.base import (
+    BodyModel, DynamicsIntegrator, SimpleBodyModel)
+from rigid_body_attitude.core.integrators.exact_step import ExactTorqueFree
+from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
+from rigid_body_attitude.core.integrators.kinematic import KINEMATIC_METHODS, kinematic_method
+from rigid_body_attitude.core.integrators.rigid_body_rk4 import RigidBodyRk4
+from rigid_body_attitude.core.integrators.rkmk4 import RigidBodyRkmk4
+from rigid_body_attitude.core.integrators.splitting import (
+    BlanesMoan4Splitting, BlanesMoan6Splitting, Casimir6Splitting, Casimir8Splitting,
+    StrangSplitting, Yoshida4Splitting)
+from rigid_body_attitude.core.integrators.strapdown import STRAPDOWN_METHODS, strapdown_method
+
+__all__ = [
+    'BodyModel',
+    'DYNAMICS_INTEGRATORS',
+    'DynamicsIntegrator',
+    'KINEMATIC_METHODS',
+    'STRAPDOWN_METHODS',
+    'SimpleBodyModel',
+    'TorqueFreeMotion',
+    'dynamics_integrator',
+    'kinematic_method',
+    'strapdown_method',
+    'torque_integrators',
+]
+
+#: Dynamics integrators by name (values are classes).
+DYNAMICS_INTEGRATORS: dict[str, Any] = {cls.name: cls for cls in (
+    RigidBodyRk4, RigidBodyRkmk4, StrangSplitting, Yoshida4Splitting, Casimir6Splitting,
+    Casimir8Splitting, BlanesMoan4Splitting, BlanesMoan6Splitting, DormandPrince45,
+    ExactTorqueFree)}
+
+
+def torque_integrators() -> tuple[str, ...]:
+    """Names of the dynamics integrators that handle torques and rotors (``supports_torque``),
+    sorted; the others handle torque-free bodies only."""
+    return tuple(sorted(name for name, cls in DYNAMICS_INTEGRATORS.items()
+                        if cls.supports_torque))
+
+
+def dynamics_integrator(name: str, **options: Any) -> Any:
+    """A fresh dynamics integrator by name (``options`` go to its constructor, e.g. the
+    tolerances of ``dopri45``); :class:`IntegratorError` lists the valid names."""
+    if name not in DYNAMICS_INTEGRATORS:
+        raise IntegratorError(f'Unknown dynamics integrator {name!r}; expected one of '
+                              f'{", ".join(sorted(DYNAMICS_INTEGRATORS))}')
+    try:
+        return DYNAMICS_INTEGRATORS[name](**options)
+    except TypeError as err:
+        raise IntegratorError(f'Unexpected options {sorted(options)!r} for dynamics '
+                              f'integrator {name!r}') from err

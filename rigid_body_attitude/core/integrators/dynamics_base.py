@@ -1,0 +1,103 @@
+"""Shared plumbing of the dynamics integrators: validation, array conversion, step loops.
+
+Each integrator implements ``_advance(q, ω, t, h, model) -> (q, ω)`` on plain float tuples;
+this base turns it into the common interface (``step`` on arrays, ``integrate`` for many
+equal steps without per-step conversions, used by the study's timings).
+
+An explicit method that is only conditionally stable declares ``max_rotation_per_step``
+(``h·|ω|`` in rad; RK4 and RKMK4: 2.0, below RK4's imaginary-axis limit 2√2, the value
+``propagator.MAX_ROTATION_PER_STEP`` holds). ``step`` and ``integrate`` refuse a step above it
+with an :class:`IntegratorError` instead of diverging silently until the state overflows;
+``DynamicsPropagator`` splits such steps into substeps before calling ``step``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numpy.typing import ArrayLike
+
+from rigid_body_attitude.core.errors import IntegratorError
+from rigid_body_attitude.core.integrators.base import (
+    as_state, BodyModel, check_step, FloatArray, output, Quat, Vec)
+
+__all__ = ['DynamicsMethod']
+
+#: Relative slack on ``max_rotation_per_step``: the propagator's substeps reach the limit up to
+#: its own slack (1 + 1e−9) and rounding, and must pass; the true stability limit is 41 % higher.
+ROTATION_LIMIT_SLACK = 1.0 + 1e-6
+
+
+class DynamicsMethod:
+    """Base of the dynamics integrators (see :class:`integrators.base.DynamicsIntegrator`)."""
+
+    name = ''
+    order = 0
+    supports_torque = True
+    #: Largest ``h·|ω|`` [rad] this method accepts per step (``inf``: unconditionally stable).
+    max_rotation_per_step = math.inf
+
+    def _advance(self, q: Quat, omega: Vec, t: float, h: float,
+                 model: BodyModel) -> tuple[Quat, Vec]:
+        raise IntegratorError(f'{type(self).__name__} defines no step')
+
+    def _check_model(self, model: BodyModel) -> None:
+        if not self.supports_torque and not model.torque_free:
+            from rigid_body_attitude.core.integrators import torque_integrators  # no cycle
+            raise IntegratorError(f'Integrator {self.name!r} handles torque-free bodies only; '
+                                  f'this model has a torque or a rotor. Use one of '
+                                  f'{", ".join(torque_integrators())}')
+
+    def _refuse_rotation(self, h: float, omega: Vec, step_index: int) -> None:
+        """Raise the :class:`IntegratorError` for a step with ``h·|ω|`` above the limit."""
+        from rigid_body_attitude.core.integrators import DYNAMICS_INTEGRATORS  # no cycle
+        stable = sorted(name for name, cls in DYNAMICS_INTEGRATORS.items()
+                        if cls.max_rotation_per_step == math.inf)
+        speed = math.sqrt(omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2])
+        where = f' (step {step_index} of the run)' if step_index else ''
+        raise IntegratorError(
+            f'Integrator {self.name!r} is stable only for h·|ω| <= '
+            f'{self.max_rotation_per_step} rad; got h = {h!r} s at |ω| = {speed:.6g} rad/s, '
+            f'h·|ω| = {abs(h) * speed:.6g} rad{where}. Use DynamicsPropagator (it splits such '
+            f'steps into substeps), a smaller step, or one of {", ".join(stable)}')
+
+    def step(self, attitude: ArrayLike, omega_body: ArrayLike, t: float, h: float,
+             model: BodyModel) -> tuple[FloatArray, FloatArray]:
+        """Advance ``(attitude, omega_body)`` from ``t`` by ``h`` seconds; returns arrays.
+
+        Raises :class:`IntegratorError` for a non-finite step or result, a step with
+        ``h·|ω|`` above :attr:`max_rotation_per_step`, or a model this integrator cannot
+        handle; the inputs are never modified.
+        """
+        self._check_model(model)
+        q, omega = as_state(attitude, omega_body)
+        h = check_step(h)
+        limit = self.max_rotation_per_step * ROTATION_LIMIT_SLACK
+        if h * h * (omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2]) > (
+                limit * limit):
+            self._refuse_rotation(h, omega, 0)
+        q, omega = self._advance(q, omega, float(t), h, model)
+        return output(q, omega)
+
+    def integrate(self, attitude: ArrayLike, omega_body: ArrayLike, t_start: float, h: float,
+                  steps: int, model: BodyModel) -> tuple[FloatArray, FloatArray]:
+        """``steps`` equal steps of ``h`` from ``t_start`` (plain floats between steps).
+
+        Each step's ``h·|ω|`` is checked against :attr:`max_rotation_per_step` (the rate may
+        grow during the run): :class:`IntegratorError` names the first step above it.
+        """
+        self._check_model(model)
+        q, omega = as_state(attitude, omega_body)
+        h = check_step(h)
+        advance = self._advance
+        if self.max_rotation_per_step == math.inf:
+            for k in range(int(steps)):
+                q, omega = advance(q, omega, t_start + k * h, h, model)
+            return output(q, omega)
+        limit = self.max_rotation_per_step * ROTATION_LIMIT_SLACK / abs(h) if h else math.inf
+        bound = limit * limit
+        for k in range(int(steps)):
+            if omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2] > bound:
+                self._refuse_rotation(h, omega, k + 1)
+            q, omega = advance(q, omega, t_start + k * h, h, model)
+        return output(q, omega)

@@ -1,0 +1,295 @@
+"""Scenes: what to simulate, read from YAML and validated once, before anything runs.
+
+A scene names the body, the initial state, the rate source, the integrator and its step, and
+the effects; only the effects it names are constructed. Format::
+
+    name: torque_free_box
+    description: a free box tumbling about no principal axis
+    rate_source: dynamics          # or gyro (strapdown from measured rates)
+    integrator: rk4
+    step: 0.001                    # [s]; for gyro scenes the input stamps set the step
+    body:
+      mass: 2.0                    # [kg]
+      inertia: {box: {edges: [0.1, 0.2, 0.3], about: centre}}
+      # or inertia: {tensor: [[...], [...], [...]]} | {moments: [J1, J2, J3]}
+      #    | {cylinder: {radius, height}} | {sphere: {radius}}
+    initial_state:
+      attitude: [1, 0, 0, 0]       # (w, x, y, z), normalised on load
+      omega_body: [0.1, 2.0, 0.05] # [rad/s]
+    effects:                       # list of {effect_name: {parameters}} or effect_name
+      - viscous_damping: {coefficient: 0.01}
+
+Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`scene_path`).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.effects import EFFECTS, BodyProperties, Effect
+from rigid_body_attitude.core.effects.base import real
+from rigid_body_attitude.core.errors import AttitudeError, SceneError
+from rigid_body_attitude.core.inertia import Inertia
+from rigid_body_attitude.core.paths import config_folders
+
+__all__ = ['RATE_SOURCES', 'Scene', 'builtin_scenes', 'load_scene', 'scene_from_mapping',
+           'scene_path']
+
+FloatArray = NDArray[np.float64]
+
+RATE_SOURCES = ('dynamics', 'gyro')
+_TOP_KEYS = {'name', 'description', 'rate_source', 'integrator', 'step', 'body',
+             'initial_state', 'effects'}
+_REQUIRED_TOP_KEYS = ('rate_source', 'body')
+_BODY_KEYS = {'mass', 'inertia'}
+_STATE_KEYS = {'attitude', 'omega_body'}
+_SHAPES = ('tensor', 'moments', 'box', 'cylinder', 'sphere')
+_DEFAULT_INTEGRATOR = {'dynamics': 'rk4', 'gyro': 'exp_map'}
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene; :meth:`build_effects` constructs the named effects (only those).
+
+    Attributes:
+        name: scene name.
+        description: one line for logs and docs.
+        rate_source: ``'dynamics'`` (Euler's equations) or ``'gyro'`` (measured rates).
+        integrator: integrator name (see :mod:`rigid_body_attitude.core.integrators`).
+        step: integration step [s] for dynamics scenes.
+        inertia: validated inertia [kg m²], body axes.
+        mass: [kg].
+        initial_attitude: unit quaternion (w, x, y, z), body → world.
+        initial_omega_body: [rad/s].
+        effects: ``(name, parameters)`` pairs in scene order.
+        source: the file it came from, if any.
+    """
+
+    name: str
+    description: str
+    rate_source: str
+    integrator: str
+    step: float
+    inertia: Inertia
+    mass: float
+    initial_attitude: FloatArray
+    initial_omega_body: FloatArray
+    effects: tuple[tuple[str, Mapping[str, Any]], ...] = field(default_factory=tuple)
+    source: str = ''
+
+    def build_effects(self) -> list[Effect]:
+        """Construct the scene's effects, in order; nothing else is built."""
+        body = BodyProperties(self.inertia, self.mass)
+        return [EFFECTS[name](params, body) for name, params in self.effects]
+
+    def with_overrides(self, integrator: str = '', step: float = 0.0,
+                       effect_parameters: Mapping[str, Mapping[str, Any]] | None = None
+                       ) -> Scene:
+        """A copy with another integrator or step, or some effect parameters replaced.
+
+        ``effect_parameters`` maps an effect name to parameters merged into that effect's
+        (ignored for effects the scene does not name). The copy is validated again.
+        """
+        effects = self.effects
+        if effect_parameters:
+            effects = tuple((name, {**params, **effect_parameters.get(name, {})})
+                            for name, params in self.effects)
+        changed = replace(self, integrator=integrator or self.integrator,
+                          step=step or self.step, effects=effects)
+        _check_effects(changed)
+        _check_step(changed.step)
+        return changed
+
+
+def builtin_scenes() -> dict[str, Path]:
+    """Names and files of the shipped scenes (``config/scenes/*.yaml``)."""
+    found: dict[str, Path] = {}
+    for folder in reversed(config_folders('scenes')):
+        for path in sorted(folder.glob('*.yaml')):
+            found[path.stem] = path
+    return found
+
+
+def scene_path(name_or_path: str) -> Path:
+    """The file of a built-in scene name, or ``name_or_path`` itself if it is a file."""
+    candidate = Path(name_or_path).expanduser()
+    if candidate.suffix in ('.yaml', '.yml') or os.sep in name_or_path:
+        if candidate.is_file():
+            return candidate
+        raise SceneError(f'Scene file {name_or_path!r} does not exist')
+    scenes = builtin_scenes()
+    if name_or_path in scenes:
+        return scenes[name_or_path]
+    raise SceneError(f'Unknown scene {name_or_path!r}; built-in scenes: '
+                     f'{", ".join(sorted(scenes)) or "(none found)"}, or give a path to a '
+                     f'.yaml file')
+
+
+def load_scene(name_or_path: str) -> Scene:
+    """Load and validate a built-in scene by name or a scene YAML file by path."""
+    path = scene_path(name_or_path)
+    try:
+        data = yaml.safe_load(path.read_text(encoding='utf-8'))
+    except yaml.YAMLError as err:
+        raise SceneError(f'Scene file {str(path)!r} is not valid YAML: {err}') from err
+    return scene_from_mapping(data, default_name=path.stem, source=str(path))
+
+
+def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '') -> Scene:
+    """Validate a scene given as a mapping (the parsed YAML)."""
+    if not isinstance(data, Mapping):
+        raise SceneError(f'Expected a scene to be a mapping with keys '
+                         f'{", ".join(sorted(_TOP_KEYS))}, got {data!r}')
+    _check_keys('scene', data, _TOP_KEYS, _REQUIRED_TOP_KEYS)
+    rate_source = data['rate_source']
+    if rate_source not in RATE_SOURCES:
+        raise SceneError(f'Unknown rate_source {rate_source!r}; valid choices: '
+                         f'{", ".join(RATE_SOURCES)}')
+    inertia, mass = _body(data['body'])
+    attitude, omega = _initial_state(data.get('initial_state', {}))
+    scene = Scene(
+        name=str(data.get('name', default_name)),
+        description=str(data.get('description', '')),
+        rate_source=rate_source,
+        integrator=_text('integrator', data.get('integrator', _DEFAULT_INTEGRATOR[rate_source])),
+        step=_check_step(data.get('step', 0.001)),
+        inertia=inertia,
+        mass=mass,
+        initial_attitude=attitude,
+        initial_omega_body=omega,
+        effects=_effect_list(data.get('effects') or []),
+        source=source,
+    )
+    _check_effects(scene)
+    return scene
+
+
+def _check_keys(where: str, data: Mapping[str, Any], valid: set[str],
+                required: tuple[str, ...] = ()) -> None:
+    unknown = sorted(set(data) - valid)
+    if unknown:
+        raise SceneError(f'Unknown key {unknown[0]!r} in {where}; valid keys: '
+                         f'{", ".join(sorted(valid))}')
+    for key in required:
+        if key not in data:
+            raise SceneError(f'Missing key {key!r} in {where}; valid keys: '
+                             f'{", ".join(sorted(valid))}')
+
+
+def _text(key: str, value: Any) -> str:
+    if not isinstance(value, str):
+        raise SceneError(f'Expected {key!r} to be a string, got {value!r}')
+    return value
+
+
+def _number(key: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        try:
+            real(value)  # always raises here; its reason explains YAML 1.1's '1e-3' text
+        except (TypeError, ValueError) as err:
+            raise SceneError(f'Expected {key!r} to be {err}, got {value!r}') from err
+    return float(value)
+
+
+def _check_step(value: Any) -> float:
+    step = _number('step', value)
+    if not np.isfinite(step) or step <= 0.0:
+        raise SceneError(f'Expected step to be a positive number of seconds, got {value!r}')
+    return step
+
+
+def _body(data: Any) -> tuple[Inertia, float]:
+    if not isinstance(data, Mapping):
+        raise SceneError(f'Expected body to be a mapping with keys mass, inertia; got {data!r}')
+    _check_keys('body', data, _BODY_KEYS, ('inertia',))
+    mass = _number('body.mass', data.get('mass', 1.0))
+    if not np.isfinite(mass) or mass <= 0.0:
+        raise SceneError(f'Expected body.mass to be a positive number [kg], got {mass!r}')
+    spec = data['inertia']
+    if not isinstance(spec, Mapping) or len(spec) != 1 or next(iter(spec)) not in _SHAPES:
+        raise SceneError(f'Expected body.inertia to be one of {{{", ".join(_SHAPES)}: ...}}, '
+                         f'got {spec!r}')
+    kind, params = next(iter(spec.items()))
+    try:
+        return _inertia(kind, params, mass), mass
+    except AttitudeError as err:
+        raise SceneError(f'Bad body.inertia.{kind}: {err}') from err
+    except TypeError as err:
+        raise SceneError(f'Bad body.inertia.{kind} parameters {params!r}: {err}') from err
+
+
+def _inertia(kind: str, params: Any, mass: float) -> Inertia:
+    if kind in ('tensor', 'moments'):
+        return Inertia(params)
+    if not isinstance(params, Mapping):
+        raise SceneError(f'Expected body.inertia.{kind} to be a mapping, got {params!r}')
+    if kind == 'box':
+        return Inertia.box(mass, **params)
+    if kind == 'cylinder':
+        return Inertia.cylinder(mass, **params)
+    return Inertia.sphere(mass, **params)
+
+
+def _initial_state(data: Any) -> tuple[FloatArray, FloatArray]:
+    if not isinstance(data, Mapping):
+        raise SceneError(f'Expected initial_state to be a mapping, got {data!r}')
+    _check_keys('initial_state', data, _STATE_KEYS)
+    try:
+        attitude = quaternion.normalize(
+            quaternion.as_quaternion(data.get('attitude', [1.0, 0.0, 0.0, 0.0]),
+                                     'initial_state.attitude'))
+        omega = quaternion.as_vector(data.get('omega_body', [0.0, 0.0, 0.0]),
+                                     'initial_state.omega_body')
+    except AttitudeError as err:
+        raise SceneError(str(err)) from err
+    if attitude.shape != (4,) or omega.shape != (3,):
+        raise SceneError('Expected initial_state.attitude to be 4 numbers (w, x, y, z) and '
+                         f'omega_body 3 numbers, got {data!r}')
+    return attitude, omega
+
+
+def _effect_list(data: Any) -> tuple[tuple[str, Mapping[str, Any]], ...]:
+    if not isinstance(data, list):
+        raise SceneError(f'Expected effects to be a list, got {data!r}')
+    effects = []
+    for item in data:
+        if isinstance(item, str):
+            name, params = item, {}
+        elif isinstance(item, Mapping) and len(item) == 1:
+            name, params = next(iter(item.items()))
+            params = {} if params is None else params
+        else:
+            raise SceneError(f'Expected each effect to be a name or {{name: {{parameters}}}}, '
+                             f'got {item!r}')
+        if name not in EFFECTS:
+            raise SceneError(f'Unknown effect {name!r}; valid effects: '
+                             f'{", ".join(sorted(EFFECTS))}')
+        if not isinstance(params, Mapping):
+            raise SceneError(f'Expected the parameters of effect {name!r} to be a mapping, '
+                             f'got {params!r}')
+        effects.append((name, dict(params)))
+    return tuple(effects)
+
+
+def _check_effects(scene: Scene) -> None:
+    names = [name for name, _ in scene.effects]
+    for name in names:
+        cls = EFFECTS[name]
+        if names.count(name) > 1:
+            raise SceneError(f'Effect {name!r} is named more than once in scene {scene.name!r}')
+        if scene.rate_source not in cls.rate_sources:
+            raise SceneError(f'Effect {name!r} applies to {"/".join(sorted(cls.rate_sources))} '
+                             f'scenes, not to rate_source {scene.rate_source!r}')
+        for required in cls.requires:
+            if required not in names:
+                raise SceneError(f'Effect {name!r} needs effect {required!r} in the same scene')
+    scene.build_effects()

@@ -1,0 +1,1 @@
+"""The only subpackage that imports rclpy: the node, its gyro loop and its middleware set-up."""

@@ -1,0 +1,28 @@
+"""The one place that reaches into rclpy's private C binding (``rclpy.impl``).
+
+rclpy 7 (Jazzy) exposes no public wait set that can be reused across wake-ups, nor its
+``RCLError`` type; both live in ``rclpy.impl.implementation_singleton.rclpy_implementation``.
+``test/ros/test_rclpy_internals.py`` checks every name used here, so an rclpy upgrade that
+moves one fails there, loudly, instead of deep inside the node.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rclpy.context import Context
+from rclpy.impl.implementation_singleton import rclpy_implementation as _binding
+
+__all__ = ['RCLError', 'USED_NAMES', 'new_wait_set']
+
+#: The binding's attributes this adapter uses (checked by the test).
+USED_NAMES = ('WaitSet', 'RCLError')
+
+#: rcl's error type (raised e.g. when the context shuts down during a take or publish).
+RCLError: type[Exception] = _binding.RCLError
+
+
+def new_wait_set(context: Context, subscriptions: int, guard_conditions: int,
+                 timers: int) -> Any:
+    """An rcl wait set with room for the given entities (no clients, services or events)."""
+    return _binding.WaitSet(subscriptions, guard_conditions, timers, 0, 0, 0, context.handle)

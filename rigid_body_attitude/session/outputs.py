@@ -1,0 +1,72 @@
+"""What a propagator publishes, computed once for the node and the replay tool alike.
+
+:class:`OutputTracker` turns the propagator's state into an :class:`OutputSample`: the attitude
+made continuous with the previous output (``q · q_prev ≥ 0``, see
+:mod:`rigid_body_attitude.core.quaternion`) and renormalised, the position, the body rate, the
+kinetic energy and the world angular momentum. The node converts a sample to messages; the
+replay tool writes the same messages to a bag, so both give the same numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
+
+__all__ = ['OutputSample', 'OutputTracker']
+
+Vector = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class OutputSample:
+    """One set of published values.
+
+    Attributes:
+        stamp: propagated time [s].
+        attitude: unit quaternion (w, x, y, z), body → world, continuous with the last output.
+        position: centre of mass in the world frame [m].
+        omega_body: body rate [rad/s].
+        energy: kinetic energy [J].
+        world_momentum: world-frame angular momentum [N m s].
+    """
+
+    stamp: float
+    attitude: tuple[float, float, float, float]
+    position: Vector
+    omega_body: Vector
+    energy: float
+    world_momentum: Vector
+
+
+class OutputTracker:
+    """Keeps the last published attitude so consecutive outputs never flip sign."""
+
+    def __init__(self) -> None:
+        """No output yet."""
+        self.previous: tuple[float, float, float, float] | None = None
+
+    def attitude(self, propagator: DynamicsPropagator | GyroPropagator
+                 ) -> tuple[float, float, float, float]:
+        """The propagator's attitude, unit-norm and on the side of the previous output."""
+        w, x, y, z = propagator.state.attitude_tuple()
+        scale = 1.0 / math.sqrt(w * w + x * x + y * y + z * z)
+        previous = self.previous
+        if previous is not None and (w * previous[0] + x * previous[1] + y * previous[2]
+                                     + z * previous[3]) < 0.0:
+            scale = -scale
+        self.previous = (w * scale, x * scale, y * scale, z * scale)
+        return self.previous
+
+    def sample(self, propagator: DynamicsPropagator | GyroPropagator) -> OutputSample:
+        """Everything published for the propagator's current state."""
+        state = propagator.state
+        return OutputSample(
+            stamp=state.time,
+            attitude=self.attitude(propagator),
+            position=tuple(state.position.tolist()),
+            omega_body=state.omega_tuple(),
+            energy=propagator.energy(),
+            world_momentum=tuple(propagator.world_momentum().tolist()),
+        )

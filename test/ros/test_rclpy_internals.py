@@ -1,0 +1,27 @@
+"""The adapter over rclpy's private binding fails here, loudly, when rclpy changes."""
+
+import rclpy
+from rclpy.impl.implementation_singleton import rclpy_implementation as binding
+
+from rigid_body_attitude.ros import rclpy_internals
+
+
+def test_every_private_name_the_adapter_uses_exists() -> None:
+    missing = [name for name in rclpy_internals.USED_NAMES if not hasattr(binding, name)]
+    assert missing == [], f'rclpy no longer has {missing}: update ros/rclpy_internals.py'
+
+
+def test_rcl_error_is_an_exception_type() -> None:
+    assert issubclass(rclpy_internals.RCLError, Exception)
+
+
+def test_new_wait_set_holds_and_clears_entities(ros_domain_id: int) -> None:
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        wait_set = rclpy_internals.new_wait_set(context, 1, 2, 1)
+        wait_set.clear_entities()
+        wait_set.wait(0)  # an empty wait set returns at once (timeout 0)
+        wait_set.destroy_when_not_in_use()
+    finally:
+        rclpy.shutdown(context=context)
