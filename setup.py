@@ -44,14 +44,14 @@ SOURCE_DIR = Path(__file__).resolve().parent
 # Executable name -> entry point. Each name has a launcher in scripts/launchers/ and a console
 # script; ``make test`` (test/test_packaging.py) checks that the two agree.
 EXECUTABLES = {
-    'propagation_node': 'rigid_body_attitude.ros.node:main',
+    'propagation_node': 'rigid_body_attitude.ros.serve:main',
     'replay': 'rigid_body_attitude.tools.replay:main',
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
 }
 
 # Names that say what they belong to, for <prefix>/bin on a shared PATH.
 ALIASES = {
-    'rigid-body-attitude-node': 'rigid_body_attitude.ros.node:main',
+    'rigid-body-attitude-node': 'rigid_body_attitude.ros.serve:main',
     'rigid-body-attitude-replay': 'rigid_body_attitude.tools.replay:main',
     'rigid-body-attitude-study': 'rigid_body_attitude.tools.study:main',
 }

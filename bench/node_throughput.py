@@ -153,7 +153,7 @@ def default_targets() -> Dict[str, List[str]]:
     if shutil.which('propagation_node'):
         targets['node'] = ['propagation_node'] + NODE_ARGS
     elif (REPO / 'rigid_body_attitude' / 'node.py').exists():
-        targets['node'] = [python, '-m', 'rigid_body_attitude.ros.node'] + NODE_ARGS
+        targets['node'] = [python, '-m', 'rigid_body_attitude.ros.serve'] + NODE_ARGS
     targets['relay'] = [python, str(BENCH / 'relay.py')]
     targets['fast_relay'] = [python, str(BENCH / 'fast_relay.py')]
     return targets
@@ -340,7 +340,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         help='an extra target command line (repeatable)')
     parser.add_argument('--node-cmd', default=None,
                         help='command line of the node target (default: propagation_node '
-                             'or python -m rigid_body_attitude.ros.node, with '
+                             'or python -m rigid_body_attitude.ros.serve, with '
                              f'{" ".join(NODE_ARGS)})')
     parser.add_argument('--depth', type=int, default=QUEUE_DEPTH,
                         help='KEEP_LAST depth of the publisher, subscriber and relays '

@@ -31,7 +31,7 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 
 # What `ros2 run rigid_body_attitude <name>` starts, and the function it runs.
 EXECUTABLES = {
-    'propagation_node': 'rigid_body_attitude.ros.node:main',
+    'propagation_node': 'rigid_body_attitude.ros.serve:main',
     'replay': 'rigid_body_attitude.tools.replay:main',
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
 }
@@ -185,7 +185,7 @@ def test_launcher_prefers_python_of_its_own_prefix(tmp_path):
     assert result.returncode == 0, result.stderr
     assert lines[0] == 'prefix-python'
     assert lines[1] == '[-c]'
-    assert 'from rigid_body_attitude.ros.node import main' in result.stdout
+    assert 'from rigid_body_attitude.ros.serve import main' in result.stdout
     assert lines[-4:] == [f'[{launcher}]', '[--ros-args]', '[-p]', '[scene:=a b]']
 
 

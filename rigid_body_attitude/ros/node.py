@@ -49,9 +49,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-import gc
 import math
-import sys
 import threading
 import time
 from typing import Any
@@ -60,15 +58,12 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import (
     PoseStamped, QuaternionStamped, TwistStamped, Vector3Stamped, WrenchStamped)
-import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidParameterTypeException, ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from rclpy.qos_overriding_options import QoSOverridingOptions
-from rclpy.task import Future
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
@@ -83,9 +78,7 @@ from rigid_body_attitude.session.reports import (
     body_frame_velocity, diagnostic_report, LEVEL_ERROR, LEVEL_WARN,
     NANOSECONDS_PER_SECOND, stale_command_count, TimeBase)
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
-from rigid_body_attitude.ros.rclpy_internals import RCLError
-from rigid_body_attitude.ros.middleware import (
-    apply_cpu_scheduling, check_cpu_scheduling, use_packaged_fastdds_profile)
+from rigid_body_attitude.ros.middleware import check_cpu_scheduling
 from rigid_body_attitude.session.outputs import OutputTracker
 from rigid_body_attitude.core.propagator import (
     build_propagator, DynamicsPropagator, MAX_STEPS_PER_CALL)
@@ -94,8 +87,8 @@ from rigid_body_attitude.session.settings import (
     DIAGNOSTICS_PERIOD, load_node_scene, NODE_DEFAULTS, NODE_NAME, publishes)
 from rigid_body_attitude.session.stream import ClockDriver, CommandStream, GyroStream, Outcome
 
-__all__ = ['AttitudePropagatorNode', 'DedicatedGroup', 'GyroLoop', 'NodeSettings',
-           'check_parameters', 'main', 'spin']
+__all__ = ['AttitudePropagatorNode', 'NodeSettings', 'RawOutput',
+           'check_parameters']
 
 #: Seconds between repeated warnings about the same rejection reason.
 WARNING_INTERVAL = 5.0
@@ -723,121 +716,3 @@ class RawOutput:
         self.subscription_count: Callable[[], int] = handle.get_subscription_count
         #: Publish serialized (CDR) ``bytes``.
         self.publish: Callable[[bytes], None] = handle.publish_raw
-
-
-def _error_text(err: BaseException) -> str:
-    """The first line of an error, without rcl's source locations."""
-    return str(err).splitlines()[0].split(', at /')[0] if str(err) else type(err).__name__
-
-
-def _serve_rest(executor: SingleThreadedExecutor, done: Future, loop: GyroLoop,
-                failures: list[BaseException]) -> None:
-    """Body of the executor thread: spin until ``done`` or shutdown; a callback's exception
-    stops the gyro loop too."""
-    try:
-        executor.spin_until_future_complete(done)
-    except ExternalShutdownException:
-        pass
-    except BaseException as err:  # handed to the main thread, which re-raises it
-        failures.append(err)
-        loop.stop()
-
-
-def spin(node: AttitudePropagatorNode) -> None:
-    """Serve ``node`` until SIGINT or shutdown. Gyro scenes: gyro messages and timers in a
-    :class:`GyroLoop` on this thread, the rest (services, parameters, set_pose) with a
-    ``SingleThreadedExecutor`` in a daemon thread. Dynamics scenes: ``rclpy.spin``.
-
-    An exception of a callback in either thread ends both and propagates. Before serving,
-    the objects of the start-up (about 60 000: rclpy, NumPy, SciPy, the scene) are collected
-    once and frozen out of the garbage collector's reach: a full collection would otherwise
-    scan them all (35 ms here, so dozens of gyro messages delayed at once); afterwards it
-    scans only what the run itself keeps. Everything that serves is built before the node's
-    threads take the ``cpu_scheduling`` policy
-    (:func:`~rigid_body_attitude.ros.middleware.apply_cpu_scheduling`) and the node logs it: a
-    KeyboardInterrupt inside an rclpy constructor would leave a half-built object whose
-    finaliser fails at exit, so after that line a Ctrl-C always exits cleanly.
-    """
-    gc.collect()
-    gc.freeze()
-    loop = node.gyro_loop()  # claims the gyro subscriptions and timers before any spin
-    executor = SingleThreadedExecutor(context=node.context)
-    if loop is None:
-        _apply_cpu_scheduling(node)
-        rclpy.spin(node, executor)
-        return
-    executor.add_node(node)
-    done, failures = Future(), []
-    rest = threading.Thread(target=_serve_rest, args=(executor, done, loop, failures),
-                            name='executor', daemon=True)
-    try:
-        rest.start()
-        _apply_cpu_scheduling(node)
-        loop.run()
-    finally:
-        if rest.ident is not None:  # started
-            _stop(done, rest)
-        executor.shutdown()  # only now: its thread no longer waits (rclpy issue #968)
-        loop.close()
-    if failures:
-        raise failures[0]
-
-
-def _apply_cpu_scheduling(node: AttitudePropagatorNode) -> None:
-    """Give every thread of the process the node's ``cpu_scheduling`` policy; log it."""
-    outcome = apply_cpu_scheduling(node.cpu_scheduling)
-    if outcome.refused:
-        node.get_logger().warning(
-            f'cpu_scheduling {node.cpu_scheduling!r} refused by the system '
-            f'({outcome.refused}); the other threads keep their policy')
-    node.get_logger().info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} '
-                           f'threads changed; serving')
-
-
-def _stop(done: Future, thread: threading.Thread) -> None:
-    """End the executor thread (``done``) and wait for it, even through KeyboardInterrupt.
-
-    rclpy raises KeyboardInterrupt in the main thread some time after SIGINT; if it cut this
-    wait short, the node would be destroyed under callbacks still running in ``thread``.
-    """
-    while True:
-        try:
-            if not done.done():
-                done.set_result(None)  # wakes the executor, whose spin then returns
-            thread.join()
-            return
-        except KeyboardInterrupt:
-            continue
-
-
-def main(args: list[str] | None = None) -> int:
-    """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2."""
-    profile_note = use_packaged_fastdds_profile()  # before the participant exists
-    try:
-        rclpy.init(args=args)
-    except RuntimeError as err:  # rcl could not parse the ROS arguments
-        print(f'error: {_error_text(err)}', file=sys.stderr)
-        return 2
-    node = None
-    try:
-        node = AttitudePropagatorNode()
-        node.get_logger().info(profile_note)
-        spin(node)
-    except (AttitudeError, ParameterException, OSError) as err:
-        print(f'error: {_error_text(err)}', file=sys.stderr)
-        return 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except RCLError:
-        # SIGINT shut the context down while a gyro message was being taken or published.
-        if rclpy.ok():
-            raise
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -30,7 +30,8 @@ from std_srvs.srv import Trigger
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import InputError, IntegratorError, SceneError
 from rigid_body_attitude.session.reports import body_frame_velocity, TimeBase
-from rigid_body_attitude.ros.node import AttitudePropagatorNode, check_parameters, main
+from rigid_body_attitude.ros.node import AttitudePropagatorNode, check_parameters
+from rigid_body_attitude.ros.serve import main
 from rigid_body_attitude.session.outputs import OutputTracker
 from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.scene import load_scene
