@@ -41,7 +41,7 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.ros.decoding import DECODERS, Decoded, MALFORMED
+from rigid_body_attitude.session.decoding import DECODERS, Decoded, MALFORMED
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.outputs import RosOutputs
 from rigid_body_attitude.ros.qos import INPUT_QOS
