@@ -190,7 +190,7 @@ def _replay(messages: Any, sink: BagSink, scene: Scene, values: dict[str, Any], 
         return sink.now_ns
 
     def monotonic() -> float:
-        return sink.now_ns * 1e-9
+        return sink.now_ns / 1e9  # correctly rounded: whole seconds stay exact
 
     session = open_session(scene, values, sink, clock_ns, monotonic)
     problem = session.check(values)
