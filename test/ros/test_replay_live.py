@@ -11,8 +11,8 @@ tumbling, constant commanded torque):
 The player follows the replay tool's documented clock rule: ``/clock`` is published at every
 multiple ``k P`` of the timer period within the bag's time span (gyro bags: plus one after the
 last sample), before the messages recorded at that instant; each message is delivered and
-taken by the node before the next event (the player waits for the node's input counters, and
-for the clock before each tick). Then (a) and (b) must agree to 1e-12 output by output
+taken by the node before the next event (the player waits for the session's input counters,
+and for the clock before each tick). Then (a) and (b) must agree to 1e-12 output by output
 (matched by stamp), and both must match the closed form within the integrator's error bound
 given by the case.
 """
@@ -155,7 +155,7 @@ class LiveRun:
         def publish() -> None:
             self.input.publish(data)
         publish()
-        self._until(lambda: self.node.input_messages >= expected, publish,
+        self._until(lambda: self.node.session.received_count() >= expected, publish,
                     f'input {expected}')
         self.fresh = self.fresh or self.is_gyro
 
@@ -178,8 +178,8 @@ class LiveRun:
             return
         self.ticks_done += 1
         count = self.ticks_done
-        self._until(lambda: self.node.clock_driver.accepted >= count, publish,
-                    f'the tick at {clock_ns}')
+        clock = self.node.session.clock
+        self._until(lambda: clock.accepted >= count, publish, f'the tick at {clock_ns}')
 
     def wait_for_outputs(self, counts: dict[str, int]) -> None:
         """Spin until the recorder holds as many messages per topic as ``counts``."""
