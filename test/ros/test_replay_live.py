@@ -1,7 +1,9 @@
 """Bag-replayed tests: each analytic bag offline through ``replay`` and live through the node.
 
 For every case of :mod:`bag_fixtures` (constant rate, coning, generic rate, torque-free
-tumbling, constant commanded torque):
+tumbling, constant commanded torque), and for the constant-rate bag with hostile records
+injected (:data:`FAULTS`: truncated, header-only, unknown encapsulation, a rate of 1e200 rad/s,
+published to the node as the raw bytes they are):
 
 (a) ``replay`` (its ``main``) writes the node's outputs for the bag to an output bag;
 (b) a player publishes the bag's messages, with their recorded stamps, over real rclpy topics
@@ -36,11 +38,12 @@ from ros_helpers import Harness, ros_session, RosContext, unique_namespace
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 
-from bag_fixtures import AnalyticCase, build_case, CASES, write_case_bag, write_scene
+from bag_fixtures import (
+    AnalyticCase, build_case, CASES, write_case_bag, write_records, write_scene)
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.bag import (
-    BagReader, float64_value, header_stamp_ns, pose_orientation, pose_position,
-    quaternion_stamped, twist_angular, twist_linear, vector3_stamped)
+    BagReader, encode_imu, float64_value, header_stamp_ns, IMU, pose_orientation,
+    pose_position, quaternion_stamped, twist_angular, twist_linear, vector3_stamped)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.tools.replay import main as replay_main
 from rigid_body_attitude.session.settings import timer_period_ns
@@ -52,6 +55,14 @@ AGREEMENT = 1e-12
 #: (the node's inputs are best effort), and how often to try.
 RETRY_AFTER = 1.0
 ATTEMPTS = 5
+#: The hostile variant of ``constant_rate``: sample index → what replaces it (not a valid
+#: Imu, or a valid one with an absurd rate). The node and the replay must reject the same.
+FAULTS = {
+    100: lambda data: data[:-9],                        # truncated
+    400: lambda data: data[:20],                        # a header only
+    700: lambda data: b'\x00\x07' + data[2:],           # unknown CDR encapsulation
+    1000: lambda data: encode_imu(header_stamp_ns(data), 'base_link', (1e200, 0.0, 0.0)),
+}
 
 
 @pytest.fixture
@@ -281,13 +292,27 @@ def closed_form_errors(case: AnalyticCase, orientation: dict[int, tuple[float, .
 
 # -- the test --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize('name', list(CASES))
+def write_faulty_bag(case: AnalyticCase, path: Path) -> None:
+    """The gyro case's Imu samples with :data:`FAULTS` injected (real rosbag2 records)."""
+    records = []
+    for index, (stamp, rate) in enumerate(zip(case.stamps.tolist(), case.rates.tolist())):
+        stamp_ns = round(stamp * 1e9)
+        data = encode_imu(stamp_ns, 'base_link', rate)
+        records.append(('imu', stamp_ns, FAULTS[index](data) if index in FAULTS else data))
+    write_records(path, {'imu': IMU}, records)
+
+
+@pytest.mark.parametrize('name', [*CASES, 'constant_rate_faults'])
 def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_path,
                                                                  request):
-    case = build_case(name)
+    faulty = name.endswith('_faults')
+    case = build_case(name.removesuffix('_faults'))
     scene_path = write_scene(case, tmp_path)
     bag_path = tmp_path / 'input'
-    write_case_bag(case, bag_path)
+    if faulty:
+        write_faulty_bag(case, bag_path)
+    else:
+        write_case_bag(case, bag_path)
     offline_path = tmp_path / 'offline'
     assert replay_main([str(bag_path), '-o', str(offline_path), '--scene', str(scene_path),
                         '--publish-rate', str(PUBLISH_RATE), '--no-progress']) == 0
@@ -306,8 +331,12 @@ def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_
         # The case's bound: the integrator's error at this step (see bag_fixtures).
         assert np.max(errors) <= case.tolerance, (case.tolerance_reason, np.max(errors))
     assert len(offline['orientation']) == (
-        case.stamps.size if case.rate_source == 'gyro'
+        case.stamps.size - len(FAULTS) * faulty if case.rate_source == 'gyro'
         else _tick_count(case.stamps))
+    if faulty:  # rejected alike: 3 malformed, 1 out of range
+        rejected = run.node.session.rejection_counts()
+        assert (rejected['malformed'], rejected['out_of_range']) == (3, 1)
+        assert run.node.session.malformed_by_topic == {'imu': 3}
     print(f'{name}: offline vs live max difference {worst:.3g} over {differences}; '
           f'closed-form error {np.max(closed_form_errors(case, offline["orientation"])):.3g} '
           f'rad (bound {case.tolerance:.3g})')
