@@ -74,7 +74,7 @@ class Parameter:
     def _text_problem(self, value: str) -> str:
         if self.choices and value not in self.choices:
             return (f'Expected parameter `{self.name}` to be one of '
-                    f'{", ".join(self.choices)}, got {_quoted(value)}')
+                    f'{", ".join(map(repr, self.choices))}, got {_quoted(value)}')
         if not self.may_be_empty and not value.strip():
             return f'Expected parameter `{self.name}` to be a non-empty name, got {value!r}'
         if len(value) > MAX_TEXT_LENGTH:

@@ -101,8 +101,8 @@ def test_set_pose_normalises_without_overflow_and_checks_the_frame(open_scene):
     assert finite_outputs(sink)
 
 
-def test_malformed_messages_are_counted_per_topic_and_warned_once_per_interval(open_scene,
-                                                                              clocks):
+def test_malformed_messages_are_counted_per_topic_and_warned_once_per_interval(
+        open_scene, clocks):
     session, sink = open_scene('strapdown')
     for _ in range(3):
         session.malformed('imu', 'truncated: 20 of 316 bytes')

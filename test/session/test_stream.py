@@ -25,7 +25,8 @@ BASE = 1_700_000_000 * 10**9 + 123_456_789
 
 
 def gyro_stream(constant_dt=0.0, max_rate=math.inf):
-    scene = scene_from_mapping({'rate_source': 'gyro', 'body': {'inertia': {'moments': [1, 1, 1]}}})
+    scene = scene_from_mapping({'rate_source': 'gyro',
+                                'body': {'inertia': {'moments': [1, 1, 1]}}})
     return GyroStream(GyroPropagator(scene), MAX_DT, JUMP, constant_dt, max_rate)
 
 
