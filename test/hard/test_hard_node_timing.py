@@ -22,9 +22,8 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import QuaternionStamped, Vector3Stamped
 import numpy as np
-import pytest
 from rclpy.parameter import Parameter
-from ros_helpers import Harness, ros_session, unique_namespace
+from ros_helpers import Harness, unique_namespace
 
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.session.outputs import OutputTracker
@@ -38,13 +37,6 @@ BASE_NS = 1_700_000_000 * 10**9 + 123_456_789
 MS = 1_000_000
 MAX_DT = 0.1
 TIME_JUMP_THRESHOLD = 1.0
-
-
-@pytest.fixture
-def ros(ros_domain_id):
-    """A context and executor of the test's own on the test run's domain."""
-    with ros_session(ros_domain_id) as session:
-        yield session
 
 
 def faulty_stream(count, seed=10):

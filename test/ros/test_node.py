@@ -8,7 +8,6 @@ same floats (the node must add nothing of its own).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 import math
 import threading
 from typing import Any
@@ -22,7 +21,7 @@ import pytest
 from rclpy.parameter import Parameter
 from rclpy.qos import ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from ros_helpers import Harness, ros_session, RosContext, unique_namespace
+from ros_helpers import Harness, stamp, unique_namespace
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
@@ -46,19 +45,6 @@ MS = 1_000_000
 #: 1 kHz gyro, |ω| = 7 rad/s: the attitude passes w = 0 at t = π/7 s, so a sign flip of the
 #: published quaternion would show against the (continuous) closed form.
 OMEGA = (2.0, -3.0, 6.0)
-
-
-@pytest.fixture
-def ros(ros_domain_id: int) -> Iterator[RosContext]:
-    """A context and executor of the test's own on the test run's domain."""
-    with ros_session(ros_domain_id) as session:
-        yield session
-
-
-def stamp(nanoseconds: int) -> Time:
-    """A builtin_interfaces/Time of integer nanoseconds."""
-    sec, nanosec = divmod(nanoseconds, 10**9)
-    return Time(sec=sec, nanosec=nanosec)
 
 
 def nanoseconds(time_message: Time) -> int:

@@ -8,18 +8,16 @@ nothing.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 import struct
 from typing import Any
 
-from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
 import numpy as np
 import pytest
 from rclpy.parameter import Parameter
 from rclpy.serialization import serialize_message
-from ros_helpers import Harness, ros_session, RosContext, unique_namespace
+from ros_helpers import Harness, stamp, unique_namespace
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 
@@ -28,17 +26,6 @@ from rigid_body_attitude.ros.node import AttitudePropagatorNode
 BASE_NS = 1_700_000_000 * 10**9 + 123_456_789
 MS = 1_000_000
 OMEGA = (0.3, -0.2, 1.1)
-
-
-@pytest.fixture
-def ros(ros_domain_id: int) -> Iterator[RosContext]:
-    with ros_session(ros_domain_id) as session:
-        yield session
-
-
-def stamp(nanoseconds: int) -> Time:
-    sec, nanosec = divmod(nanoseconds, 10**9)
-    return Time(sec=sec, nanosec=nanosec)
 
 
 def malformed_variants(good: bytes) -> list[bytes]:

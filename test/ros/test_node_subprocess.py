@@ -198,7 +198,8 @@ def test_default_scene_with_the_params_file_publishes_pose_alone(ros, request, p
 @pytest.mark.parametrize('arguments, expected', [
     (('-p', 'scene:=no_such_scene'), "error: Unknown scene 'no_such_scene'"),
     (('-p', 'publish_rate:=50'), 'error: Expected parameter `publish_rate` to be a double'),
-    (('-p', 'max_dt:=0.0'), 'error: Expected parameter `max_dt` to be a finite number in (0, 3600], got 0.0'),
+    (('-p', 'max_dt:=0.0'),
+     'error: Expected parameter `max_dt` to be a finite number in (0, 3600], got 0.0'),
 ])
 def test_bad_parameters_give_one_error_line_and_exit_2(processes, arguments, expected):
     process = start('--ros-args', *arguments)
