@@ -32,7 +32,7 @@ from typing import Any
 
 from geometry_msgs.msg import PoseStamped, Vector3Stamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import InvalidParameterTypeException
+from rclpy.exceptions import InvalidParameterTypeException, ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
@@ -134,6 +134,8 @@ class AttitudePropagatorNode(Node):
             except InvalidParameterTypeException as err:
                 raise InputError(f'Expected parameter `{parameter.name}` to be a '
                                  f'{parameter.type_text}: {str(err)[:200]}') from err
+            except ParameterException as err:
+                raise InputError(f'Bad parameter `{parameter.name}`: {str(err)[:200]}') from err
         return values
 
     def _create_inputs(self) -> None:

@@ -203,7 +203,8 @@ class Session(ABC):
         self._period = (now, received, accepted, rejections, missed)
         counts = PeriodCounts(
             elapsed=max(now - start, 1e-9), received=received - received0,
-            accepted=accepted - accepted0, accepted_total=accepted, rejections=rejections,
+            accepted=accepted - accepted0, accepted_total=accepted, received_total=received,
+            rejections=rejections,
             new_rejections=rejections - rejections0, missed=missed - missed0,
             missed_total=missed, malformed_by_topic=Counter(self.malformed_by_topic),
             gyro_scene=isinstance(self.propagator, GyroPropagator))

@@ -10,6 +10,7 @@ rules that tie parameters together.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -74,7 +75,7 @@ class Parameter:
     def _text_problem(self, value: str) -> str:
         if self.choices and value not in self.choices:
             return (f'Expected parameter `{self.name}` to be one of '
-                    f'{", ".join(self.choices)}, got {_quoted(value)}')
+                    f'{", ".join(map(repr, self.choices))}, got {_quoted(value)}')
         if not self.may_be_empty and not value.strip():
             return f'Expected parameter `{self.name}` to be a non-empty name, got {value!r}'
         if len(value) > MAX_TEXT_LENGTH:
@@ -86,8 +87,8 @@ class Parameter:
         """The bounds as an interval, e.g. ``(0, 1000]``; ``''`` for non-numbers."""
         if self.type is not float:
             return ''
-        low = '-inf' if self.low is None else f'{self.low:g}'
-        high = 'inf' if self.high is None else f'{self.high:g}'
+        low = '-inf' if self.low is None else _number_text(self.low)
+        high = 'inf' if self.high is None else _number_text(self.high)
         return f'{"(" if self.low_open or self.low is None else "["}{low}, {high}]'
 
 
@@ -96,6 +97,11 @@ MAX_TEXT_LENGTH = 4096
 
 _TYPE_TEXT = {float: 'double (written with a decimal point, e.g. 50.0)',
               bool: 'boolean (true or false)', str: 'string'}
+
+
+def _number_text(value: float) -> str:
+    """A bound as people write it: ``1e6``, not ``1e+06``."""
+    return re.sub(r'e\+?(-?)0*(\d)', r'e\1\2', f'{value:g}')
 
 
 def _quoted(value: Any) -> str:

@@ -72,6 +72,7 @@ class PeriodCounts:
         received: inputs received in the period (every message, whatever became of it).
         accepted: inputs used in the period (gyro samples, commands, poses; not clock ticks).
         accepted_total: inputs used so far.
+        received_total: inputs received so far.
         rejections: rejections so far by reason.
         new_rejections: rejections in the period by reason.
         missed: samples lost upstream in the period (gyro).
@@ -90,6 +91,7 @@ class PeriodCounts:
     accepted_total: int
     rejections: Counter[str]
     new_rejections: Counter[str]
+    received_total: int = 0
     missed: int = 0
     missed_total: int = 0
     malformed_by_topic: Counter[str] = field(default_factory=Counter)
@@ -244,6 +246,7 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
         ('quaternion_norm_error', f'{diagnostics.quaternion_norm_error:.3e}'),
         ('input_rate [Hz]', f'{counts.accepted / counts.elapsed:.1f}'),
         ('received_rate [Hz]', f'{counts.received / counts.elapsed:.1f}'),
+        ('received', str(counts.received_total)),
         ('accepted', str(counts.accepted_total)),
         ('missed_samples', str(counts.missed_total)),
     ]

@@ -110,6 +110,11 @@ class _Counting:
         self.accepted += 1
         return outcome
 
+    @property
+    def total(self) -> int:
+        """Inputs seen: accepted plus rejected."""
+        return self.accepted + sum(self.rejected.values())
+
 
 def _vector(values: Sequence[float]) -> Vector | None:
     """3 finite floats, or None."""
