@@ -69,7 +69,7 @@ class GyroSession(Session):
         """
         if not self.use_header_stamps:
             sec, nanosec = split_ns(self.clock_ns())
-        elif nanosec >= NANOSECONDS_PER_SECOND or sec <= 0:
+        elif nanosec >= NANOSECONDS_PER_SECOND or (sec <= 0 and (sec < 0 or not nanosec)):
             return self._bad_stamp(sec, nanosec)
         stream = self.stream
         outliers = stream.outliers
