@@ -21,7 +21,6 @@ given by the case.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 import math
 from pathlib import Path
 import struct
@@ -34,7 +33,7 @@ import numpy as np
 import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
-from ros_helpers import Harness, ros_session, RosContext, unique_namespace
+from ros_helpers import Harness, RosContext, unique_namespace
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 
@@ -63,13 +62,6 @@ FAULTS = {
     700: lambda data: b'\x00\x07' + data[2:],           # unknown CDR encapsulation
     1000: lambda data: encode_imu(header_stamp_ns(data), 'base_link', (1e200, 0.0, 0.0)),
 }
-
-
-@pytest.fixture
-def ros(ros_domain_id: int) -> Iterator[RosContext]:
-    """A context and executor of the test's own on the test run's domain."""
-    with ros_session(ros_domain_id) as session:
-        yield session
 
 
 def _ns(stamp: Time) -> int:

@@ -424,3 +424,15 @@ def test_ground_truth_types_are_read(tmp_path):
         result = replay_bag(bag, tmp_path / f'out_{kind}',
                             ReplayOptions(scene=GYRO_SCENE, ground_truth_topic='ground_truth'))
         assert result.errors.count == 200 and result.errors.errors.max() < 1e-13
+
+
+def test_stamps_within_the_first_second_are_valid(tmp_path, capsys):
+    # Simulators start their clock at 0: sec 0 with nanosec > 0 is a valid stamp; only the
+    # all-zero stamp means "unstamped" and is refused (zero_stamp).
+    bag = constant_rate_bag(tmp_path / 'in', count=20, start=0.0)
+    code, text, _ = run([str(bag), '-o', str(tmp_path / 'out'), '--scene', GYRO_SCENE],
+                        capsys)
+    assert code == 0 and 'used: 19; rejected: zero_stamp 1' in text
+    series = read_series(tmp_path / 'out', 'orientation')
+    assert series.stamps == pytest.approx(np.arange(1, 20) / RATE, abs=1e-9)
+    assert quaternion.attitude_error(series.values[-1], quaternion.exp(OMEGA * 18e-3)) < 1e-14
