@@ -49,6 +49,11 @@ def test_options_are_the_node_parameters_with_their_defaults():
     options = ReplayOptions().parameters()
     assert options == {p.name: p.default for p in PARAMETERS if not p.node_only}
     assert 'cpu_scheduling' not in options and 'max_angular_rate' in options
+    # From Python an integer may stand for a double; a boolean may not.
+    assert ReplayOptions(publish_rate=100).parameters()['publish_rate'] == 100.0
+    assert type(ReplayOptions(publish_rate=100).parameters()['publish_rate']) is float
+    with pytest.raises(InputError, match='Expected parameter `max_dt` to be a double'):
+        replay_bag('unused', 'unused', ReplayOptions(max_dt=True))
     # rclpy's create_timer(1 / rate): 50 Hz → 20 ms; 30 Hz truncates to 33333333 ns.
     assert timer_period_ns(50.0) == 20_000_000
     assert timer_period_ns(30.0) == 33_333_333
