@@ -9,6 +9,7 @@ of :data:`MALFORMED`; the node counts them and goes on.
 from __future__ import annotations
 
 from collections.abc import Callable
+import struct
 from typing import Any
 
 from rigid_body_attitude.bag import cdr
@@ -23,9 +24,14 @@ Decoded = tuple[int, int, str, Any, Any]
 MALFORMED: tuple[type[Exception], ...] = (BagError,)
 
 
+_STAMP = {0: struct.Struct('>iI'), 1: struct.Struct('<iI')}
+
+
 def _header(data: bytes) -> tuple[int, int, str]:
-    sec, nanosec = divmod(cdr.header_stamp_ns(data), 1_000_000_000)
-    return sec, nanosec, cdr.header_frame_id(data)
+    """The stamp as sent (not normalised: the session judges it) and the frame id."""
+    frame_id = cdr.header_frame_id(data)  # checks the encapsulation and the header's size
+    sec, nanosec = _STAMP[data[1] & 1].unpack_from(data, 4)
+    return sec, nanosec, frame_id
 
 
 def imu(data: bytes) -> Decoded:
