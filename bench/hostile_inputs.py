@@ -104,7 +104,7 @@ class RunningNode:
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
-                   ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+                   ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', PYTHONFAULTHANDLER='1')
         self.process = subprocess.Popen(node_command(*arguments), env=env,
                                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                         text=True)
@@ -200,6 +200,7 @@ def gyro_attack(domain: int, name: str, attacks: list[tuple[str, Any]], reason: 
     problems = []
     if code != 0 or 'Traceback' in stderr:
         problems.append(f'exit {code}')
+        print(stderr[-4000:], file=sys.stderr)  # the crash's traces (faulthandler)
     counted = sum(int(values.get(f'rejected {key}', 0)) for key in reason.split('|'))
     if counted != len(attacks):
         problems.append(f'rejected {reason} = {counted}')
