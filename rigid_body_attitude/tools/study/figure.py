@@ -1,0 +1,105 @@
+"""The work-precision figure: one panel per case, error against CPU per simulated second.
+
+Every method of a panel has its own colour and its own marker (no repeats within a panel);
+legends sit outside the axes, to the right; points below the reference's floor (not
+resolved) are not drawn; a dashed line marks the case's target error where it has one
+(:data:`~rigid_body_attitude.tools.study.cases.TARGETS`). Invariant-drift panels follow
+for the cases that measure a conserved quantity.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from rigid_body_attitude.tools.study.cases import TARGETS
+from rigid_body_attitude.tools.study.runner import Row
+
+__all__ = ['MARKERS', 'method_styles', 'write_figure']
+
+#: Distinct markers, enough for the largest panel (``generic``: 22 methods).
+MARKERS = ('o', 's', '^', 'v', 'D', 'P', 'X', '<', '>', 'p', 'h', '*', 'd', 'H', '8',
+           '1', '2', '3', '4', '+', 'x', '|', '_', '.')
+#: Drift panels: cases whose invariant is conserved by the exact motion.
+DRIFT_CASES = ('coning', 'torque_free', 'heavy_top')
+
+
+def _colours(count: int) -> list[tuple[float, ...]]:
+    """``count`` distinct colours: tab10, then tab20's light shades, then Dark2."""
+    from matplotlib import colormaps
+    palette = [tuple(c) for c in colormaps['tab10'].colors]
+    palette += [tuple(c) for c in colormaps['tab20'].colors[1::2]]
+    palette += [tuple(c) for c in colormaps['Dark2'].colors]
+    if count > len(palette):
+        raise ValueError(f'Expected at most {len(palette)} methods in a panel, got {count}')
+    return palette[:count]
+
+
+def method_styles(methods: Sequence[str]) -> dict[str, tuple[tuple[float, ...], str]]:
+    """A distinct (colour, marker) per method, in order."""
+    if len(methods) > len(MARKERS):
+        raise ValueError(f'Expected at most {len(MARKERS)} methods in a panel, got '
+                         f'{len(methods)}')
+    return dict(zip(methods, zip(_colours(len(methods)), MARKERS)))
+
+
+def _points(rows: Sequence[Row], method: str, drift: bool) -> list[tuple[float, float]]:
+    """(CPU per simulated s, value) of a method's resolved runs, by cost."""
+    points = []
+    for r in rows:
+        if r.method != method or not r.resolved:
+            continue
+        value = abs(r.drift) if drift else r.error
+        if value > 0.0 and math.isfinite(value):
+            points.append((r.cpu_per_second, value))
+    return sorted(points)
+
+
+def _panel(axis: Any, rows: Sequence[Row], case: str, drift: bool) -> None:
+    subset = [r for r in rows if r.case == case]
+    methods = list(dict.fromkeys(r.method for r in subset))
+    styles = method_styles(methods)
+    for method in methods:
+        points = _points(subset, method, drift)
+        if points:
+            colour, marker = styles[method]
+            axis.plot(*zip(*points), color=colour, marker=marker, markersize=5,
+                      linewidth=1.0, label=method)
+    invariant = subset[0].invariant
+    if not drift and case in TARGETS:
+        axis.axhline(TARGETS[case], color='0.3', linestyle='--', linewidth=1.0,
+                     label=f'target {TARGETS[case]:.0e} rad')
+    axis.set_xscale('log')
+    axis.set_yscale('log')
+    axis.set_title(f'{case}: |{invariant}|' if drift else case)
+    axis.set_xlabel('CPU time per simulated second [s]')
+    axis.set_ylabel(f'|{invariant}|' if drift else 'attitude error at the end [rad]')
+    axis.grid(True, which='both', alpha=0.3)
+    axis.legend(fontsize=7, loc='upper left', bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+                frameon=False)
+
+
+def write_figure(rows: Sequence[Row], path: Path) -> None:
+    """Work-precision panels per case, then drift panels; two panels per line."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    cases = list(dict.fromkeys(r.case for r in rows))
+    panels = [(case, False) for case in cases] + [
+        (case, True) for case in DRIFT_CASES if case in cases]
+    columns = min(2, len(panels))
+    lines = (len(panels) + columns - 1) // columns
+    figure, axes = plt.subplots(lines, columns, figsize=(9.0 * columns, 4.6 * lines),
+                                squeeze=False)
+    flat = list(axes.ravel())
+    for axis, (case, drift) in zip(flat, panels):
+        _panel(axis, rows, case, drift)
+    for axis in flat[len(panels):]:
+        axis.set_visible(False)
+    figure.suptitle('Work-precision: unresolved points (below the reference floor) not drawn',
+                    fontsize=11)
+    figure.tight_layout()
+    figure.savefig(path, dpi=72)
+    plt.close(figure)
