@@ -38,5 +38,7 @@ class ExactTorqueFree(DynamicsMethod):
         qp = q if frame.identity else q_multiply(q, frame.rotation)
         motion = TorqueFreeMotion(frame.moments, qp, omega_body=frame.principal_vector(omega))
         qp1, omega_p1 = motion.state(h)
-        q1 = frame.body_attitude(tuple(float(x) for x in qp1))
-        return q_normalize(q1), frame.body_vector(tuple(float(w) for w in omega_p1))
+        w, x, y, z = qp1.tolist()
+        rate_x, rate_y, rate_z = omega_p1.tolist()
+        return (q_normalize(frame.body_attitude((w, x, y, z))),
+                frame.body_vector((rate_x, rate_y, rate_z)))

@@ -26,18 +26,19 @@ MARKERS = ('o', 's', '^', 'v', 'D', 'P', 'X', '<', '>', 'p', 'h', '*', 'd', 'H',
 DRIFT_CASES = ('coning', 'torque_free', 'heavy_top')
 
 
-def _colours(count: int) -> list[tuple[float, ...]]:
+def _colours(count: int) -> list[tuple[float, float, float, float]]:
     """``count`` distinct colours: tab10, then tab20's light shades, then Dark2."""
     from matplotlib import colormaps
-    palette = [tuple(c) for c in colormaps['tab10'].colors]
-    palette += [tuple(c) for c in colormaps['tab20'].colors[1::2]]
-    palette += [tuple(c) for c in colormaps['Dark2'].colors]
+    palette = [colormaps['tab10'](i) for i in range(10)]
+    palette += [colormaps['tab20'](i) for i in range(1, 20, 2)]
+    palette += [colormaps['Dark2'](i) for i in range(8)]
     if count > len(palette):
         raise ValueError(f'Expected at most {len(palette)} methods in a panel, got {count}')
     return palette[:count]
 
 
-def method_styles(methods: Sequence[str]) -> dict[str, tuple[tuple[float, ...], str]]:
+def method_styles(methods: Sequence[str]
+                  ) -> dict[str, tuple[tuple[float, float, float, float], str]]:
     """A distinct (colour, marker) per method, in order."""
     if len(methods) > len(MARKERS):
         raise ValueError(f'Expected at most {len(MARKERS)} methods in a panel, got '
@@ -58,6 +59,7 @@ def _points(rows: Sequence[Row], method: str, drift: bool) -> list[tuple[float, 
 
 
 def _panel(axis: Any, rows: Sequence[Row], case: str, drift: bool) -> None:
+    from matplotlib.ticker import NullFormatter
     subset = [r for r in rows if r.case == case]
     methods = list(dict.fromkeys(r.method for r in subset))
     styles = method_styles(methods)
@@ -73,6 +75,7 @@ def _panel(axis: Any, rows: Sequence[Row], case: str, drift: bool) -> None:
                      label=f'target {TARGETS[case]:.0e} rad')
     axis.set_xscale('log')
     axis.set_yscale('log')
+    axis.xaxis.set_minor_formatter(NullFormatter())  # decade labels only: no overlaps
     axis.set_title(f'{case}: |{invariant}|' if drift else case)
     axis.set_xlabel('CPU time per simulated second [s]')
     axis.set_ylabel(f'|{invariant}|' if drift else 'attitude error at the end [rad]')
@@ -98,8 +101,8 @@ def write_figure(rows: Sequence[Row], path: Path) -> None:
         _panel(axis, rows, case, drift)
     for axis in flat[len(panels):]:
         axis.set_visible(False)
-    figure.suptitle('Work-precision: unresolved points (below the reference floor) not drawn',
-                    fontsize=11)
-    figure.tight_layout()
+    figure.suptitle('Work-precision per case (points below the reference floor are not '
+                    'resolved and not drawn), then invariant drift', fontsize=12)
+    figure.tight_layout(rect=(0.0, 0.0, 1.0, 0.985))
     figure.savefig(path, dpi=72)
     plt.close(figure)

@@ -93,7 +93,8 @@ def quaternion_reference(rate: Rate, initial: FloatArray,
             (0.0, duration), initial, method='DOP853', rtol=rtol, atol=1e-3 * rtol)
         return quat.normalize(solution.y[:, -1])
     reference = solve(2.3e-14)
-    return reference, 10.0 * max(quat.attitude_error(reference, solve(2.3e-13)), 1e-16)
+    error = float(quat.attitude_error(reference, solve(2.3e-13)))
+    return reference, 10.0 * max(error, 1e-16)
 
 
 def stream_run(name: str, rate: Rate, angle: Callable[[float], FloatArray],
@@ -147,7 +148,7 @@ def coning_jobs(quick: bool) -> list[Job]:
                 # the axial error per unit time is the coning drift.
                 drift = (_axial_error(final, truth) - _axial_error(early, truth_first)) / (
                     duration - period)
-                return Outcome(quat.attitude_error(final, truth), drift)
+                return Outcome(float(quat.attitude_error(final, truth)), drift)
             jobs.append(Job('coning', name, 'strapdown', duration / steps, duration, measure,
                             'coning drift [rad/s]', CONING_FLOOR))
     return jobs
@@ -163,7 +164,7 @@ def _kinematic_jobs(case: str, names: Sequence[str], rate: Rate, initial: FloatA
         for steps in counts:
             def measure(method: Any = method, steps: int = steps) -> Outcome:
                 q = method.integrate((w, x, y, z), rate, 0.0, duration / steps, steps)
-                return Outcome(quat.attitude_error(np.array(q), reference))
+                return Outcome(float(quat.attitude_error(np.array(q), reference)))
             jobs.append(Job(case, f'{name} (ω(t))', 'kinematic', duration / steps, duration,
                             measure))
     return jobs
@@ -182,7 +183,7 @@ def generic_jobs(quick: bool) -> list[Job]:
             run = stream_run(name, generic_rate, generic_angle, initial, duration, steps)
 
             def measure(run: Callable[[], tuple[FloatArray, FloatArray]] = run) -> Outcome:
-                return Outcome(quat.attitude_error(run()[1], reference))
+                return Outcome(float(quat.attitude_error(run()[1], reference)))
             jobs.append(Job('generic', f'{name} (samples)', 'strapdown', duration / steps,
                             duration, measure))
     jobs += angle_jobs('generic', generic_rate, initial, reference, duration, counts)
@@ -232,7 +233,7 @@ def angle_jobs(case: str, rate: Rate, initial: FloatArray, reference: FloatArray
                     except AttitudeError as err:
                         return Outcome(math.nan, note=f'refused at t = {k * h:.3f} s: {err}')
                 q = to_quaternion(np.array(state))
-                return Outcome(quat.attitude_error(q, reference))
+                return Outcome(float(quat.attitude_error(q, reference)))
             jobs.append(Job(case, name, 'angles', duration / steps, duration, measure))
     return jobs
 
