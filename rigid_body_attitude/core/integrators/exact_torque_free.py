@@ -500,8 +500,9 @@ class TorqueFreeMotion:
     period): measured ≤ 4.7e−12 rad at t = 1e4 s against a 30-digit reference on generic and
     nearly axisymmetric bodies (relative moment differences 1e−6 down to one ulp, which take
     the elliptic form; only exactly equal moments take the axisymmetric one). Cost:
-    construction ≈ 0.3 ms (``K``, ``R_F`` and the phase table); evaluation ≈ 0.25 ms + ~1 µs
-    per time. Invariants: world angular momentum to round-off at every ``t``
+    construction (``K``, ``R_F`` and the phase table) plus one evaluation ≈ 0.7–0.9 ms (the
+    ``exact`` rows of the accuracy study, docs/accuracy/); a vectorised evaluation adds about
+    1 µs per time. Invariants: world angular momentum to round-off at every ``t``
     (independent of the ψ error), energy and ``|m|`` to round-off, ``|q| = 1``.
     Source: Celledoni, Fassò, Säfström & Zanna (2008); Principia's Celledoni.tex; Bulirsch (1965).
     """

@@ -1,10 +1,11 @@
 """The work-precision figure: one panel per case, error against CPU per simulated second.
 
 Every method of a panel has its own colour and its own marker (no repeats within a panel);
-legends sit outside the axes, to the right; points below the reference's floor (not
-resolved) are not drawn; a dashed line marks the case's target error where it has one
-(:data:`~rigid_body_attitude.tools.study.cases.TARGETS`). Invariant-drift panels follow
-for the cases that measure a conserved quantity.
+legends sit outside the axes, to the right; errors below the reference's floor (not
+resolved) are drawn hollow, at the floor, and not joined to the resolved points; a dashed
+line marks the case's target error where it has one
+(:data:`~rigid_body_attitude.tools.study.cases.TARGETS`). Invariant-drift panels follow for
+the cases that measure a conserved quantity (every run drawn: the drift needs no reference).
 """
 
 from __future__ import annotations
@@ -46,16 +47,22 @@ def method_styles(methods: Sequence[str]
     return dict(zip(methods, zip(_colours(len(methods)), MARKERS)))
 
 
-def _points(rows: Sequence[Row], method: str, drift: bool) -> list[tuple[float, float]]:
-    """(CPU per simulated s, value) of a method's resolved runs, by cost."""
-    points = []
+def _points(rows: Sequence[Row], method: str,
+            drift: bool) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
+    """(CPU per simulated s, value) of a method's runs, by cost: resolved ones, and those
+    below the reference's floor placed at the floor (drift panels: every run)."""
+    resolved, unresolved = [], []
     for r in rows:
-        if r.method != method or not r.resolved:
+        if r.method != method:
             continue
         value = abs(r.drift) if drift else r.error
-        if value > 0.0 and math.isfinite(value):
-            points.append((r.cpu_per_second, value))
-    return sorted(points)
+        if not (math.isfinite(value) and (value > 0.0 or not drift)):
+            continue
+        if drift or r.resolved:
+            resolved.append((r.cpu_per_second, value))
+        else:
+            unresolved.append((r.cpu_per_second, r.floor))
+    return sorted(resolved), sorted(unresolved)
 
 
 def _panel(axis: Any, rows: Sequence[Row], case: str, drift: bool) -> None:
@@ -64,11 +71,15 @@ def _panel(axis: Any, rows: Sequence[Row], case: str, drift: bool) -> None:
     methods = list(dict.fromkeys(r.method for r in subset))
     styles = method_styles(methods)
     for method in methods:
-        points = _points(subset, method, drift)
-        if points:
-            colour, marker = styles[method]
-            axis.plot(*zip(*points), color=colour, marker=marker, markersize=5,
+        resolved, unresolved = _points(subset, method, drift)
+        colour, marker = styles[method]
+        if resolved:
+            axis.plot(*zip(*resolved), color=colour, marker=marker, markersize=5,
                       linewidth=1.0, label=method)
+        if unresolved:
+            axis.plot(*zip(*unresolved), linestyle='none', marker=marker, markersize=6,
+                      markerfacecolor='none', markeredgecolor=colour,
+                      label=None if resolved else f'{method} (below floor)')
     invariant = subset[0].invariant
     if not drift and case in TARGETS:
         axis.axhline(TARGETS[case], color='0.3', linestyle='--', linewidth=1.0,
@@ -101,8 +112,8 @@ def write_figure(rows: Sequence[Row], path: Path) -> None:
         _panel(axis, rows, case, drift)
     for axis in flat[len(panels):]:
         axis.set_visible(False)
-    figure.suptitle('Work-precision per case (points below the reference floor are not '
-                    'resolved and not drawn), then invariant drift', fontsize=12)
+    figure.suptitle('Work-precision per case, then invariant drift. Hollow markers: errors '
+                    'below the reference floor (not resolved), drawn at the floor', fontsize=12)
     figure.tight_layout(rect=(0.0, 0.0, 1.0, 0.985))
     figure.savefig(path, dpi=72)
     plt.close(figure)
