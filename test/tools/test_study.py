@@ -72,8 +72,8 @@ def test_main_measures_orders_and_invariants(quick_output):
 def test_main_steps_the_propagator_at_100_hz(quick_output):
     _, output = quick_output
     stepped = {r['method']: r for r in read_rows(output) if r['family'] == 'stepped'}
-    assert set(stepped) == {f'{name} (propagator, 100 Hz)' for name in ('exact', 'casimir8',
-                                                                         'rk4')}
+    names = ('exact', 'casimir8', 'rk4')
+    assert set(stepped) == {f'{name} (propagator, 100 Hz)' for name in names}
     assert all(int(r['steps']) == 1000 for r in stepped.values())  # 10 s at 100 Hz
     assert float(stepped['exact (propagator, 100 Hz)']['error_rad']) <= 1e-12
 
