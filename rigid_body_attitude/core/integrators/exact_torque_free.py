@@ -15,7 +15,8 @@ handled like 1 rad/s.
 Cases (physics.md §2.4–2.6):
 
 * **steady** — ``m`` along a principal axis (or a spherical body): ``q(t) = q₀ ⊗ exp(t ω₀)``.
-* **axisymmetric** — two exactly equal moments ``J_t`` and symmetry axis ``e_s``:
+* **axisymmetric** — two exactly equal moments ``J_t``, symmetry axis ``e_s`` (nearly equal
+  ones take the triaxial form, at the round-off floor: it is built from differences of moments):
   ``q(t) = exp((G/J_t) t ĥ) ⊗ q₀ ⊗ exp(−Ω_b t e_s)``, ``Ω_b = m_s (J_s − J_t)/(J_s J_t)``.
 * **triaxial** — Jacobi elliptic functions with the cancellation-free invariants
   ``Δ_j = G² − 2T J_j`` (Δ₁ = m₂²(J₂−J₁)/J₂ + m₃²(J₃−J₁)/J₃, Δ₂ = −m₁²(J₂−J₁)/J₁ +
@@ -89,13 +90,6 @@ FloatArray = NDArray[np.float64]
 #: error is below 1e−17 relative.
 _GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(8)
 _PANEL_WIDTH = 0.5
-
-#: Nearly equal moments (any relative difference down to one ulp) take the elliptic form, which
-#: stays at the double-precision floor there: its amplitudes, modulus and rate are formed from
-#: differences of moments, exact for representable moments, and ``k → 0`` is benign (measured
-#: ≤ 4.7e−12 rad at t = 1e4 s against a 30-digit reference for δ = 1e−6 … 2.2e−16,
-#: test/core/test_exact_torque_free_near_axisymmetric.py). Only exactly equal moments take the
-#: axisymmetric closed form.
 
 
 def _checked_inertia(inertia: ArrayLike) -> FloatArray:
