@@ -18,10 +18,11 @@ class ExactTorqueFree(DynamicsMethod):
     per step whatever ``h`` (accuracy study, docs/accuracy/: 0.86 ms for one 10-s step, i.e.
     0.09 ms per simulated second; 0.70 ms per step when the propagator steps it at 100 Hz,
     i.e. 70 ms per simulated second). One step can cover a whole run; at a fixed rate of
-    100 Hz a splitting such as ``casimir8`` reaches round-off on a triaxial body for a small
-    fraction of that (the study's ``torque_free`` case). Invariants: world angular momentum,
-    energy, ``|m|`` and ``|q|`` to round-off. Refuses (:class:`IntegratorError`) a model with
-    a torque or a rotor. Source: see :mod:`rigid_body_attitude.core.integrators.exact_torque_free`.
+    100 Hz ``casimir8`` reaches round-off on the study's triaxial body (3.4e−13 rad) for a
+    twelfth of that, 5.7 ms per simulated second (its ``torque_free`` case). Invariants:
+    world angular momentum, energy, ``|m|`` and ``|q|`` to round-off. Refuses
+    (:class:`IntegratorError`) a model with a torque or a rotor. Source: see
+    :mod:`rigid_body_attitude.core.integrators.exact_torque_free`.
     """
 
     name = 'exact'
