@@ -145,13 +145,13 @@ def test_sample_decoders_reject_what_the_rate_decoders_reject():
     imu = cdr.encode_imu(0, 'base_link', [1.0, 2.0, 3.0])
     decode = bag.RATE_SAMPLE_DECODERS[bag.IMU]
     for data, message in [(cdr.encode_vector3_stamped(0, 'base_link', [1.0, 2.0, 3.0]),
-                           'sensor_msgs/msg/Imu message of 324 bytes'),
-                          (imu[:100], 'got 100 bytes'), (imu[:2], 'got 2 bytes'),
-                          (b'\x00\x03' + imu[2:], 'CDR-encoded sensor_msgs/msg/Imu')]:
-        with pytest.raises(bag.BagError, match=message):
-            decode(data)
-    with pytest.raises(bag.BagError, match='geometry_msgs/msg/Vector3Stamped message of 52 bytes'):
-        bag.RATE_SAMPLE_DECODERS[bag.VECTOR3_STAMPED](imu)
+                           'malformed sensor_msgs/msg/Imu: truncated: 52 of 324 bytes'),
+                          (imu[:100], 'truncated: 100 of 324 bytes'),
+                          (imu[:2], 'truncated: 2 of at least 316 bytes'),
+                          (b'\x00\x05' + imu[2:], 'bad encapsulation 0x0005')]:
+        for decoder in (decode, cdr.imu_rates):
+            with pytest.raises(bag.MalformedMessage, match=message):
+                decoder(data)
 
 
 @pytest.mark.parametrize('frame_id', FRAME_IDS)
@@ -193,7 +193,7 @@ def test_imu_with_orientation_sets_the_orientation_and_nothing_else(frame_id, li
         expected = bytes(bag.typestore().serialize_cdr(message, msgtype,
                                                        little_endian=little_endian))
         assert cdr.imu_with_orientation(data, attitude) == expected
-    with pytest.raises(bag.BagError, match='sensor_msgs/msg/Imu message of 324 bytes'):
+    with pytest.raises(bag.MalformedMessage, match='truncated: 52 of 324 bytes'):
         cdr.imu_with_orientation(cdr.encode_vector3_stamped(0, 'base_link', [1.0, 2.0, 3.0]),
                                  (1.0, 0.0, 0.0, 0.0))
 
@@ -231,18 +231,18 @@ def test_stamp_to_ns_keeps_epoch_resolution():
 
 def test_decoder_rejects_wrong_type_truncation_and_encapsulation():
     vector = cdr.encode_vector3_stamped(0, 'base_link', [1.0, 2.0, 3.0])
-    with pytest.raises(bag.BagError, match='sensor_msgs/msg/Imu message of 324 bytes'):
+    with pytest.raises(bag.BagError, match='malformed sensor_msgs/msg/Imu: truncated: 52 of '
+                                           '324 bytes'):
         cdr.imu_rates(vector)
     imu = cdr.encode_imu(0, 'base_link', [1.0, 2.0, 3.0])
-    with pytest.raises(bag.BagError, match='got 100 bytes'):
+    with pytest.raises(bag.BagError, match='truncated: 100 of 324 bytes'):
         cdr.imu_rates(imu[:100])
-    with pytest.raises(bag.BagError, match='got 2 bytes'):
+    with pytest.raises(bag.BagError, match='truncated: 2 of at least 316 bytes'):
         cdr.imu_rates(imu[:2])
-    parameter_list_cdr = b'\x00\x03' + imu[2:]
-    with pytest.raises(bag.BagError, match='CDR-encoded sensor_msgs/msg/Imu'):
-        cdr.imu_rates(parameter_list_cdr)
-    with pytest.raises(bag.BagError, match='std_msgs/msg/Float64 message of 12 bytes'):
-        cdr.float64_value(imu)
+    with pytest.raises(bag.BagError, match='bad encapsulation 0x0004'):
+        cdr.imu_rates(b'\x00\x04' + imu[2:])
+    with pytest.raises(bag.BagError, match='std_msgs/msg/Float64: truncated: 11 of 12 bytes'):
+        cdr.float64_value(cdr.encode_float64(1.0)[:11])
 
 
 def test_encoders_reject_bad_arguments():
