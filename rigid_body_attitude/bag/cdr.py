@@ -314,6 +314,8 @@ def encode_imu(stamp_ns: int, frame_id: str, angular_velocity: Sequence[float],
     zero with ``covariance[0] = −1`` (REP-145: not provided); given fields get an all-zero
     (unknown) covariance, as does the angular velocity.
     """
+    orientation_fields: Floats
+    acceleration: Floats
     if orientation is None:
         orientation_fields, orientation_covariance = _IDENTITY_XYZW, _NOT_PROVIDED
     else:
