@@ -187,7 +187,7 @@ def load_scene(name_or_path: str) -> Scene:
     module's limits); nothing else escapes for any file content.
     """
     path = scene_path(name_or_path)
-    where = f'Scene file {quote(str(path))}'
+    where = f'Scene file {str(path)!r}'
     data = _parse_yaml(_read_text(path, where), where)
     try:
         return scene_from_mapping(data, default_name=path.stem, source=str(path))
@@ -195,12 +195,14 @@ def load_scene(name_or_path: str) -> Scene:
         raise SceneError(_bounded(f'{where}: {err}')) from None
 
 
-def _bounded(text: str) -> str:
-    return text if len(text) <= MAX_ERROR_CHARS else text[:MAX_ERROR_CHARS - 3] + '...'
+def _bounded(text: str, limit: int = MAX_ERROR_CHARS) -> str:
+    """``text`` on one line, at most ``limit`` characters."""
+    text = ' '.join(text[:limit + 1].splitlines())
+    return text if len(text) <= limit else text[:limit - 3] + '...'
 
 
 def _clip(text: str) -> str:
-    return text if len(text) <= QUOTE_LIMIT else text[:QUOTE_LIMIT - 3] + '...'
+    return _bounded(text, QUOTE_LIMIT)
 
 
 def _read_text(path: Path, where: str) -> str:
@@ -246,8 +248,9 @@ class _SceneLoader(yaml.SafeLoader):
 
 
 def _parse_yaml(text: str, where: str) -> Any:
-    loader = _SceneLoader(text)
+    loader = None
     try:
+        loader = _SceneLoader(text)
         data = loader.get_single_data()
     except yaml.MarkedYAMLError as err:
         mark = err.problem_mark or err.context_mark
@@ -257,12 +260,12 @@ def _parse_yaml(text: str, where: str) -> Any:
     except (yaml.YAMLError, ValueError, TypeError, OverflowError) as err:
         raise SceneError(f'{where}: not valid YAML: {_clip(str(err))}') from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
     for key_path, value in _numbers(data, ''):
         if abs(value) > _FLOAT_MAX:
-            digits = int(value.bit_length() * math.log10(2)) + 1
-            raise SceneError(f'{where}: {key_path or "scene"}: an integer of about {digits} '
-                             f'digits is too large for a float')
+            raise SceneError(f'{where}: {key_path or "scene"}: an integer of '
+                             f'{len(str(abs(value)))} digits is too large for a float')
     return data
 
 
