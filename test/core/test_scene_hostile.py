@@ -103,9 +103,13 @@ def test_yaml_nested_500_levels(tmp_path, style):
 
 
 def test_nesting_up_to_the_limit_is_read(tmp_path):
-    nested = '[' * (MAX_DEPTH - 2) + ']' * (MAX_DEPTH - 2)  # the scene mapping is level 1
-    _refused(tmp_path, GOOD + f'description: {nested}\n', r"Expected 'description' to be a "
-                                                           r'string, got \[\[\[')
+    # The scene's mapping is the first level; MAX_DEPTH - 1 lists inside it are read.
+    nested = '[' * (MAX_DEPTH - 1) + ']' * (MAX_DEPTH - 1)
+    _refused(tmp_path, GOOD + f'description: {nested}\n',
+             r"Expected 'description' to be a string, got \[\[\[")
+    nested = '[' * MAX_DEPTH + ']' * MAX_DEPTH
+    _refused(tmp_path, GOOD + f'description: {nested}\n',
+             rf'line 3, column {13 + MAX_DEPTH}: not valid YAML: nesting deeper than')
 
 
 def test_alias_bomb_of_500_bytes(tmp_path):
