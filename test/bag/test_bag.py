@@ -7,7 +7,7 @@ from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, Writer
 import yaml
 
 from rigid_body_attitude import bag
-from rigid_body_attitude.bag import cdr, mcap, sqlite
+from rigid_body_attitude.bag import cdr, mcap, rosbags_internals, sqlite
 from rigid_body_attitude.core.errors import AttitudeError, InputError
 from rigid_body_attitude.core.quaternion import from_ros, normalize, to_ros
 
@@ -598,8 +598,8 @@ def test_mcap_fast_iteration_matches_rosbags(tmp_path, receive_order):
                   ground_truth=np.tile([1.0, 0.0, 0.0, 0.0], (count, 1)),
                   receive_times=receive, storage='mcap')
     with bag.BagReader(path) as reader:
-        assert mcap.fast_messages(reader._reader.storage, reader.connections(['imu']))
-        chunks = sorted(reader._reader.storage.storages[0].chunks,
+        assert mcap.fast_messages(reader._reader, reader.connections(['imu']))
+        chunks = sorted(rosbags_internals.mcap_files(reader._reader)[0].chunks,
                         key=lambda chunk: chunk.message_start_time)
         assert len(chunks) >= 2
         overlap = chunks[0].message_end_time - chunks[1].message_start_time
@@ -628,7 +628,7 @@ def test_sqlite_fast_iteration_matches_rosbags(tmp_path, receive_order):
     topics = ['imu', 'torque', 'ground_truth']
     for target in (path, next(path.glob('*.db3'))):
         with bag.BagReader(target) as reader:
-            assert sqlite.fast_messages(reader._reader.storage, reader.connections(topics))
+            assert sqlite.fast_messages(reader._reader, reader.connections(topics))
             ours = list(reader.messages(topics))
             subset = list(reader.messages(['ground_truth', 'imu']))
         assert ours == _rosbags_messages(target, set(topics))
@@ -655,8 +655,7 @@ def test_fast_iteration_declines_what_it_does_not_handle(tmp_path):
                          (paths['sqlite3'], sqlite), (paths['mcap'], sqlite),
                          (plain_sqlite, mcap), (plain_mcap, sqlite)]:
         with bag.BagReader(path) as reader:
-            storage = reader._reader.storage
-            assert module.fast_messages(storage, reader.connections(['imu'])) is None
+            assert module.fast_messages(reader._reader, reader.connections(['imu'])) is None
             assert list(reader.messages(['imu'])) == _rosbags_messages(path, {'imu'})
     for path in paths.values():
         rates = bag.read_series(path, 'imu').values
