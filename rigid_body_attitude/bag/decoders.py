@@ -229,17 +229,18 @@ class _Primed(NamedTuple):
     """A decoder's one-call path for the CDR_LE messages of one frame id."""
 
     unpack: Callable[[bytes, int], tuple[Any, ...]]
-    frame_bytes: bytes
+    length_and_frame: bytes
     frame_id: str
     size: int
 
 
 def _primed(frame_bytes: bytes, frame_id: str, count: int, at: int, width: int) -> _Primed:
-    """Encapsulation, stamp, string length, frame bytes and the fields wanted, in one call."""
+    """Encapsulation, stamp, string length and bytes, and the fields wanted, in one call."""
     length = len(frame_bytes)
     offset = ((_HEADER + length + 3) & -8) + 4
-    unpack = Struct(f'<H2xiII{length}s{offset - _HEADER - length}x{8 * at}x{width}d')
-    return _Primed(unpack.unpack_from, frame_bytes, frame_id, offset + 8 * count)
+    unpack = Struct(f'<2s2xiI{4 + length}s{offset - _HEADER - length}x{8 * at}x{width}d')
+    return _Primed(unpack.unpack_from, struct.pack('<I', length) + frame_bytes, frame_id,
+                   offset + 8 * count)
 
 
 def _decoder(msgtype: str, count: int, at: int, width: int) -> GyroDecoder:
@@ -255,18 +256,12 @@ def _decoder(msgtype: str, count: int, at: int, width: int) -> GyroDecoder:
     unpack = Struct(f'<{width}d').unpack_from
     header = _LE_HEADER
     frames = _FRAMES
-    primed = [_primed(b'\x00', '', count, at, width)]
-    missed = [b'']
+    primed = _primed(b'\x00', '', count, at, width)
+    missed = b''
 
-    def decode(data: bytes) -> GyroSample:
-        unpack_all, frame_bytes, frame_id, size = primed[0]
-        try:
-            fields = unpack_all(data, 0)
-            if (fields[0] == _CDR_LE and fields[4] == frame_bytes
-                    and fields[3] == len(frame_bytes) and len(data) >= size):
-                return fields[1], fields[2], frame_id, fields[5:]
-        except _FAST_ERRORS:
-            pass
+    def decode_other(data: bytes) -> GyroSample:
+        """The second and third paths."""
+        nonlocal primed, missed
         try:
             encapsulation, sec, nanosec, length = header(data, 0)
             end = _HEADER + length
@@ -274,15 +269,35 @@ def _decoder(msgtype: str, count: int, at: int, width: int) -> GyroDecoder:
             frame_id = frames[frame_bytes]
             offset = ((end + 3) & -8) + 4
             if encapsulation == _CDR_LE and len(data) >= offset + body_size:
-                if frame_bytes == missed[0]:
-                    primed[0] = _primed(bytes(frame_bytes), frame_id, count, at, width)
-                missed[0] = frame_bytes
+                if frame_bytes == missed:
+                    primed = _primed(bytes(frame_bytes), frame_id, count, at, width)
+                missed = frame_bytes
                 return sec, nanosec, frame_id, unpack(data, offset + field_at)
         except _FAST_ERRORS:
             pass
         parsed = parse_stamped(data, msgtype, count)
         return parsed.sec, parsed.nanosec, parsed.frame_id, parsed.body[at:at + width]
-    return decode
+
+    def decode_vector(data: bytes) -> GyroSample:
+        unpack_all, length_and_frame, frame_id, size = primed
+        try:
+            encapsulation, sec, nanosec, frame, x, y, z = unpack_all(data, 0)
+            if encapsulation == b'\x00\x01' and frame == length_and_frame and len(data) >= size:
+                return sec, nanosec, frame_id, (x, y, z)
+        except _FAST_ERRORS:
+            pass
+        return decode_other(data)
+
+    def decode_fields(data: bytes) -> GyroSample:
+        unpack_all, length_and_frame, frame_id, size = primed
+        try:
+            fields = unpack_all(data, 0)
+            if fields[0] == b'\x00\x01' and fields[3] == length_and_frame and len(data) >= size:
+                return fields[1], fields[2], frame_id, fields[4:]
+        except _FAST_ERRORS:
+            pass
+        return decode_other(data)
+    return decode_vector if width == 3 else decode_fields
 
 
 decode_imu_rate = _decoder(IMU, IMU_COUNT, _IMU_RATE_AT, 3)
