@@ -25,8 +25,8 @@ Hostile or broken files are refused at load with one :class:`SceneError` naming 
 the key path (``initial_state.attitude``), or the line and column of a YAML syntax error; error
 texts quote at most :data:`QUOTE_LIMIT` characters of a bad value. Limits:
 
-* size: at most :data:`MAX_FILE_BYTES` (64 KiB; the shipped scenes are under 1 KiB, and the
-  pure-Python YAML parser that the checks below need reads 64 KiB in well under a second);
+* size: at most :data:`MAX_FILE_BYTES` (64 KiB; the shipped scenes are under 1 KiB; the limit
+  is small because the pure-Python YAML parser that the alias and depth checks need is slow);
 * UTF-8 only; YAML aliases (``*name``) are refused (an alias bomb of a few hundred bytes
   expands to gigabytes), anchors alone are harmless; nesting at most :data:`MAX_DEPTH` levels;
 * every integer must fit a float (a 400-digit mass is refused, not overflowed);
@@ -299,8 +299,9 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
     if rate_source not in RATE_SOURCES:
         raise SceneError(f'Unknown rate_source {quote(rate_source)}; valid choices: '
                          f'{", ".join(RATE_SOURCES)}')
-    inertia, mass = _body(data['body'])
-    attitude, omega = _initial_state(data.get('initial_state', {}), inertia)
+    with np.errstate(all='ignore'):  # overflow is refused below, not warned about
+        inertia, mass = _body(data['body'])
+        attitude, omega = _initial_state(data.get('initial_state', {}), inertia)
     scene = Scene(
         name=_label('name', data.get('name', default_name), MAX_NAME_CHARS),
         description=_label('description', data.get('description', ''), MAX_DESCRIPTION_CHARS),
