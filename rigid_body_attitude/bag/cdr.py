@@ -43,7 +43,9 @@ from rigid_body_attitude.bag.decoders import (
     GYRO_DECODERS,
     Floats,
     GyroDecoder,
+    body_offset,
     decode_float64,
+    decode_header,
     decode_imu,
     decode_imu_rate,
     decode_pose_stamped,
@@ -52,7 +54,6 @@ from rigid_body_attitude.bag.decoders import (
     decode_twist_stamped,
     decode_vector3_stamped,
     decode_wrench_stamped,
-    parse_stamped,
 )
 from rigid_body_attitude.bag.msgtypes import (
     IMU,
@@ -118,13 +119,13 @@ def _stamp(sec: int, nanosec: int) -> float:
 
 def header_stamp_ns(data: bytes) -> int:
     """Header stamp of any ``std_msgs/msg/Header``-first message, in integer nanoseconds."""
-    parsed = parse_stamped(data, 'stamped message', 0)
-    return parsed.sec * _NS_PER_S + parsed.nanosec
+    sec, nanosec, _ = decode_header(data)
+    return sec * _NS_PER_S + nanosec
 
 
 def header_frame_id(data: bytes) -> str:
     """Header frame id of any ``std_msgs/msg/Header``-first message."""
-    return parse_stamped(data, 'stamped message', 0).frame_id
+    return decode_header(data)[2]
 
 
 def imu_rates(data: bytes) -> tuple[float, Floats]:
@@ -248,10 +249,9 @@ def imu_with_orientation(data: bytes, attitude: Sequence[float]) -> bytes:
     :func:`~rigid_body_attitude.bag.decoders.decode_imu` checks it
     (:class:`~rigid_body_attitude.bag.errors.MalformedMessage`).
     """
-    parsed = parse_stamped(data, IMU, IMU_COUNT)
-    offset = parsed.body_offset
+    offset, little_endian = body_offset(data, IMU, IMU_COUNT)
     w, x, y, z = attitude
-    orientation = _IMU_ORIENTATION[parsed.encapsulation.little_endian].pack(x, y, z, w)
+    orientation = _IMU_ORIENTATION[little_endian].pack(x, y, z, w)
     return b''.join((data[:offset], orientation, data[offset + _IMU_ORIENTATION_SIZE:]))
 
 

@@ -81,7 +81,9 @@ __all__ = [
     'GYRO_DECODERS',
     'Floats',
     'GyroDecoder',
+    'body_offset',
     'decode_float64',
+    'decode_header',
     'decode_imu',
     'decode_imu_rate',
     'decode_pose_stamped',
@@ -208,7 +210,8 @@ def _float64s(little_endian: bool, count: int) -> Callable[[bytes, int], Floats]
 def parse_stamped(data: bytes, msgtype: str, count: int) -> Parsed:
     """Check a message of a ``Header`` and ``count`` float64 completely; the slow path.
 
-    ``count = 0`` checks the header alone (any stamped message).
+    ``count = 0`` checks the header alone (any stamped message; no padding after the frame id
+    is required then).
     """
     raw = _bytes(data, msgtype)
     minimum = 4 + 16 + 8 * count
@@ -220,7 +223,7 @@ def parse_stamped(data: bytes, msgtype: str, count: int) -> Parsed:
     alignment = encapsulation.float64_alignment
     offset = 4 + -(-(12 + length) // alignment) * alignment
     frame_id = _frame_text(raw, length, msgtype, offset + 8 * count)
-    if len(raw) < offset + 8 * count:
+    if count and len(raw) < offset + 8 * count:
         raise MalformedMessage(msgtype, f'truncated: {len(raw)} of {offset + 8 * count} bytes')
     body = _float64s(encapsulation.little_endian, count)(raw, offset) if count else ()
     return Parsed(sec, nanosec, frame_id, encapsulation, offset, body)
@@ -242,6 +245,41 @@ def _primed(frame_bytes: bytes, frame_id: str, count: int, at: int, width: int) 
     unpack = Struct(f'<2s2xiI{4 + length}s{offset - _HEADER - length}x{8 * at}x{width}d')
     return _Primed(unpack.unpack_from, struct.pack('<I', length) + frame_bytes, frame_id,
                    offset + 8 * count)
+
+
+def decode_header(data: bytes) -> tuple[int, int, str]:
+    """``(sec, nanosec, frame_id)`` of any message that starts with a ``std_msgs/Header``.
+
+    Only the header is checked (the body's layout depends on the type).
+    """
+    try:
+        encapsulation, sec, nanosec, length = _LE_HEADER(data, 0)
+        frame_id = _FRAMES[data[_HEADER:_HEADER + length]]
+        if encapsulation == _CDR_LE:
+            return sec, nanosec, frame_id
+    except _FAST_ERRORS:
+        pass
+    parsed = parse_stamped(data, 'stamped message', 0)
+    return parsed.sec, parsed.nanosec, parsed.frame_id
+
+
+def body_offset(data: bytes, msgtype: str, count: int) -> tuple[int, bool]:
+    """``(offset, little_endian)`` of the float64 body of a checked stamped message.
+
+    Checked as :func:`parse_stamped` checks (:class:`MalformedMessage`); a CDR_LE message of a
+    frame id seen before costs one ``struct`` call and a look-up.
+    """
+    try:
+        encapsulation, _, _, length = _LE_HEADER(data, 0)
+        end = _HEADER + length
+        if encapsulation == _CDR_LE and data[_HEADER:end] in _FRAMES:
+            offset = ((end + 3) & -8) + 4
+            if len(data) >= offset + 8 * count:
+                return offset, True
+    except _FAST_ERRORS:
+        pass
+    parsed = parse_stamped(data, msgtype, count)
+    return parsed.body_offset, parsed.encapsulation.little_endian
 
 
 def _decoder(msgtype: str, count: int, at: int, width: int) -> GyroDecoder:

@@ -432,8 +432,11 @@ def _initial_state(data: Any, inertia: Inertia) -> tuple[FloatArray, FloatArray]
     if raw_attitude.shape != (4,) or omega.shape != (3,):
         raise SceneError('Expected initial_state.attitude to be 4 numbers (w, x, y, z) and '
                          f'omega_body 3 numbers, got {quote(data)}')
-    _within_scale('initial_state.attitude (largest component)',
-                  float(np.max(np.abs(raw_attitude))), positive=True)
+    largest = float(np.max(np.abs(raw_attitude)))
+    if largest == 0.0:
+        raise SceneError(f'Expected initial_state.attitude to be a non-zero quaternion '
+                         f'(w, x, y, z), got {raw_attitude.tolist()!r}')
+    _within_scale('initial_state.attitude (largest component)', largest, positive=True)
     attitude = quaternion.normalize(raw_attitude)
     _within_scale('|initial_state.omega_body| [rad/s]', _norm(omega))
     momentum = inertia.tensor @ omega

@@ -192,3 +192,33 @@ def test_all_three_paths_give_the_same_values():
         first = decoders.decode_imu_rate(data)
         assert first == decoders.parse_stamped(bytes(data), 'imu', 37)[:3] + (
             decoders.parse_stamped(bytes(data), 'imu', 37).body[13:16],)
+
+
+def _outcome(run):
+    try:
+        return True, run()
+    except MalformedMessage as err:
+        return False, err.reason
+
+
+@SETTINGS
+@given(message=valid_messages(stamped=True), data=st.data())
+def test_header_and_body_offset_agree_with_the_full_check(message, data):
+    """``decode_header`` and ``body_offset`` (fast paths, frame ids learned) = parse_stamped."""
+    name, raw = message
+    kind = KINDS[name]
+    flips = data.draw(st.lists(st.integers(0, 8 * len(raw) - 1), max_size=2))
+    cut = data.draw(st.integers(0, len(raw) + 4))
+    mutated = bytearray(raw + b'\x00' * 4)[:cut]
+    for bit in flips:
+        if bit // 8 < len(mutated):
+            mutated[bit // 8] ^= 1 << bit % 8
+    mutated = bytes(mutated)
+    for _ in range(2):  # the second time, any good frame id is known (fast paths)
+        whole = _outcome(lambda: decoders.parse_stamped(mutated, kind.msgtype, kind.floats))
+        header = _outcome(lambda: decoders.parse_stamped(mutated, kind.msgtype, 0))
+        offset = _outcome(lambda: decoders.body_offset(mutated, kind.msgtype, kind.floats))
+        assert _outcome(lambda: decoders.decode_header(mutated)) == (
+            (True, header[1][:3]) if header[0] else (False, header[1]))
+        assert offset == ((True, (whole[1].body_offset, whole[1].encapsulation.little_endian))
+                          if whole[0] else (False, whole[1]))

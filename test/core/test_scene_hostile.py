@@ -166,6 +166,12 @@ def test_attitude_that_overflows_or_underflows_when_normalised(tmp_path, compone
              r'initial_state\.attitude \(largest component\) to be \[1e-75, 1e\+75\]')
 
 
+def test_zero_attitude_names_the_key(tmp_path):
+    _refused(tmp_path, GOOD + 'initial_state: {attitude: [0, 0, 0, 0]}\n',
+             r'initial_state\.attitude to be a non-zero quaternion \(w, x, y, z\), got '
+             r'\[0\.0, 0\.0, 0\.0, 0\.0\]$')
+
+
 def test_absurd_name_and_description(tmp_path):
     _refused(tmp_path, GOOD + f'name: {"x" * 300}\n',
              r"Expected 'name' to be at most 256 characters, got 300: 'xxx")
