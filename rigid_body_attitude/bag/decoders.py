@@ -17,6 +17,7 @@ they are (physical bounds are the session's job).
 ``decode_twist_stamped(data)``      ``(sec, nanosec, frame_id, linear, angular)``
 ``decode_imu(data)``                ``(sec, nanosec, frame_id, (w, x, y, z), ω, a)``
 ``decode_float64(data)``            ``value``
+``decode_header(data)``             ``(sec, nanosec, frame_id)`` of any stamped message
 ==================================  ===========================================================
 
 ``sec`` is the int32 and ``nanosec`` the uint32 of the header stamp, as sent; vectors are
