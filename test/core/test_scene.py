@@ -286,7 +286,8 @@ BAD_SCENES = [
     ('integrator not text', f'rate_source: dynamics\nintegrator: 4\nbody: {BODY}',
      r"Expected 'integrator' to be a string, got 4"),
     ('not a mapping', '- rate_source: dynamics', r'Expected a scene to be a mapping with keys'),
-    ('not YAML', 'rate_source: [dynamics', r"Scene file '.*bad\.yaml' is not valid YAML"),
+    ('not YAML', 'rate_source: [dynamics',
+     r"Scene file '.*bad\.yaml', line 2, column 1: not valid YAML: expected ',' or ']'"),
 ]
 
 
