@@ -59,7 +59,7 @@ ATTEMPTS = 5
 FAULTS = {
     100: lambda data: data[:-9],                        # truncated
     400: lambda data: data[:20],                        # a header only
-    700: lambda data: b'\x00\x07' + data[2:],           # unknown CDR encapsulation
+    700: lambda data: b'\x01\x05' + data[2:],           # unknown CDR encapsulation
     1000: lambda data: encode_imu(header_stamp_ns(data), 'base_link', (1e200, 0.0, 0.0)),
 }
 
