@@ -18,7 +18,7 @@ from rigid_body_attitude.core.propagator import GyroPropagator
 from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.session.base import OutputSink, Session
 from rigid_body_attitude.session.reports import LEVEL_WARN
-from rigid_body_attitude.session.stream import GyroStream, Outcome
+from rigid_body_attitude.session.stream import GyroStream, INTEGRATED, Outcome
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns, stamp_problem
 
 __all__ = ['GyroSession']
@@ -72,14 +72,15 @@ class GyroSession(Session):
         elif nanosec >= NANOSECONDS_PER_SECOND or (sec <= 0 and (sec < 0 or not nanosec)):
             return self._bad_stamp(sec, nanosec)
         stream = self.stream
-        outliers = stream.outliers
+        outliers = stream.outliers if stream.pending else -1  # a jump waits: watch for them
         outcome = stream.add(sec * NANOSECONDS_PER_SECOND + nanosec, rate)
-        if outcome.reason:
-            self._rejected(outcome)
-        if stream.outliers != outliers:
+        if outliers >= 0 and stream.outliers != outliers:
             self.warn('outlier_stamp', f'gyro: {_DETAIL["outlier_stamp"]} (parameter `max_dt`)')
-        if not outcome.moved:
-            return False
+        if outcome is not INTEGRATED:  # the common case needs no further look
+            if outcome.reason:
+                self._rejected(outcome)
+            if not outcome.moved:
+                return False
         attitude = self.tracker.attitude(self.propagator)
         if not math.isfinite(attitude[0] + attitude[1] + attitude[2] + attitude[3]):
             return self._non_finite_result()

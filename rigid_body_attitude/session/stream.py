@@ -39,13 +39,15 @@ to the tick.
 from __future__ import annotations
 
 import math
+import sys
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator, _Propagator
 
-__all__ = ['COMMAND_LIMIT', 'ClockDriver', 'CommandStream', 'GyroStream', 'JUMP_CONFIRMATIONS',
+__all__ = ['COMMAND_LIMIT', 'ClockDriver', 'CommandStream', 'GyroStream', 'INTEGRATED',
+           'JUMP_CONFIRMATIONS',
            'Outcome', 'PERIOD_SAMPLES', 'REASONS']
 
 #: Rejection reasons of the streams, in the order the diagnostics list them.
@@ -91,7 +93,8 @@ class Outcome:
 
 
 _BASELINE = Outcome(accepted=True)
-_INTEGRATED = Outcome(accepted=True, integrated=True)
+#: The outcome of an ordinary integrated sample (one object: callers may test identity).
+INTEGRATED = Outcome(accepted=True, integrated=True)
 _PENDING = Outcome(accepted=False, pending=True)
 
 
@@ -190,6 +193,17 @@ class GyroStream(_Counting):
         self.threshold_ns = round(seconds * 1e9)
 
     @property
+    def max_angular_rate(self) -> float:
+        """Largest magnitude of a rate integrated [rad/s]."""
+        return math.sqrt(self.max_rate_squared)
+
+    @max_angular_rate.setter
+    def max_angular_rate(self, rate: float) -> None:
+        # Capped at the largest float: an infinite rate (or a square that overflows) is never
+        # integrated, whatever the bound.
+        self.max_rate_squared = min(rate * rate, sys.float_info.max)
+
+    @property
     def missed_samples(self) -> int:
         """Samples lost upstream, from the stamp spacing."""
         return self.period.missed
@@ -206,37 +220,43 @@ class GyroStream(_Counting):
 
     def add(self, stamp_ns: int, omega_body: Sequence[float]) -> Outcome:
         """Process one gyro sample stamped ``stamp_ns`` with rate ``omega_body`` [rad/s]."""
-        sample = _vector(omega_body)
-        if sample is None:
+        try:
+            x, y, z = omega_body
+            squared = x * x + y * y + z * z
+        except (TypeError, ValueError):
             return self._reject('non_finite')
-        x, y, z = sample
-        if x * x + y * y + z * z > self.max_angular_rate * self.max_angular_rate:
-            return self._reject('out_of_range')
+        if not squared <= self.max_rate_squared:  # NaN, Inf, overflow and too fast alike
+            return self._reject('out_of_range' if _vector(omega_body) else 'non_finite')
         if not self.propagator.has_sample:
             self.epoch_ns = stamp_ns
-            self._start(stamp_ns, sample)
+            self._start(stamp_ns, (float(x), float(y), float(z)))
             return self._accept(_BASELINE)
         if self.pending:
-            return self._resolve(stamp_ns, sample)
+            return self._resolve(stamp_ns, (float(x), float(y), float(z)))
         step_ns = stamp_ns - self.last_ns
         if 0 < step_ns <= self.max_dt_ns:
-            return self._integrate(stamp_ns, step_ns, sample)
+            return self._integrate(stamp_ns, step_ns, (float(x), float(y), float(z)))
         if step_ns <= 0 and -step_ns <= self.threshold_ns:
             return self._reject('stale_stamp')
-        self.pending.append((stamp_ns, sample))
+        self.pending.append((stamp_ns, (float(x), float(y), float(z))))
         return _PENDING
 
     def _integrate(self, stamp_ns: int, step_ns: int, sample: Vector) -> Outcome:
         propagator = self.propagator
         if self.count_missed:
-            self.period.step(step_ns)
+            period = self.period
+            if period.period_ns and 2 * step_ns < 3 * period.period_ns:  # the usual step
+                if 2 * step_ns > period.period_ns:
+                    period.period_ns += (step_ns - period.period_ns) // 64
+            else:
+                period.step(step_ns)
         if self.constant_dt > 0.0:
             propagator.advance(propagator.state.time + self.constant_dt, sample)
         else:
             propagator.advance((stamp_ns - self.epoch_ns) * 1e-9, sample)
         self.last_ns = stamp_ns
         self.accepted += 1
-        return _INTEGRATED
+        return INTEGRATED
 
     def _start(self, stamp_ns: int, sample: Vector) -> None:
         """A new baseline at ``stamp_ns``. The propagator's time is seconds since
@@ -344,7 +364,7 @@ class ClockDriver(_Counting):
             propagator.state.time = now
             return self._reject('gap')
         propagator.advance_to(now)
-        return self._accept(_INTEGRATED)
+        return self._accept(INTEGRATED)
 
     def reset(self) -> None:
         """The next tick starts the scene again."""
