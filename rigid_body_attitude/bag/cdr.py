@@ -240,21 +240,27 @@ _IMU_ORIENTATION = {True: Struct('<4d72x'), False: Struct('>4d72x')}  # quaterni
 _IMU_ORIENTATION_SIZE = 13 * 8
 
 
-def imu_with_orientation(data: bytes, attitude: Sequence[float]) -> bytes:
+def imu_with_orientation(data: bytes, attitude: Sequence[float],
+                         stamp: tuple[int, int] | None = None) -> bytes:
     """The ``sensor_msgs/msg/Imu`` ``data`` with orientation ``(w, x, y, z)``, covariance zero.
 
     What the node publishes on ``imu/data``: the input message with the propagated attitude
-    and an all-zero (unknown) orientation covariance; everything else, the encapsulation and
-    byte order included, as it came. ``data`` is checked as
+    and an all-zero (unknown) orientation covariance, and with the header stamp ``stamp``
+    ``(sec, nanosec)`` when given (the receive time the node used instead of the message's);
+    everything else, the encapsulation and byte order included, as it came. ``data`` is checked as
     :func:`~rigid_body_attitude.bag.decoders.decode_imu` checks it
     (:class:`~rigid_body_attitude.bag.errors.MalformedMessage`).
     """
     offset, little_endian = body_offset(data, IMU, IMU_COUNT)
     w, x, y, z = attitude
     orientation = _IMU_ORIENTATION[little_endian].pack(x, y, z, w)
-    return b''.join((data[:offset], orientation, data[offset + _IMU_ORIENTATION_SIZE:]))
+    head = data[:offset]
+    if stamp is not None:
+        head = _STAMP[little_endian].pack(*stamp).join((head[:4], head[12:]))
+    return b''.join((head, orientation, data[offset + _IMU_ORIENTATION_SIZE:]))
 
 
+_STAMP = {False: Struct('>iI'), True: Struct('<iI')}  # header stamp, by byte order
 _PACKERS: dict[tuple[str, int], tuple[Struct, bytes]] = {}
 _MAX_PACKERS = 256
 

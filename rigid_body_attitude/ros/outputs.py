@@ -10,7 +10,6 @@ orientation covariance all zeros = known, unknown covariance) and the stamp the 
 
 from __future__ import annotations
 
-import struct
 from collections.abc import Callable
 from typing import Any
 
@@ -28,7 +27,7 @@ from rigid_body_attitude.ros.qos import OUTPUT_QOS
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
 
-__all__ = ['RawOutput', 'RosOutputs', 'restamped']
+__all__ = ['RawOutput', 'RosOutputs']
 
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
@@ -36,15 +35,6 @@ Vector = tuple[float, float, float]
 _LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN,
                 LEVEL_ERROR: DiagnosticStatus.ERROR}
 _ZERO_POSITION = (0.0, 0.0, 0.0)
-_STAMP = {0: struct.Struct('>iI'), 1: struct.Struct('<iI')}  # by CDR encapsulation byte 1
-
-
-def restamped(cdr: bytes, sec: int, nanosec: int) -> bytes:
-    """A serialized stamped message with its header stamp replaced (the stamp follows the
-    4-byte encapsulation header in every ``std_msgs/Header``-first message)."""
-    data = bytearray(cdr)
-    _STAMP[data[1] & 1].pack_into(data, 4, sec, nanosec)
-    return bytes(data)
 
 
 class RawOutput:
@@ -124,9 +114,8 @@ class RosOutputs:
             pose.publish(self.encode_pose(sec, nanosec, _ZERO_POSITION, attitude))
         imu = self.current_imu
         if imu is not None and self.imu_raw.subscription_count():
-            if (sec, nanosec) != self.current_stamp:  # receive time used instead
-                imu = restamped(imu, sec, nanosec)
-            self.imu_raw.publish(imu_with_orientation(imu, attitude))
+            stamp = None if (sec, nanosec) == self.current_stamp else (sec, nanosec)
+            self.imu_raw.publish(imu_with_orientation(imu, attitude, stamp))
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:

@@ -12,7 +12,6 @@ the same topics, types, stamps and frames. Gyro-rate outputs use the per-frame e
 from __future__ import annotations
 
 import array
-import struct
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -42,7 +41,6 @@ FloatArray = NDArray[np.float64]
 LogHandler = Callable[[int, int, str], None]
 
 _ZERO = (0.0, 0.0, 0.0)
-_STAMP = {0: struct.Struct('>iI'), 1: struct.Struct('<iI')}  # by CDR encapsulation byte 1
 _LEVEL_NAMES = {LEVEL_WARN: 'warning', LEVEL_ERROR: 'error'}
 
 
@@ -80,14 +78,6 @@ class OutputSeries:
         return (np.frombuffer(self.invariant_stamps_ns, dtype=np.int64).copy(),
                 np.frombuffer(self.energies, dtype=np.float64).copy(),
                 np.frombuffer(self.momenta, dtype=np.float64).reshape(-1, 3).copy())
-
-
-def restamped(cdr: bytes, sec: int, nanosec: int) -> bytes:
-    """A serialized stamped message with its header stamp replaced (the stamp follows the
-    4-byte encapsulation header in every ``std_msgs/Header``-first message)."""
-    data = bytearray(cdr)
-    _STAMP[data[1] & 1].pack_into(data, 4, sec, nanosec)
-    return bytes(data)
 
 
 class BagSink:
@@ -166,9 +156,8 @@ class BagSink:
             append((self._pose, now, self.encode_pose(sec, nanosec, _ZERO, attitude)))
         imu = self.current_imu
         if imu is not None and self._imu is not None:
-            if not self.use_header_stamps:  # the receive time was used instead of the stamp
-                imu = restamped(imu, sec, nanosec)
-            append((self._imu, now, imu_with_orientation(imu, attitude)))
+            stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
+            append((self._imu, now, imu_with_orientation(imu, attitude, stamp)))
         self.attitude_outputs += 1
         self.last_attitude = attitude
         series = self.series
