@@ -32,6 +32,7 @@ zero and subnormal rates never divide by zero.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -60,7 +61,10 @@ __all__ = [
     'norm_error',
     'normalize',
     'rotate',
+    'rotate_floats',
     'rotate_inverse',
+    'rotate_inverse_floats',
+    'rotate_rows',
     'to_matrix',
     'to_ros',
 ]
@@ -186,6 +190,42 @@ def rotate(q: ArrayLike, v: ArrayLike) -> FloatArray:
     u = q[..., 1:]
     t = 2.0 * np.cross(u, v)
     return v + w * t + np.cross(u, t)
+
+
+def rotate_floats(q: Sequence[float], v: Sequence[float]) -> tuple[float, float, float]:
+    """:func:`rotate` for one plain-float quaternion and vector (no NumPy: hot paths).
+
+    ``v + w t + u × t`` with ``t = 2 u × v`` (18 products).
+    """
+    w, x, y, z = q
+    vx, vy, vz = v
+    tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
+    return (vx + w * tx + (y * tz - z * ty), vy + w * ty + (z * tx - x * tz),
+            vz + w * tz + (x * ty - y * tx))
+
+
+def rotate_inverse_floats(q: Sequence[float],
+                          v: Sequence[float]) -> tuple[float, float, float]:
+    """:func:`rotate_inverse` for one plain-float quaternion and vector: rotation by ``q*``."""
+    w, x, y, z = q
+    vx, vy, vz = v
+    tx, ty, tz = 2.0 * (z * vy - y * vz), 2.0 * (x * vz - z * vx), 2.0 * (y * vx - x * vy)
+    return (vx + w * tx + (z * ty - y * tz), vy + w * ty + (x * tz - z * tx),
+            vz + w * tz + (y * tx - x * ty))
+
+
+def rotate_rows(q: FloatArray, v: FloatArray, inverse: bool = False) -> FloatArray:
+    """:func:`rotate` (or, with ``inverse``, :func:`rotate_inverse`) in structure-of-arrays
+    layout: ``q`` of shape (4, n) (rows w, x, y, z), ``v`` of shape (3, n) or (3, 1); returns
+    (3, n). For batch kernels: components as rows keep every operation on contiguous rows."""
+    w = q[0]
+    x, y, z = (-q[1], -q[2], -q[3]) if inverse else (q[1], q[2], q[3])
+    vx, vy, vz = v
+    tx = 2.0 * (y * vz - z * vy)
+    ty = 2.0 * (z * vx - x * vz)
+    tz = 2.0 * (x * vy - y * vx)
+    return np.stack((vx + w * tx + (y * tz - z * ty), vy + w * ty + (z * tx - x * tz),
+                     vz + w * tz + (x * ty - y * tx)))
 
 
 def rotate_inverse(q: ArrayLike, v: ArrayLike) -> FloatArray:

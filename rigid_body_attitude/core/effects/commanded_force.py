@@ -6,16 +6,13 @@ as ``stale``). Needs ``translation`` in the same scene.
 
 from __future__ import annotations
 
-from typing import Any
-
-from numpy.typing import NDArray
-
 from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.core.effects.base import CommandedEffect, Parameter, positive, register
+from rigid_body_attitude.core.effects.base import (
+    CommandedEffect, ForceEffect, Parameter, positive, Quat, register, Vec)
 
 
 @register
-class CommandedForce(CommandedEffect):
+class CommandedForce(CommandedEffect, ForceEffect):
     """Held commanded force [N], body axes, applied at the centre of mass."""
 
     name = 'commanded_force'
@@ -24,6 +21,6 @@ class CommandedForce(CommandedEffect):
     inputs = {'force': 'force_body [N] (WrenchStamped.wrench.force)'}
     requires = ('translation',)
 
-    def force_world(self, t: float, attitude: NDArray[Any]) -> NDArray[Any]:
+    def force(self, t: float, q: Quat) -> Vec:
         """``R(q) F_cmd`` [N], zero after the timeout."""
-        return quaternion.rotate(attitude, self.command.value_at(t))
+        return quaternion.rotate_floats(q, self.command.vector_at(t))

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.effects.base import (
-    REQUIRED, BodyProperties, Effect, Parameter, nonnegative, real, register)
+    REQUIRED, BodyProperties, RateCorrection, Parameter, nonnegative, real, register)
 
 WGS84_EARTH_RATE = 7.2921150e-5
 
@@ -30,7 +30,7 @@ def _latitude(value: Any) -> float:
 
 
 @register
-class EarthRate(Effect):
+class EarthRate(RateCorrection):
     """Earth-rotation compensation for strapdown scenes."""
 
     name = 'earth_rate'
@@ -39,7 +39,6 @@ class EarthRate(Effect):
         'latitude': Parameter(_latitude, REQUIRED, 'geodetic latitude [deg]'),
         'rate': Parameter(nonnegative, WGS84_EARTH_RATE, 'Earth rotation rate [rad/s]'),
     }
-    rate_sources = frozenset({'gyro'})
 
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Precompute the Earth rate in the ENU world frame."""

@@ -15,11 +15,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.effects.base import (
-    BodyProperties, Effect, Parameter, nonnegative, register, vector3)
+    BodyProperties, RateCorrection, Parameter, nonnegative, register, vector3)
 
 
 @register
-class GyroBias(Effect):
+class GyroBias(RateCorrection):
     """Constant gyro bias [rad/s], fixed or estimated from an initial rest phase."""
 
     name = 'gyro_bias'
@@ -29,7 +29,6 @@ class GyroBias(Effect):
         'estimate_seconds': Parameter(nonnegative, 0.0,
                                       'average the first N seconds at rest (0 = off) [s]'),
     }
-    rate_sources = frozenset({'gyro'})
 
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Start with the given bias, or an empty estimate."""

@@ -8,15 +8,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from numpy.typing import NDArray
-
-from rigid_body_attitude.core.effects.base import Effect, Parameter, register, vector3
+from rigid_body_attitude.core.effects.base import (
+    as_vec, BodyProperties, ForceEffect, Parameter, Quat, register, Vec, vector3)
 
 STANDARD_GRAVITY = [0.0, 0.0, -9.80665]
 
 
 @register
-class UniformGravity(Effect):
+class UniformGravity(ForceEffect):
     """Weight [N] in the world frame."""
 
     name = 'uniform_gravity'
@@ -24,6 +23,11 @@ class UniformGravity(Effect):
     parameters = {'gravity': Parameter(vector3, STANDARD_GRAVITY, 'world frame [m/s²]')}
     requires = ('translation',)
 
-    def force_world(self, t: float, attitude: NDArray[Any]) -> NDArray[Any]:
+    def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
+        """Precompute the weight [N]."""
+        super().__init__(params, body)
+        self.weight = as_vec(body.mass * self.params['gravity'])
+
+    def force(self, t: float, q: Quat) -> Vec:
         """``m g`` [N]."""
-        return self.body.mass * self.params['gravity']
+        return self.weight
