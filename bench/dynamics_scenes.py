@@ -51,6 +51,8 @@ COMMAND_PERIOD = 0.1
 AMPLITUDE = {'torque': 0.01, 'force': 0.5, 'rotor_torque': 0.01}
 TARGET_MS_PER_SIMULATED_S = 10.0
 REFERENCE_REFINEMENT = 16
+ACCURACY_KEYS = ('attitude_error_rad', 'energy_balance_residual', 'momentum_drift',
+                 'position_error_m')
 
 
 def command_value(input_name: str, t: float) -> list[float]:
@@ -60,8 +62,10 @@ def command_value(input_name: str, t: float) -> list[float]:
             amplitude * math.sin(0.7 * t + 1.1)]
 
 
-def run(scene: Scene, seconds: float) -> tuple[DynamicsPropagator, list[np.ndarray], float]:
-    """Tick the scene's propagator at 50 Hz for ``seconds``; attitudes at the ticks, CPU s."""
+def run(scene: Scene, seconds: float
+        ) -> tuple[DynamicsPropagator, list[tuple[np.ndarray, np.ndarray]], float]:
+    """Tick the scene's propagator at 50 Hz for ``seconds``; attitudes and positions at the
+    ticks, CPU seconds."""
     propagator = DynamicsPropagator(scene)
     inputs = sorted(propagator.input_names)
     ticks = int(round(seconds / TICK))
@@ -74,7 +78,7 @@ def run(scene: Scene, seconds: float) -> tuple[DynamicsPropagator, list[np.ndarr
             for name in inputs:
                 propagator.command(name, now - TICK, command_value(name, now - TICK))
         propagator.advance_to(now)
-        attitudes.append(propagator.state.attitude.copy())
+        attitudes.append((propagator.state.attitude.copy(), propagator.state.position.copy()))
     return propagator, attitudes, time.process_time() - start
 
 
@@ -91,14 +95,19 @@ def attitude_error(a: np.ndarray, b: np.ndarray) -> float:
          a[0] * b[3] - a[1] * b[2] + a[2] * b[1] - a[3] * b[0]]))))
 
 
-def accuracy(scene: Scene, reference: list[np.ndarray], seconds: float) -> dict[str, float]:
-    """Attitude error against ``reference`` and the invariants' drift after ``seconds``."""
-    propagator, attitudes, _ = run(scene, seconds)
+def accuracy(scene: Scene, reference: list[tuple[np.ndarray, np.ndarray]],
+             seconds: float) -> dict[str, float]:
+    """Attitude (and position) error against ``reference`` and the invariants' drift after
+    ``seconds``."""
+    propagator, states, _ = run(scene, seconds)
     diagnostics = propagator.diagnostics()
     scale = max(abs(propagator.tracker.initial_energy), abs(diagnostics.kinetic_energy))
-    result = {'attitude_error_rad': max(attitude_error(a, r)
-                                        for a, r in zip(attitudes, reference)),
+    result = {'attitude_error_rad': max(attitude_error(a[0], r[0])
+                                        for a, r in zip(states, reference)),
               'energy_balance_residual': abs(diagnostics.energy_balance_residual) / scale}
+    if propagator.has_translation:
+        result['position_error_m'] = max(float(np.linalg.norm(a[1] - r[1]))
+                                         for a, r in zip(states, reference))
     if propagator.model.torque_free:
         result['momentum_drift'] = diagnostics.momentum_drift
     return result
@@ -107,6 +116,8 @@ def accuracy(scene: Scene, reference: list[np.ndarray], seconds: float) -> dict[
 def measure(name: str, args: argparse.Namespace) -> dict[str, Any]:
     """One scene's row: CPU and accuracy, old settings and as shipped."""
     shipped = load_scene(name)
+    if name in args.try_settings:
+        shipped = shipped.with_overrides(*args.try_settings[name])
     old = shipped.with_overrides(*OLD_SETTINGS[name])
     row: dict[str, Any] = {'scene': name,
                            'old': {'integrator': old.integrator, 'step': old.step},
@@ -154,7 +165,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--cpu-only', action='store_true')
     parser.add_argument('--before', type=Path)
     parser.add_argument('--json', type=Path)
+    parser.add_argument('--try', dest='try_settings', default='',
+                        help='settings to try instead of the shipped ones: '
+                             'scene=integrator:step,... (for choosing them)')
     args = parser.parse_args(argv)
+    args.try_settings = {
+        item.split('=')[0]: (item.split('=')[1].split(':')[0],
+                             float(item.split('=')[1].split(':')[1]))
+        for item in args.try_settings.split(',') if item}
     before = {}
     if args.before is not None:
         before = {row['scene']: row['new']['cpu_ms_per_s']
@@ -165,8 +183,7 @@ def main(argv: list[str] | None = None) -> int:
                 if row['new']['cpu_ms_per_s'] > TARGET_MS_PER_SIMULATED_S
                 or (not args.cpu_only and any(
                     row['new'][key] > row['old'][key] * 1.0001 + 1e-15
-                    for key in ('attitude_error_rad', 'energy_balance_residual',
-                                'momentum_drift') if key in row['new']))]
+                    for key in ACCURACY_KEYS if key in row['new']))]
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps({'rows': rows, 'before_ms_per_s': before,

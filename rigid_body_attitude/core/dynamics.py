@@ -89,6 +89,7 @@ class RigidBodyModel:
             apply a torque kick exactly, in one evaluation). True (the safe default) otherwise.
         torque_takes_floats: always True: :attr:`torque_body` takes and returns plain floats.
         has_rotor: whether a rotor acts.
+        has_torque: whether a torque acts.
         torque_body: ``(t, q, ω) -> M`` [N m], the sum of :attr:`torques` (plain floats).
         rotor_momentum: ``t -> (h, ḣ)``, the sum of :attr:`rotors` (plain floats).
         tensor_entries, inverse_entries: ``J`` and ``J⁻¹`` as row-major 9-tuples of floats.
@@ -109,6 +110,7 @@ class RigidBodyModel:
         self.torque_depends_on_rate = bool(torque_depends_on_rate)
         self.torque_takes_floats = True
         self.has_rotor = bool(self.rotors)
+        self.has_torque = bool(self.torques)
         self.tensor_entries = tuple(inertia.tensor.ravel().tolist())
         self.inverse_entries = tuple(inertia.inverse.ravel().tolist())
         self.torque_body = self.torques[0] if len(self.torques) == 1 else self._torque_sum

@@ -25,11 +25,14 @@ from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.diagnostics import Diagnostics, DiagnosticsTracker
 from rigid_body_attitude.core.dynamics import RigidBodyModel
 from rigid_body_attitude.core.effects import (
-    CommandedEffect, Effect, ForceEffect, RateCorrection, RotorEffect, StatefulEffect)
+    CommandedEffect, ConservativeTorque, Effect, ForceEffect, RateCorrection, RotorEffect,
+    StatefulEffect, TorqueEffect)
+from rigid_body_attitude.core.effects.base import ForceSum
 from rigid_body_attitude.core.errors import InputError, IntegratorError
 from rigid_body_attitude.core.integrators import (
     dynamics_integrator, strapdown_method, torque_integrators)
 from rigid_body_attitude.core.integrators.base import Quat, Vec
+from rigid_body_attitude.core.integrators.dynamics_base import ROTATION_LIMIT_SLACK
 from rigid_body_attitude.core.scene import Scene
 
 __all__ = ['DynamicsPropagator', 'GyroPropagator', 'PropagatorState', 'build_propagator']
@@ -264,8 +267,16 @@ class DynamicsPropagator(_Propagator):
                                   f'rate_source {scene.rate_source!r}')
         super().__init__(scene)
         self.model = RigidBodyModel.from_effects(scene.inertia, self.effects)
+        torques = [e for e in self.effects if isinstance(e, TorqueEffect)]
+        #: Every torque has a potential and no rotor acts: the work is ``V(q₀) − V(q₁)``.
+        self.potentials = ([e for e in torques if isinstance(e, ConservativeTorque)]
+                           if all(isinstance(e, ConservativeTorque) for e in torques)
+                           and torques and not self.model.has_rotor else [])
         self.force_effects = [e for e in self.effects if isinstance(e, ForceEffect)]
         self.switching = [e for e in self.effects if isinstance(e, CommandedEffect)]
+        #: Sum of the scene's forces at ``(t, q)`` (the one force effect's own, when alone).
+        self.force_sum: ForceSum = (self.force_effects[0].force if len(self.force_effects) == 1
+                                    else self._force)
         self.integrator = dynamics_integrator(scene.integrator)
         if not self.model.torque_free and not self.integrator.supports_torque:
             raise IntegratorError(f'Integrator {scene.integrator!r} handles torque-free bodies '
@@ -332,13 +343,19 @@ class DynamicsPropagator(_Propagator):
     def _checked_step(self, q: Quat, omega: Vec, t: float,
                       h: float) -> tuple[Quat, Vec, float]:
         """One integrator step and the stateful effects' step; a non-finite result raises."""
-        new_q, new_omega, work = self.integrator.advance_with_work(q, omega, t, h, self.model)
+        if self.potentials:
+            new_q, new_omega = self.integrator.advance_floats(q, omega, t, h, self.model)
+            work = sum(effect.potential(q) - effect.potential(new_q)
+                       for effect in self.potentials)
+        else:
+            new_q, new_omega, work = self.integrator.advance_with_work(q, omega, t, h,
+                                                                       self.model)
         if not math.isfinite(new_omega[0] + new_omega[1] + new_omega[2] + work):
             raise IntegratorError(f'Integration produced a non-finite state: attitude '
                                   f'{list(new_q)!r}, omega_body {list(new_omega)!r}; reduce '
                                   f'the step')
         for effect in self.stateful:
-            work += effect.advance(t, h, q, new_q, self._force)
+            work += effect.advance(t, h, q, new_q, self.force_sum)
         return new_q, new_omega, work
 
     def _store(self, time: float, q: Quat, omega: Vec, work: float) -> None:
@@ -383,10 +400,15 @@ class DynamicsPropagator(_Propagator):
         steps, work = 0, 0.0
         for effect in self.switching:
             effect.begin_step(t, t_end)
+        # |ω|² below this needs no substeps at h ≤ step (the integrator's limit, its slack)
+        fast = (self.integrator.max_rotation_per_step * ROTATION_LIMIT_SLACK / step) ** 2
         try:
             while remaining > tolerance:
                 h = step if step < remaining else remaining
-                q, omega, step_work = self._one_step(q, omega, t, h)
+                if omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2] <= fast:
+                    q, omega, step_work = self._checked_step(q, omega, t, h)
+                else:
+                    q, omega, step_work = self._one_step(q, omega, t, h)
                 work += step_work
                 steps += 1
                 t += h

@@ -10,10 +10,10 @@ import importlib
 import pkgutil
 
 from rigid_body_attitude.core.effects.base import (
-    BatchChunk, BodyProperties, CommandedEffect, Effect, EFFECTS, ForceEffect, RateCorrection,
+    BatchChunk, BodyProperties, CommandedEffect, ConservativeTorque, Effect, EFFECTS, ForceEffect, RateCorrection,
     RotorEffect, StatefulEffect, TorqueEffect)
 
-__all__ = ['BatchChunk', 'BodyProperties', 'CommandedEffect', 'EFFECTS', 'Effect', 'ForceEffect',
+__all__ = ['BatchChunk', 'BodyProperties', 'CommandedEffect', 'ConservativeTorque', 'EFFECTS', 'Effect', 'ForceEffect',
            'RateCorrection', 'RotorEffect', 'StatefulEffect', 'TorqueEffect']
 
 for _module in pkgutil.iter_modules(__path__):

@@ -41,6 +41,7 @@ __all__ = [
     'BatchChunk',
     'BodyProperties',
     'CommandedEffect',
+    'ConservativeTorque',
     'Effect',
     'EFFECTS',
     'ForceEffect',
@@ -250,6 +251,19 @@ class TorqueEffect(Effect, ABC):
         return np.array(self.torque(t, as_quat(attitude), as_vec(omega_body)))
 
 
+class ConservativeTorque(TorqueEffect, ABC):
+    """A torque with a potential ``V(q)``: ``M = −∂V/∂θ`` (body-frame rotation vector θ).
+
+    Its work over any step is ``V(q₀) − V(q₁)``, exactly: the propagator uses that for the
+    energy balance instead of a quadrature of the power, so ``T − T₀ − W`` is the drift of the
+    total energy ``T + V``.
+    """
+
+    @abstractmethod
+    def potential(self, q: Quat) -> float:
+        """Potential energy [J] at attitude ``q``."""
+
+
 class RotorEffect(Effect, ABC):
     """A gyrostat rotor: momentum ``h(t)`` [N m s] relative to the body and its rate ``ḣ``."""
 
@@ -381,6 +395,7 @@ class HeldInput:
         self.segments: list[tuple[float, float, Vec]] = []
         self.folded: Vec = _ZERO
         self.window: float | None = None
+        self.pinned: tuple[float, Vec, Vec] = (0.0, _ZERO, _ZERO)
         self.expiry_counted = True
 
     @property
@@ -414,8 +429,20 @@ class HeldInput:
         return [time for start, end, _ in self.segments for time in (start, end)]
 
     def begin_step(self, t_start: float, t_end: float) -> None:
-        """Evaluate as the command in force inside ``(t_start, t_end)`` until :meth:`end_step`."""
-        self.window = 0.5 * (t_start + t_end)
+        """Evaluate as the command in force inside ``(t_start, t_end)`` until :meth:`end_step`.
+
+        No command starts or ends inside the interval (the propagator ends its steps at
+        :meth:`switch_times`), so the command in force and the integral at its start are
+        looked up once here: :meth:`vector_at` and :meth:`integral_at` then cost no search.
+        """
+        self.window = None
+        middle = 0.5 * (t_start + t_end)
+        segment = self.segment_at(middle)
+        if segment is None:
+            self.pinned = (middle, self.integral_at(middle), _ZERO)
+        else:
+            self.pinned = (segment[0], self.integral_at(segment[0]), segment[2])
+        self.window = middle
 
     def end_step(self) -> None:
         """Evaluate at the times asked again."""
@@ -440,6 +467,8 @@ class HeldInput:
 
     def vector_at(self, t: float) -> Vec:
         """The command in force at ``t``, or zero (plain floats)."""
+        if self.window is not None:
+            return self.pinned[2]
         segment = self.segment_at(t)
         return _ZERO if segment is None else segment[2]
 
@@ -449,6 +478,10 @@ class HeldInput:
 
     def integral_at(self, t: float) -> Vec:
         """``∫ command dt`` from the first command to ``t`` (exact for the piecewise constant)."""
+        if self.window is not None:
+            start, (x, y, z), (u, v, w) = self.pinned
+            span = t - start
+            return x + u * span, y + v * span, z + w * span
         x, y, z = self.folded
         for start, end, value in self.segments:
             if t <= start:

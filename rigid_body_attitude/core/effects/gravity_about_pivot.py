@@ -15,14 +15,14 @@ import numpy as np
 
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.effects.base import (
-    as_vec, BatchChunk, BodyProperties, FloatArray, Parameter, Quat, register, REQUIRED,
-    TorqueEffect, Vec, vector3)
+    as_vec, BatchChunk, BodyProperties, ConservativeTorque, FloatArray, Parameter, Quat, register,
+    REQUIRED, Vec, vector3)
 
 STANDARD_GRAVITY = (0.0, 0.0, -9.80665)
 
 
 @register
-class GravityAboutPivot(TorqueEffect):
+class GravityAboutPivot(ConservativeTorque):
     """Gravity torque about a fixed pivot [N m]."""
 
     name = 'gravity_about_pivot'
@@ -43,6 +43,12 @@ class GravityAboutPivot(TorqueEffect):
         """``−m g · R(q) r_c`` [J] (zero with the centre of mass at the pivot's height)."""
         return float(-self.weight_world @ quaternion.rotate(attitude,
                                                             self.params['centre_of_mass']))
+
+    def potential(self, q: Quat) -> float:
+        """:meth:`potential_energy` on plain floats [J]."""
+        x, y, z = quaternion.rotate_floats(q, self.centre)
+        gx, gy, gz = self.weight
+        return -(gx * x + gy * y + gz * z)
 
     def torque(self, t: float, q: Quat, omega: Vec) -> Vec:
         """``r_c × R(q)ᵀ (m g)`` [N m]."""

@@ -46,11 +46,17 @@ class Rotor(CommandedEffect, RotorEffect):
 
     def rotor(self, t: float) -> tuple[Vec, Vec]:
         """``(h(t), ḣ(t))``: ``h₀ + ∫ u dt`` over the held commands, ``ḣ`` the one in force."""
-        if not self.command.segments:
-            return self.initial, (0.0, 0.0, 0.0)
-        ix, iy, iz = self.command.integral_at(t)
+        command = self.command
         h0 = self.initial
-        return (h0[0] + ix, h0[1] + iy, h0[2] + iz), self.command.vector_at(t)
+        if command.window is not None:  # inside a step: the command in force is pinned
+            start, (x, y, z), rate = command.pinned
+            span = t - start
+            return (h0[0] + (x + rate[0] * span), h0[1] + (y + rate[1] * span),
+                    h0[2] + (z + rate[2] * span)), rate
+        if not command.segments:
+            return h0, (0.0, 0.0, 0.0)
+        ix, iy, iz = command.integral_at(t)
+        return (h0[0] + ix, h0[1] + iy, h0[2] + iz), command.vector_at(t)
 
     def batch_rotor(self, t: float, chunk: BatchChunk) -> tuple[FloatArray, Vec]:
         """``h`` for the bodies of ``chunk`` ((3, n) or (3, 1)) and the shared ``ḣ``."""

@@ -63,7 +63,8 @@ class BodyModel(Protocol):
     9-tuples of floats), ``principal_moments`` (ascending, (3,)), ``principal_axes``
     (rotation whose columns are the principal axes), ``torque_free`` (no torque, no rotor),
     ``torque_body(t, attitude, omega_body) -> (3,)`` [N m] and
-    ``rotor_momentum(t) -> (h [N m s], ḣ [N m])``, and three declarations:
+    ``rotor_momentum(t) -> (h [N m s], ḣ [N m])``, and four declarations: ``has_torque``
+    (False: ``torque_body`` is zero, never called by the written-out RK4 step),
     ``torque_depends_on_rate`` (False lets the splitting methods apply a torque kick exactly
     in one evaluation), ``has_rotor`` (False skips the rotor query) and
     ``torque_takes_floats`` (True: the integrators call
@@ -74,6 +75,7 @@ class BodyModel(Protocol):
     tensor_entries: tuple[float, ...]
     inverse_entries: tuple[float, ...]
     torque_depends_on_rate: bool
+    has_torque: bool
     has_rotor: bool
     torque_takes_floats: bool
 
@@ -130,6 +132,7 @@ class SimpleBodyModel:
         self.torque_depends_on_rate = bool(torque_depends_on_rate)
         self.torque_takes_floats = bool(torque_takes_floats) and torque_body is not None
         self.has_rotor = rotor_momentum is not None
+        self.has_torque = torque_body is not None
 
     @property
     def torque_free(self) -> bool:

@@ -47,6 +47,11 @@ class DynamicsMethod:
                  model: BodyModel) -> tuple[Quat, Vec]:
         raise IntegratorError(f'{type(self).__name__} defines no step')
 
+    def advance_floats(self, q: Quat, omega: Vec, t: float, h: float,
+                       model: BodyModel) -> tuple[Quat, Vec]:
+        """One step on plain floats, no checks (the propagator's hot path)."""
+        return self._advance(q, omega, t, h, model)
+
     def advance_with_work(self, q: Quat, omega: Vec, t: float, h: float,
                           model: BodyModel) -> tuple[Quat, Vec, float]:
         """One step on plain floats (no checks) and the work [J] of the torques over it.

@@ -11,6 +11,7 @@ from __future__ import annotations
 from rigid_body_attitude.core.integrators.base import (
     body_derivative_power, BodyModel, q_normalize, Quat, Vec)
 from rigid_body_attitude.core.integrators.dynamics_base import DynamicsMethod
+from rigid_body_attitude.core.integrators.rk4_kernel import Rk4Kernel, rk4_kernel
 
 __all__ = ['RigidBodyRk4', 'rk4_state_step', 'rk4_work_step']
 
@@ -67,13 +68,24 @@ class RigidBodyRk4(DynamicsMethod):
     #: steps. Steps above 2 rad are refused (:class:`.dynamics_base.DynamicsMethod`).
     max_rotation_per_step = 2.0
 
+    def __init__(self) -> None:
+        self._model: BodyModel | None = None
+        self._kernel: Rk4Kernel | None = None
+
+    def _kernel_of(self, model: BodyModel) -> Rk4Kernel:
+        """The step written out for ``model`` (:mod:`.rk4_kernel`), built once per model."""
+        if model is not self._model or self._kernel is None:
+            self._kernel = rk4_kernel(model)
+            self._model = model
+        return self._kernel
+
     def _advance(self, q: Quat, omega: Vec, t: float, h: float,
                  model: BodyModel) -> tuple[Quat, Vec]:
-        y1 = rk4_work_step(model, t, q + omega, h)[0]
+        y1 = self._kernel_of(model)(t, q + omega, h)[0]
         return q_normalize(y1[:4]), (y1[4], y1[5], y1[6])
 
     def advance_with_work(self, q: Quat, omega: Vec, t: float, h: float,
                           model: BodyModel) -> tuple[Quat, Vec, float]:
         """One step on plain floats and the work of the torques (stage quadrature)."""
-        y1, work = rk4_work_step(model, t, q + omega, h)
+        y1, work = self._kernel_of(model)(t, q + omega, h)
         return q_normalize(y1[:4]), (y1[4], y1[5], y1[6]), work
