@@ -218,11 +218,14 @@ class BatchChunk:
         parameters: the effect's numeric parameters for these bodies: a dispersed parameter
             as an array over the bodies (shape (n,) or (3, n)), a shared one as a float or a
             (3, 1) array (NumPy broadcasts both the same way).
+        diagonal: True when every tensor of the chunk is diagonal (kernels may then skip the
+            off-diagonal products, which are exact zeros).
     """
 
     tensor: FloatArray
     mass: FloatArray
     parameters: Mapping[str, Any]
+    diagonal: bool = False
 
 
 class TorqueEffect(Effect, ABC):
@@ -288,6 +291,11 @@ class ForceEffect(Effect, ABC):
     @abstractmethod
     def force(self, t: float, q: Quat) -> Vec:
         """The force [N, world] at time ``t`` and attitude ``q``."""
+
+    @abstractmethod
+    def add_batch_force(self, t: float, q: FloatArray, chunk: BatchChunk,
+                        out: FloatArray) -> None:
+        """Add the force on every body of ``chunk`` to ``out`` (3, n); ``q`` is (4, n)."""
 
     def force_world(self, t: float, attitude: Sequence[float] | FloatArray) -> FloatArray:
         """:meth:`force` on an array-like attitude, as a (3,) array."""

@@ -6,9 +6,12 @@ as ``stale``). Needs ``translation`` in the same scene.
 
 from __future__ import annotations
 
+import numpy as np
+
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.effects.base import (
-    CommandedEffect, ForceEffect, Parameter, positive, Quat, register, Vec)
+    BatchChunk, CommandedEffect, FloatArray, ForceEffect, Parameter, positive, Quat, register,
+    Vec)
 
 
 @register
@@ -24,3 +27,8 @@ class CommandedForce(CommandedEffect, ForceEffect):
     def force(self, t: float, q: Quat) -> Vec:
         """``R(q) F_cmd`` [N], zero after the timeout."""
         return quaternion.rotate_floats(q, self.command.vector_at(t))
+
+    def add_batch_force(self, t: float, q: FloatArray, chunk: BatchChunk,
+                        out: FloatArray) -> None:
+        """The same held command on every body, rotated by each body's attitude."""
+        out += quaternion.rotate_rows(q, np.array(self.command.vector_at(t))[:, None])

@@ -84,9 +84,12 @@ class GravityGradient(TorqueEffect):
         radial = np.array(self.radial(t))[:, None]
         x, y, z = quaternion.rotate_rows(q, radial, inverse=True)
         tensor = chunk.tensor
-        jx = tensor[0, 0] * x + tensor[0, 1] * y + tensor[0, 2] * z
-        jy = tensor[1, 0] * x + tensor[1, 1] * y + tensor[1, 2] * z
-        jz = tensor[2, 0] * x + tensor[2, 1] * y + tensor[2, 2] * z
+        if chunk.diagonal:
+            jx, jy, jz = tensor[0, 0] * x, tensor[1, 1] * y, tensor[2, 2] * z
+        else:
+            jx = tensor[0, 0] * x + tensor[0, 1] * y + tensor[0, 2] * z
+            jy = tensor[1, 0] * x + tensor[1, 1] * y + tensor[1, 2] * z
+            jz = tensor[2, 0] * x + tensor[2, 1] * y + tensor[2, 2] * z
         gain = self.gain
         out[0] += gain * (y * jz - z * jy)
         out[1] += gain * (z * jx - x * jz)

@@ -85,3 +85,12 @@ class Translation(StatefulEffect):
     def outputs(self) -> dict[str, FloatArray]:
         """``position`` and ``velocity`` in the world frame."""
         return {'position': self.position, 'velocity': self.velocity}
+
+    @staticmethod
+    def batch_advance(h: float, mass: FloatArray, position: FloatArray, velocity: FloatArray,
+                      force_start: FloatArray, force_end: FloatArray) -> None:
+        """:meth:`advance` for many bodies, in place: ``position`` and ``velocity`` (3, n),
+        forces (3, n) at both ends of the step, ``mass`` (n,) or a float."""
+        position += h * velocity
+        position += h * h / (6.0 * mass) * (2.0 * force_start + force_end)
+        velocity += 0.5 * h / mass * (force_start + force_end)

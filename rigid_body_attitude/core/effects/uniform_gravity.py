@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 from rigid_body_attitude.core.effects.base import (
-    as_vec, BodyProperties, ForceEffect, Parameter, Quat, register, Vec, vector3)
+    as_vec, BatchChunk, BodyProperties, FloatArray, ForceEffect, Parameter, Quat, register, Vec, vector3)
 
 STANDARD_GRAVITY = [0.0, 0.0, -9.80665]
 
@@ -31,3 +31,8 @@ class UniformGravity(ForceEffect):
     def force(self, t: float, q: Quat) -> Vec:
         """``m g`` [N]."""
         return self.weight
+
+    def add_batch_force(self, t: float, q: FloatArray, chunk: BatchChunk,
+                        out: FloatArray) -> None:
+        """``m g`` per body (mass and gravity may be dispersed)."""
+        out += chunk.parameters['gravity'] * chunk.mass
