@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.effects.base import (
-    REQUIRED, BodyProperties, RateCorrection, Parameter, nonnegative, real, register)
+    as_vec, REQUIRED, BodyProperties, RateCorrection, Parameter, nonnegative, real, register)
 
 WGS84_EARTH_RATE = 7.2921150e-5
 
@@ -46,8 +46,11 @@ class EarthRate(RateCorrection):
         latitude = math.radians(self.params['latitude'])
         self.earth_rate_world = self.params['rate'] * np.array(
             [0.0, math.cos(latitude), math.sin(latitude)])
+        self.earth_rate = as_vec(self.earth_rate_world)
 
     def corrected_rate(self, t: float, attitude: NDArray[Any],
                        omega_measured: NDArray[Any]) -> NDArray[Any]:
         """``ω_measured − R(q)ᵀ Ω_E`` [rad/s]."""
-        return omega_measured - quaternion.rotate_inverse(attitude, self.earth_rate_world)
+        w, x, y, z = np.asarray(attitude, dtype=np.float64).tolist()
+        return omega_measured - np.array(quaternion.rotate_inverse_floats(
+            (w, x, y, z), self.earth_rate))
