@@ -28,6 +28,7 @@ import json
 from pathlib import Path
 import sys
 import time
+from typing import Any
 
 import numpy as np
 
@@ -69,7 +70,7 @@ def dispersion(count: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray, np.nd
     return tensors, attitudes, omegas
 
 
-def run(count: int, steps: int, repeats: int, check: int) -> dict:
+def run(count: int, steps: int, repeats: int, check: int) -> dict[str, Any]:
     """Time ``repeats`` calls of ``rk4(STEP, steps)``; check ``check`` bodies afterwards."""
     tensors, attitudes, omegas = dispersion(count)
     batch = TorqueFreeBatch(tensors, attitudes, omegas)
@@ -96,7 +97,7 @@ def run(count: int, steps: int, repeats: int, check: int) -> dict:
 
 
 def run_scene(count: int, steps: int, repeats: int, check: int,
-              disperse_inertia: bool) -> dict:
+              disperse_inertia: bool) -> dict[str, Any]:
     """Time ``repeats`` calls of ``SceneBatch.advance_to`` over ``steps`` steps; check
     ``check`` bodies against the single-body propagator afterwards."""
     scene = scene_from_mapping(EFFECTS_SCENE)

@@ -106,16 +106,20 @@ class TorqueFreeBatch:
     def attitude(self) -> FloatArray:
         """(N, 4) body → world quaternions."""
         principal = self._state[:4].T
-        return quaternion.multiply(principal, quaternion.conjugate(self._axes_quaternion))
+        attitude: FloatArray = quaternion.multiply(principal,
+                                                   quaternion.conjugate(self._axes_quaternion))
+        return attitude
 
     @property
     def omega_body(self) -> FloatArray:
         """(N, 3) body rates [rad/s]."""
-        return np.einsum('nij,jn->ni', self._axes, self._state[4:])
+        omega: FloatArray = np.einsum('nij,jn->ni', self._axes, self._state[4:])
+        return omega
 
     def kinetic_energy(self) -> FloatArray:
         """(N,) kinetic energies ``½ Σ J_i ω_i²`` [J]."""
-        return 0.5 * np.sum(self._moments.T * self._state[4:] ** 2, axis=0)
+        energy: FloatArray = 0.5 * np.sum(self._moments.T * self._state[4:] ** 2, axis=0)
+        return energy
 
     def world_angular_momentum(self) -> FloatArray:
         """(N, 3) world-frame angular momenta [N m s]."""
@@ -323,7 +327,8 @@ class SceneBatch:
     def kinetic_energy(self) -> FloatArray:
         """(N,) rotational kinetic energies ``½ ωᵀ J ω`` [J]."""
         omega = self._state[4:]
-        return 0.5 * np.einsum('in,ijn,jn->n', omega, self._tensor, omega)
+        energy: FloatArray = 0.5 * np.einsum('in,ijn,jn->n', omega, self._tensor, omega)
+        return energy
 
 
 def _step_plan(t: float, t_end: float, step: float) -> list[tuple[float, float]]:
@@ -392,9 +397,9 @@ class _Chunk:
         self.diagonal = not any(np.any(self.tensor[i, j]) or np.any(self.inverse[i, j])
                                 for i, j in off_diagonal)
         self.out = np.empty((7, self.mass.shape[0]))
-        self.torques = []
-        self.rotors = []
-        self.forces = []
+        self.torques: list[tuple[TorqueEffect, BatchChunk]] = []
+        self.rotors: list[tuple[RotorEffect, BatchChunk]] = []
+        self.forces: list[tuple[ForceEffect, BatchChunk]] = []
         for effect, (parameters, dispersed) in zip(batch.effects, batch._parameters):
             sliced = {name: value[..., bodies] if name in dispersed else value
                       for name, value in parameters.items()}
@@ -417,8 +422,8 @@ class _Chunk:
         """``(q̇, ω̇)`` of every body, (7, n): Euler's equations with the effects."""
         q, omega = y[:4], y[4:]
         torque = np.zeros((3, y.shape[1]))
-        for effect, view in self.torques:
-            effect.add_batch_torque(t, q, omega, view, torque)
+        for torque_effect, view in self.torques:
+            torque_effect.add_batch_torque(t, q, omega, view, torque)
         tensor = self.tensor
         p, r, s = omega
         if self.diagonal:
@@ -427,8 +432,8 @@ class _Chunk:
             mx = tensor[0, 0] * p + tensor[0, 1] * r + tensor[0, 2] * s
             my = tensor[1, 0] * p + tensor[1, 1] * r + tensor[1, 2] * s
             mz = tensor[2, 0] * p + tensor[2, 1] * r + tensor[2, 2] * s
-        for effect, view in self.rotors:
-            momentum, rate = effect.batch_rotor(t, view)
+        for rotor_effect, view in self.rotors:
+            momentum, rate = rotor_effect.batch_rotor(t, view)
             torque[0] -= rate[0]
             torque[1] -= rate[1]
             torque[2] -= rate[2]
@@ -468,4 +473,3 @@ class _Chunk:
         q = result[:4]
         q *= 1.0 / np.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
         return result
-

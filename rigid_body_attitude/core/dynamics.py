@@ -168,8 +168,9 @@ class RigidBodyModel:
     def external_torque(self, t: float, attitude: Sequence[float] | FloatArray,
                         omega_body: Sequence[float] | FloatArray) -> Vec:
         """``M − ḣ``: the torque whose power ``ω·(M − ḣ)`` changes the kinetic energy."""
-        q, omega = _floats(attitude), _floats(omega_body)
-        x, y, z = self.torque_body(t, q, omega) if self.torques else _ZERO  # type: ignore[arg-type]
+        qw, qx, qy, qz = _floats(attitude)
+        p, r, s = _floats(omega_body)
+        x, y, z = self.torque_body(t, (qw, qx, qy, qz), (p, r, s)) if self.torques else _ZERO
         if self.rotors:
             _, (rx, ry, rz) = self.rotor_momentum(t)
             x, y, z = x - rx, y - ry, z - rz

@@ -9,8 +9,8 @@
 Neither knows any particular effect: each effect declares its kinds by the base classes it
 derives from (:mod:`rigid_body_attitude.core.effects.base`), and the propagators sort them by
 kind. The dynamics hot loop runs on plain floats from one call of :meth:`advance_to` to its
-end (arrays are built once per call, for the state's readers). Time handling of input streams (stale stamps, gaps,
-jumps) is :mod:`rigid_body_attitude.session.stream`'s job.
+end (arrays are built once per call, for the state's readers). Time handling of input
+streams (stale stamps, gaps, jumps) is :mod:`rigid_body_attitude.session.stream`'s job.
 """
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ class GyroState(PropagatorState):
     _attitude_array: FloatArray | None
     _omega_array: FloatArray | None
 
-    @property  # type: ignore[override]
+    @property
     def attitude(self) -> FloatArray:
         """Unit quaternion (w, x, y, z), body → world (read-only array)."""
         if self._attitude_array is None:
@@ -101,7 +101,7 @@ class GyroState(PropagatorState):
         w, x, y, z = self._attitude_array.tolist()
         self._attitude_floats = (w, x, y, z)
 
-    @property  # type: ignore[override]
+    @property
     def omega_body(self) -> FloatArray:
         """Body rate [rad/s] (read-only array)."""
         if self._omega_array is None:
@@ -300,7 +300,7 @@ class DynamicsPropagator(_Propagator):
         :class:`IntegratorError` if more than :data:`MAX_SUBSTEPS` substeps would be needed or
         the result is not finite; the state is then unchanged.
         """
-        if not (isinstance(h, numbers.Real) and math.isfinite(h) and h > 0.0):
+        if not _positive_finite(h):
             raise InputError(f'Expected `h` to be a positive finite number of seconds, got {h!r}')
         state = self.state
         t = state.time
@@ -499,6 +499,12 @@ class GyroPropagator(_Propagator):
         attitude = self.method.propagate(state.attitude_tuple(), state.omega_tuple(), omega,
                                          t - state.time)
         state.set_sample(t, attitude, omega)
+
+
+def _positive_finite(value: object) -> bool:
+    """Whether ``value`` is a real number, finite and > 0."""
+    return (isinstance(value, numbers.Real) and math.isfinite(value)
+            and float(value) > 0.0)
 
 
 def _checked_sample(t: float, omega_measured: ArrayLike) -> FloatArray:

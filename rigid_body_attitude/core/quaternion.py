@@ -125,7 +125,8 @@ def multiply(p: ArrayLike, q: ArrayLike) -> FloatArray:
 def conjugate(q: ArrayLike) -> FloatArray:
     """Conjugate ``q* = (w, −x, −y, −z)``, the inverse rotation of a unit quaternion."""
     q = as_quaternion(q, finite=False)
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
+    conjugated: FloatArray = q * np.array([1.0, -1.0, -1.0, -1.0])
+    return conjugated
 
 
 def normalize(q: ArrayLike) -> FloatArray:
@@ -134,7 +135,8 @@ def normalize(q: ArrayLike) -> FloatArray:
     norm = np.linalg.norm(q, axis=-1, keepdims=True)
     if np.any(norm == 0.0):
         raise InputError(f'Expected `q` to be non-zero to normalise, got {q.tolist()!r}')
-    return q / norm
+    unit: FloatArray = q / norm
+    return unit
 
 
 def norm_error(q: ArrayLike) -> FloatArray | float:

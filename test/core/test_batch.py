@@ -172,7 +172,8 @@ def test_scene_batch_matches_the_single_body_propagator_per_body(name):
 
 
 def test_scene_batch_refuses_bad_dispersions():
-    scene = scene_from_mapping({'rate_source': 'dynamics', 'body': {'inertia': {'moments': [1, 2, 3]}},
+    scene = scene_from_mapping({'rate_source': 'dynamics',
+                                'body': {'inertia': {'moments': [1, 2, 3]}},
                                 'effects': [{'viscous_damping': {'coefficient': 0.1}}]})
     attitude, omega = np.tile([1.0, 0, 0, 0], (4, 1)), np.zeros((4, 3))
     with pytest.raises(InputError, match=r'viscous_damping.coefficient as finite values of '

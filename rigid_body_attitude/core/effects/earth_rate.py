@@ -52,5 +52,6 @@ class EarthRate(RateCorrection):
                        omega_measured: NDArray[Any]) -> NDArray[Any]:
         """``ω_measured − R(q)ᵀ Ω_E`` [rad/s]."""
         w, x, y, z = np.asarray(attitude, dtype=np.float64).tolist()
-        return omega_measured - np.array(quaternion.rotate_inverse_floats(
-            (w, x, y, z), self.earth_rate))
+        corrected: NDArray[Any] = omega_measured - np.array(
+            quaternion.rotate_inverse_floats((w, x, y, z), self.earth_rate))
+        return corrected

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.effects.base import (
     as_vec, BatchChunk, BodyProperties, ConservativeTorque, FloatArray, Parameter, Quat, register,

@@ -56,4 +56,5 @@ class GyroBias(RateCorrection):
             self.estimating = False
             if self.sample_count:
                 self.bias = self.sample_sum / self.sample_count
-        return omega_measured - self.bias
+        corrected: NDArray[Any] = omega_measured - self.bias
+        return corrected

@@ -9,7 +9,8 @@ from __future__ import annotations
 from typing import Any
 
 from rigid_body_attitude.core.effects.base import (
-    as_vec, BatchChunk, BodyProperties, FloatArray, ForceEffect, Parameter, Quat, register, Vec, vector3)
+    as_vec, BatchChunk, BodyProperties, FloatArray, ForceEffect, Parameter, Quat, register, Vec,
+    vector3)
 
 STANDARD_GRAVITY = [0.0, 0.0, -9.80665]
 

@@ -91,11 +91,17 @@ class BodyModel(Protocol):
     def principal_axes(self) -> FloatArray:
         """Right-handed rotation whose columns are the principal axes (body coordinates)."""
 
-    def torque_body(self, t: float, attitude: FloatArray, omega_body: FloatArray) -> Any:
-        """External torque [N m] in body axes."""
+    def torque_body(self, t: float, attitude: Any, omega_body: Any) -> Any:
+        """External torque [N m] in body axes (arrays, or plain floats when
+        ``torque_takes_floats``)."""
 
     def rotor_momentum(self, t: float) -> tuple[Any, Any]:
         """Rotor momentum ``h`` [N m s] and its rate ``ḣ`` [N m] in body axes."""
+
+
+def _no_torque(t: float, attitude: Any, omega_body: Any) -> FloatArray:
+    """Zero torque [N m]."""
+    return np.zeros(3)
 
 
 class SimpleBodyModel:
@@ -127,8 +133,9 @@ class SimpleBodyModel:
         self._axes = axes
         self._torque = torque_body
         self._rotor = rotor_momentum
-        if torque_body is not None:
-            self.torque_body = torque_body  # call the user's function directly (hot path)
+        # the user's function itself (no wrapper call on the hot path), or zero
+        self.torque_body: Callable[[float, Any, Any], Any] = (
+            _no_torque if torque_body is None else torque_body)
         self.torque_depends_on_rate = bool(torque_depends_on_rate)
         self.torque_takes_floats = bool(torque_takes_floats) and torque_body is not None
         self.has_rotor = rotor_momentum is not None
@@ -148,12 +155,6 @@ class SimpleBodyModel:
     def principal_axes(self) -> FloatArray:
         """Right-handed rotation whose columns are the principal axes (body coordinates)."""
         return self._axes
-
-    def torque_body(self, t: float, attitude: FloatArray, omega_body: FloatArray) -> Any:
-        """The torque callable's value, or zero [N m]."""
-        if self._torque is None:
-            return np.zeros(3)
-        return self._torque(t, attitude, omega_body)
 
     def rotor_momentum(self, t: float) -> tuple[Any, Any]:
         """The rotor callable's ``(h, ḣ)``, or zeros."""
