@@ -1,7 +1,8 @@
 """commanded_force: a force on the centre of mass from the ``force`` input (body axes).
 
 ``F_world = R(q) F_cmd``, held from the command's stamp until ``timeout``, then zero (counted
-as ``stale``). Needs ``translation`` in the same scene.
+as ``stale``). Needs ``translation`` in the same scene. Assumption: the force acts at the
+centre of mass (no torque). Source: Newton's second law; Basilisk's ``extForceTorque``.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """constant_torque: a torque of fixed magnitude and direction, in body or world axes.
 
 ``M_body = M`` (``frame: body``) or ``M_body = R(q)ᵀ M`` (``frame: world``, e.g. a thruster
-fixed in inertial space). Assumption: constant in time.
+fixed in inertial space). Assumption: constant in time. Source: Euler's equations with an
+external torque (physics.md §1).
 """
 
 from __future__ import annotations

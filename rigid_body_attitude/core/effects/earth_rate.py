@@ -3,8 +3,8 @@
 A gyro measures the rate relative to inertial space; a ROS world frame (ENU, REP-103/105) is
 fixed to the rotating Earth. The rate relative to the world frame is
 ``ω = ω_measured − R(q)ᵀ Ω_E (0, cos φ, sin φ)`` with ``φ`` the latitude and
-``Ω_E = 7.2921150e−5 rad/s`` (WGS-84). Assumptions: stationary or slowly moving platform
-(transport rate neglected), ENU world frame.
+``Ω_E = 7.2921150e−5 rad/s`` (Source: WGS-84; ROS frames: REP-103/105). Assumptions:
+stationary or slowly moving platform (transport rate neglected), ENU world frame.
 """
 
 from __future__ import annotations

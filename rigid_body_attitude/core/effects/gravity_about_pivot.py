@@ -4,7 +4,8 @@
 ``g`` the gravity vector in the world frame (default ENU, ``(0, 0, −9.80665)`` m/s²). The
 scene's inertia must be **about the pivot** (parallel-axis theorem applied by the user) and
 ``mass`` must be given. Assumptions: frictionless fixed pivot, uniform gravity. Energy
-``T + m g_z·z_c`` is conserved; the world momentum about the vertical is conserved.
+``T + m g_z·z_c`` is conserved; the world momentum about the vertical is conserved. Source:
+the heavy top with one point fixed (Goldstein, *Classical Mechanics*, §5.7).
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """gravity_gradient: the gravity-gradient torque on a satellite in a circular orbit.
 
 ``M = 3 μ / r³ · r̂_b × (J r̂_b)``, ``r̂_b = R(q)ᵀ r̂_w(t)`` the unit vector from the planet's
-centre to the satellite in body axes (Hughes, *Spacecraft Attitude Dynamics*, §8.1; Basilisk
-GravityGradientEffector). The world frame is inertial with the planet at its origin; the
+centre to the satellite in body axes (Source: Hughes, *Spacecraft Attitude Dynamics*, §8.1;
+Basilisk GravityGradientEffector). The world frame is inertial with the planet at its origin; the
 orbit is circular with radius ``orbit_radius`` in the plane normal to ``orbit_normal``, mean
 motion ``n = √(μ/r³)``, anomaly ``u = initial_anomaly + n t``. Assumptions: point-mass planet,
 body small against ``r``, the orbit unaffected by the attitude. In a batch every body is on

@@ -4,7 +4,9 @@
 first ``N`` seconds of samples: during that window the samples are averaged into ``b`` (plus
 the given ``bias`` as a prior offset of zero weight) and the corrected rate is zero, so the
 attitude holds still; afterwards ``b`` is the mean. Assumption: a constant bias over the run
-(no temperature drift); Earth rate, when also named, should come after this effect.
+(no temperature drift); Earth rate, when also named, should come after this effect. Source:
+the constant-bias term of the usual gyro error model (Titterton & Weston, *Strapdown Inertial
+Navigation Technology*, gyro errors).
 """
 
 from __future__ import annotations

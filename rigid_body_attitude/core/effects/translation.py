@@ -9,7 +9,8 @@ evaluated at both ends of each step; the update
 is exact for a force linear in time over the step (constant gravity, held commands in a
 slowly turning body) and third-order otherwise. The work ``h (v₀·F₀ + v₁·F₁)/2`` goes into
 the energy balance. Assumption: translation does not act back on the rotation (forces
-through the centre of mass).
+through the centre of mass). Source: Newton's second law; the velocity update is the
+trapezoidal rule, the position update its exact integral for a linear force.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """uniform_gravity: the weight ``m g`` on the centre of mass (world frame, ENU by default).
 
 Needs ``translation`` in the same scene. Assumption: uniform field (no gradient, no torque
-about the centre of mass).
+about the centre of mass). Source: Newton's second law.
 """
 
 from __future__ import annotations
