@@ -327,7 +327,8 @@ class SceneBatch:
     def kinetic_energy(self) -> FloatArray:
         """(N,) rotational kinetic energies ``½ ωᵀ J ω`` [J]."""
         omega = self._state[4:]
-        energy: FloatArray = 0.5 * np.einsum('in,ijn,jn->n', omega, self._tensor, omega)
+        tensor = np.broadcast_to(self._tensor, (3, 3, self.count))
+        energy: FloatArray = 0.5 * np.einsum('in,ijn,jn->n', omega, tensor, omega)
         return energy
 
 
@@ -346,13 +347,15 @@ def _step_plan(t: float, t_end: float, step: float) -> list[tuple[float, float]]
 
 def _tensors(scene: Scene, inertia: ArrayLike | None,
              count: int) -> tuple[FloatArray, FloatArray]:
-    """Per-body inertia tensors and inverses, shape (3, 3, N) (validated as :class:`Inertia`)."""
-    if inertia is None:
-        tensors = np.broadcast_to(scene.inertia.tensor, (count, 3, 3))
+    """Per-body inertia tensors and inverses, shape (3, 3, N) (validated as :class:`Inertia`),
+    or (3, 3, 1) when every body has the same (NumPy then broadcasts one value: less memory
+    traffic per operation)."""
+    if inertia is None or np.shape(inertia) in ((3,), (3, 3)):
+        shared = scene.inertia if inertia is None else Inertia(inertia)
+        return (np.ascontiguousarray(shared.tensor[:, :, None]),
+                np.ascontiguousarray(shared.inverse[:, :, None]))
     else:
         tensors = np.asarray(inertia, dtype=np.float64)
-        if tensors.shape in ((3,), (3, 3)):
-            tensors = np.broadcast_to(Inertia(tensors).tensor, (count, 3, 3))
         if tensors.shape != (count, 3, 3):
             raise InputError(f'Expected `inertia` (3, 3) or ({count}, 3, 3), got '
                              f'{tensors.shape}')
@@ -390,8 +393,9 @@ class _Chunk:
     the RK4 step on them (the single-body kernel's arithmetic, vectorised)."""
 
     def __init__(self, batch: SceneBatch, bodies: slice) -> None:
-        self.tensor = batch._tensor[:, :, bodies]
-        self.inverse = batch._inverse[:, :, bodies]
+        shared = batch._tensor.shape[2] == 1 and batch.count > 1
+        self.tensor = batch._tensor if shared else batch._tensor[:, :, bodies]
+        self.inverse = batch._inverse if shared else batch._inverse[:, :, bodies]
         self.mass = batch._mass[bodies]
         off_diagonal = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]
         self.diagonal = not any(np.any(self.tensor[i, j]) or np.any(self.inverse[i, j])

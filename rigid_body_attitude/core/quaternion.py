@@ -220,14 +220,27 @@ def rotate_rows(q: FloatArray, v: FloatArray, inverse: bool = False) -> FloatArr
     """:func:`rotate` (or, with ``inverse``, :func:`rotate_inverse`) in structure-of-arrays
     layout: ``q`` of shape (4, n) (rows w, x, y, z), ``v`` of shape (3, n) or (3, 1); returns
     (3, n). For batch kernels: components as rows keep every operation on contiguous rows."""
-    w = q[0]
-    x, y, z = (-q[1], -q[2], -q[3]) if inverse else (q[1], q[2], q[3])
-    vx, vy, vz = v
+    w, x, y, z = q
+    if v.shape[1] == 1:  # one vector for every quaternion: plain floats broadcast fastest
+        vx, vy, vz = (float(c) for c in v[:, 0])
+    else:
+        vx, vy, vz = v
+    out = np.empty((3, q.shape[1]))
+    if inverse:  # rotation by q* (the formula of rotate_inverse_floats)
+        tx = 2.0 * (z * vy - y * vz)
+        ty = 2.0 * (x * vz - z * vx)
+        tz = 2.0 * (y * vx - x * vy)
+        np.add(vx + w * tx, z * ty - y * tz, out=out[0])
+        np.add(vy + w * ty, x * tz - z * tx, out=out[1])
+        np.add(vz + w * tz, y * tx - x * ty, out=out[2])
+        return out
     tx = 2.0 * (y * vz - z * vy)
     ty = 2.0 * (z * vx - x * vz)
     tz = 2.0 * (x * vy - y * vx)
-    return np.stack((vx + w * tx + (y * tz - z * ty), vy + w * ty + (z * tx - x * tz),
-                     vz + w * tz + (x * ty - y * tx)))
+    np.add(vx + w * tx, y * tz - z * ty, out=out[0])
+    np.add(vy + w * ty, z * tx - x * tz, out=out[1])
+    np.add(vz + w * tz, x * ty - y * tx, out=out[2])
+    return out
 
 
 def rotate_inverse(q: ArrayLike, v: ArrayLike) -> FloatArray:
