@@ -182,6 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     result = {'effects': effect_rows(args.repeats),
               'steps': step_rows(args.steps, args.repeats),
               'kernel': kernel_rows(args.repeats), 'step_s': STEP,
+              'repeats': args.repeats, 'step_count': args.steps,
               'effect_sets': EFFECT_SETS}
     print(render(result))
     if args.json is not None:
