@@ -241,8 +241,8 @@ def _scene_lines(scenes: dict) -> list[str]:
 def _cost_lines(costs: dict) -> list[str]:
     lines = [f'**What each effect costs per evaluation** (`python bench/effect_costs.py`, '
              f'best of {costs["repeats"]} `timeit` runs): the plain-float method the '
-             'integrators call against the same effect through its array API (a NumPy round trip per call, what every '
-             'evaluation cost before).', '',
+             'integrators call against the same effect through its array API (a NumPy round '
+             'trip per call, what every evaluation cost before).', '',
              '| effect | kind | plain-float call [µs] | array API [µs] |', '|---|---|---:|---:|']
     lines += [f'| {r["effect"]} | {r["kind"]} | {r["plain_float_us"]:.2f} | '
               f'{r["array_us"]:.2f} |' for r in costs['effects']]
