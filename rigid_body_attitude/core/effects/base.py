@@ -219,7 +219,8 @@ class BatchChunk:
             as an array over the bodies (shape (n,) or (3, n)), a shared one as a float or a
             (3, 1) array (NumPy broadcasts both the same way).
         diagonal: True when every tensor of the chunk is diagonal (kernels may then skip the
-            off-diagonal products, which are exact zeros).
+            off-diagonal products, which are exact zeros). ``tensor`` has shape (3, 3, 1)
+            when every body has the same.
     """
 
     tensor: FloatArray

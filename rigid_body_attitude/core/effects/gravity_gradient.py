@@ -86,6 +86,8 @@ class GravityGradient(TorqueEffect):
         tensor = chunk.tensor
         if chunk.diagonal:
             jx, jy, jz = tensor[0, 0] * x, tensor[1, 1] * y, tensor[2, 2] * z
+        elif tensor.shape[2] > 1:  # a tensor per body: one contraction
+            jx, jy, jz = np.einsum('ijn,jn->in', tensor, np.stack((x, y, z)))
         else:
             jx = tensor[0, 0] * x + tensor[0, 1] * y + tensor[0, 2] * z
             jy = tensor[1, 0] * x + tensor[1, 1] * y + tensor[1, 2] * z
