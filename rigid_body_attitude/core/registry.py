@@ -8,7 +8,7 @@ one means adding a module, never editing a list elsewhere.
 
 from __future__ import annotations
 
-from typing import Generic, Protocol, TypeVar
+from typing import ClassVar, Generic, Protocol, TypeVar
 
 __all__ = ['Named', 'Registry']
 
@@ -16,10 +16,10 @@ __all__ = ['Named', 'Registry']
 class Named(Protocol):
     """A registrable class: it has a ``name``."""
 
-    name: str
+    name: ClassVar[str]
 
 
-NamedType = TypeVar('NamedType', bound=type)
+NamedType = TypeVar('NamedType', bound='type[Named]')
 
 
 class Registry(dict[str, NamedType], Generic[NamedType]):
@@ -33,7 +33,7 @@ class Registry(dict[str, NamedType], Generic[NamedType]):
 
     def register(self, cls: NamedType) -> NamedType:
         """Class decorator: add ``cls`` under ``cls.name`` (a name may be registered once)."""
-        name = str(getattr(cls, 'name'))
+        name = cls.name
         if not name or name in self:
             raise self.error(f'{self.kind} name {name!r} is empty or registered twice')
         self[name] = cls

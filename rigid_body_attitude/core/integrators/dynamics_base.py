@@ -18,6 +18,7 @@ work ``∫ ω·(M − ḣ) dt`` [J] of the torques over the step for the energy 
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 from numpy.typing import ArrayLike
 
@@ -37,11 +38,11 @@ ROTATION_LIMIT_SLACK = 1.0 + 1e-6
 class DynamicsMethod:
     """Base of the dynamics integrators (see :class:`integrators.base.DynamicsIntegrator`)."""
 
-    name = ''
-    order = 0
-    supports_torque = True
+    name: ClassVar[str] = ''
+    order: ClassVar[int] = 0
+    supports_torque: ClassVar[bool] = True
     #: Largest ``h·|ω|`` [rad] this method accepts per step (``inf``: unconditionally stable).
-    max_rotation_per_step = math.inf
+    max_rotation_per_step: ClassVar[float] = math.inf
 
     def _advance(self, q: Quat, omega: Vec, t: float, h: float,
                  model: BodyModel) -> tuple[Quat, Vec]:
