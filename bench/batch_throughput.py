@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from pathlib import Path
 import sys
 import time
@@ -177,7 +178,8 @@ def main(argv: list[str] | None = None) -> int:
             'step_s': STEP, 'rows': rows, 'scene_rows': scene_rows, 'problems': problems,
             'target_body_steps_per_s': TARGET_BODY_STEPS_PER_S,
             'target_effects_body_steps_per_s': TARGET_EFFECTS_BODY_STEPS_PER_S,
-            'effects_scene': EFFECTS_SCENE, 'target_bodies': TARGET_BODIES}, indent=1))
+            'effects_scene': EFFECTS_SCENE, 'target_bodies': TARGET_BODIES,
+            'load_average_1min': os.getloadavg()[0]}, indent=1))
     for problem in problems:
         print(f'error: {problem}', file=sys.stderr)
     return 1 if problems else 0

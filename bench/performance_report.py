@@ -276,7 +276,8 @@ def _scene_batch_lines(batch: dict) -> list[str]:
              'and damping coefficients, and either the scene\'s diagonal inertia or a '
              'dispersed full tensor. Checked bodies are run again one by one through '
              '`DynamicsPropagator` (`test/core/test_batch.py` asserts 1e-12 for four scenes '
-             'with every effect kind).', '',
+             'with every effect kind). Load average of the 2-core machine (other users) '
+             f'at the end of the run: {batch.get("load_average_1min", float("nan")):.1f}.', '',
              '| N bodies | inertia | body-steps/s (best) | body-steps/s (median) | max abs. '
              'difference vs single body |', '|---:|---|---:|---:|---:|']
     for row in batch['scene_rows']:
