@@ -3,14 +3,18 @@
 Prints messages per second (best of ``--repeats`` runs) for
 
 * ``rosbags`` ``deserialize_cdr`` / ``serialize_cdr`` of ``sensor_msgs/msg/Imu`` (reference),
-* the hand-written codecs of :mod:`rigid_body_attitude.bag.cdr`,
+* the hand-written codecs of :mod:`rigid_body_attitude.bag.cdr` and the checked decoders of
+  :mod:`rigid_body_attitude.bag.decoders` on each of their paths: one frame id (the primed
+  one-call path), two frame ids alternating (the look-up path), big-endian messages (the full
+  check), and a malformed message (the full check raising ``MalformedMessage``),
 * reading a bag of Imu messages and decoding the rates (sqlite3, mcap fast path, mcap through
   ``rosbags``' iterator), writing ``QuaternionStamped`` output with :class:`BagWriter`,
 * a replay-like loop: read Imu, decode, one ``scalar_exp_step``, encode and write a
   ``QuaternionStamped`` (an upper bound for ``replay``; it has no stream checks).
 
-Usage: ``python bench/bag_codecs.py [--messages 100000] [--repeats 3]``. Bags go to a temporary
-directory that is removed afterwards. The numbers depend on the machine and its load.
+Usage: ``python bench/bag_codecs.py [--messages 100000] [--repeats 3] [--codecs-only]``.
+Bags go to a temporary directory that is removed afterwards. The numbers depend on the machine
+and its load.
 """
 
 from __future__ import annotations
@@ -19,14 +23,17 @@ import argparse
 import sys
 import tempfile
 import time
-from collections.abc import Callable
+from collections import deque
+from collections.abc import Callable, Sequence
+from itertools import islice, repeat
 from pathlib import Path
 
 import numpy as np
 from rosbags.rosbag2 import Reader
 
 from rigid_body_attitude import bag
-from rigid_body_attitude.bag import cdr
+from rigid_body_attitude.bag import cdr, decoders
+from rigid_body_attitude.bag.errors import MalformedMessage
 from rigid_body_attitude.core.quaternion import scalar_exp_step
 
 
@@ -38,6 +45,52 @@ def best_rate(count: int, repeats: int, run: Callable[[], object]) -> float:
         run()
         best = min(best, time.perf_counter() - start)
     return count / best
+
+
+def _each(decode: Callable[[bytes], object], messages: Sequence[bytes], count: int
+          ) -> Callable[[], object]:
+    """A run decoding ``count`` messages cycled from ``messages`` (results dropped)."""
+    cycled = list(islice(messages * (count // len(messages) + 1), count))
+    return lambda: deque(map(decode, cycled), 0)
+
+
+def _refusing(decode: Callable[[bytes], object], data: bytes, count: int
+              ) -> Callable[[], object]:
+    def run() -> None:
+        for message in repeat(data, count):
+            try:
+                decode(message)
+            except MalformedMessage:
+                pass
+    return run
+
+
+def decoder_rates(count: int, repeats: int) -> dict[str, float]:
+    """Per-message cost of the checked decoders on each path."""
+    stamp = 1_700_000_000_000_000_000
+    imu = cdr.encode_imu(stamp, 'base_link', (0.1, 0.2, 0.3))
+    other_imu = cdr.encode_imu(stamp, 'imu_link', (0.1, 0.2, 0.3))
+    big_endian_imu = bytes(bag.typestore().serialize_cdr(
+        bag.typestore().deserialize_cdr(imu, bag.IMU), bag.IMU, little_endian=False))
+    vector = cdr.encode_vector3_stamped(stamp, 'base_link', (0.1, 0.2, 0.3))
+    wrench = cdr.encode_wrench_stamped(stamp, 'base_link', (1.0, 2.0, 3.0), (0.1, 0.2, 0.3))
+    pose = cdr.encode_pose_stamped(stamp, 'world', (1.0, 2.0, 3.0), (1.0, 0.0, 0.0, 0.0))
+    cases = {
+        'decode_imu_rate, one frame id': (decoders.decode_imu_rate, [imu]),
+        'decode_imu_rate, two frame ids alternating': (decoders.decode_imu_rate,
+                                                       [imu, other_imu]),
+        'decode_imu_rate, big-endian (full check)': (decoders.decode_imu_rate, [big_endian_imu]),
+        'decode_vector3_stamped, one frame id': (decoders.decode_vector3_stamped, [vector]),
+        'decode_wrench_stamped, one frame id': (decoders.decode_wrench_stamped, [wrench]),
+        'decode_pose_stamped, one frame id': (decoders.decode_pose_stamped, [pose]),
+        'RATE_SAMPLE_DECODERS[Imu] (no frame id)': (cdr.RATE_SAMPLE_DECODERS[bag.IMU], [imu]),
+        'cdr.imu_rates (float stamp)': (cdr.imu_rates, [imu]),
+    }
+    results = {name: best_rate(count, repeats, _each(decode, messages, count))
+               for name, (decode, messages) in cases.items()}
+    results['decode_imu_rate, truncated (MalformedMessage)'] = best_rate(
+        count, repeats, _refusing(decoders.decode_imu_rate, imu[:100], count))
+    return results
 
 
 def codec_rates(count: int, repeats: int) -> dict[str, float]:
@@ -52,8 +105,7 @@ def codec_rates(count: int, repeats: int) -> dict[str, float]:
             store.deserialize_cdr(data, bag.IMU) for _ in loops]),
         'rosbags serialize_cdr Imu': best_rate(count, repeats, lambda: [
             store.serialize_cdr(message, bag.IMU) for _ in loops]),
-        'cdr.imu_rates (decode)': best_rate(count, repeats, lambda: [
-            cdr.imu_rates(data) for _ in loops]),
+        **decoder_rates(count, repeats),
         'cdr.encode_imu': best_rate(count, repeats, lambda: [
             cdr.encode_imu(5, 'base_link', rate) for _ in loops]),
         'cdr.encode_quaternion_stamped': best_rate(count, repeats, lambda: [
@@ -125,13 +177,16 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--messages', type=int, default=100_000)
     parser.add_argument('--repeats', type=int, default=3)
+    parser.add_argument('--codecs-only', action='store_true',
+                        help='measure the codecs only (no bag reading or writing)')
     args = parser.parse_args(argv)
     results = codec_rates(args.messages, args.repeats)
-    with tempfile.TemporaryDirectory(prefix='bag_codecs_') as directory:
-        results.update(bag_rates(args.messages, args.repeats, Path(directory)))
+    if not args.codecs_only:
+        with tempfile.TemporaryDirectory(prefix='bag_codecs_') as directory:
+            results.update(bag_rates(args.messages, args.repeats, Path(directory)))
     width = max(len(name) for name in results)
     for name, value in results.items():
-        print(f'{name:{width}s}  {value:12,.0f} msg/s')
+        print(f'{name:{width}s}  {value:12,.0f} msg/s  {1e6 / value:7.3f} µs/msg')
     return 0
 
 

@@ -10,9 +10,12 @@ shared machine the CPU time is the steadier figure; the wall time is what a user
   per sample; energy and momentum at 50 Hz; diagnostics at 1 Hz) and for ``orientation``
   only, with sqlite3 and MCAP storage (input and output in the same storage);
 * **per stage**, the same work split up, each timed alone over all messages (CPU time): read
-  the bag (sqlite3, MCAP), decode the header stamp and rate (``RATE_SAMPLE_DECODERS``),
-  ``GyroStream.add`` (stream rules + propagator, core), ``OutputTracker.attitude`` (core),
-  encode orientation + pose + imu/data (the replay's per-frame encoders), and write the three
+  the bag (sqlite3, MCAP), decode with the node's Imu decoder
+  (:mod:`rigid_body_attitude.session.decoding`: stamp, frame id, rate), ``GyroStream.add``
+  (stream rules + propagator, core), ``GyroSession.gyro`` (the session's per-sample work:
+  stamp checks, ``GyroStream.add``, the attitude; into a sink that drops it),
+  ``OutputTracker.attitude`` (core), encode orientation + pose + imu/data (the replay's
+  per-frame encoders), and write the three
   records per message with ``BagWriter.write_many`` (sqlite3, MCAP) and, for comparison, one
   ``BagWriter.write`` call per record; then the sum decode + propagate + encode (no bag I/O)
   and the sums of the stages with each storage. For reference, the bare exp-map step in
@@ -36,15 +39,18 @@ from pathlib import Path
 import numpy as np
 
 from rigid_body_attitude.bag import (
-    IMU, POSE_STAMPED, QUATERNION_STAMPED, RATE_SAMPLE_DECODERS, BagReader, BagWriter,
-    imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder, write_bag)
-from rigid_body_attitude.session.reports import TimeBase
-from rigid_body_attitude.session.outputs import OutputTracker
+    IMU, POSE_STAMPED, QUATERNION_STAMPED, BagReader, BagWriter, imu_with_orientation,
+    pose_stamped_encoder, quaternion_stamped_encoder, write_bag)
 from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.quaternion import scalar_exp_step
-from rigid_body_attitude.tools.replay import ReplayOptions, replay_bag
 from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.session import decoding
+from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.outputs import OutputSample, OutputTracker
+from rigid_body_attitude.session.parameters import defaults
+from rigid_body_attitude.session.reports import DiagnosticReport
 from rigid_body_attitude.session.stream import GyroStream
+from rigid_body_attitude.tools.replay import ReplayOptions, replay_bag
 
 RATE_HZ = 1000.0
 STORAGES = ('sqlite3', 'mcap')
@@ -58,6 +64,31 @@ def make_bag(path: Path, count: int, storage: str) -> None:
     rates = np.stack([0.3 * np.sin(phase), -0.2 + 0.1 * np.cos(2 * phase),
                       0.5 * np.sin(0.5 * phase)], axis=1)
     write_bag(path, stamps=stamps, rates=rates, storage=storage)
+
+
+class NullSink:
+    """An output sink that drops everything (to time the session alone)."""
+
+    def attitude(self, sec: int, nanosec: int, attitude: tuple[float, ...]) -> None:
+        """Drop."""
+
+    def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
+                 velocity_body: tuple[float, ...]) -> None:
+        """Drop."""
+
+    def wants_invariants(self) -> bool:
+        """No."""
+        return False
+
+    def invariants(self, sec: int, nanosec: int, energy: float,
+                   world_momentum: tuple[float, ...]) -> None:
+        """Drop."""
+
+    def diagnostics(self, report: DiagnosticReport) -> None:
+        """Drop."""
+
+    def log(self, level: int, text: str) -> None:
+        """Drop."""
 
 
 def best_of(repeat: int, run: Callable[[], None]) -> tuple[float, float]:
@@ -111,24 +142,29 @@ def stages(workdir: Path, repeat: int) -> dict[str, float]:
         times[f'read bag ({storage})'] = best_of(repeat, read)[1]
     with BagReader(workdir / 'in_sqlite3') as reader:
         messages = list(reader.messages(['imu']))
-    decode_sample = RATE_SAMPLE_DECODERS[IMU]
     decoded: list[tuple[int, int, tuple[float, ...]]] = []
 
     def decode() -> None:
         decoded.clear()
         for _, _, _, data in messages:
-            decoded.append(decode_sample(data))
-    times['decode stamp + rate'] = best_of(repeat, decode)[1]
+            sec, nanosec, _, rate, _ = decoding.imu(data)
+            decoded.append((sec, nanosec, rate))
+    times['decode (the node\'s Imu decoder)'] = best_of(repeat, decode)[1]
 
     scene = load_scene('strapdown')
 
     def propagate() -> None:
         stream = GyroStream(build_propagator(scene), 0.1, 1.0)
-        seconds = TimeBase().seconds
         add = stream.add
         for sec, nanosec, omega in decoded:
-            add(seconds(sec, nanosec), omega)
+            add(sec * 1_000_000_000 + nanosec, omega)
     times['GyroStream.add (core)'] = best_of(repeat, propagate)[1]
+
+    def session() -> None:
+        gyro = GyroSession(scene, defaults(), NullSink(), int, float).gyro
+        for sec, nanosec, omega in decoded:
+            gyro(sec, nanosec, omega)
+    times['GyroSession.gyro (session, null sink)'] = best_of(repeat, session)[1]
 
     def plain_step() -> None:
         q = (1.0, 0.0, 0.0, 0.0)
@@ -199,7 +235,7 @@ def main(argv: list[str] | None = None) -> int:
         times = stages(workdir, args.repeat)
         for name, seconds in times.items():
             print(_row(name, seconds, count))
-        core = ('decode stamp + rate', 'GyroStream.add (core)', 'OutputTracker.attitude (core)',
+        core = ('decode (the node\'s Imu decoder)', 'GyroSession.gyro (session, null sink)',
                 'encode 3 outputs')
         without_io = sum(times[name] for name in core)
         print(_row('decode + propagate + encode (no bag I/O)', without_io, count))

@@ -37,11 +37,11 @@ import numpy as np
 import yaml
 
 from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.bag import stamp_to_ns, write_bag
+from rigid_body_attitude.bag import BagWriter, stamp_to_ns, write_bag
 from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
 
 __all__ = ['AnalyticCase', 'CASES', 'GROUND_TRUTH_TOPIC', 'build_case', 'write_case_bag',
-           'write_scene']
+           'write_records', 'write_scene']
 
 GROUND_TRUTH_TOPIC = 'ground_truth'
 #: Gyro rate of the gyro cases [Hz] and samples per bag (2 s).
@@ -304,3 +304,17 @@ def write_case_bag(case: AnalyticCase, path: Path, storage: str = 'sqlite3',
     return write_bag(path, stamps=case.stamps, rates=case.rates, torques=case.torques,
                      ground_truth=truth, imu_topic=gyro_topic, torque_topic=torque_topic,
                      ground_truth_topic=GROUND_TRUTH_TOPIC, storage=storage)
+
+
+def write_records(path: Path, topics: dict[str, str],
+                  records: list[tuple[str, int, bytes]], storage: str = 'sqlite3') -> None:
+    """Write raw records ``(topic, bag_time_ns, cdr_bytes)`` as a bag with the real rosbag2
+    writer (:class:`~rigid_body_attitude.bag.BagWriter`), whatever the bytes hold: for
+    malformed or hostile messages that :func:`~rigid_body_attitude.bag.write_bag` refuses.
+
+    ``topics`` maps each topic to its message type.
+    """
+    with BagWriter(path, storage=storage) as writer:
+        connections = writer.add_topics(topics)
+        for topic, bag_time_ns, data in records:
+            writer.write(connections[topic], bag_time_ns, data)

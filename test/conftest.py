@@ -28,9 +28,12 @@ from pathlib import Path
 import subprocess
 import sys
 import tempfile
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
 import pytest
+
+if TYPE_CHECKING:
+    from ros_helpers import RosContext
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 TEST_DOMAIN_IDS = range(215, 233)
@@ -111,3 +114,11 @@ def processes() -> Iterator[list[subprocess.Popen]]:
         if process.poll() is None:
             process.kill()
             process.communicate()
+
+
+@pytest.fixture
+def ros(ros_domain_id: int) -> Iterator['RosContext']:
+    """A ROS context and executor of the test's own on the test run's domain."""
+    from ros_helpers import ros_session  # imports rclpy: only for the tests that use it
+    with ros_session(ros_domain_id) as session:
+        yield session

@@ -18,6 +18,7 @@ import re
 import time
 from typing import Any
 
+from builtin_interfaces.msg import Time
 import pytest
 import rclpy
 from rclpy.context import Context
@@ -129,3 +130,9 @@ class Harness:
         future = client.call_async(request)
         self.spin_until(future.done, timeout)
         return future.result()
+
+
+def stamp(nanoseconds: int) -> Time:
+    """A builtin_interfaces/Time of integer nanoseconds."""
+    sec, nanosec = divmod(nanoseconds, 10**9)
+    return Time(sec=sec, nanosec=nanosec)

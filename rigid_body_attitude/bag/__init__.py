@@ -3,8 +3,11 @@
 * :mod:`~rigid_body_attitude.bag.reader`: :class:`BagReader`, :func:`read_messages` (raw CDR
   tuples in bag-time order) and :func:`read_series` (a topic as arrays); indexed MCAP files
   are walked by :mod:`~rigid_body_attitude.bag.mcap`.
-* :mod:`~rigid_body_attitude.bag.cdr`: fast ``struct`` codecs of the fixed-layout messages
-  (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped, Float64).
+* :mod:`~rigid_body_attitude.bag.decoders`: checked decoders of the fixed-layout messages
+  (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped, Float64)
+  to plain values, raising :class:`MalformedMessage` for any bytes that are not one.
+* :mod:`~rigid_body_attitude.bag.cdr`: fast ``struct`` encoders of those messages and the
+  float-stamp decoders of bag readers.
 * :mod:`~rigid_body_attitude.bag.writer`: :class:`BagWriter` for output bags (one record or
   a batch of :data:`Record` per call) and :func:`write_bag` for arrays of samples.
 * :mod:`~rigid_body_attitude.bag.msgtypes`: message type names, the Jazzy type store and the
@@ -48,7 +51,22 @@ from rigid_body_attitude.bag.cdr import (
     wrench_force,
     wrench_torque,
 )
-from rigid_body_attitude.bag.errors import BagError
+from rigid_body_attitude.bag.decoders import (
+    ENCAPSULATIONS,
+    GYRO_DECODERS,
+    GyroDecoder,
+    decode_float64,
+    decode_header,
+    decode_imu,
+    decode_imu_rate,
+    decode_pose_stamped,
+    decode_quaternion_stamped,
+    decode_twist_angular,
+    decode_twist_stamped,
+    decode_vector3_stamped,
+    decode_wrench_stamped,
+)
+from rigid_body_attitude.bag.errors import BagError, MalformedMessage
 from rigid_body_attitude.bag.msgtypes import (
     DIAGNOSTIC_ARRAY,
     FLOAT64,
@@ -83,8 +101,10 @@ from rigid_body_attitude.bag.writer import (
 __all__ = [
     'ATTITUDE_DECODERS',
     'DIAGNOSTIC_ARRAY',
+    'ENCAPSULATIONS',
     'FLOAT64',
     'GROUND_TRUTH_TYPES',
+    'GYRO_DECODERS',
     'IMU',
     'POSE_STAMPED',
     'QUATERNION_STAMPED',
@@ -102,9 +122,21 @@ __all__ = [
     'BagWriter',
     'Decoder',
     'DiagnosticStatus',
+    'GyroDecoder',
+    'MalformedMessage',
     'Record',
     'SampleDecoder',
     'Series',
+    'decode_float64',
+    'decode_header',
+    'decode_imu',
+    'decode_imu_rate',
+    'decode_pose_stamped',
+    'decode_quaternion_stamped',
+    'decode_twist_angular',
+    'decode_twist_stamped',
+    'decode_vector3_stamped',
+    'decode_wrench_stamped',
     'deserialize',
     'encode_diagnostic_array',
     'encode_float64',

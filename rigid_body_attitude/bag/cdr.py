@@ -2,29 +2,33 @@
 
 ``rosbags``' generic ``deserialize_cdr``/``serialize_cdr`` build full message objects (about
 6.5 µs and 4.6 µs per ``sensor_msgs/msg/Imu``); the replay tool needs ≥ 10⁵ messages/s end to
-end, so the per-sample fields are read and written here with one precompiled ``struct`` call
+end, so the per-sample fields are read and written here with precompiled ``struct`` calls
 (``bench/bag_codecs.py`` measures both; ``test/bag/test_bag.py`` proves byte equality with
 ``rosbags``' serialiser for every message type and frame-id padding).
 
-Layout (OMG CDR / XCDR1, as written by ROS 2 and ``rosbags``): a 4-byte encapsulation header
-(``00 01 00 00`` little-endian, ``00 00 00 00`` big-endian), then the payload with every
-primitive aligned to its own size relative to the payload start. ``std_msgs/msg/Header`` is
-``int32 sec`` at 0, ``uint32 nanosec`` at 4, ``uint32 n`` at 8 (frame-id bytes including the
-terminating NUL) and the frame id at 12; the float64 body follows at the next multiple of 8.
+Decoding is done, and every byte checked, by :mod:`rigid_body_attitude.bag.decoders` (what is
+taken and refused, and why, is stated there); every decoder here raises
+:class:`~rigid_body_attitude.bag.errors.MalformedMessage` and nothing else for bad bytes. The
+functions here are the float-stamp forms used by bag readers: ``(stamp_s, values)`` with
+``stamp_s = sec + nanosec·10⁻⁹``.
+
+Encoders write OMG CDR / XCDR1 little-endian (``00 01 00 00``), as ROS 2 and ``rosbags`` do:
+``std_msgs/msg/Header`` is ``int32 sec`` at payload offset 0, ``uint32 nanosec`` at 4,
+``uint32 n`` at 8 (frame-id bytes including the terminating NUL) and the frame id at 12; the
+float64 body follows at the next multiple of 8.
 
 Quaternions: decoders return and encoders take **scalar-first** ``(w, x, y, z)``; the message
 order is ``(x, y, z, w)``. This is :func:`rigid_body_attitude.core.quaternion.to_ros` /
 :func:`~rigid_body_attitude.core.quaternion.from_ros` done inside the ``struct`` argument list,
 because the NumPy versions cost microseconds per call (the tests check the codecs against
-them). Decoders return stamps in seconds (``sec + nanosec·10⁻⁹``); encoders take integer
-nanoseconds. Encoders do not check finiteness (fault-injection bags need NaN values);
-:func:`rigid_body_attitude.bag.write_bag` does.
+them). Encoders take integer nanoseconds. Encoders do not check finiteness (fault-injection
+bags need NaN values); :func:`rigid_body_attitude.bag.write_bag` does.
 
 Per-sample fast paths of the replay tool: :data:`RATE_SAMPLE_DECODERS` read the header stamp
 as integers ``(sec, nanosec)`` and the rate in one pass; :func:`quaternion_stamped_encoder`
 and :func:`pose_stamped_encoder` precompute the header bytes of one frame id (one ``struct``
-call per message, 0.1 µs against 0.55 µs); :func:`imu_with_orientation` splices the
-orientation into an Imu's bytes. They give the bytes of the general functions (tested).
+call per message); :func:`imu_with_orientation` splices the orientation into an Imu's bytes.
+They give the bytes of the general functions (tested).
 """
 
 from __future__ import annotations
@@ -34,9 +38,24 @@ import struct
 from collections.abc import Callable, Sequence
 from struct import Struct
 
-from rigid_body_attitude.bag.errors import BagError
+from rigid_body_attitude.bag.decoders import (
+    IMU_COUNT,
+    GYRO_DECODERS,
+    Floats,
+    GyroDecoder,
+    body_offset,
+    decode_float64,
+    decode_header,
+    decode_imu,
+    decode_imu_rate,
+    decode_pose_stamped,
+    decode_quaternion_stamped,
+    decode_twist_angular,
+    decode_twist_stamped,
+    decode_vector3_stamped,
+    decode_wrench_stamped,
+)
 from rigid_body_attitude.bag.msgtypes import (
-    FLOAT64,
     IMU,
     POSE_STAMPED,
     QUATERNION_STAMPED,
@@ -52,6 +71,7 @@ __all__ = [
     'RATE_SAMPLE_DECODERS',
     'TORQUE_DECODERS',
     'Decoder',
+    'SampleDecoder',
     'encode_float64',
     'encode_imu',
     'encode_pose_stamped',
@@ -78,24 +98,13 @@ __all__ = [
     'wrench_torque',
 ]
 
-Vector = tuple[float, float, float]
-Quaternion = tuple[float, float, float, float]
 #: A decoder maps CDR bytes to ``(stamp_seconds, values)``.
-Decoder = Callable[[bytes], tuple[float, tuple[float, ...]]]
+Decoder = Callable[[bytes], tuple[float, Floats]]
 #: A sample decoder maps CDR bytes to ``(sec, nanosec, values)`` (the header stamp as is).
-SampleDecoder = Callable[[bytes], tuple[int, int, tuple[float, ...]]]
+SampleDecoder = Callable[[bytes], tuple[int, int, Floats]]
 
 _NS_PER_S = 1_000_000_000
 _ENCAPSULATION_LE = b'\x00\x01\x00\x00'
-
-# Body sizes in bytes (float64 count × 8) after the header of each stamped message.
-_IMU_SIZE = 37 * 8           # orientation 4, cov 9, angular_velocity 3, cov 9, accel 3, cov 9
-_IMU_RATES_AT = 13 * 8
-_IMU_ACCELERATION_AT = 25 * 8
-_VECTOR3_SIZE = 3 * 8
-_PAIR_SIZE = 6 * 8           # WrenchStamped (force, torque), TwistStamped (linear, angular)
-_QUATERNION_SIZE = 4 * 8
-_POSE_SIZE = 7 * 8           # position 3, orientation 4
 
 #: REP-145: covariance[0] = −1 marks a field the sensor does not provide; all zeros = unknown.
 _NOT_PROVIDED = (-1.0,) + (0.0,) * 8
@@ -104,135 +113,84 @@ _IDENTITY_XYZW = (0.0, 0.0, 0.0, 1.0)
 _ZERO_VECTOR = (0.0, 0.0, 0.0)
 
 
-class _ByteOrder:
-    """Precompiled structs for one CDR byte order."""
-
-    def __init__(self, prefix: str) -> None:
-        self.header = Struct(prefix + 'iII')
-        self.vector3 = Struct(prefix + '3d')
-        self.quaternion = Struct(prefix + '4d')
-        self.pose = Struct(prefix + '7d')
-        self.float64 = Struct(prefix + 'd')
-
-
-# Keyed by the encapsulation identifier (bytes 0-1, big-endian): 0x0000 CDR_BE, 0x0001 CDR_LE.
-_BYTE_ORDERS = {0: _ByteOrder('>'), 1: _ByteOrder('<')}
-
-
-def _malformed(data: bytes, msgtype: str, expected: int | str) -> BagError:
-    return BagError(f'Expected a CDR-encoded {msgtype} message of {expected} bytes, got '
-                    f'{len(data)} bytes starting {bytes(data[:16]).hex()!r}')
-
-
-def _locate(data: bytes, msgtype: str, body_size: int) -> tuple[_ByteOrder, float, int]:
-    """Byte order, header stamp (s) and body offset of a stamped fixed-layout message."""
-    try:
-        order = _BYTE_ORDERS[data[0] << 8 | data[1]]
-        sec, nanosec, length = order.header.unpack_from(data, 4)
-    except (KeyError, IndexError, struct.error) as err:
-        raise _malformed(data, msgtype, 'header + body') from err
-    offset = 4 + ((12 + length + 7) & -8)
-    # CDR writers may pad the end to 4 bytes; anything else is a different or broken message.
-    if not 0 <= len(data) - offset - body_size <= 3:
-        raise _malformed(data, msgtype, offset + body_size)
-    return order, sec + nanosec * 1e-9, offset
+def _stamp(sec: int, nanosec: int) -> float:
+    return sec + nanosec * 1e-9
 
 
 def header_stamp_ns(data: bytes) -> int:
     """Header stamp of any ``std_msgs/msg/Header``-first message, in integer nanoseconds."""
-    try:
-        order = _BYTE_ORDERS[data[0] << 8 | data[1]]
-        sec, nanosec, _ = order.header.unpack_from(data, 4)
-    except (KeyError, IndexError, struct.error) as err:
-        raise _malformed(data, 'stamped', '≥ 17') from err
+    sec, nanosec, _ = decode_header(data)
     return sec * _NS_PER_S + nanosec
 
 
 def header_frame_id(data: bytes) -> str:
     """Header frame id of any ``std_msgs/msg/Header``-first message."""
-    try:
-        order = _BYTE_ORDERS[data[0] << 8 | data[1]]
-        _, _, length = order.header.unpack_from(data, 4)
-        raw = bytes(data[16:16 + length])
-        if length < 1 or len(raw) != length or raw[-1] != 0:
-            raise ValueError('frame id is not a NUL-terminated string')
-        return raw[:-1].decode('utf-8')
-    except (KeyError, IndexError, ValueError, struct.error) as err:
-        raise _malformed(data, 'stamped', '≥ 17') from err
+    return decode_header(data)[2]
 
 
-def imu_rates(data: bytes) -> tuple[float, Vector]:
+def imu_rates(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, (ωx, ωy, ωz))`` of a ``sensor_msgs/msg/Imu``: body-frame rate, rad/s."""
-    order, stamp, offset = _locate(data, IMU, _IMU_SIZE)
-    return stamp, order.vector3.unpack_from(data, offset + _IMU_RATES_AT)
+    sec, nanosec, _, rate = decode_imu_rate(data)
+    return _stamp(sec, nanosec), rate
 
 
-def imu_acceleration(data: bytes) -> tuple[float, Vector]:
+def imu_acceleration(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, (ax, ay, az))`` of a ``sensor_msgs/msg/Imu``: specific force, m/s²."""
-    order, stamp, offset = _locate(data, IMU, _IMU_SIZE)
-    return stamp, order.vector3.unpack_from(data, offset + _IMU_ACCELERATION_AT)
+    sec, nanosec, _, _, _, acceleration = decode_imu(data)
+    return _stamp(sec, nanosec), acceleration
 
 
-def vector3_stamped(data: bytes) -> tuple[float, Vector]:
+def vector3_stamped(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, (x, y, z))`` of a ``geometry_msgs/msg/Vector3Stamped``."""
-    order, stamp, offset = _locate(data, VECTOR3_STAMPED, _VECTOR3_SIZE)
-    return stamp, order.vector3.unpack_from(data, offset)
+    sec, nanosec, _, vector = decode_vector3_stamped(data)
+    return _stamp(sec, nanosec), vector
 
 
-def wrench_force(data: bytes) -> tuple[float, Vector]:
+def wrench_force(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, force)`` of a ``geometry_msgs/msg/WrenchStamped`` (N)."""
-    order, stamp, offset = _locate(data, WRENCH_STAMPED, _PAIR_SIZE)
-    return stamp, order.vector3.unpack_from(data, offset)
+    sec, nanosec, _, force, _ = decode_wrench_stamped(data)
+    return _stamp(sec, nanosec), force
 
 
-def wrench_torque(data: bytes) -> tuple[float, Vector]:
+def wrench_torque(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, torque)`` of a ``geometry_msgs/msg/WrenchStamped`` (N m)."""
-    order, stamp, offset = _locate(data, WRENCH_STAMPED, _PAIR_SIZE)
-    return stamp, order.vector3.unpack_from(data, offset + _VECTOR3_SIZE)
+    sec, nanosec, _, _, torque = decode_wrench_stamped(data)
+    return _stamp(sec, nanosec), torque
 
 
-def twist_linear(data: bytes) -> tuple[float, Vector]:
+def twist_linear(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, linear velocity)`` of a ``geometry_msgs/msg/TwistStamped`` (m/s)."""
-    order, stamp, offset = _locate(data, TWIST_STAMPED, _PAIR_SIZE)
-    return stamp, order.vector3.unpack_from(data, offset)
+    sec, nanosec, _, linear, _ = decode_twist_stamped(data)
+    return _stamp(sec, nanosec), linear
 
 
-def twist_angular(data: bytes) -> tuple[float, Vector]:
+def twist_angular(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, angular velocity)`` of a ``geometry_msgs/msg/TwistStamped`` (rad/s)."""
-    order, stamp, offset = _locate(data, TWIST_STAMPED, _PAIR_SIZE)
-    return stamp, order.vector3.unpack_from(data, offset + _VECTOR3_SIZE)
+    sec, nanosec, _, angular = decode_twist_angular(data)
+    return _stamp(sec, nanosec), angular
 
 
-def quaternion_stamped(data: bytes) -> tuple[float, Quaternion]:
+def quaternion_stamped(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, (w, x, y, z))`` of a ``geometry_msgs/msg/QuaternionStamped``."""
-    order, stamp, offset = _locate(data, QUATERNION_STAMPED, _QUATERNION_SIZE)
-    x, y, z, w = order.quaternion.unpack_from(data, offset)
-    return stamp, (w, x, y, z)
+    sec, nanosec, _, attitude = decode_quaternion_stamped(data)
+    return _stamp(sec, nanosec), attitude
 
 
-def pose_orientation(data: bytes) -> tuple[float, Quaternion]:
+def pose_orientation(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, (w, x, y, z))`` orientation of a ``geometry_msgs/msg/PoseStamped``."""
-    order, stamp, offset = _locate(data, POSE_STAMPED, _POSE_SIZE)
-    x, y, z, w = order.quaternion.unpack_from(data, offset + _VECTOR3_SIZE)
-    return stamp, (w, x, y, z)
+    sec, nanosec, _, _, attitude = decode_pose_stamped(data)
+    return _stamp(sec, nanosec), attitude
 
 
-def pose_position(data: bytes) -> tuple[float, Vector]:
+def pose_position(data: bytes) -> tuple[float, Floats]:
     """``(stamp_s, (x, y, z))`` position of a ``geometry_msgs/msg/PoseStamped`` (m)."""
-    order, stamp, offset = _locate(data, POSE_STAMPED, _POSE_SIZE)
-    return stamp, order.vector3.unpack_from(data, offset)
+    sec, nanosec, _, position, _ = decode_pose_stamped(data)
+    return _stamp(sec, nanosec), position
 
 
 def float64_value(data: bytes) -> float:
     """The value of a ``std_msgs/msg/Float64`` (no header, so no stamp)."""
-    try:
-        order = _BYTE_ORDERS[data[0] << 8 | data[1]]
-        (value,) = order.float64.unpack_from(data, 4)
-    except (KeyError, IndexError, struct.error) as err:
-        raise _malformed(data, FLOAT64, 12) from err
-    if len(data) > 12 + 3:
-        raise _malformed(data, FLOAT64, 12)
-    return value
+    return decode_float64(data)
 
 
 #: Decoders of a body-frame angular rate, by message type.
@@ -243,32 +201,19 @@ RATE_DECODERS: dict[str, Decoder] = {
 }
 
 
-def _sample_decoder(msgtype: str, body_size: int, field_at: int) -> SampleDecoder:
-    """A decoder of ``(sec, nanosec, (x, y, z))``: the header and the vector at ``field_at``."""
-    byte_orders = _BYTE_ORDERS
-
-    def decode(data: bytes) -> tuple[int, int, tuple[float, ...]]:
-        try:
-            order = byte_orders[data[0] << 8 | data[1]]
-            sec, nanosec, length = order.header.unpack_from(data, 4)
-        except (KeyError, IndexError, struct.error) as err:
-            raise _malformed(data, msgtype, 'header + body') from err
-        offset = 4 + ((12 + length + 7) & -8)
-        if not 0 <= len(data) - offset - body_size <= 3:
-            raise _malformed(data, msgtype, offset + body_size)
-        return sec, nanosec, order.vector3.unpack_from(data, offset + field_at)
-    decode.__doc__ = (f'``(sec, nanosec, (x, y, z))`` of a ``{msgtype}``: the header stamp '
-                      f'and the body-frame rate [rad/s].')
-    return decode
+def _sample_decoder(decode: GyroDecoder) -> SampleDecoder:
+    """``(sec, nanosec, values)`` of ``decode``'s result (the frame id left out)."""
+    def decode_sample(data: bytes) -> tuple[int, int, Floats]:
+        sec, nanosec, _, values = decode(data)
+        return sec, nanosec, values
+    decode_sample.__doc__ = decode.__doc__
+    return decode_sample
 
 
-#: Decoders of ``(sec, nanosec, rate)`` (header stamp as integers), by message type: the
-#: fields of :data:`RATE_DECODERS` and :func:`header_stamp_ns` in one pass.
+#: Decoders of ``(sec, nanosec, rate)`` (header stamp as integers), by message type:
+#: :data:`~rigid_body_attitude.bag.decoders.GYRO_DECODERS` without the frame id.
 RATE_SAMPLE_DECODERS: dict[str, SampleDecoder] = {
-    IMU: _sample_decoder(IMU, _IMU_SIZE, _IMU_RATES_AT),
-    VECTOR3_STAMPED: _sample_decoder(VECTOR3_STAMPED, _VECTOR3_SIZE, 0),
-    TWIST_STAMPED: _sample_decoder(TWIST_STAMPED, _PAIR_SIZE, _VECTOR3_SIZE),
-}
+    msgtype: _sample_decoder(decode) for msgtype, decode in GYRO_DECODERS.items()}
 #: Decoders of a body-frame torque, by message type.
 TORQUE_DECODERS: dict[str, Decoder] = {
     WRENCH_STAMPED: wrench_torque,
@@ -291,7 +236,7 @@ def stamp_to_ns(stamp_s: float) -> int:
     return whole * _NS_PER_S + round((stamp_s - whole) * _NS_PER_S)
 
 
-_IMU_ORIENTATION = {0: Struct('>4d72x'), 1: Struct('<4d72x')}  # quaternion, zero covariance
+_IMU_ORIENTATION = {True: Struct('<4d72x'), False: Struct('>4d72x')}  # quaternion, zero cov
 _IMU_ORIENTATION_SIZE = 13 * 8
 
 
@@ -299,20 +244,15 @@ def imu_with_orientation(data: bytes, attitude: Sequence[float]) -> bytes:
     """The ``sensor_msgs/msg/Imu`` ``data`` with orientation ``(w, x, y, z)``, covariance zero.
 
     What the node publishes on ``imu/data``: the input message with the propagated attitude
-    and an all-zero (unknown) orientation covariance; everything else, the byte order
-    included, as it came.
+    and an all-zero (unknown) orientation covariance; everything else, the encapsulation and
+    byte order included, as it came. ``data`` is checked as
+    :func:`~rigid_body_attitude.bag.decoders.decode_imu` checks it
+    (:class:`~rigid_body_attitude.bag.errors.MalformedMessage`).
     """
-    try:
-        order = _BYTE_ORDERS[data[0] << 8 | data[1]]
-        _, _, length = order.header.unpack_from(data, 4)
-    except (KeyError, IndexError, struct.error) as err:
-        raise _malformed(data, IMU, 'header + body') from err
-    offset = 4 + ((12 + length + 7) & -8)
-    if not 0 <= len(data) - offset - _IMU_SIZE <= 3:
-        raise _malformed(data, IMU, offset + _IMU_SIZE)
+    offset, little_endian = body_offset(data, IMU, IMU_COUNT)
     w, x, y, z = attitude
-    return b''.join((data[:offset], _IMU_ORIENTATION[data[1]].pack(x, y, z, w),
-                     data[offset + _IMU_ORIENTATION_SIZE:]))
+    orientation = _IMU_ORIENTATION[little_endian].pack(x, y, z, w)
+    return b''.join((data[:offset], orientation, data[offset + _IMU_ORIENTATION_SIZE:]))
 
 
 _PACKERS: dict[tuple[str, int], tuple[Struct, bytes]] = {}
@@ -374,6 +314,8 @@ def encode_imu(stamp_ns: int, frame_id: str, angular_velocity: Sequence[float],
     zero with ``covariance[0] = −1`` (REP-145: not provided); given fields get an all-zero
     (unknown) covariance, as does the angular velocity.
     """
+    orientation_fields: Floats
+    acceleration: Floats
     if orientation is None:
         orientation_fields, orientation_covariance = _IDENTITY_XYZW, _NOT_PROVIDED
     else:

@@ -25,12 +25,11 @@ import struct
 from collections.abc import Collection, Iterator
 from itertools import chain, repeat
 from operator import itemgetter
-from typing import Any
 
 from rosbags.interfaces import Connection
-from rosbags.rosbag2.storage_mcap import McapReader, decompress
+from rosbags.rosbag2 import Reader
 
-from rigid_body_attitude.bag.storage import storage_files
+from rigid_body_attitude.bag.rosbags_internals import McapChunk, McapFile, decompress, mcap_files
 
 __all__ = ['fast_messages']
 
@@ -44,57 +43,56 @@ _MESSAGE_HEADER = 22            # channel, sequence, log time, publish time
 Message = tuple[str, int, str, bytes]
 
 
-def fast_messages(storage: Any, connections: Collection[Connection]) -> Iterator[Message] | None:
+def fast_messages(reader: Reader, connections: Collection[Connection]
+                  ) -> Iterator[Message] | None:
     """``(topic, log_time_ns, msgtype, data)`` of ``connections``, or None if not applicable.
 
-    ``storage`` is the ``storage`` attribute of an open ``rosbags.rosbag2.Reader``.
+    ``reader`` is an open ``rosbags.rosbag2.Reader``.
     """
-    files = storage_files(storage,
-                          lambda f: bool(isinstance(f, McapReader) and f.chunks and f.bio))
+    files = mcap_files(reader)
     if files is None:
         return None
     return _iterate(files, connections)
 
 
-def _iterate(files: list[McapReader], connections: Collection[Connection]) -> Iterator[Message]:
+def _iterate(files: list[McapFile], connections: Collection[Connection]) -> Iterator[Message]:
     """Files one after the other (as rosbags does), each in log-time order.
 
     Messages come from per-chunk lists chained at C level (no Python code per message).
     """
-    return chain.from_iterable(_group_messages(reader, group, wanted)
-                               for reader, wanted, groups in map(_plan, files, repeat(connections))
+    return chain.from_iterable(_group_messages(file, group, wanted)
+                               for file, wanted, groups in map(_plan, files, repeat(connections))
                                for group in groups)
 
 
-def _plan(reader: McapReader, connections: Collection[Connection]
-          ) -> tuple[McapReader, dict[int, tuple[str, str]], list[list[Any]]]:
+def _plan(file: McapFile, connections: Collection[Connection]
+          ) -> tuple[McapFile, dict[int, tuple[str, str]], list[list[McapChunk]]]:
     """The file's wanted channels and its chunks holding them, grouped disjoint in time."""
     wanted = {channel.id: (selected.topic, selected.msgtype)
-              for channel in reader.connections for selected in connections
+              for channel in file.connections for selected in connections
               if channel.topic == selected.topic and channel.msgtype == selected.msgtype}
-    chunks = [chunk for chunk in reader.chunks
-              if any(chunk.channel_count.get(channel_id) for channel_id in wanted)]
-    return reader, wanted, _time_groups(chunks)
+    chunks = [chunk for chunk in file.chunks if not chunk.channel_ids.isdisjoint(wanted)]
+    return file, wanted, _time_groups(chunks)
 
 
-def _group_messages(reader: McapReader, group: list[Any],
+def _group_messages(file: McapFile, group: list[McapChunk],
                     wanted: dict[int, tuple[str, str]]) -> list[Message]:
     """The messages of chunks overlapping in time, merged by a stable sort."""
     if len(group) == 1:
-        return _chunk_messages(reader, group[0], wanted)
+        return _chunk_messages(file, group[0], wanted)
     merged: list[Message] = []
-    for chunk in sorted(group, key=lambda chunk: chunk.chunk_start_offset):
-        merged.extend(_chunk_messages(reader, chunk, wanted))
+    for chunk in sorted(group, key=lambda chunk: chunk.start_offset):
+        merged.extend(_chunk_messages(file, chunk, wanted))
     merged.sort(key=itemgetter(1))  # stable: ties in file order, as rosbags' merge
     return merged
 
 
-def _time_groups(chunks: list[Any]) -> list[list[Any]]:
+def _time_groups(chunks: list[McapChunk]) -> list[list[McapChunk]]:
     """Chunks grouped so that groups are disjoint in time (touching chunks share a group)."""
-    groups: list[list[Any]] = []
+    groups: list[list[McapChunk]] = []
     group_end = -1
     for chunk in sorted(chunks, key=lambda chunk: (chunk.message_start_time,
-                                                   chunk.chunk_start_offset)):
+                                                   chunk.start_offset)):
         if groups and chunk.message_start_time <= group_end:
             groups[-1].append(chunk)
             group_end = max(group_end, chunk.message_end_time)
@@ -104,9 +102,9 @@ def _time_groups(chunks: list[Any]) -> list[list[Any]]:
     return groups
 
 
-def _chunk_messages(reader: McapReader, chunk: Any,
+def _chunk_messages(file: McapFile, chunk: McapChunk,
                     wanted: dict[int, tuple[str, str]]) -> list[Message]:
-    raw = _chunk_records(reader, chunk)
+    raw = _chunk_records(file, chunk)
     messages = []
     unpack_record = _RECORD.unpack_from
     unpack_message = _MESSAGE.unpack_from
@@ -128,11 +126,11 @@ def _chunk_messages(reader: McapReader, chunk: Any,
     return messages
 
 
-def _chunk_records(reader: McapReader, chunk: Any) -> bytes:
+def _chunk_records(file: McapFile, chunk: McapChunk) -> bytes:
     """The decompressed, CRC-checked records of one chunk."""
-    bio = reader.bio
-    bio.seek(chunk.chunk_start_offset + _CHUNK_CRC_AT)
-    (crc,) = struct.unpack('<I', bio.read(4))
-    bio.seek(chunk.chunk_start_offset + _CHUNK_COMPRESSION_AT + 4 + len(chunk.compression) + 8)
-    compressed = bio.read(chunk.compressed_size)
+    stream = file.stream
+    stream.seek(chunk.start_offset + _CHUNK_CRC_AT)
+    (crc,) = struct.unpack('<I', stream.read(4))
+    stream.seek(chunk.start_offset + _CHUNK_COMPRESSION_AT + 4 + len(chunk.compression) + 8)
+    compressed = stream.read(chunk.compressed_size)
     return decompress(compressed, chunk.compression, chunk.uncompressed_size, crc)

@@ -14,9 +14,9 @@ from typing import Any, NamedTuple
 
 from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_typestore
-from rosbags.typesys.store import Typestore
 
 from rigid_body_attitude.bag.errors import BagError
+from rigid_body_attitude.bag.rosbags_internals import Typestore
 from rigid_body_attitude.core.errors import InputError
 
 __all__ = [

@@ -32,6 +32,7 @@ from rigid_body_attitude.bag.cdr import (
 )
 from rigid_body_attitude.bag.errors import BagError
 from rigid_body_attitude.bag import mcap, sqlite
+from rigid_body_attitude.bag.rosbags_internals import custom_data
 from rigid_body_attitude.bag.msgtypes import (
     FLOAT64,
     IMU,
@@ -102,7 +103,7 @@ class BagReader:
     @property
     def custom_data(self) -> dict[str, str]:
         """The bag's ``custom_data`` metadata (rosbag2 ≥ 6), empty if there is none."""
-        return dict(self._reader.storage.metadata.custom or {})
+        return custom_data(self._reader)
 
     def _describe(self) -> str:
         topics = self.topics
@@ -157,10 +158,9 @@ class BagReader:
 
     def _iterate(self, connections: list[Connection]) -> Iterator[BagMessage]:
         try:
-            storage = self._reader.storage
-            fast = mcap.fast_messages(storage, connections)
+            fast = mcap.fast_messages(self._reader, connections)
             if fast is None:
-                fast = sqlite.fast_messages(storage, connections)
+                fast = sqlite.fast_messages(self._reader, connections)
             if fast is not None:
                 yield from fast
                 return
@@ -247,4 +247,5 @@ def _float64_series(reader: BagReader, topic: str) -> Series:
         values.append(float64_value(data))
         times.append(bag_time_ns)
     bag_times = np.array(times, dtype=np.int64)
-    return Series(bag_times * 1e-9, np.array(values, dtype=np.float64).reshape(-1, 1), bag_times)
+    stamps = np.asarray(bag_times * 1e-9, dtype=np.float64)
+    return Series(stamps, np.array(values, dtype=np.float64).reshape(-1, 1), bag_times)

@@ -18,10 +18,11 @@ from collections.abc import Collection, Iterator
 from itertools import chain
 from typing import Any
 
+import apsw
 from rosbags.interfaces import Connection
-from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
+from rosbags.rosbag2 import Reader
 
-from rigid_body_attitude.bag.storage import storage_files
+from rigid_body_attitude.bag.rosbags_internals import sqlite_files
 
 __all__ = ['fast_messages']
 
@@ -32,22 +33,24 @@ _QUERY = ('SELECT topics.name,messages.timestamp,topics.type,messages.data FROM 
           'topics ON messages.topic_id=topics.id WHERE topics.id IN ({}) ORDER BY timestamp')
 
 
-def fast_messages(storage: Any, connections: Collection[Connection]) -> Iterator[Message] | None:
+def fast_messages(reader: Reader, connections: Collection[Connection]
+                  ) -> Iterator[Message] | None:
     """``(topic, time_ns, msgtype, data)`` of ``connections``, or None if not applicable.
 
-    ``storage`` is the ``storage`` attribute of an open ``rosbags.rosbag2.Reader``.
+    ``reader`` is an open ``rosbags.rosbag2.Reader``.
     """
-    files = storage_files(storage, lambda f: bool(isinstance(f, Sqlite3Reader) and f.dbconn))
+    files = sqlite_files(reader)
     if files is None:
         return None
-    return chain.from_iterable(_file_messages(reader, connections) for reader in files)
+    return chain.from_iterable(_file_messages(connection, topics, connections)
+                               for connection, topics in files)
 
 
-def _file_messages(reader: Sqlite3Reader, connections: Collection[Connection]
-                   ) -> Iterator[Message]:
+def _file_messages(connection: apsw.Connection, topics: list[Connection],
+                   connections: Collection[Connection]) -> Iterator[Any]:
     """One file's messages in time order (files follow one another, as in ``rosbags``)."""
     selected = {(c.topic, c.msgtype) for c in connections}
-    ids = sorted({c.id for c in reader.connections if (c.topic, c.msgtype) in selected})
+    ids = sorted({c.id for c in topics if (c.topic, c.msgtype) in selected})
     if not ids:
         return iter(())
-    return reader.dbconn.execute(_QUERY.format(','.join('?' * len(ids))), ids)
+    return iter(connection.execute(_QUERY.format(','.join('?' * len(ids))), ids))

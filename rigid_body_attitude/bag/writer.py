@@ -8,13 +8,14 @@ standard messages, for test fixtures and for users converting their own logs.
 
 Batched writing. ``rosbags``' writer costs about 3.7 µs per record (a membership scan of its
 connections, one ``sqlite3`` statement or a ``BytesIO`` record per message); the replay tool
-writes three records per gyro message and needs ≥ 10⁵ messages/s. The storages here are
-``rosbags``' own with a ``write_many`` added. The sqlite3 storage keeps ``rosbags``' schema
-and statements but runs on an ``apsw`` connection (the SQLite binding ``rosbags`` reads with;
-its ``executemany`` inserts a row in about 1.1 µs against 2.0 µs for the standard ``sqlite3``
-module), 512 rows per statement, in one transaction, with 32 KiB pages (0.6 µs a row in
-all). The MCAP storage lays out a
-batch of message records with C-level ``map`` calls and closes chunks at the same 1 MiB
+writes three records per gyro message and needs ≥ 10⁵ messages/s. The storages used are
+``rosbags``' own with a ``write_many`` added (in
+:mod:`~rigid_body_attitude.bag.rosbags_internals`, with every other use of ``rosbags``'
+unexported API). The sqlite3 storage keeps ``rosbags``' schema and statements but runs on an
+``apsw`` connection (the SQLite binding ``rosbags`` reads with; its ``executemany`` inserts a
+row in about 1.1 µs against 2.0 µs for the standard ``sqlite3`` module), 512 rows per
+statement, in one transaction, with 32 KiB pages (0.6 µs a row in all). The MCAP storage lays
+out a batch of message records with C-level ``map`` calls and closes chunks at the same 1 MiB
 boundary as ``rosbags``, so the file is byte for byte the one ``rosbags`` writes. Metadata
 (message counts, start, duration) is kept by ``rosbags``' ``Writer`` as for single writes.
 ``bench/replay_throughput.py`` measures it.
@@ -23,22 +24,15 @@ boundary as ``rosbags``, so the file is byte for byte the one ``rosbags`` writes
 from __future__ import annotations
 
 import struct
-from bisect import bisect_right
-from collections import defaultdict
 from collections.abc import Callable, Mapping, Sequence
-from io import BytesIO
-from itertools import accumulate, chain, repeat
-from operator import add, itemgetter
+from operator import itemgetter
 from pathlib import Path
 from types import TracebackType
 
-import apsw
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from rosbags.interfaces import Connection
-from rosbags.rosbag2 import CompressionMode, StoragePlugin, Writer, WriterError
-from rosbags.rosbag2.storage_mcap import McapWriter, PendingChunk
-from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
+from rosbags.rosbag2 import StoragePlugin, WriterError
 
 from rigid_body_attitude.bag.cdr import (
     encode_imu,
@@ -58,13 +52,12 @@ from rigid_body_attitude.bag.msgtypes import (
     serialize,
     typestore,
 )
+from rigid_body_attitude.bag.rosbags_internals import Record, Rosbag2Writer
 from rigid_body_attitude.core.errors import InputError
 
 __all__ = ['GROUND_TRUTH_TYPES', 'STORAGES', 'BagWriter', 'Record', 'write_bag']
 
 FloatArray = NDArray[np.float64]
-#: One record for :meth:`BagWriter.write_many`: ``(connection.id, bag_time_ns, cdr_bytes)``.
-Record = tuple[int, int, bytes]
 
 #: Storage plugin names accepted by :class:`BagWriter` and :func:`write_bag`.
 STORAGES = {'sqlite3': StoragePlugin.SQLITE3, 'mcap': StoragePlugin.MCAP}
@@ -78,191 +71,8 @@ _FIRST, _SECOND, _THIRD = itemgetter(0), itemgetter(1), itemgetter(2)
 #: Records :func:`write_bag` hands to :meth:`BagWriter.write_many` at a time.
 _WRITE_BAG_BATCH = 16384
 _TIME_LIMIT = 2 ** 63
-#: Page size of the sqlite3 files written [bytes]. SQLite's default (4096) makes an insert of
-#: the replay's three outputs cost 3.2 µs; 32 KiB pages (fewer page splits and b-tree levels)
-#: 2.6 µs; 64 KiB gains no more. Any SQLite reader opens any page size.
-SQLITE_PAGE_SIZE = 32768
 #: Types accepted as message data (``bytes`` from the encoders; views of read messages).
 _DATA_TYPES = {bytes, bytearray, memoryview}
-_INSERT_MESSAGE = 'INSERT INTO messages (topic_id, timestamp, data) VALUES(?, ?, ?)'
-#: Rows per multi-row insert: 512 rows (1536 parameters) insert three outputs per message in
-#: 1.7 µs against 2.5 µs one row per statement; 1024 gains no more.
-_SQLITE_ROWS_PER_INSERT = 512
-_INSERT_MESSAGES = ('INSERT INTO messages (topic_id, timestamp, data) VALUES '
-                    + ','.join(['(?, ?, ?)'] * _SQLITE_ROWS_PER_INSERT))
-#: MCAP message record: opcode, record length, channel id, sequence, log time, publish time.
-_MCAP_MESSAGE = struct.Struct('<BQHIQQ')
-_MCAP_MESSAGE_OPCODE = 0x05
-_MCAP_CHUNK_OPCODE = 0x06
-_MCAP_MESSAGE_INDEX_OPCODE = 0x07
-_MCAP_RECORD = struct.Struct('<BQ')
-_MCAP_MESSAGE_FIELDS = _MCAP_MESSAGE.size - 9  # the record length counts what follows it
-#: ``rosbags``' McapWriter closes a chunk once it holds more than this many bytes.
-_MCAP_CHUNK_BYTES = 2 ** 20
-
-
-class _Sqlite3Storage(Sqlite3Writer):
-    """``rosbags``' sqlite3 storage (schema, topics, rows) on an ``apsw`` connection.
-
-    One transaction from creation to :meth:`close`, as ``rosbags``' own (the standard module
-    opens it implicitly at the first insert and commits on close); pages of
-    :data:`SQLITE_PAGE_SIZE` bytes.
-    """
-
-    def __init__(self, path: Path, compression: CompressionMode) -> None:
-        if compression == CompressionMode.STORAGE:
-            raise WriterError('SQLITE3 writer does not support storage-side compression.')
-        self.path = path / f'{path.name}.db3'
-        self.conn = apsw.Connection(str(self.path))
-        self.cursor = self.conn.cursor()
-        self.cursor.execute(f'PRAGMA page_size={SQLITE_PAGE_SIZE}')
-        self.cursor.execute(self.SQLITE_SCHEMA)
-        self.cursor.execute('BEGIN')
-
-    def write_many(self, records: Sequence[Record]) -> None:
-        """Insert ``(topic_id, timestamp, data)`` rows in order.
-
-        :data:`_SQLITE_ROWS_PER_INSERT` rows per statement (a multi-row ``VALUES``), the rest
-        one per statement: SQLite's cost per statement run is then shared by the rows.
-        """
-        rows = _SQLITE_ROWS_PER_INSERT
-        full = len(records) - len(records) % rows
-        if full:
-            self.cursor.executemany(_INSERT_MESSAGES, [
-                tuple(chain.from_iterable(records[begin:begin + rows]))
-                for begin in range(0, full, rows)])
-        if full < len(records):
-            self.cursor.executemany(_INSERT_MESSAGE, records[full:])
-
-    def close(self, version: int, metadata: str) -> None:
-        """Store the metadata row, commit and close."""
-        self.cursor.execute('INSERT INTO metadata(metadata_version, metadata) VALUES(?, ?)',
-                            (version, metadata))
-        self.cursor.execute('COMMIT')
-        self.cursor.execute('PRAGMA optimize')
-        self.conn.close()
-
-    def abort(self) -> None:
-        """Roll back and close."""
-        try:
-            if not self.conn.getautocommit():
-                self.cursor.execute('ROLLBACK')
-        finally:
-            self.conn.close()
-
-
-class _McapStorage(McapWriter):
-    """``rosbags``' MCAP storage writing batches of message records (the same bytes).
-
-    The pending chunk's message index is kept as three flat lists (channel ids, log times,
-    record offsets) instead of ``rosbags``' per-channel lists of pairs, so that a batch is
-    laid out by C-level ``map``/``accumulate`` calls and the index packed by NumPy per chunk.
-    Chunks close after the record that takes them past 1 MiB, as in ``rosbags``.
-    """
-
-    def __init__(self, path: Path, compression: CompressionMode) -> None:
-        super().__init__(path, compression)
-        self.index_channels: list[int] = []
-        self.index_times: list[int] = []
-        self.index_offsets: list[int] = []
-
-    def write(self, connection: Connection, timestamp: int, data: bytes | memoryview) -> None:
-        """One message record (:meth:`write_many` of one, without the batch set-up)."""
-        chunk = self.chunk
-        self.index_channels.append(connection.id)
-        self.index_times.append(timestamp)
-        self.index_offsets.append(chunk.bio.tell())
-        chunk.bio.write(_MCAP_MESSAGE.pack(_MCAP_MESSAGE_OPCODE, _MCAP_MESSAGE_FIELDS + len(data),
-                                           connection.id, 0, timestamp, timestamp))
-        chunk.bio.write(data)
-        chunk.message_start_time = min(chunk.message_start_time, timestamp)
-        chunk.message_end_time = max(chunk.message_end_time, timestamp)
-        self.message_start_time = min(self.message_start_time, timestamp)
-        self.message_end_time = max(self.message_end_time, timestamp)
-        self.channel_stats[connection.id] += 1
-        if chunk.bio.tell() > _MCAP_CHUNK_BYTES:
-            self.close_chunk()
-
-    def write_many(self, channel_ids: Sequence[int], times: Sequence[int],
-                   datas: Sequence[bytes], counts: Mapping[int, int]) -> None:
-        """Append message records, as :meth:`McapWriter.write` of each in turn would.
-
-        ``channel_ids``, ``times`` and ``datas`` are the records' columns; ``counts`` the
-        records per channel id.
-        """
-        sizes = list(map(len, datas))
-        headers = list(map(_MCAP_MESSAGE.pack, repeat(_MCAP_MESSAGE_OPCODE),
-                           map(add, sizes, repeat(_MCAP_MESSAGE_FIELDS)), channel_ids, repeat(0),
-                           times, times))
-        # starts[i]: where record i starts if the whole batch went into the pending chunk.
-        starts = list(accumulate(map(add, sizes, repeat(_MCAP_MESSAGE.size)),
-                                 initial=self.chunk.bio.tell()))
-        count, begin = len(sizes), 0
-        while begin < count:
-            chunk = self.chunk
-            shift = chunk.bio.tell() - starts[begin]
-            # The chunk closes after the first record ending beyond the limit.
-            end = min(bisect_right(starts, _MCAP_CHUNK_BYTES - shift, begin + 1), count)
-            chunk.bio.writelines(chain.from_iterable(zip(headers[begin:end], datas[begin:end])))
-            self.index_channels.extend(channel_ids[begin:end])
-            self.index_times.extend(times[begin:end])
-            self.index_offsets.extend(map(add, starts[begin:end], repeat(shift)))
-            chunk.message_start_time = min(chunk.message_start_time, min(times[begin:end]))
-            chunk.message_end_time = max(chunk.message_end_time, max(times[begin:end]))
-            if chunk.bio.tell() > _MCAP_CHUNK_BYTES:
-                self.close_chunk()
-            begin = end
-        self.message_start_time = min(self.message_start_time, min(times))
-        self.message_end_time = max(self.message_end_time, max(times))
-        for channel_id, records in counts.items():
-            self.channel_stats[channel_id] += records
-
-    def close_chunk(self) -> None:
-        """Write the pending chunk, its message indexes and keep its chunk index record.
-
-        :meth:`McapWriter.close_chunk` record for record; each channel's message index
-        (``(log time, offset)`` pairs in write order) is packed by NumPy.
-        """
-        chunk, bio = self.chunk, self.bio
-        uncompressed_size = chunk.bio.tell()
-        compressed = self.compressor(chunk.bio.getbuffer())
-        compression = self.compression.encode()
-        compression_field = struct.pack('<I', len(compression)) + compression
-        times = struct.pack('<QQ', chunk.message_start_time, chunk.message_end_time)
-        header = b''.join((times, struct.pack('<QI', uncompressed_size, 0), compression_field,
-                           struct.pack('<Q', len(compressed))))
-        chunk_start = bio.tell()
-        compressed_size = len(compressed)
-        bio.write(_MCAP_RECORD.pack(_MCAP_CHUNK_OPCODE, len(header) + compressed_size))
-        bio.write(header)
-        bio.write(compressed)
-        del compressed  # a view of the chunk's buffer
-        chunk_end = bio.tell()
-        channels = np.array(self.index_channels, dtype=np.int64)
-        pairs = np.empty((channels.size, 2), dtype='<u8')
-        pairs[:, 0] = self.index_times
-        pairs[:, 1] = self.index_offsets
-        offsets = []
-        for channel_id in dict.fromkeys(self.index_channels):  # in order of first message
-            offsets.append(struct.pack('<HQ', channel_id, bio.tell()))
-            entries = pairs[channels == channel_id].tobytes()
-            bio.write(_MCAP_RECORD.pack(_MCAP_MESSAGE_INDEX_OPCODE, 6 + len(entries)))
-            bio.write(struct.pack('<HI', channel_id, len(entries)))
-            bio.write(entries)
-        index = BytesIO()
-        index.write(b''.join((
-            times, struct.pack('<QQI', chunk_start, chunk_end - chunk_start, 10 * len(offsets)),
-            *offsets, struct.pack('<Q', bio.tell() - chunk_end), compression_field,
-            struct.pack('<QQ', compressed_size, uncompressed_size))))
-        self.chunks.append(index)
-        self.chunk = PendingChunk(2 ** 63 - 1, 0, BytesIO(), defaultdict(list))
-        self.index_channels, self.index_times, self.index_offsets = [], [], []
-
-
-class _Rosbag2Writer(Writer):
-    """``rosbags``' writer with the storages above."""
-
-    STORAGE_PLUGINS = {StoragePlugin.SQLITE3: _Sqlite3Storage, StoragePlugin.MCAP: _McapStorage}
 
 
 def _storage_plugin(storage: str) -> StoragePlugin:
@@ -292,7 +102,7 @@ class BagWriter:
                                  f'{key!r}: {value!r}')
         self.path = Path(path)
         try:
-            self._writer = _Rosbag2Writer(self.path, version=9, storage_plugin=plugin)
+            self._writer = Rosbag2Writer(self.path, version=9, storage_plugin=plugin)
             for key, value in custom.items():
                 self._writer.set_custom_data(key, value)
             self._writer.open()
@@ -350,24 +160,17 @@ class BagWriter:
             raise BagError(f'Cannot write to bag {str(self.path)!r}: expected records '
                            f'(connection id, integer bag time in [0, 2**63) ns, bytes), got '
                            f'{err}') from err
-        counts = {connection_id: channel_ids.count(connection_id)
-                  for connection_id in writer.counts}
+        registered = writer.registered()
+        counts = {connection_id: channel_ids.count(connection_id) for connection_id in registered}
         if (first < 0 or last >= _TIME_LIMIT or sum(counts.values()) != len(channel_ids)
-                or writer.storage is None or not set(map(type, datas)) <= _DATA_TYPES):
-            unknown = sorted(set(channel_ids) - set(writer.counts))
+                or not writer.is_open() or not set(map(type, datas)) <= _DATA_TYPES):
+            unknown = sorted(set(channel_ids) - registered)
             types = sorted({type(data).__name__ for data in datas})
             raise BagError(f'Cannot write to bag {str(self.path)!r}: expected an open bag, '
-                           f'connection ids of its topics {sorted(writer.counts)}, bag times '
+                           f'connection ids of its topics {sorted(registered)}, bag times '
                            f'in [0, 2**63) ns and bytes, got ids {unknown} not registered, '
                            f'times [{first}, {last}], data of types {types}')
-        if isinstance(writer.storage, _McapStorage):
-            writer.storage.write_many(channel_ids, times, datas, counts)
-        else:
-            writer.storage.write_many(records)
-        for connection_id, count in counts.items():
-            writer.counts[connection_id] += count
-        writer.min_timestamp = min(first, writer.min_timestamp)
-        writer.max_timestamp = max(last, writer.max_timestamp)
+        writer.write_records(records, channel_ids, times, datas, counts)
 
     def write_message(self, connection: Connection, bag_time_ns: int, message: object) -> None:
         """Serialise a ``rosbags`` message object of the connection's type and write it."""

@@ -65,7 +65,8 @@ def exp_map_step(attitude: ArrayLike, omega_body: ArrayLike, h: float) -> FloatA
         raise InputError(f'Expected a finite rotation `h * omega_body`, got h={h!r}, '
                          f'omega_body={omega.tolist()!r}')
     result = quaternion.multiply(q, quaternion.exp(rotation))
-    return result / np.linalg.norm(result, axis=-1, keepdims=True)
+    normalized: FloatArray = result / np.linalg.norm(result, axis=-1, keepdims=True)
+    return normalized
 
 
 def rk4_quaternion_step(attitude: ArrayLike, omega_of_time: Callable[[float], ArrayLike],
@@ -86,4 +87,5 @@ def rk4_quaternion_step(attitude: ArrayLike, omega_of_time: Callable[[float], Ar
     k3 = quaternion_rate(q + 0.5 * h * k2, rate(t + 0.5 * h))
     k4 = quaternion_rate(q + h * k3, rate(t + h))
     result = q + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    return result / np.linalg.norm(result, axis=-1, keepdims=True)
+    normalized: FloatArray = result / np.linalg.norm(result, axis=-1, keepdims=True)
+    return normalized

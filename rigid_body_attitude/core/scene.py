@@ -20,12 +20,32 @@ the effects; only the effects it names are constructed. Format::
       - viscous_damping: {coefficient: 0.01}
 
 Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`scene_path`).
+
+Hostile or broken files are refused at load with one :class:`SceneError` naming the file and
+the key path (``initial_state.attitude``), or the line and column of a YAML syntax error; error
+texts quote at most :data:`QUOTE_LIMIT` characters of a bad value. Limits:
+
+* size: at most :data:`MAX_FILE_BYTES` (64 KiB; the shipped scenes are under 1 KiB; the limit
+  is small because the pure-Python YAML parser that the alias and depth checks need is slow);
+* UTF-8 only; YAML aliases (``*name``) are refused (an alias bomb of a few hundred bytes
+  expands to gigabytes), anchors alone are harmless; nesting at most :data:`MAX_DEPTH` levels;
+* every integer must fit a float (a 400-digit mass is refused, not overflowed);
+* ``name`` at most :data:`MAX_NAME_CHARS` characters, ``description`` at most
+  :data:`MAX_DESCRIPTION_CHARS`;
+* physics that stays finite: mass, principal moments and their inverses, ``|omega_body|``,
+  the initial kinetic energy ``½ ωᵀJω`` and ``|Jω|``, and the attitude's magnitude before
+  normalisation all within ``[1/SCALE_LIMIT, SCALE_LIMIT]`` (zero allowed for rates and
+  energies). With :data:`SCALE_LIMIT` = 1e75 a product of two such quantities (``ω × Jω``,
+  ``J⁻¹τ``) is at most 1e150 and its squared norm at most 1e300, below the float maximum
+  (1.8e308); real bodies are far inside (the Earth: 8e37 kg m², 7e33 kg m²/s).
 """
 
 from __future__ import annotations
 
+import math
 import os
-from collections.abc import Mapping
+import reprlib
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -41,8 +61,9 @@ from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.inertia import Inertia
 from rigid_body_attitude.core.paths import config_folders
 
-__all__ = ['RATE_SOURCES', 'Scene', 'builtin_scenes', 'load_scene', 'scene_from_mapping',
-           'scene_path']
+__all__ = ['MAX_DEPTH', 'MAX_DESCRIPTION_CHARS', 'MAX_FILE_BYTES', 'MAX_NAME_CHARS',
+           'QUOTE_LIMIT', 'RATE_SOURCES', 'SCALE_LIMIT', 'Scene', 'builtin_scenes',
+           'load_scene', 'scene_from_mapping', 'scene_path']
 
 FloatArray = NDArray[np.float64]
 
@@ -54,6 +75,31 @@ _BODY_KEYS = {'mass', 'inertia'}
 _STATE_KEYS = {'attitude', 'omega_body'}
 _SHAPES = ('tensor', 'moments', 'box', 'cylinder', 'sphere')
 _DEFAULT_INTEGRATOR = {'dynamics': 'rk4', 'gyro': 'exp_map'}
+
+#: Largest scene file read [bytes].
+MAX_FILE_BYTES = 64 * 1024
+#: Deepest nesting of YAML collections.
+MAX_DEPTH = 32
+#: Longest ``name`` and ``description`` [characters].
+MAX_NAME_CHARS = 256
+MAX_DESCRIPTION_CHARS = 1024
+#: Most characters of a bad value quoted in an error; a whole error text is at most
+#: :data:`MAX_ERROR_CHARS`.
+QUOTE_LIMIT = 100
+MAX_ERROR_CHARS = 600
+#: Bound on every physical magnitude of a scene (SI units), and 1/bound on the positive ones.
+SCALE_LIMIT = 1e75
+_FLOAT_MAX = 1.7976931348623157e308
+_QUOTE = reprlib.Repr()
+_QUOTE.maxstring = _QUOTE.maxother = _QUOTE.maxlong = QUOTE_LIMIT
+_QUOTE.maxlist = _QUOTE.maxtuple = _QUOTE.maxdict = _QUOTE.maxset = 6
+_QUOTE.maxlevel = 3
+
+
+def quote(value: Any) -> str:
+    """``repr(value)`` of at most about :data:`QUOTE_LIMIT` characters (for error texts)."""
+    text = _QUOTE.repr(value)
+    return text if len(text) <= QUOTE_LIMIT else text[:QUOTE_LIMIT - 3] + '...'
 
 
 @dataclass(frozen=True)
@@ -135,30 +181,130 @@ def scene_path(name_or_path: str) -> Path:
 
 
 def load_scene(name_or_path: str) -> Scene:
-    """Load and validate a built-in scene by name or a scene YAML file by path."""
+    """Load and validate a built-in scene by name or a scene YAML file by path.
+
+    Every fault is one :class:`SceneError` whose text starts ``Scene file '<path>'`` (see the
+    module's limits); nothing else escapes for any file content.
+    """
     path = scene_path(name_or_path)
+    where = f'Scene file {str(path)!r}'
+    data = _parse_yaml(_read_text(path, where), where)
     try:
-        data = yaml.safe_load(path.read_text(encoding='utf-8'))
-    except yaml.YAMLError as err:
-        raise SceneError(f'Scene file {str(path)!r} is not valid YAML: {err}') from err
-    return scene_from_mapping(data, default_name=path.stem, source=str(path))
+        return scene_from_mapping(data, default_name=path.stem, source=str(path))
+    except SceneError as err:
+        raise SceneError(_bounded(f'{where}: {err}')) from None
+
+
+def _bounded(text: str, limit: int = MAX_ERROR_CHARS) -> str:
+    """``text`` on one line, at most ``limit`` characters."""
+    text = ' '.join(text[:limit + 1].splitlines())
+    return text if len(text) <= limit else text[:limit - 3] + '...'
+
+
+def _clip(text: str) -> str:
+    return _bounded(text, QUOTE_LIMIT)
+
+
+def _read_text(path: Path, where: str) -> str:
+    """The file's text: at most :data:`MAX_FILE_BYTES`, UTF-8."""
+    try:
+        with path.open('rb') as file:
+            raw = file.read(MAX_FILE_BYTES + 1)
+    except OSError as err:
+        raise SceneError(f'{where} cannot be read: {quote(err.strerror)}') from None
+    if len(raw) > MAX_FILE_BYTES:
+        raise SceneError(f'{where} is larger than the limit of {MAX_FILE_BYTES} bytes')
+    try:
+        return raw.decode('utf-8')
+    except UnicodeDecodeError as err:
+        line = raw.count(b'\n', 0, err.start) + 1
+        column = err.start - raw.rfind(b'\n', 0, err.start)
+        raise SceneError(f'{where}, line {line}, column {column}: not UTF-8 (byte '
+                         f'0x{raw[err.start]:02x})') from None
+
+
+class _SceneLoader(yaml.SafeLoader):
+    """PyYAML's safe loader without aliases and with a nesting limit."""
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self.depth = 0
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node | None:
+        """Refuse an alias, or a collection nested deeper than :data:`MAX_DEPTH`."""
+        event = self.peek_event()  # type: ignore[no-untyped-call]
+        mark = event.start_mark
+        if isinstance(event, yaml.AliasEvent):
+            raise yaml.composer.ComposerError(
+                None, None, 'aliases (*name) are not allowed in scene files', mark)
+        if self.depth >= MAX_DEPTH:
+            raise yaml.composer.ComposerError(
+                None, None, f'nesting deeper than {MAX_DEPTH} levels', mark)
+        self.depth += 1
+        try:
+            return super().compose_node(parent, index)
+        finally:
+            self.depth -= 1
+
+
+def _parse_yaml(text: str, where: str) -> Any:
+    loader = None
+    try:
+        loader = _SceneLoader(text)
+        data = loader.get_single_data()
+    except yaml.MarkedYAMLError as err:
+        mark = err.problem_mark or err.context_mark
+        position = f', line {mark.line + 1}, column {mark.column + 1}' if mark else ''
+        raise SceneError(f'{where}{position}: not valid YAML: '
+                         f'{_clip(err.problem or err.context or "")}') from None
+    except (yaml.YAMLError, ValueError, TypeError, OverflowError) as err:
+        raise SceneError(f'{where}: not valid YAML: {_clip(str(err))}') from None
+    finally:
+        if loader is not None:
+            loader.dispose()
+    for key_path, value in _numbers(data, ''):
+        if abs(value) > _FLOAT_MAX:
+            raise SceneError(f'{where}: {key_path or "scene"}: an integer of '
+                             f'{len(str(abs(value)))} digits is too large for a float')
+    return data
+
+
+def _numbers(data: Any, key_path: str) -> Iterator[tuple[str, int]]:
+    """``(key path, integer)`` of every integer in the parsed file (nesting is bounded)."""
+    if isinstance(data, bool):
+        return
+    if isinstance(data, int):
+        yield key_path, data
+    elif isinstance(data, Mapping):
+        for key, value in data.items():
+            yield from _numbers(key, key_path)
+            name = key if isinstance(key, str) else quote(key)
+            yield from _numbers(value, f'{key_path}.{name}' if key_path else name)
+    elif isinstance(data, list):
+        for index, value in enumerate(data):
+            yield from _numbers(value, f'{key_path}[{index}]')
 
 
 def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '') -> Scene:
-    """Validate a scene given as a mapping (the parsed YAML)."""
+    """Validate a scene given as a mapping (the parsed YAML).
+
+    Errors name the key path (``body.mass``, ``initial_state.attitude``) and quote at most
+    :data:`QUOTE_LIMIT` characters of the bad value.
+    """
     if not isinstance(data, Mapping):
         raise SceneError(f'Expected a scene to be a mapping with keys '
-                         f'{", ".join(sorted(_TOP_KEYS))}, got {data!r}')
+                         f'{", ".join(sorted(_TOP_KEYS))}, got {quote(data)}')
     _check_keys('scene', data, _TOP_KEYS, _REQUIRED_TOP_KEYS)
     rate_source = data['rate_source']
     if rate_source not in RATE_SOURCES:
-        raise SceneError(f'Unknown rate_source {rate_source!r}; valid choices: '
+        raise SceneError(f'Unknown rate_source {quote(rate_source)}; valid choices: '
                          f'{", ".join(RATE_SOURCES)}')
-    inertia, mass = _body(data['body'])
-    attitude, omega = _initial_state(data.get('initial_state', {}))
+    with np.errstate(all='ignore'):  # overflow is refused below, not warned about
+        inertia, mass = _body(data['body'])
+        attitude, omega = _initial_state(data.get('initial_state', {}), inertia)
     scene = Scene(
-        name=str(data.get('name', default_name)),
-        description=str(data.get('description', '')),
+        name=_label('name', data.get('name', default_name), MAX_NAME_CHARS),
+        description=_label('description', data.get('description', ''), MAX_DESCRIPTION_CHARS),
         rate_source=rate_source,
         integrator=_text('integrator', data.get('integrator', _DEFAULT_INTEGRATOR[rate_source])),
         step=_check_step(data.get('step', 0.001)),
@@ -173,12 +319,12 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
     return scene
 
 
-def _check_keys(where: str, data: Mapping[str, Any], valid: set[str],
+def _check_keys(where: str, data: Mapping[Any, Any], valid: set[str],
                 required: tuple[str, ...] = ()) -> None:
-    unknown = sorted(set(data) - valid)
-    if unknown:
-        raise SceneError(f'Unknown key {unknown[0]!r} in {where}; valid keys: '
-                         f'{", ".join(sorted(valid))}')
+    for key in data:
+        if key not in valid:
+            raise SceneError(f'Unknown key {quote(key)} in {where}; valid keys: '
+                             f'{", ".join(sorted(valid))}')
     for key in required:
         if key not in data:
             raise SceneError(f'Missing key {key!r} in {where}; valid keys: '
@@ -187,8 +333,19 @@ def _check_keys(where: str, data: Mapping[str, Any], valid: set[str],
 
 def _text(key: str, value: Any) -> str:
     if not isinstance(value, str):
-        raise SceneError(f'Expected {key!r} to be a string, got {value!r}')
+        raise SceneError(f'Expected {key!r} to be a string, got {quote(value)}')
     return value
+
+
+def _label(key: str, value: Any, limit: int) -> str:
+    """A name or description: text (numbers are written as text), at most ``limit`` chars."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        value = str(value)
+    text = _text(key, value)
+    if len(text) > limit:
+        raise SceneError(f'Expected {key!r} to be at most {limit} characters, got '
+                         f'{len(text)}: {quote(text)}')
+    return text
 
 
 def _number(key: str, value: Any) -> float:
@@ -196,42 +353,52 @@ def _number(key: str, value: Any) -> float:
         try:
             real(value)  # always raises here; its reason explains YAML 1.1's '1e-3' text
         except (TypeError, ValueError) as err:
-            raise SceneError(f'Expected {key!r} to be {err}, got {value!r}') from err
-    return float(value)
+            raise SceneError(f'Expected {key!r} to be {err}, got {quote(value)}') from err
+    try:
+        return float(value)
+    except OverflowError:
+        raise SceneError(f'Expected {key!r} to be a number within the float range, got '
+                         f'{quote(value)}') from None
 
 
 def _check_step(value: Any) -> float:
     step = _number('step', value)
     if not np.isfinite(step) or step <= 0.0:
-        raise SceneError(f'Expected step to be a positive number of seconds, got {value!r}')
+        raise SceneError(f'Expected step to be a positive number of seconds, got {quote(value)}')
     return step
 
 
 def _body(data: Any) -> tuple[Inertia, float]:
     if not isinstance(data, Mapping):
-        raise SceneError(f'Expected body to be a mapping with keys mass, inertia; got {data!r}')
+        raise SceneError(f'Expected body to be a mapping with keys mass, inertia; got '
+                         f'{quote(data)}')
     _check_keys('body', data, _BODY_KEYS, ('inertia',))
     mass = _number('body.mass', data.get('mass', 1.0))
     if not np.isfinite(mass) or mass <= 0.0:
         raise SceneError(f'Expected body.mass to be a positive number [kg], got {mass!r}')
+    _within_scale('body.mass', mass, positive=True)
     spec = data['inertia']
     if not isinstance(spec, Mapping) or len(spec) != 1 or next(iter(spec)) not in _SHAPES:
         raise SceneError(f'Expected body.inertia to be one of {{{", ".join(_SHAPES)}: ...}}, '
-                         f'got {spec!r}')
+                         f'got {quote(spec)}')
     kind, params = next(iter(spec.items()))
     try:
-        return _inertia(kind, params, mass), mass
+        inertia = _inertia(kind, params, mass)
     except AttitudeError as err:
-        raise SceneError(f'Bad body.inertia.{kind}: {err}') from err
-    except TypeError as err:
-        raise SceneError(f'Bad body.inertia.{kind} parameters {params!r}: {err}') from err
+        raise SceneError(_bounded(f'Bad body.inertia.{kind}: {err}')) from err
+    except (TypeError, OverflowError) as err:
+        raise SceneError(_bounded(f'Bad body.inertia.{kind} parameters {quote(params)}: '
+                                  f'{err}')) from err
+    for moment in inertia.principal_moments.tolist():
+        _within_scale(f'body.inertia.{kind} (principal moment)', moment, positive=True)
+    return inertia, mass
 
 
 def _inertia(kind: str, params: Any, mass: float) -> Inertia:
     if kind in ('tensor', 'moments'):
         return Inertia(params)
     if not isinstance(params, Mapping):
-        raise SceneError(f'Expected body.inertia.{kind} to be a mapping, got {params!r}')
+        raise SceneError(f'Expected body.inertia.{kind} to be a mapping, got {quote(params)}')
     if kind == 'box':
         return Inertia.box(mass, **params)
     if kind == 'cylinder':
@@ -239,43 +406,71 @@ def _inertia(kind: str, params: Any, mass: float) -> Inertia:
     return Inertia.sphere(mass, **params)
 
 
-def _initial_state(data: Any) -> tuple[FloatArray, FloatArray]:
+def _within_scale(key: str, value: float, positive: bool = False) -> None:
+    """Refuse a magnitude above :data:`SCALE_LIMIT` (or, if ``positive``, below its inverse)."""
+    if not abs(value) <= SCALE_LIMIT or (positive and not abs(value) >= 1.0 / SCALE_LIMIT):
+        bounds = f'[{1.0 / SCALE_LIMIT:g}, {SCALE_LIMIT:g}]' if positive else (
+            f'at most {SCALE_LIMIT:g}')
+        raise SceneError(f'Expected {key} to be {bounds} so that the physics stays finite, '
+                         f'got {value:.6g}')
+
+
+def _initial_state(data: Any, inertia: Inertia) -> tuple[FloatArray, FloatArray]:
     if not isinstance(data, Mapping):
-        raise SceneError(f'Expected initial_state to be a mapping, got {data!r}')
+        raise SceneError(f'Expected initial_state to be a mapping, got {quote(data)}')
     _check_keys('initial_state', data, _STATE_KEYS)
     try:
-        attitude = quaternion.normalize(
-            quaternion.as_quaternion(data.get('attitude', [1.0, 0.0, 0.0, 0.0]),
-                                     'initial_state.attitude'))
+        raw_attitude = quaternion.as_quaternion(data.get('attitude', [1.0, 0.0, 0.0, 0.0]),
+                                                'initial_state.attitude')
         omega = quaternion.as_vector(data.get('omega_body', [0.0, 0.0, 0.0]),
                                      'initial_state.omega_body')
     except AttitudeError as err:
-        raise SceneError(str(err)) from err
-    if attitude.shape != (4,) or omega.shape != (3,):
+        raise SceneError(_bounded(str(err))) from err
+    except OverflowError as err:
+        raise SceneError(f'Expected initial_state to hold numbers within the float range: '
+                         f'{err}') from err
+    if raw_attitude.shape != (4,) or omega.shape != (3,):
         raise SceneError('Expected initial_state.attitude to be 4 numbers (w, x, y, z) and '
-                         f'omega_body 3 numbers, got {data!r}')
+                         f'omega_body 3 numbers, got {quote(data)}')
+    largest = float(np.max(np.abs(raw_attitude)))
+    if largest == 0.0:
+        raise SceneError(f'Expected initial_state.attitude to be a non-zero quaternion '
+                         f'(w, x, y, z), got {raw_attitude.tolist()!r}')
+    _within_scale('initial_state.attitude (largest component)', largest, positive=True)
+    attitude = quaternion.normalize(raw_attitude)
+    _within_scale('|initial_state.omega_body| [rad/s]', _norm(omega))
+    momentum = inertia.tensor @ omega
+    _within_scale('the initial angular momentum |J omega_body| [kg m²/s]', _norm(momentum))
+    _within_scale('the initial kinetic energy [J]', 0.5 * float(omega @ momentum))
     return attitude, omega
+
+
+def _norm(vector: FloatArray) -> float:
+    """Euclidean norm without overflow in the squares (components are finite)."""
+    scale = float(np.max(np.abs(vector)))
+    return 0.0 if scale == 0.0 else scale * math.sqrt(float(np.sum((vector / scale) ** 2)))
 
 
 def _effect_list(data: Any) -> tuple[tuple[str, Mapping[str, Any]], ...]:
     if not isinstance(data, list):
-        raise SceneError(f'Expected effects to be a list, got {data!r}')
+        raise SceneError(f'Expected effects to be a list, got {quote(data)}')
     effects = []
-    for item in data:
+    for index, item in enumerate(data):
+        params: Any
         if isinstance(item, str):
             name, params = item, {}
         elif isinstance(item, Mapping) and len(item) == 1:
             name, params = next(iter(item.items()))
             params = {} if params is None else params
         else:
-            raise SceneError(f'Expected each effect to be a name or {{name: {{parameters}}}}, '
-                             f'got {item!r}')
-        if name not in EFFECTS:
-            raise SceneError(f'Unknown effect {name!r}; valid effects: '
+            raise SceneError(f'Expected effects[{index}] to be a name or '
+                             f'{{name: {{parameters}}}}, got {quote(item)}')
+        if not isinstance(name, str) or name not in EFFECTS:
+            raise SceneError(f'Unknown effect {quote(name)}; valid effects: '
                              f'{", ".join(sorted(EFFECTS))}')
         if not isinstance(params, Mapping):
             raise SceneError(f'Expected the parameters of effect {name!r} to be a mapping, '
-                             f'got {params!r}')
+                             f'got {quote(params)}')
         effects.append((name, dict(params)))
     return tuple(effects)
 
@@ -285,11 +480,17 @@ def _check_effects(scene: Scene) -> None:
     for name in names:
         cls = EFFECTS[name]
         if names.count(name) > 1:
-            raise SceneError(f'Effect {name!r} is named more than once in scene {scene.name!r}')
+            raise SceneError(f'Effect {name!r} is named more than once in scene '
+                             f'{quote(scene.name)}')
         if scene.rate_source not in cls.rate_sources:
             raise SceneError(f'Effect {name!r} applies to {"/".join(sorted(cls.rate_sources))} '
                              f'scenes, not to rate_source {scene.rate_source!r}')
         for required in cls.requires:
             if required not in names:
                 raise SceneError(f'Effect {name!r} needs effect {required!r} in the same scene')
-    scene.build_effects()
+    try:
+        scene.build_effects()
+    except SceneError as err:
+        raise SceneError(_bounded(str(err))) from err
+    except (AttitudeError, TypeError, OverflowError) as err:
+        raise SceneError(_bounded(f'effects: {err}')) from err

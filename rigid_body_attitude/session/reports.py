@@ -1,47 +1,32 @@
-"""Conversions at the ROS message boundary that need no ROS import (node and replay tool).
+"""The ``/diagnostics`` report of a session: level, message and key/value strings.
 
-* :class:`TimeBase`: ROS stamps (integer ``sec``, ``nanosec``) ↔ float seconds relative to
-  an epoch, so that stamps near 1.7e9 s keep sub-nanosecond resolution in float arithmetic
-  (a float near 1.7e9 has a spacing of 2.4e-7 s, which would put a 2.4e-4 relative error on
-  the step of a 1 kHz gyro).
-* :func:`body_frame_velocity`: the centre-of-mass velocity in body axes (the linear part of
-  a body-frame twist), zero without translation.
-* :func:`diagnostic_report`: the propagator's diagnostics and the input counters as the
-  level, message and key/value strings of a ``diagnostic_msgs/DiagnosticStatus``.
+Honest by construction: the level is OK only while inputs are accepted and the invariants hold.
 
-Quaternions are converted to message order with :func:`rigid_body_attitude.core.quaternion.to_ros`
-(or field by field from :class:`rigid_body_attitude.session.outputs.OutputTracker`'s scalar-first
-tuple); this module states no convention of its own.
+* ERROR: a drift above :data:`DRIFT_ERROR_THRESHOLD`, or a refused integration in the last
+  period (``integration_failed``, ``non_finite_result``).
+* WARN: a drift above :data:`DRIFT_WARN_THRESHOLD`; any rejection of :data:`WARN_REASONS` or
+  missed samples in the last period; inputs that arrived with none accepted (the main reason
+  named); a gyro scene that received no input; a dynamics scene behind its clock.
+
+Each problem names the parameter that governs it (:data:`GOVERNING_PARAMETER`). The period
+figures come from :class:`PeriodCounts`, which the sessions fill.
 """
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Mapping
-from dataclasses import dataclass
-
-import numpy as np
-from numpy.typing import NDArray
+from dataclasses import dataclass, field
 
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
 from rigid_body_attitude.session.stream import REASONS
 
 __all__ = [
-    'DRIFT_ERROR_THRESHOLD',
-    'DRIFT_WARN_THRESHOLD',
-    'DiagnosticReport',
-    'LEVEL_ERROR',
-    'LEVEL_OK',
-    'LEVEL_WARN',
-    'NANOSECONDS_PER_SECOND',
-    'REJECTION_KEYS',
-    'TimeBase',
-    'body_frame_velocity',
-    'diagnostic_report',
-    'stale_command_count',
+    'DRIFT_ERROR_THRESHOLD', 'DRIFT_WARN_THRESHOLD', 'DiagnosticReport', 'GOVERNING_PARAMETER',
+    'LEVEL_ERROR', 'LEVEL_OK', 'LEVEL_WARN', 'PeriodCounts', 'REJECTION_KEYS', 'WARN_REASONS',
+    'body_frame_velocity', 'diagnostic_report', 'stale_command_count',
 ]
-
-NANOSECONDS_PER_SECOND = 1_000_000_000
 
 #: diagnostic_msgs/DiagnosticStatus levels.
 LEVEL_OK, LEVEL_WARN, LEVEL_ERROR = 0, 1, 2
@@ -52,64 +37,68 @@ LEVEL_OK, LEVEL_WARN, LEVEL_ERROR = 0, 1, 2
 DRIFT_WARN_THRESHOLD = 1e-6
 DRIFT_ERROR_THRESHOLD = 1e-3
 
-#: Rejection counters reported, in order: the stream reasons, stale commands, bad poses, and
-#: clock ticks the integrator refused (the state was then reset).
-REJECTION_KEYS = (*REASONS, 'stale_torque', 'invalid_pose', 'integration_failed')
+#: Rejection counters reported, in order: the stream reasons, the session's own (malformed
+#: messages, invalid or zero stamps, poses), expired commands and refused integrations.
+REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
+                  'wrong_frame', 'stale_torque', 'integration_failed', 'non_finite_result',
+                  'internal_error')
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
-_WARNING_REASONS = ('non_finite', 'gap', 'time_jump', 'invalid_pose')
-_ERROR_REASONS = ('integration_failed',)
+WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
+                'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame')
+ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
+
+#: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).
+GOVERNING_PARAMETER = {
+    'out_of_range': 'max_angular_rate', 'stale_stamp': 'use_header_stamps',
+    'outlier_stamp': 'max_dt', 'gap': 'max_dt', 'time_jump': 'time_jump_threshold',
+    'invalid_stamp': 'use_header_stamps', 'zero_stamp': 'use_header_stamps',
+    'invalid_pose': 'world_frame', 'wrong_frame': 'world_frame',
+    'integration_failed': 'integrator', 'non_finite_result': 'integrator',
+    'missed_samples': 'qos_overrides./imu.subscription.depth',
+    'no_input': 'use_header_stamps', 'behind': 'step',
+}
+DYNAMICS_GOVERNING_PARAMETER = {
+    **{key: value for key, value in GOVERNING_PARAMETER.items() if key != 'out_of_range'},
+    'gap': 'time_jump_threshold'}
 
 
-class TimeBase:
-    """Integer ROS times ↔ float seconds since an epoch fixed by the first time converted.
+@dataclass
+class PeriodCounts:
+    """What happened to the inputs during one diagnostics period, and so far.
 
-    The epoch is the first time's whole seconds, so the first time maps to ``[0, 1)`` s and
-    later ones to their exact distance from it (float resolution ~1e-10 s within ±1e6 s of
-    the epoch). Times far before the epoch (a jump back to stamp zero) lose resolution like
-    any float of their size.
+    Attributes:
+        elapsed: length of the period [s].
+        received: inputs received in the period (every message, whatever became of it).
+        accepted: inputs used in the period (gyro samples, commands, poses; not clock ticks).
+        accepted_total: inputs used so far.
+        received_total: inputs received so far.
+        rejections: rejections so far by reason.
+        new_rejections: rejections in the period by reason.
+        missed: samples lost upstream in the period (gyro).
+        missed_total: samples lost upstream so far.
+        malformed_by_topic: malformed messages so far by topic.
+        gyro_scene: the session integrates gyro samples (no input is then a problem).
+        real_time_factor: dynamics: simulated seconds per second of work in the period
+            (``inf`` when no work was timed).
+        lag: dynamics: the largest delay of the propagated time behind the clock [s].
+        tick_period: dynamics: the tick period [s].
     """
 
-    def __init__(self) -> None:
-        """No epoch until the first conversion."""
-        self.epoch_sec: int | None = None
-
-    def seconds(self, sec: int, nanosec: int) -> float:
-        """Seconds since the epoch of the stamp ``(sec, nanosec)``."""
-        if self.epoch_sec is None:
-            self.epoch_sec = sec
-        return (sec - self.epoch_sec) + nanosec * 1e-9
-
-    def seconds_from_nanoseconds(self, nanoseconds: int) -> float:
-        """Seconds since the epoch of a time given in integer nanoseconds (rclpy Time)."""
-        sec, nanosec = divmod(nanoseconds, NANOSECONDS_PER_SECOND)
-        return self.seconds(sec, nanosec)
-
-    def stamp(self, seconds: float) -> tuple[int, int]:
-        """``(sec, nanosec)`` of ``seconds`` since the epoch, rounded to the nanosecond."""
-        epoch = self.epoch_sec if self.epoch_sec is not None else 0
-        total = epoch * NANOSECONDS_PER_SECOND + round(seconds * NANOSECONDS_PER_SECOND)
-        sec, nanosec = divmod(total, NANOSECONDS_PER_SECOND)
-        return sec, nanosec
-
-
-def body_frame_velocity(propagator: DynamicsPropagator | GyroPropagator
-                        ) -> tuple[float, float, float]:
-    """Centre-of-mass velocity in body axes [m/s], ``R(q)ᵀ v_world``; zero without translation.
-
-    ``v_world`` is the ``velocity`` output of the scene's stateful effects (translation).
-    """
-    for effect in propagator.stateful:
-        velocity_world = effect.outputs().get('velocity')
-        if velocity_world is not None:
-            velocity_body = quaternion.rotate_inverse(propagator.state.attitude, velocity_world)
-            return tuple(velocity_body.tolist())
-    return (0.0, 0.0, 0.0)
-
-
-def stale_command_count(counters: Mapping[str, int]) -> int:
-    """Commands (torque, force, rotor torque) that expired: the effects' ``*.stale`` counters."""
-    return sum(value for key, value in counters.items() if key.endswith('.stale'))
+    elapsed: float
+    received: int
+    accepted: int
+    accepted_total: int
+    rejections: Counter[str]
+    new_rejections: Counter[str]
+    received_total: int = 0
+    missed: int = 0
+    missed_total: int = 0
+    malformed_by_topic: Counter[str] = field(default_factory=Counter)
+    gyro_scene: bool = False
+    real_time_factor: float = float('inf')
+    lag: float = 0.0
+    tick_period: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -125,6 +114,26 @@ class DiagnosticReport:
     level: int
     message: str
     values: tuple[tuple[str, str], ...]
+
+
+def body_frame_velocity(propagator: DynamicsPropagator | GyroPropagator
+                        ) -> tuple[float, float, float]:
+    """Centre-of-mass velocity in body axes [m/s], ``R(q)ᵀ v_world``; zero without translation.
+
+    ``v_world`` is the ``velocity`` output of the scene's stateful effects (translation).
+    """
+    for effect in propagator.stateful:
+        velocity_world = effect.outputs().get('velocity')
+        if velocity_world is not None:
+            x, y, z = quaternion.rotate_inverse(propagator.state.attitude,
+                                                velocity_world).tolist()
+            return x, y, z
+    return (0.0, 0.0, 0.0)
+
+
+def stale_command_count(counters: Mapping[str, int]) -> int:
+    """Commands (torque, force, rotor torque) that expired: the effects' ``*.stale`` counters."""
+    return sum(value for key, value in counters.items() if key.endswith('.stale'))
 
 
 def _relative(change: float, scale: float) -> float:
@@ -154,60 +163,100 @@ def _drift_problems(propagator: DynamicsPropagator | GyroPropagator,
                 level, threshold = LEVEL_ERROR, DRIFT_ERROR_THRESHOLD
             else:
                 level = max(level, LEVEL_WARN)
-            problems.append(f'{name} {value:.3g} > {threshold:.0e}')
+            problems.append(f'{name} {value:.3g} > {threshold:.0e} (parameters `step`, '
+                            f'`integrator`)')
     return level, problems
 
 
-def _rejection_problems(new_rejections: Mapping[str, int]) -> tuple[int, list[str]]:
-    """Level and reasons (gaps, time jumps, non-finite inputs...) of the last period."""
+def _governed(text: str, key: str, parameters: Mapping[str, str]) -> str:
+    parameter = parameters.get(key)
+    return f'{text} (parameter `{parameter}`)' if parameter else text
+
+
+def _input_problems(counts: PeriodCounts, parameters: Mapping[str, str]
+                    ) -> tuple[int, list[str]]:
+    """Level and reasons from what happened to the inputs in the last period."""
     level, problems = LEVEL_OK, []
-    for reasons, reason_level in ((_ERROR_REASONS, LEVEL_ERROR),
-                                  (_WARNING_REASONS, LEVEL_WARN)):
+    for reasons, reason_level in ((ERROR_REASONS, LEVEL_ERROR), (WARN_REASONS, LEVEL_WARN)):
         for reason in reasons:
-            if new_rejections.get(reason, 0) > 0:
+            if counts.new_rejections.get(reason, 0) > 0:
                 level = max(level, reason_level)
-                problems.append(f'{new_rejections[reason]} {reason} in the last period')
+                problems.append(_governed(
+                    f'{counts.new_rejections[reason]} {reason} in the last period', reason,
+                    parameters))
+    if counts.missed:
+        level = max(level, LEVEL_WARN)
+        problems.append(_governed(f'{counts.missed} samples missed upstream in the last '
+                                  f'period', 'missed_samples', parameters))
+    if counts.received and not counts.accepted:
+        main = max(counts.new_rejections.items(), key=lambda item: item[1], default=('', 0))
+        if main[0] not in WARN_REASONS + ERROR_REASONS:  # not named above already
+            level = max(level, LEVEL_WARN)
+            problems.append(_governed(
+                f'{counts.received} inputs and none accepted in the last period, mostly '
+                f'{main[0] or "pending"}', main[0] or 'outlier_stamp', parameters))
+    elif counts.gyro_scene and not counts.received:
+        level = max(level, LEVEL_WARN)
+        problems.append('no gyro input in the last period (topics imu, angular_velocity)')
     return level, problems
 
 
-def _vector_text(vector: NDArray[np.float64] | tuple[float, ...]) -> str:
+def _timing_problems(counts: PeriodCounts, parameters: Mapping[str, str]
+                     ) -> tuple[int, list[str]]:
+    """A dynamics scene behind its clock: the work takes longer than the time simulated."""
+    if counts.gyro_scene or (counts.real_time_factor >= 1.0
+                             and counts.lag <= counts.tick_period):
+        return LEVEL_OK, []
+    return LEVEL_WARN, [_governed(
+        f'behind the clock: lag {counts.lag:.3f} s, real-time factor '
+        f'{counts.real_time_factor:.2f} (also `integrator`, `publish_rate`)', 'behind',
+        parameters)]
+
+
+def _vector_text(vector: tuple[float, ...]) -> str:
     return ' '.join(f'{float(value):.9g}' for value in vector)
 
 
-def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator,
-                      rejections: Mapping[str, int], new_rejections: Mapping[str, int],
-                      accepted: int, input_rate: float, step_text: str) -> DiagnosticReport:
-    """Level, message and values of the propagator's status.
+def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: PeriodCounts,
+                      step_text: str, time_s: float) -> DiagnosticReport:
+    """Level, message and values of a session's status (see the module docstring).
 
-    ``rejections`` are the totals by reason (:data:`REJECTION_KEYS`), ``new_rejections``
-    those of the last period, ``accepted`` the inputs used so far, ``input_rate`` [Hz] the
-    input messages per second of the last period and ``step_text`` the step description.
-    WARN: a drift above :data:`DRIFT_WARN_THRESHOLD`, or gaps, time jumps, non-finite inputs
-    or invalid poses in the last period; ERROR: a drift above :data:`DRIFT_ERROR_THRESHOLD`
-    or a refused integration in the last period.
+    ``step_text`` describes the step; ``time_s`` is the propagated time shown [s].
     """
+    parameters = GOVERNING_PARAMETER if counts.gyro_scene else DYNAMICS_GOVERNING_PARAMETER
     diagnostics = propagator.diagnostics()
     level, problems = _drift_problems(propagator, diagnostics.energy_balance_residual,
                                       diagnostics.momentum_drift)
-    rejection_level, rejection_problems = _rejection_problems(new_rejections)
-    level = max(level, rejection_level)
+    for check in (_input_problems, _timing_problems):
+        check_level, check_problems = check(counts, parameters)
+        level, problems = max(level, check_level), problems + check_problems
     scene = propagator.scene
+    momentum = diagnostics.world_angular_momentum.tolist()
     values = [
         ('scene', scene.name),
         ('rate_source', scene.rate_source),
         ('integrator', scene.integrator),
         ('step [s]', step_text),
-        ('time [s]', f'{propagator.state.time:.9f}'),
+        ('time [s]', f'{time_s:.9f}'),
         ('kinetic_energy [J]', f'{diagnostics.kinetic_energy:.12g}'),
         ('energy_drift', f'{diagnostics.energy_drift:.3e}'),
         ('energy_balance_residual [J]', f'{diagnostics.energy_balance_residual:.3e}'),
-        ('world_angular_momentum [N m s]', _vector_text(diagnostics.world_angular_momentum)),
+        ('world_angular_momentum [N m s]', _vector_text(tuple(momentum))),
         ('momentum_drift', f'{diagnostics.momentum_drift:.3e}'),
         ('quaternion_norm_error', f'{diagnostics.quaternion_norm_error:.3e}'),
-        ('input_rate [Hz]', f'{input_rate:.1f}'),
-        ('accepted', str(accepted)),
+        ('input_rate [Hz]', f'{counts.accepted / counts.elapsed:.1f}'),
+        ('received_rate [Hz]', f'{counts.received / counts.elapsed:.1f}'),
+        ('received', str(counts.received_total)),
+        ('accepted', str(counts.accepted_total)),
+        ('missed_samples', str(counts.missed_total)),
     ]
-    values += [(f'rejected {key}', str(rejections.get(key, 0))) for key in REJECTION_KEYS]
+    if not counts.gyro_scene:
+        values += [('real_time_factor', f'{counts.real_time_factor:.3g}'),
+                   ('lag [s]', f'{counts.lag:.6f}')]
+    values += [(f'rejected {key}', str(counts.rejections.get(key, 0)))
+               for key in REJECTION_KEYS]
+    values += [(f'malformed {topic}', str(count))
+               for topic, count in sorted(counts.malformed_by_topic.items())]
     values += [(key, str(value)) for key, value in sorted(propagator.counters().items())]
-    message = '; '.join(problems + rejection_problems) or 'propagating'
+    message = '; '.join(problems) or 'propagating'
     return DiagnosticReport(level, message, tuple(values))

@@ -1,62 +1,33 @@
-"""The propagation node's defaults, topics and timing rules, importable without rclpy.
+"""What the node and the replay tool share besides the sessions: topics, timing, the scene.
 
-The node (:mod:`rigid_body_attitude.ros.node`) and the replay tool
-(:mod:`rigid_body_attitude.tools.replay`) must agree on these, so a replayed bag gives the numbers
-the node would have published; the replay tool cannot import the node (it needs no ROS install).
-``test/tools/test_replay.py`` checks that the node's parameter defaults equal
-:data:`NODE_DEFAULTS`.
-
-Timing rules shared by both:
-
-* the output timer period is :func:`timer_period_ns` of ``publish_rate`` (what
+* Topics, one table per scene kind: :func:`input_topics` and :func:`output_topics` (relative
+  names, message types), so the node subscribes and publishes, and the replay tool reads and
+  writes, the same set.
+* The output timer period :func:`timer_period_ns` of ``publish_rate`` (what
   ``rclpy.node.Node.create_timer(1 / publish_rate)`` uses); an rcl timer on a clock that
   starts at 0 (``use_sim_time`` before the first ``/clock``) fires at the multiples of the
-  period, reading the clock when it runs;
-* gyro and tick outcomes are published unless rejected, except that a ``gap`` or
-  ``time_jump`` still publishes (the state moved to the new time): :func:`publishes`.
+  period, reading the clock when it runs.
+* :func:`load_node_scene`: the scene with the ``integrator``, ``step`` and ``torque_timeout``
+  overrides; :func:`open_session`: the session of a scene's rate source.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from rigid_body_attitude.core.scene import Scene, load_scene
-from rigid_body_attitude.session.stream import Outcome
+from rigid_body_attitude.session.base import OutputSink
+from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.gyro import GyroSession
 
 __all__ = [
-    'COMMAND_EFFECTS',
-    'DIAGNOSTICS_PERIOD',
-    'DIAGNOSTICS_TOPIC',
-    'GYRO_TOPICS',
-    'MOVED_REASONS',
-    'NODE_DEFAULTS',
-    'NODE_NAME',
-    'OUTPUT_TOPICS',
-    'ROTOR_TORQUE_TOPIC',
-    'SET_POSE_TOPIC',
-    'TORQUE_TOPIC',
-    'load_node_scene',
-    'publishes',
-    'timer_period_ns',
+    'COMMAND_EFFECTS', 'DIAGNOSTICS_PERIOD', 'DIAGNOSTICS_TOPIC', 'GYRO_TOPICS', 'NODE_NAME',
+    'OUTPUT_TOPICS', 'ROTOR_TORQUE_TOPIC', 'SET_POSE_TOPIC', 'TORQUE_TOPIC', 'input_topics',
+    'load_node_scene', 'open_session', 'output_topics', 'timer_period_ns',
 ]
 
 NODE_NAME = 'attitude_propagator'
-
-#: Parameter name → default value of the node (types as declared: float, bool, str).
-NODE_DEFAULTS: dict[str, Any] = {
-    'scene': 'torque_free_box',
-    'world_frame': 'world',
-    'body_frame': 'base_link',
-    'publish_rate': 50.0,
-    'use_header_stamps': True,
-    'constant_dt': 0.0,
-    'max_dt': 0.1,
-    'time_jump_threshold': 1.0,
-    'torque_timeout': 0.0,
-    'integrator': '',
-    'step': 0.0,
-    'cpu_scheduling': 'batch',
-}
 
 #: Gyro input topics (relative names) → message type.
 GYRO_TOPICS = {'imu': 'sensor_msgs/msg/Imu',
@@ -69,8 +40,7 @@ ROTOR_TORQUE_TOPIC = 'rotor_torque'
 SET_POSE_TOPIC = 'set_pose'
 #: Diagnostics (absolute name, as every ROS node publishes it).
 DIAGNOSTICS_TOPIC = '/diagnostics'
-#: Output topics (relative names) → message type. ``twist`` for dynamics scenes only,
-#: ``imu/data`` for gyro scenes fed by ``sensor_msgs/msg/Imu`` only.
+#: Output topics (relative names) → message type.
 OUTPUT_TOPICS = {
     'orientation': 'geometry_msgs/msg/QuaternionStamped',
     'pose': 'geometry_msgs/msg/PoseStamped',
@@ -82,20 +52,39 @@ OUTPUT_TOPICS = {
 }
 #: Seconds between diagnostics messages.
 DIAGNOSTICS_PERIOD = 1.0
-#: Rejections after which the state still moved to the message's time (so it is published).
-MOVED_REASONS = ('gap', 'time_jump')
 #: Effects whose ``timeout`` the ``torque_timeout`` parameter overrides.
 COMMAND_EFFECTS = ('commanded_torque', 'commanded_force', 'rotor')
+
+Session = GyroSession | DynamicsSession
+
+
+def input_topics(scene: Scene, input_names: frozenset[str]) -> dict[str, str]:
+    """Input topic → message type for a scene whose propagator takes ``input_names``."""
+    topics: dict[str, str] = {}
+    if scene.rate_source == 'gyro':
+        topics.update(GYRO_TOPICS)
+    if input_names & {'torque', 'force'}:
+        topics[TORQUE_TOPIC] = 'geometry_msgs/msg/WrenchStamped'
+    if 'rotor_torque' in input_names:
+        topics[ROTOR_TORQUE_TOPIC] = 'geometry_msgs/msg/Vector3Stamped'
+    topics[SET_POSE_TOPIC] = 'geometry_msgs/msg/PoseStamped'
+    return topics
+
+
+def output_topics(scene: Scene, imu_input: bool = True) -> tuple[str, ...]:
+    """Output topics of a scene, in the order they are listed; ``imu/data`` for gyro scenes
+    fed by ``sensor_msgs/Imu`` (``imu_input``), ``twist`` for dynamics scenes."""
+    if scene.rate_source == 'gyro':
+        rate_output = ('imu/data',) if imu_input else ()
+    else:
+        rate_output = ('twist',)
+    return ('orientation', 'pose', *rate_output, 'energy', 'angular_momentum',
+            DIAGNOSTICS_TOPIC)
 
 
 def timer_period_ns(publish_rate: float) -> int:
     """Timer period [ns] of ``create_timer(1.0 / publish_rate)`` (rclpy truncates to ns)."""
     return int(float(1.0 / publish_rate) * 1e9)
-
-
-def publishes(outcome: Outcome) -> bool:
-    """Whether the node publishes after a gyro sample or clock tick with this outcome."""
-    return not outcome.reason or outcome.reason in MOVED_REASONS
 
 
 def load_node_scene(scene: str, integrator: str = '', step: float = 0.0,
@@ -108,3 +97,10 @@ def load_node_scene(scene: str, integrator: str = '', step: float = 0.0,
     return load_scene(scene).with_overrides(
         integrator=integrator, step=step,
         effect_parameters={name: held for name in COMMAND_EFFECTS} if held else None)
+
+
+def open_session(scene: Scene, values: Mapping[str, Any], sink: OutputSink,
+                 clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> Session:
+    """The session of the scene's rate source (see :class:`~.base.Session`)."""
+    kind = GyroSession if scene.rate_source == 'gyro' else DynamicsSession
+    return kind(scene, values, sink, clock_ns, monotonic)

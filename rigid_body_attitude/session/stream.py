@@ -1,27 +1,39 @@
-"""Time handling of input streams, shared by the node and the replay tool.
+"""Time rules of the input streams: whether and how far to integrate for each input.
 
-The propagators integrate; this module decides *whether and how far* to integrate for each
-incoming message, and counts what it refuses. Rules (the node's documented behaviour):
+The propagators integrate; this module decides what each input does, and counts what it
+refuses. Times are integer nanoseconds (:mod:`rigid_body_attitude.session.times`). Every input
+ends up in exactly one bucket: ``accepted``, one rejection reason, or (for a while) ``pending``.
 
 Gyro samples (:class:`GyroStream`)
-    * non-finite stamp or rate → rejected, ``non_finite``; the state is untouched;
+    * a rate that is not 3 finite numbers → ``non_finite``; of a magnitude above
+      ``max_angular_rate`` → ``out_of_range``; the state is untouched;
     * the first sample only sets the baseline (nothing to integrate across);
-    * a stamp equal to or older than the last → rejected, ``stale_stamp``; but a backward
-      jump larger than ``time_jump_threshold`` (a looping bag) → the state resets to the
-      scene's initial state and the sample is the new baseline, ``time_jump``;
-    * a gap longer than ``max_dt`` → not integrated across; the sample is the new baseline,
-      ``gap``;
-    * otherwise integrated over ``stamp − last`` (or ``constant_dt`` when set).
+    * a stamp at most ``max_dt`` after the last → integrated over the stamp difference (or
+      ``constant_dt`` when set);
+    * a stamp equal to or older than the last, by at most ``time_jump_threshold`` →
+      ``stale_stamp``;
+    * a **jump** (a stamp more than ``max_dt`` ahead, or more than ``time_jump_threshold``
+      back) is taken only when the next :data:`JUMP_CONFIRMATIONS` samples confirm it, each
+      within ``max_dt`` after the one before. Until then the samples are ``pending`` (nothing
+      changes, nothing is published). Confirmed, the first of them counts as ``gap`` (forward:
+      the new baseline, not integrated across) or ``time_jump`` (backward, a looping bag: the
+      state resets to the scene's initial state), and the confirming samples are integrated
+      from it. A sample that continues the old time line instead ends the wait: the pending
+      samples count as ``outlier_stamp`` and the stream goes on undisturbed.
+    * **missed samples**: with header stamps, the stream learns its sample period (the median
+      of the first :data:`PERIOD_SAMPLES` steps, then a slow average of the steps within ±50 %
+      of it); a step of ``k`` periods (``k ≥ 1.5``) means ``round(k) − 1`` samples were lost
+      upstream, and so does a confirmed forward gap. They are counted in
+      :attr:`GyroStream.missed_samples`.
 
-Commanded inputs (:class:`CommandStream`): non-finite → ``non_finite``; older than the last
-command of the same input → ``stale_stamp``; otherwise passed to the propagator.
+Commanded inputs (:class:`CommandStream`): not 3 finite numbers → ``non_finite``; a
+magnitude above :data:`COMMAND_LIMIT` → ``out_of_range``; older than the last command of the
+same input → ``stale_stamp``; otherwise passed to the propagator.
 
-Clock ticks for dynamics scenes (:class:`ClockDriver`): the first tick sets the scene's start
+Clock ticks of dynamics scenes (:class:`ClockDriver`): the first tick sets the scene's start
 time; a backward jump larger than ``time_jump_threshold`` resets (``time_jump``); a forward
 jump larger than it is not integrated across (``gap``); otherwise the state is integrated up
 to the tick.
-
-Every message ends up in exactly one bucket: ``accepted`` or one rejection reason.
 """
 
 from __future__ import annotations
@@ -33,35 +45,58 @@ from dataclasses import dataclass
 
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator, _Propagator
 
-__all__ = ['ClockDriver', 'CommandStream', 'GyroStream', 'Outcome', 'REASONS']
+__all__ = ['COMMAND_LIMIT', 'ClockDriver', 'CommandStream', 'GyroStream', 'JUMP_CONFIRMATIONS',
+           'Outcome', 'PERIOD_SAMPLES', 'REASONS']
 
-#: Rejection reasons, in the order the diagnostics list them.
-REASONS = ('non_finite', 'stale_stamp', 'gap', 'time_jump')
+#: Rejection reasons of the streams, in the order the diagnostics list them.
+REASONS = ('non_finite', 'out_of_range', 'stale_stamp', 'outlier_stamp', 'gap', 'time_jump')
+
+#: Samples after a jump that must confirm it (each within ``max_dt`` of the one before).
+JUMP_CONFIRMATIONS = 2
+
+#: Steps whose median is the first estimate of the gyro's sample period.
+PERIOD_SAMPLES = 16
+
+#: Largest magnitude of a commanded torque [N m] or force [N]: far above any actuator (the
+#: largest control moment gyros give ~1e4 N m, a launcher's engines ~1e7 N), far below
+#: values whose integration could overflow a float.
+COMMAND_LIMIT = 1e12
+
+Vector = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """What happened to one message.
+    """What happened to one input.
 
     Attributes:
-        accepted: the message was used (integrated, or taken as the baseline).
+        accepted: the input was used (integrated, or taken as the baseline).
         integrated: the state advanced.
-        reason: the rejection reason (one of :data:`REASONS`), or ``''`` when accepted.
+        reason: the rejection reason (one of :data:`REASONS`), or ``''``; for the sample
+            that confirmed a jump, the jump's (``gap`` or ``time_jump``).
         reset: the state was reset to the scene's initial state (a time jump).
+        pending: held until the next samples confirm or refute a jump.
     """
 
     accepted: bool
     integrated: bool = False
     reason: str = ''
     reset: bool = False
+    pending: bool = False
+
+    @property
+    def moved(self) -> bool:
+        """Whether the state moved to this input's time (so outputs are published)."""
+        return self.accepted or self.reason in ('gap', 'time_jump')
 
 
 _BASELINE = Outcome(accepted=True)
 _INTEGRATED = Outcome(accepted=True, integrated=True)
+_PENDING = Outcome(accepted=False, pending=True)
 
 
 class _Counting:
-    """Counts accepted messages and rejections by reason."""
+    """Counts accepted inputs and rejections by reason."""
 
     def __init__(self) -> None:
         self.accepted = 0
@@ -77,65 +112,170 @@ class _Counting:
 
     @property
     def total(self) -> int:
-        """Messages seen: accepted plus rejected."""
+        """Inputs seen: accepted plus rejected."""
         return self.accepted + sum(self.rejected.values())
 
 
-def _finite(stamp: float, values: Sequence[float]) -> bool:
-    isfinite = math.isfinite
-    return isfinite(stamp) and isfinite(values[0]) and isfinite(values[1]) and isfinite(
-        values[2])
+def _vector(values: Sequence[float]) -> Vector | None:
+    """3 finite floats, or None."""
+    if len(values) != 3:
+        return None
+    x, y, z = values
+    if math.isfinite(x) and math.isfinite(y) and math.isfinite(z):
+        return float(x), float(y), float(z)
+    return None
+
+
+class _PeriodLearner:
+    """The sample period of a stream, learnt from its steps; counts the samples missed."""
+
+    def __init__(self) -> None:
+        self.period_ns = 0
+        self.first_steps: list[int] = []
+        self.missed = 0
+
+    def step(self, step_ns: int) -> None:
+        """One step between consecutive samples (``step_ns > 0``)."""
+        period = self.period_ns
+        if not period:
+            self.first_steps.append(step_ns)
+            if len(self.first_steps) == PERIOD_SAMPLES:
+                self.period_ns = sorted(self.first_steps)[PERIOD_SAMPLES // 2]
+            return
+        if 2 * step_ns >= 3 * period:
+            self.missed += round(step_ns / period) - 1
+        elif 2 * step_ns > period:
+            self.period_ns = period + (step_ns - period) // 64
 
 
 class GyroStream(_Counting):
     """Feeds gyro samples into a :class:`GyroPropagator` under the stream rules above."""
 
     def __init__(self, propagator: GyroPropagator, max_dt: float, time_jump_threshold: float,
-                 constant_dt: float = 0.0) -> None:
-        """Apply ``max_dt`` [s], ``time_jump_threshold`` [s] and ``constant_dt`` (0 = off)."""
+                 constant_dt: float = 0.0, max_angular_rate: float = math.inf,
+                 count_missed: bool = True) -> None:
+        """Rules with ``max_dt``, ``time_jump_threshold``, ``constant_dt`` (0 = off) [s] and
+        ``max_angular_rate`` [rad/s]; ``count_missed``: learn the period and count missed
+        samples (meaningful for header stamps, not for receive times)."""
         super().__init__()
         self.propagator = propagator
         self.max_dt = max_dt
         self.time_jump_threshold = time_jump_threshold
         self.constant_dt = constant_dt
-        self.last_stamp = -math.inf
+        self.max_angular_rate = max_angular_rate
+        self.count_missed = count_missed
+        self.last_ns = 0
+        self.epoch_ns = 0
+        self.pending: list[tuple[int, Vector]] = []
+        #: Samples found to be outliers so far (also in ``rejected``; cheap to watch).
+        self.outliers = 0
+        self.period = _PeriodLearner()
+
+    @property
+    def max_dt(self) -> float:
+        """Longest step integrated across [s]."""
+        return self.max_dt_ns * 1e-9
+
+    @max_dt.setter
+    def max_dt(self, seconds: float) -> None:
+        self.max_dt_ns = round(seconds * 1e9)
+
+    @property
+    def time_jump_threshold(self) -> float:
+        """Largest backward step rejected as stale rather than a time jump [s]."""
+        return self.threshold_ns * 1e-9
+
+    @time_jump_threshold.setter
+    def time_jump_threshold(self, seconds: float) -> None:
+        self.threshold_ns = round(seconds * 1e9)
+
+    @property
+    def missed_samples(self) -> int:
+        """Samples lost upstream, from the stamp spacing."""
+        return self.period.missed
+
+    @property
+    def total(self) -> int:
+        """Samples seen: accepted, rejected and pending."""
+        return self.accepted + sum(self.rejected.values()) + len(self.pending)
 
     def reset(self) -> None:
         """Reset the propagator; the next sample is a new baseline."""
         self.propagator.reset()
-        self.last_stamp = -math.inf
+        self.pending.clear()
 
-    def add(self, stamp: float, omega_body: Sequence[float]) -> Outcome:
-        """Process one gyro sample stamped ``stamp`` [s] with rate ``omega_body`` [rad/s]."""
-        if len(omega_body) != 3 or not _finite(stamp, omega_body):
+    def add(self, stamp_ns: int, omega_body: Sequence[float]) -> Outcome:
+        """Process one gyro sample stamped ``stamp_ns`` with rate ``omega_body`` [rad/s]."""
+        sample = _vector(omega_body)
+        if sample is None:
             return self._reject('non_finite')
-        propagator = self.propagator
-        if not propagator.has_sample:
-            return self._baseline(stamp, omega_body)
-        if stamp <= self.last_stamp:
-            if self.last_stamp - stamp > self.time_jump_threshold:
-                propagator.reset()
-                propagator.start(stamp, omega_body)
-                self.last_stamp = stamp
-                return self._reject('time_jump', reset=True)
+        x, y, z = sample
+        if x * x + y * y + z * z > self.max_angular_rate * self.max_angular_rate:
+            return self._reject('out_of_range')
+        if not self.propagator.has_sample:
+            self.epoch_ns = stamp_ns
+            self._start(stamp_ns, sample)
+            return self._accept(_BASELINE)
+        if self.pending:
+            return self._resolve(stamp_ns, sample)
+        step_ns = stamp_ns - self.last_ns
+        if 0 < step_ns <= self.max_dt_ns:
+            return self._integrate(stamp_ns, step_ns, sample)
+        if step_ns <= 0 and -step_ns <= self.threshold_ns:
             return self._reject('stale_stamp')
-        if stamp - self.last_stamp > self.max_dt:
-            propagator.start(stamp, omega_body)
-            self.last_stamp = stamp
-            return self._reject('gap')
-        sample = (float(omega_body[0]), float(omega_body[1]), float(omega_body[2]))
+        self.pending.append((stamp_ns, sample))
+        return _PENDING
+
+    def _integrate(self, stamp_ns: int, step_ns: int, sample: Vector) -> Outcome:
+        propagator = self.propagator
+        if self.count_missed:
+            self.period.step(step_ns)
         if self.constant_dt > 0.0:
             propagator.advance(propagator.state.time + self.constant_dt, sample)
         else:
-            propagator.advance(float(stamp), sample)
-        self.last_stamp = stamp
+            propagator.advance((stamp_ns - self.epoch_ns) * 1e-9, sample)
+        self.last_ns = stamp_ns
         self.accepted += 1
         return _INTEGRATED
 
-    def _baseline(self, stamp: float, omega_body: Sequence[float]) -> Outcome:
-        self.propagator.start(stamp, omega_body)
-        self.last_stamp = stamp
-        return self._accept(_BASELINE)
+    def _start(self, stamp_ns: int, sample: Vector) -> None:
+        """A new baseline at ``stamp_ns``. The propagator's time is seconds since
+        :attr:`epoch_ns`, the stamp of the first sample since the last reset."""
+        self.last_ns = stamp_ns
+        self.propagator.start((stamp_ns - self.epoch_ns) * 1e-9, sample)
+
+    def _resolve(self, stamp_ns: int, sample: Vector) -> Outcome:
+        """A sample while a jump waits for confirmation."""
+        step_ns = stamp_ns - self.pending[-1][0]
+        if 0 < step_ns <= self.max_dt_ns:
+            self.pending.append((stamp_ns, sample))
+            if len(self.pending) <= JUMP_CONFIRMATIONS:
+                return _PENDING
+            return self._take_jump()
+        self.rejected['outlier_stamp'] += len(self.pending)
+        self.outliers += len(self.pending)
+        self.pending.clear()
+        return self.add(stamp_ns, sample)
+
+    def _take_jump(self) -> Outcome:
+        """The pending samples confirmed a jump: the first is a new baseline, the rest are
+        integrated from it."""
+        (first_ns, first), *confirming = self.pending
+        self.pending = []
+        backward = first_ns < self.last_ns
+        if backward:
+            self.rejected['time_jump'] += 1
+            self.propagator.reset()
+            self.epoch_ns = first_ns
+        else:
+            self.rejected['gap'] += 1
+            if self.count_missed and self.period.period_ns:
+                self.period.step(first_ns - self.last_ns)
+        self._start(first_ns, first)
+        for stamp_ns, sample in confirming:
+            self._integrate(stamp_ns, stamp_ns - self.last_ns, sample)
+        return Outcome(accepted=True, integrated=True, reason='time_jump' if backward else 'gap',
+                       reset=backward)
 
 
 class CommandStream(_Counting):
@@ -145,21 +285,34 @@ class CommandStream(_Counting):
         """Route commands to ``propagator``."""
         super().__init__()
         self.propagator = propagator
-        self.last_stamps: dict[str, float] = {}
+        self.last_ns: dict[str, int] = {}
 
-    def add(self, input_name: str, stamp: float, value: Sequence[float]) -> Outcome:
-        """Process one command ``value`` for ``input_name`` stamped ``stamp`` [s]."""
-        if len(value) != 3 or not _finite(stamp, value):
-            return self._reject('non_finite')
-        if stamp < self.last_stamps.get(input_name, -math.inf):
+    def check(self, value: Sequence[float]) -> str:
+        """The rejection reason of a command value, or ``''``."""
+        vector = _vector(value)
+        if vector is None:
+            return 'non_finite'
+        x, y, z = vector
+        if x * x + y * y + z * z > COMMAND_LIMIT * COMMAND_LIMIT:
+            return 'out_of_range'
+        return ''
+
+    def add(self, input_name: str, stamp_ns: int, time_s: float,
+            value: Sequence[float]) -> Outcome:
+        """Process one command ``value`` for ``input_name`` stamped ``stamp_ns`` (``time_s``
+        on the propagator's time axis)."""
+        reason = self.check(value)
+        if reason:
+            return self._reject(reason)
+        if stamp_ns < self.last_ns.get(input_name, stamp_ns):
             return self._reject('stale_stamp')
-        self.propagator.command(input_name, stamp, value)
-        self.last_stamps[input_name] = stamp
+        self.propagator.command(input_name, time_s, value)
+        self.last_ns[input_name] = stamp_ns
         return self._accept(_BASELINE)
 
     def reset(self) -> None:
-        """Forget the last stamps (after a time jump)."""
-        self.last_stamps.clear()
+        """Forget the last stamps (after a time jump or reset)."""
+        self.last_ns.clear()
 
 
 class ClockDriver(_Counting):
@@ -173,7 +326,7 @@ class ClockDriver(_Counting):
         self.started = False
 
     def tick(self, now: float) -> Outcome:
-        """Integrate up to ``now`` [s] (clock seconds)."""
+        """Integrate up to ``now`` [s on the propagator's time axis]."""
         if not math.isfinite(now):
             return self._reject('non_finite')
         propagator = self.propagator

@@ -77,7 +77,8 @@ class BroadTrial:
     @property
     def ground_truth_lost(self) -> NDArray[np.bool_]:
         """Mask of samples without optical ground truth (NaN rows), shape (N,)."""
-        return np.all(np.isnan(self.ground_truth), axis=1)
+        lost: NDArray[np.bool_] = np.all(np.isnan(self.ground_truth), axis=1)
+        return lost
 
     def rest_gyro_bias(self) -> FloatArray:
         """Gyroscope bias estimate (rad/s, body frame): mean rate over the initial rest phase.
@@ -85,7 +86,8 @@ class BroadTrial:
         The rest phase is every sample before :attr:`first_motion_index`; the standard error of
         the mean is σ/√n ≈ 2·10⁻³/√7500 ≈ 2·10⁻⁵ rad/s for the shipped trials.
         """
-        return self.gyro[:self.first_motion_index].mean(axis=0)
+        bias: FloatArray = self.gyro[:self.first_motion_index].mean(axis=0)
+        return bias
 
 
 def _read_archive(path: Path) -> dict[str, np.ndarray]:
@@ -115,7 +117,7 @@ def _array(arrays: dict[str, np.ndarray], key: str, path: Path,
 
 
 def _readonly(array: np.ndarray, dtype: type) -> np.ndarray:
-    result = np.array(array, dtype=dtype)
+    result: np.ndarray = np.array(array, dtype=dtype)
     result.flags.writeable = False
     return result
 

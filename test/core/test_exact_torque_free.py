@@ -133,9 +133,7 @@ def test_near_separatrix_both_sides_match_dop853():
 @pytest.mark.parametrize('difference', [1e-13, 1e-11, 1e-9, 1e-7])
 def test_state_nearly_axisymmetric_minor_side(difference):
     # J1 ≈ J2 with m3 tiny: Δ2 < 0, the thin minor-axis band where the Carlson closed form
-    # of ψ loses digits like eps·√|n| (n ≈ −1/difference); the quadrature must not. (m is
-    # far from the symmetry axis e₃, so differences below AXISYMMETRY_TOLERANCE are not
-    # routed to the axisymmetric form either.)
+    # of ψ loses digits like eps·√|n| (n ≈ −1/difference); the quadrature must not.
     attitude = quat.normalize([0.9, 0.1, -0.3, 0.2])
     omega_body = [1.0, 0.2, 1e-9]
     nearly = TorqueFreeMotion([1.0, 1.0 + difference, 2.0], attitude, omega_body=omega_body)

@@ -1,9 +1,9 @@
 """Tests of the fused composition loop for axisymmetric bodies (integrators/axisymmetric.py).
 
 The Casimir and RKN splittings run it for an axisymmetric body under a rate-independent torque
-without rotor. References: DOP853 at rtol 1e−13 on the study's heavy top (the accuracy study's
-right-hand side), the general per-stage path of the same methods, a relabelled copy of the
-same top, and the top's conservation laws.
+without rotor. References: DOP853 at rtol 1e−13 on the heavy top below (a plain-float
+gravity torque, the case the fused loop serves), the general per-stage path of the same
+methods, a relabelled copy of the same top, and the top's conservation laws.
 """
 
 import math
@@ -13,17 +13,46 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.tools import study
 from rigid_body_attitude.core.errors import IntegratorError
 from rigid_body_attitude.core.integrators import dynamics_integrator, SimpleBodyModel
 
 FUSED_METHODS = ['casimir6', 'casimir8', 'rkn4', 'rkn6']
 START = np.concatenate([quat.exp([0.3, 0.0, 0.0]), [0.0, 0.5, 25.0]])
-MOMENTS = study.HEAVY_TOP_MOMENTS
+MOMENTS = (0.05, 0.05, 0.02)  # symmetric top about its pivot [kg m²]
+MGL = 9.81 * 0.1  # m g l [N m]
 
 
-def top_model(moments=MOMENTS, torque=study.heavy_top_torque, takes_floats=True):
-    """The study's heavy top (gravity ignores ω, no rotor): the fused loop applies."""
+def heavy_top_torque(t, attitude, omega_body):
+    """Gravity about the pivot, centre of mass at l e₃: ``m g l e₃ × R(q)ᵀ(−ẑ)`` [N m],
+    taking plain floats or arrays (the effect gravity_about_pivot, written in floats)."""
+    qw, qx, qy, qz = (float(x) for x in attitude)
+    # R(q)ᵀ(−ẑ) = −(2(xz − wy), 2(yz + wx), 1 − 2(x² + y²)); e₃ × g = (−g_y, g_x, 0).
+    return (MGL * 2.0 * (qy * qz + qw * qx), -MGL * 2.0 * (qx * qz - qw * qy), 0.0)
+
+
+def heavy_top_rhs(t, y):
+    """Euler + Poisson equations of the top, ``y = (q, ω)``."""
+    q, w = y[:4], y[4:]
+    moments = np.array(MOMENTS)
+    w_dot = (np.array(heavy_top_torque(t, q, w)) - np.cross(w, moments * w)) / moments
+    return np.concatenate([0.5 * quat.multiply(q, np.concatenate([[0.0], w])), w_dot])
+
+
+def heavy_top_energy(q, w):
+    """Kinetic plus potential energy ``½ωᵀJω + m g l (R e₃)·ẑ`` [J]."""
+    height = 1.0 - 2.0 * (q[1] ** 2 + q[2] ** 2)
+    return float(0.5 * np.sum(np.array(MOMENTS) * w * w) + MGL * height)
+
+
+def test_heavy_top_torque_is_gravity_about_pivot():
+    attitude = quat.normalize([0.7, 0.2, -0.4, 0.3])
+    force_body = quat.rotate_inverse(attitude, [0.0, 0.0, -1.0])
+    np.testing.assert_allclose(heavy_top_torque(0.0, attitude, None),
+                               MGL * np.cross([0.0, 0.0, 1.0], force_body), atol=1e-15)
+
+
+def top_model(moments=MOMENTS, torque=heavy_top_torque, takes_floats=True):
+    """The heavy top (gravity ignores ω, no rotor): the fused loop applies."""
     return SimpleBodyModel(moments, torque_body=torque, torque_depends_on_rate=False,
                            torque_takes_floats=takes_floats)
 
@@ -31,7 +60,7 @@ def top_model(moments=MOMENTS, torque=study.heavy_top_torque, takes_floats=True)
 @pytest.fixture(scope='module')
 def reference():
     """DOP853 at rtol 1e−13 over 2 s (global error ~1e−12 here)."""
-    return solve_ivp(study.heavy_top_rhs, (0.0, 2.0), START, method='DOP853', rtol=1e-13,
+    return solve_ivp(heavy_top_rhs, (0.0, 2.0), START, method='DOP853', rtol=1e-13,
                      atol=1e-15).y[:4, -1]
 
 
@@ -78,8 +107,7 @@ def test_integrate_spin_axis_first_matches_relabelled_top():
     relabel = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
     def relabelled_torque(t, attitude, omega_body):
-        return study.HEAVY_TOP_MGL * np.cross([1.0, 0.0, 0.0],
-                                              quat.rotate_inverse(attitude, [0.0, 0.0, -1.0]))
+        return MGL * np.cross([1.0, 0.0, 0.0], quat.rotate_inverse(attitude, [0.0, 0.0, -1.0]))
     moments = (MOMENTS[2], MOMENTS[0], MOMENTS[1])
     attitude = quat.from_matrix(quat.to_matrix(START[:4]) @ relabel.T)
     q, omega = dynamics_integrator('casimir8').integrate(
@@ -118,12 +146,12 @@ def test_integrate_heavy_top_keeps_vertical_momentum_spin_and_energy():
     moments = np.array(MOMENTS)
     q, omega = START[:4], START[4:]
     vertical = quat.rotate(q, moments * omega)[2]
-    energy = study.heavy_top_energy(q, omega)
+    energy = heavy_top_energy(q, omega)
     for _ in range(40):
         q, omega = integrator.integrate(q, omega, 0.0, 0.05, 50, model)  # 100 s in all
         assert abs(quat.rotate(q, moments * omega)[2] - vertical) <= 1e-13 * abs(vertical)
         assert abs(omega[2] - START[6]) <= 4.0 * np.spacing(START[6])
-        assert abs(study.heavy_top_energy(q, omega) / energy - 1.0) <= 1e-12
+        assert abs(heavy_top_energy(q, omega) / energy - 1.0) <= 1e-12
         assert abs(np.linalg.norm(q) - 1.0) <= 1e-15
 
 

@@ -25,8 +25,7 @@ from rigid_body_attitude.core import quaternion as quat
 from rigid_body_attitude.core.dynamics import RigidBodyModel
 from rigid_body_attitude.core.inertia import Inertia
 from rigid_body_attitude.core.integrators import DYNAMICS_INTEGRATORS, dynamics_integrator
-from rigid_body_attitude.core.integrators.exact_torque_free import (
-    AXISYMMETRY_TOLERANCE, TorqueFreeMotion)
+from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
 
 EPS = np.finfo(float).eps
 Q0 = quat.normalize([0.8, -0.2, 0.3, 0.4])
@@ -68,26 +67,19 @@ def test_exact_solution_moves_smoothly_into_the_axisymmetric_form(delta):
     times = np.linspace(0.0, duration, 501)
     q, omega = motion.state(times)
     assert np.all(np.isfinite(q)) and np.all(np.isfinite(omega))
-    # Routing: relative differences up to AXISYMMETRY_TOLERANCE = 1e−10 go to the
-    # axisymmetric form (harmonic mean of J₁, J₂) since m is within 45° of the symmetry axis
-    # here; above, the elliptic form.
+    # Routing: only exactly equal moments take the axisymmetric form; any difference, down
+    # to one ulp, the elliptic one (test_exact_torque_free_near_axisymmetric.py).
     relative = (inertia[0] - inertia[1]) / inertia[0]
-    routed = relative <= AXISYMMETRY_TOLERANCE
+    routed = relative == 0.0
     assert motion.kind == ('axisymmetric' if routed else 'major_axis')
-    # Against DOP853 on the actual tensor: the elliptic form measured 3.6e−13..5.2e−13 rad
-    # (bound 2e−12, the reference's accuracy); the routed form adds its model error, stated
-    # ≤ δ|ω|t (6.0e−11 rad for δ = 1e−12; measured 4.0e−13 — with J₁ instead of the harmonic
-    # mean it was 1.2e−11 rad) and ≤ δ|ω|·|ω|t in the rate.
-    speed = np.linalg.norm(omega0)
-    model_error = relative * speed * duration if routed else 0.0
+    # Against DOP853 on the actual tensor: measured 3.6e−13..5.2e−13 rad (bound 2e−12, the
+    # reference's accuracy).
     reference_q, reference_omega = dop853_reference(np.diag(inertia), Q0, omega0, duration)
-    assert quat.attitude_error(q[-1], reference_q) <= 2e-12 + model_error
-    np.testing.assert_allclose(omega[-1], reference_omega, rtol=0.0,
-                               atol=1e-12 + model_error * speed)
+    assert quat.attitude_error(q[-1], reference_q) <= 2e-12
+    np.testing.assert_allclose(omega[-1], reference_omega, rtol=0.0, atol=1e-12)
     # Against the exactly axisymmetric body J = (1, 1, 2): the attitude depends smoothly on
     # J₁, so the difference is c·δ (c = 11.9 for this body after 50 s, measured from δ = 1e−3
-    # down to 1e−14; 6.0 when routed, the harmonic mean being 1 + δ/2), with no step at the
-    # switch.
+    # down to 1e−14), with no step at δ = 0.
     symmetric = TorqueFreeMotion([1.0, 1.0, 2.0], Q0, omega_body=omega0)
     assert quat.attitude_error(q[-1], symmetric.attitude(duration)) <= 15.0 * delta + 1e-13
     world = quat.rotate(q, omega * inertia)
@@ -137,22 +129,13 @@ def test_exact_solution_on_extreme_bodies(body):
     # the rods (measured 2.7e−12, 5.2e−11, 5.1e−12; DOP853 itself drifts 3.1e−11 in H on the
     # rotated rod).
     conditioning = 4.0 * np.linalg.cond(tensor) * EPS
-    # The heavy oblate body (δ = 1e−12, m near its symmetry axis) is routed to the
-    # axisymmetric form: model error ≤ δ|ω|t rad, ≤ δ|ω|·|ω|t relative in the rate
-    # (measured 4.0e−13 rad, 4.1e−13 relative).
-    moments = np.linalg.eigvalsh(tensor)
-    routing = 0.0
-    if motion.kind == 'axisymmetric':
-        relative = min(moments[1] - moments[0], moments[2] - moments[1]) / moments[2]
-        routing = relative * np.linalg.norm(omega0) * duration
     assert np.linalg.norm(tensor @ (omega - reference_omega)) <= (
-        (conditioning + routing * max(1.0, np.linalg.norm(omega0) * duration))
-        * np.linalg.norm(momentum))
+        conditioning * np.linalg.norm(momentum))
     # The phase ψ is integrated from ψ̇ = (2T + σ G ω_a)/(G + σ m_a), a ratio of positive
     # terms, so nothing of size G t/J₁ ≈ 1.3e6 rad cancels (test below). Bound: conditioning
     # + 1e−11 (DOP853's own error on these bodies: 5.1e−12 rad on the triaxial rod against
     # the 60-digit reference below; measured 1.3e−12, 5.1e−12, 2.3e−11 in all).
-    assert quat.attitude_error(q, reference_q) <= conditioning + routing + 1e-11
+    assert quat.attitude_error(q, reference_q) <= conditioning + 1e-11
     world = quat.rotate(q, tensor @ omega)
     assert np.linalg.norm(world - quat.rotate(Q0, momentum)) <= 1e-13 * np.linalg.norm(momentum)
 

@@ -194,17 +194,17 @@ def test_gyro_stream_in_two_halves_equals_whole(stream, split, name):
     whole = fresh()
     outputs_whole = []
     for stamp, value in zip(stamps, values):
-        whole.add(stamp, value)
+        whole.add(round(stamp * 1e9), value)
         outputs_whole.append(whole.propagator.state.attitude.copy())
     index = int(split * len(stamps))
     first = fresh()
     outputs_halves = []
     for stamp, value in zip(stamps[:index], values[:index]):
-        first.add(stamp, value)
+        first.add(round(stamp * 1e9), value)
         outputs_halves.append(first.propagator.state.attitude.copy())
     second = copy.deepcopy(first)  # the state carried over: attitude, last sample, history
     for stamp, value in zip(stamps[index:], values[index:]):
-        second.add(stamp, value)
+        second.add(round(stamp * 1e9), value)
         outputs_halves.append(second.propagator.state.attitude.copy())
     np.testing.assert_array_equal(np.array(outputs_halves), np.array(outputs_whole))
     assert second.total == len(stamps) == whole.total

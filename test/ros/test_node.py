@@ -8,7 +8,6 @@ same floats (the node must add nothing of its own).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 import math
 import threading
 from typing import Any
@@ -22,20 +21,20 @@ import pytest
 from rclpy.parameter import Parameter
 from rclpy.qos import ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from ros_helpers import Harness, ros_session, RosContext, unique_namespace
+from ros_helpers import Harness, stamp, unique_namespace
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import InputError, IntegratorError, SceneError
-from rigid_body_attitude.session.reports import body_frame_velocity, TimeBase
-from rigid_body_attitude.ros.node import AttitudePropagatorNode, check_parameters
+from rigid_body_attitude.session.reports import body_frame_velocity
+from rigid_body_attitude.session.times import TimeBase
+from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.serve import main
 from rigid_body_attitude.session.outputs import OutputTracker
 from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.scene import load_scene
-from rigid_body_attitude.session.settings import NODE_DEFAULTS
 from rigid_body_attitude.session.stream import ClockDriver, CommandStream, GyroStream
 
 #: Input stamps start at a realistic epoch with a fractional second: as float seconds these
@@ -46,19 +45,6 @@ MS = 1_000_000
 #: 1 kHz gyro, |ω| = 7 rad/s: the attitude passes w = 0 at t = π/7 s, so a sign flip of the
 #: published quaternion would show against the (continuous) closed form.
 OMEGA = (2.0, -3.0, 6.0)
-
-
-@pytest.fixture
-def ros(ros_domain_id: int) -> Iterator[RosContext]:
-    """A context and executor of the test's own on the test run's domain."""
-    with ros_session(ros_domain_id) as session:
-        yield session
-
-
-def stamp(nanoseconds: int) -> Time:
-    """A builtin_interfaces/Time of integer nanoseconds."""
-    sec, nanosec = divmod(nanoseconds, 10**9)
-    return Time(sec=sec, nanosec=nanosec)
 
 
 def nanoseconds(time_message: Time) -> int:
@@ -107,9 +93,9 @@ def deep_qos(namespace: str, topics: dict[str, str]) -> dict[str, Any]:
 def publish_and_wait(harness: Harness, node: AttitudePropagatorNode, topic: str,
                      message: Any) -> None:
     """Publish one input and spin until the node has taken it (outputs get 50 ms to arrive)."""
-    expected = node.input_messages + 1
+    expected = node.session.received_count() + 1
     harness.publishers[topic].publish(message)
-    assert harness.spin_until(lambda: node.input_messages >= expected, 5.0)
+    assert harness.spin_until(lambda: node.session.received_count() >= expected, 5.0)
     harness.spin_for(0.05)
 
 
@@ -127,44 +113,11 @@ def own_statuses(messages: list[DiagnosticArray], node: AttitudePropagatorNode
 
 # -- parameters ----------------------------------------------------------------------------
 
-def defaults() -> dict[str, Any]:
-    return dict(NODE_DEFAULTS)
-
-
-def test_check_parameters_accepts_defaults():
-    assert check_parameters(defaults()) == ''
-
-
-@pytest.mark.parametrize('name, value, expected', [
-    ('max_dt', 0.0, 'Expected parameter `max_dt` to be a finite number > 0, got 0.0'),
-    ('publish_rate', math.nan, '`publish_rate` to be a finite number > 0, got nan'),
-    ('time_jump_threshold', -1.0, '`time_jump_threshold` to be a finite number > 0'),
-    ('constant_dt', -0.001, '`constant_dt` to be a finite number >= 0, got -0.001'),
-    ('step', math.inf, '`step` to be a finite number >= 0, got inf'),
-    ('scene', ' ', '`scene` to be a non-empty name'),
-    ('body_frame', 'world', '`world_frame` and `body_frame` to differ, both are \'world\''),
-])
-def test_check_parameters_names_the_bad_value(name, value, expected):
-    values = defaults()
-    values[name] = value
-    assert expected in check_parameters(values)
-
-
-def test_check_parameters_bounds_the_steps_of_one_tick():
-    values = defaults()
-    values['time_jump_threshold'] = 2e4
-    assert check_parameters(values) == ''  # gyro scenes: no integration over clock jumps
-    assert check_parameters(values, dynamics_step=0.002) == ''  # 1e7 steps
-    assert check_parameters(values, dynamics_step=0.001) == (
-        'Expected parameter `time_jump_threshold` to be at most 10000 s (10000000 steps of '
-        '0.001 s in one tick), got 20000.0')
-
-
 @pytest.mark.parametrize('name, value, error, match', [
     ('scene', 'no_such_scene', SceneError, "Unknown scene 'no_such_scene'; built-in scenes"),
     ('publish_rate', 50, InputError, 'Expected parameter `publish_rate` to be a double'),
     ('max_dt', -1.0, InputError, 'Bad parameter `max_dt`: .*out of range'),
-    ('max_dt', 0.0, InputError, '`max_dt` to be a finite number > 0, got 0.0'),
+    ('max_dt', 0.0, InputError, '`max_dt` to be a finite number in \\(0, 3600\\], got 0.0'),
     ('integrator', 'no_such_method', IntegratorError, "Unknown strapdown method"),
 ])
 def test_node_refuses_bad_parameters_at_start(ros, request, name, value, error, match):
@@ -187,17 +140,18 @@ def test_runtime_parameter_changes_are_checked_and_applied(ros, request):
     harness = Harness(ros, unique_namespace(request))
     node = start_node(harness, scene='strapdown')
     assert node.set_parameters([Parameter('max_dt', value=0.5)])[0].successful
-    assert node.gyro_stream.max_dt == 0.5
+    assert node.session.stream.max_dt == 0.5
     assert node.set_parameters([Parameter('constant_dt', value=0.002)])[0].successful
-    assert node.gyro_stream.constant_dt == 0.002
+    assert node.session.stream.constant_dt == 0.002
     refused = node.set_parameters([Parameter('max_dt', value=0.0)])[0]
-    assert not refused.successful and '`max_dt` to be a finite number > 0' in refused.reason
-    assert node.gyro_stream.max_dt == 0.5
+    assert not refused.successful
+    assert '`max_dt` to be a finite number in (0, 3600]' in refused.reason
+    assert node.session.stream.max_dt == 0.5
     assert not node.set_parameters([Parameter('body_frame', value='world')])[0].successful
     assert not node.set_parameters([Parameter('scene', value='dzhanibekov')])[0].successful
     assert node.set_parameters([Parameter('world_frame', value='map')])[0].successful
-    assert node.pose_message.header.frame_id == 'map'
-    assert node.orientation_message.header.frame_id == 'map'
+    assert node.outputs.pose_message.header.frame_id == 'map'
+    assert node.outputs.orientation_message.header.frame_id == 'map'
 
 
 @pytest.mark.parametrize('scene, inputs, outputs', [
@@ -250,12 +204,12 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
     times = np.arange(count) * 1e-3
     closed_form = quaternion.exp(times[:, None] * np.array(OMEGA))
     assert np.max(np.abs(published - closed_form)) <= 1e-9
-    # The core fed the same floats through the same time base gives the same bits.
+    # The stream rules fed the same stamps and floats give the same bits.
     propagator = build_propagator(load_scene('strapdown'))
-    stream, time_base, tracker = GyroStream(propagator, 0.1, 1.0), TimeBase(), OutputTracker()
+    stream, tracker = GyroStream(propagator, 0.1, 1.0), OutputTracker()
     core = []
     for at_ns in stamps_ns:
-        stream.add(time_base.seconds_from_nanoseconds(at_ns), OMEGA)
+        stream.add(at_ns, OMEGA)
         core.append(tracker.attitude(propagator))
     assert np.max(np.abs(published - np.array(core))) <= 1e-15
     assert np.max(np.abs(np.linalg.norm(published, axis=1) - 1.0)) <= 1e-12
@@ -272,7 +226,7 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
             last.orientation.z) == tuple(published[-1])
     assert (last.angular_velocity.x, last.angular_velocity.y, last.angular_velocity.z) == OMEGA
     assert not np.any(last.orientation_covariance)  # all zeros: covariance unknown
-    assert node.gyro_stream.accepted == count and not node.gyro_stream.rejected
+    assert node.session.stream.accepted == count and not node.session.stream.rejected
 
 
 def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request):
@@ -315,6 +269,7 @@ def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request
                                                                              node)), 5.0)
         # set_pose goes through the executor, the next gyro sample through the loop.
         pose = PoseStamped()
+        pose.header.frame_id = 'world'
         pose.pose.orientation.x, pose.pose.orientation.w = 1.0, 0.0  # 180° about x
         publish_and_wait(harness, node, 'set_pose', pose)
         rate = Vector3Stamped()
@@ -370,7 +325,7 @@ def test_receive_time_replaces_header_stamps_when_asked(ros, request):
         publish_and_wait(harness, node, 'imu', imu_message(0, OMEGA))
     after_ns = node.get_clock().now().nanoseconds
     stamps_ns = [nanoseconds(m.header.stamp) for m in orientations]
-    assert len(stamps_ns) == 3 and not node.gyro_stream.rejected
+    assert len(stamps_ns) == 3 and not node.session.stream.rejected
     assert before_ns <= stamps_ns[0] < stamps_ns[1] < stamps_ns[2] <= after_ns
     # Integrated over the receive-time differences (exact for a constant rate; the float
     # seconds of the time base carry ~1e-16 s relative error): 1e-12.
@@ -388,17 +343,27 @@ def test_timing_faults_are_rejected_counted_and_reported(ros, request, capfd):
     harness.wait_for_connections()
     step = quaternion.exp(1e-3 * np.array(OMEGA))
     identity = quaternion.identity()
-    # (stamp offset [ms], outputs so far, last output's attitude and stamp offset, rejections)
+    step2 = quaternion.multiply(step, step)
+    # (stamp offset [ms], outputs so far, last output's attitude and stamp offset, rejections).
+    # A jump waits for two confirming samples (stream.JUMP_CONFIRMATIONS): nothing is
+    # published meanwhile; a sample on the old time line makes the candidate an outlier.
     script = [
         (0.0, 1, identity, 0.0, {}),                                           # baseline
         (1.0, 2, step, 1.0, {}),                                               # integrated
         (1.0, 2, step, 1.0, {'stale_stamp': 1}),                               # duplicate
         (0.5, 2, step, 1.0, {'stale_stamp': 2}),                               # out of order
-        (501.0, 3, step, 501.0, {'stale_stamp': 2, 'gap': 1}),                 # gap: held
-        (502.0, 4, quaternion.multiply(step, step), 502.0, {'stale_stamp': 2, 'gap': 1}),
-        (-4498.0, 5, identity, -4498.0,                                        # loop: reset
-         {'stale_stamp': 2, 'gap': 1, 'time_jump': 1}),
-        (-4497.0, 6, step, -4497.0, {'stale_stamp': 2, 'gap': 1, 'time_jump': 1}),
+        (501.0, 2, step, 1.0, {'stale_stamp': 2}),                             # jump? pending
+        (2.0, 3, step2, 2.0, {'stale_stamp': 2, 'outlier_stamp': 1}),          # no: outlier
+        (601.0, 3, step2, 2.0, {'stale_stamp': 2, 'outlier_stamp': 1}),        # jump? pending
+        (602.0, 3, step2, 2.0, {'stale_stamp': 2, 'outlier_stamp': 1}),        # pending
+        (603.0, 4, quaternion.multiply(step2, step2), 603.0,                   # confirmed gap:
+         {'stale_stamp': 2, 'outlier_stamp': 1, 'gap': 1}),                    # held, then 2
+        (-4397.0, 4, quaternion.multiply(step2, step2), 603.0,                 # loop? pending
+         {'stale_stamp': 2, 'outlier_stamp': 1, 'gap': 1}),
+        (-4396.0, 4, quaternion.multiply(step2, step2), 603.0,
+         {'stale_stamp': 2, 'outlier_stamp': 1, 'gap': 1}),
+        (-4395.0, 5, step2, -4395.0,                                           # confirmed:
+         {'stale_stamp': 2, 'outlier_stamp': 1, 'gap': 1, 'time_jump': 1}),    # reset, 2 steps
     ]
     for offset_ms, outputs, attitude, output_offset_ms, rejected in script:
         publish_and_wait(harness, node, 'imu',
@@ -409,7 +374,7 @@ def test_timing_faults_are_rejected_counted_and_reported(ros, request, capfd):
         # At most two exp steps computed in another operation order than the reference
         # (scalar_exp_step with renormalisation): ~10 roundings of 1.1e-16 each, so 1e-14.
         assert np.max(np.abs(scalar_first(orientations[-1:])[0] - attitude)) <= 1e-14
-        assert dict(node.gyro_stream.rejected) == rejected, offset_ms
+        assert dict(node.session.stream.rejected) == rejected, offset_ms
     assert harness.spin_until(lambda: any(
         status_values(m)['rejected time_jump'] == '1' for m in own_statuses(diagnostics, node)),
         3.0)
@@ -418,9 +383,9 @@ def test_timing_faults_are_rejected_counted_and_reported(ros, request, capfd):
     assert '1 gap in the last period' in warned and '1 time_jump in the last period' in warned
     final = status_values(own_statuses(diagnostics, node)[-1])
     assert (final['rejected stale_stamp'], final['rejected gap'], final['accepted']) == \
-        ('2', '1', '4')  # baseline, two integrated steps, the sample after the jump
+        ('2', '1', '7')  # baseline, 3 integrated steps, 2 after the gap, 2 after the jump
     assert final['scene'] == 'strapdown' and final['integrator'] == 'exp_map'
-    assert capfd.readouterr().err.count('time jumped back') == 1  # logged once
+    assert capfd.readouterr().err.count('stamps jumped back') == 1  # logged once
 
 
 def test_non_finite_inputs_are_rejected_and_outputs_stay_finite(ros, request):
@@ -434,15 +399,18 @@ def test_non_finite_inputs_are_rejected_and_outputs_stay_finite(ros, request):
     publish_and_wait(harness, node, 'imu', imu_message(BASE_NS + MS, (math.nan, 0.0, 0.0)))
     publish_and_wait(harness, node, 'imu', imu_message(BASE_NS + MS, (0.0, 0.0, -math.inf)))
     bad_pose = PoseStamped()
+    bad_pose.header.frame_id = 'world'
     bad_pose.pose.orientation.w = math.nan
     publish_and_wait(harness, node, 'set_pose', bad_pose)
     zero_pose = PoseStamped()
+    zero_pose.header.frame_id = 'world'
     zero_pose.pose.orientation.w = 0.0  # (0, 0, 0, 0): not a rotation
     publish_and_wait(harness, node, 'set_pose', zero_pose)
     assert len(orientations) == 1
-    assert dict(node.gyro_stream.rejected) == {'non_finite': 2}
-    assert dict(node.shell_rejections) == {'non_finite': 1, 'invalid_pose': 1}
+    assert dict(node.session.stream.rejected) == {'non_finite': 2}
+    assert dict(node.session.rejections) == {'non_finite': 1, 'invalid_pose': 1}
     pose = PoseStamped()
+    pose.header.frame_id = 'world'
     pose.pose.orientation.x, pose.pose.orientation.w = 1.0, 0.0  # 180° about x
     publish_and_wait(harness, node, 'set_pose', pose)
     publish_and_wait(harness, node, 'imu', imu_message(BASE_NS + MS, OMEGA))
@@ -492,8 +460,8 @@ def test_commanded_torque_on_sim_time_gives_the_core_rates_and_energy(ros, reque
     publish_and_wait(harness, node, 'torque', wrench)
     wrench.wrench.torque.x, wrench.wrench.torque.y, wrench.wrench.torque.z = torque_body
     publish_and_wait(harness, node, 'torque', wrench)
-    assert node.command_stream.accepted == 1
-    assert dict(node.command_stream.rejected) == {'non_finite': 1}
+    assert node.session.commands_accepted == 1
+    assert dict(node.session.commands.rejected) == {'non_finite': 1}
     ticks = 50  # 1 s of sim time; the scene holds a command 0.5 s
     for k in range(1, ticks + 1):
         advance_clock(harness, first_ns + k * 20 * MS, twists, k + 1)
@@ -504,13 +472,13 @@ def test_commanded_torque_on_sim_time_gives_the_core_rates_and_energy(ros, reque
     propagator = build_propagator(load_scene('commanded_torque'))
     driver, commands, time_base = ClockDriver(propagator, 1.0), CommandStream(propagator), \
         TimeBase()
-    driver.tick(time_base.seconds_from_nanoseconds(first_ns))
-    commands.add('torque', time_base.seconds_from_nanoseconds(first_ns), torque_body)
+    driver.tick(time_base.seconds(first_ns))
+    commands.add('torque', first_ns, time_base.seconds(first_ns), torque_body)
     j2 = propagator.scene.inertia.tensor[1, 1]
     rate = torque_body[1] / j2
     for twist, pose, energy in zip(twists[1:], poses[1:], energies[1:]):
         at_ns = nanoseconds(twist.header.stamp)
-        driver.tick(time_base.seconds_from_nanoseconds(at_ns))
+        driver.tick(time_base.seconds(at_ns))
         omega = (twist.twist.angular.x, twist.twist.angular.y, twist.twist.angular.z)
         assert omega == tuple(propagator.state.omega_body.tolist())  # same bits as the core
         assert energy.data == propagator.energy()
@@ -567,7 +535,7 @@ def test_commanded_force_moves_the_pose_as_the_core_predicts(ros, request):
     wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z = force_body
     wrench.wrench.torque.x, wrench.wrench.torque.y, wrench.wrench.torque.z = torque_body
     publish_and_wait(harness, node, 'torque', wrench)
-    assert node.command_stream.accepted == 2  # torque and force from one WrenchStamped
+    assert node.session.commands_accepted == 1  # torque and force from one WrenchStamped
     for k in range(1, 11):
         advance_clock(harness, first_ns + k * 20 * MS, twists, k + 1)
     assert harness.spin_until(lambda: len(poses) >= 11, 2.0)
@@ -575,12 +543,12 @@ def test_commanded_force_moves_the_pose_as_the_core_predicts(ros, request):
     propagator = build_propagator(load_scene('free_flyer'))
     driver, commands, time_base = ClockDriver(propagator, 1.0), CommandStream(propagator), \
         TimeBase()
-    driver.tick(time_base.seconds_from_nanoseconds(first_ns))
-    start = time_base.seconds_from_nanoseconds(first_ns)
-    commands.add('torque', start, torque_body)
-    commands.add('force', start, force_body)
+    driver.tick(time_base.seconds(first_ns))
+    start = time_base.seconds(first_ns)
+    commands.add('torque', first_ns, start, torque_body)
+    commands.add('force', first_ns, start, force_body)
     for k in range(1, 11):
-        driver.tick(time_base.seconds_from_nanoseconds(first_ns + k * 20 * MS))
+        driver.tick(time_base.seconds(first_ns + k * 20 * MS))
     position, twist = poses[-1].pose.position, twists[-1].twist
     # The node adds nothing to the core: the same bits.
     assert (position.x, position.y, position.z) == tuple(propagator.state.position.tolist())
@@ -618,7 +586,7 @@ def test_a_refused_integration_resets_instead_of_crashing(ros, request):
     clock.clock = stamp(first_ns + 20 * MS)
     harness.publishers['/clock'].publish(clock)
     # RK4 would need > 1e6 substeps (h|ω| ≤ 2 rad each): refused, counted, scene reset.
-    assert harness.spin_until(lambda: node.shell_rejections['integration_failed'] == 1, 5.0)
+    assert harness.spin_until(lambda: node.session.rejections['integration_failed'] == 1, 5.0)
     assert len(twists) == 1
     advance_clock(harness, first_ns + 40 * MS, twists, 2)
     last = twists[-1]

@@ -1,7 +1,9 @@
 """Bag-replayed tests: each analytic bag offline through ``replay`` and live through the node.
 
 For every case of :mod:`bag_fixtures` (constant rate, coning, generic rate, torque-free
-tumbling, constant commanded torque):
+tumbling, constant commanded torque), and for the constant-rate bag with hostile records
+injected (:data:`FAULTS`: truncated, header-only, unknown encapsulation, a rate of 1e200 rad/s,
+published to the node as the raw bytes they are):
 
 (a) ``replay`` (its ``main``) writes the node's outputs for the bag to an output bag;
 (b) a player publishes the bag's messages, with their recorded stamps, over real rclpy topics
@@ -11,15 +13,14 @@ tumbling, constant commanded torque):
 The player follows the replay tool's documented clock rule: ``/clock`` is published at every
 multiple ``k P`` of the timer period within the bag's time span (gyro bags: plus one after the
 last sample), before the messages recorded at that instant; each message is delivered and
-taken by the node before the next event (the player waits for the node's input counters, and
-for the clock before each tick). Then (a) and (b) must agree to 1e-12 output by output
+taken by the node before the next event (the player waits for the session's input counters,
+and for the clock before each tick). Then (a) and (b) must agree to 1e-12 output by output
 (matched by stamp), and both must match the closed form within the integrator's error bound
 given by the case.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 import math
 from pathlib import Path
 import struct
@@ -32,15 +33,16 @@ import numpy as np
 import pytest
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
-from ros_helpers import Harness, ros_session, RosContext, unique_namespace
+from ros_helpers import Harness, RosContext, unique_namespace
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 
-from bag_fixtures import AnalyticCase, build_case, CASES, write_case_bag, write_scene
+from bag_fixtures import (
+    AnalyticCase, build_case, CASES, write_case_bag, write_records, write_scene)
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.bag import (
-    BagReader, float64_value, header_stamp_ns, pose_orientation, pose_position,
-    quaternion_stamped, twist_angular, twist_linear, vector3_stamped)
+    BagReader, encode_imu, float64_value, header_stamp_ns, IMU, pose_orientation,
+    pose_position, quaternion_stamped, twist_angular, twist_linear, vector3_stamped)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.tools.replay import main as replay_main
 from rigid_body_attitude.session.settings import timer_period_ns
@@ -52,13 +54,14 @@ AGREEMENT = 1e-12
 #: (the node's inputs are best effort), and how often to try.
 RETRY_AFTER = 1.0
 ATTEMPTS = 5
-
-
-@pytest.fixture
-def ros(ros_domain_id: int) -> Iterator[RosContext]:
-    """A context and executor of the test's own on the test run's domain."""
-    with ros_session(ros_domain_id) as session:
-        yield session
+#: The hostile variant of ``constant_rate``: sample index → what replaces it (not a valid
+#: Imu, or a valid one with an absurd rate). The node and the replay must reject the same.
+FAULTS = {
+    100: lambda data: data[:-9],                        # truncated
+    400: lambda data: data[:20],                        # a header only
+    700: lambda data: b'\x01\x05' + data[2:],           # unknown CDR encapsulation
+    1000: lambda data: encode_imu(header_stamp_ns(data), 'base_link', (1e200, 0.0, 0.0)),
+}
 
 
 def _ns(stamp: Time) -> int:
@@ -155,7 +158,7 @@ class LiveRun:
         def publish() -> None:
             self.input.publish(data)
         publish()
-        self._until(lambda: self.node.input_messages >= expected, publish,
+        self._until(lambda: self.node.session.received_count() >= expected, publish,
                     f'input {expected}')
         self.fresh = self.fresh or self.is_gyro
 
@@ -178,8 +181,8 @@ class LiveRun:
             return
         self.ticks_done += 1
         count = self.ticks_done
-        self._until(lambda: self.node.clock_driver.accepted >= count, publish,
-                    f'the tick at {clock_ns}')
+        clock = self.node.session.clock
+        self._until(lambda: clock.accepted >= count, publish, f'the tick at {clock_ns}')
 
     def wait_for_outputs(self, counts: dict[str, int]) -> None:
         """Spin until the recorder holds as many messages per topic as ``counts``."""
@@ -281,13 +284,27 @@ def closed_form_errors(case: AnalyticCase, orientation: dict[int, tuple[float, .
 
 # -- the test --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize('name', list(CASES))
+def write_faulty_bag(case: AnalyticCase, path: Path) -> None:
+    """The gyro case's Imu samples with :data:`FAULTS` injected (real rosbag2 records)."""
+    records = []
+    for index, (stamp, rate) in enumerate(zip(case.stamps.tolist(), case.rates.tolist())):
+        stamp_ns = round(stamp * 1e9)
+        data = encode_imu(stamp_ns, 'base_link', rate)
+        records.append(('imu', stamp_ns, FAULTS[index](data) if index in FAULTS else data))
+    write_records(path, {'imu': IMU}, records)
+
+
+@pytest.mark.parametrize('name', [*CASES, 'constant_rate_faults'])
 def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_path,
                                                                  request):
-    case = build_case(name)
+    faulty = name.endswith('_faults')
+    case = build_case(name.removesuffix('_faults'))
     scene_path = write_scene(case, tmp_path)
     bag_path = tmp_path / 'input'
-    write_case_bag(case, bag_path)
+    if faulty:
+        write_faulty_bag(case, bag_path)
+    else:
+        write_case_bag(case, bag_path)
     offline_path = tmp_path / 'offline'
     assert replay_main([str(bag_path), '-o', str(offline_path), '--scene', str(scene_path),
                         '--publish-rate', str(PUBLISH_RATE), '--no-progress']) == 0
@@ -306,8 +323,12 @@ def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_
         # The case's bound: the integrator's error at this step (see bag_fixtures).
         assert np.max(errors) <= case.tolerance, (case.tolerance_reason, np.max(errors))
     assert len(offline['orientation']) == (
-        case.stamps.size if case.rate_source == 'gyro'
+        case.stamps.size - len(FAULTS) * faulty if case.rate_source == 'gyro'
         else _tick_count(case.stamps))
+    if faulty:  # rejected alike: 3 malformed, 1 out of range
+        rejected = run.node.session.rejection_counts()
+        assert (rejected['malformed'], rejected['out_of_range']) == (3, 1)
+        assert run.node.session.malformed_by_topic == {'imu': 3}
     print(f'{name}: offline vs live max difference {worst:.3g} over {differences}; '
           f'closed-form error {np.max(closed_form_errors(case, offline["orientation"])):.3g} '
           f'rad (bound {case.tolerance:.3g})')

@@ -1,5 +1,6 @@
-"""Message-boundary helpers without ROS: stamp time base, body-frame velocity, diagnostics."""
+"""The diagnostics report: levels, messages naming the governing parameter, values."""
 
+from collections import Counter
 import math
 
 import numpy as np
@@ -8,28 +9,9 @@ import pytest
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.session.reports import (
     body_frame_velocity, diagnostic_report, LEVEL_ERROR, LEVEL_OK, LEVEL_WARN, REJECTION_KEYS,
-    stale_command_count, TimeBase)
+    PeriodCounts, stale_command_count)
 from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.scene import load_scene
-
-
-def test_time_base_keeps_nanoseconds_at_realistic_epochs():
-    time_base = TimeBase()
-    first = time_base.seconds(1_700_000_000, 999_999_000)
-    second = time_base.seconds(1_700_000_001, 999_000)
-    assert first == pytest.approx(0.999999, abs=1e-15)
-    # 1 ms apart: as absolute floats the difference would be off by up to 2.4e-7 s.
-    assert second - first == pytest.approx(1e-3, abs=1e-15)
-    assert time_base.epoch_sec == 1_700_000_000
-
-
-def test_time_base_stamp_inverts_seconds():
-    time_base = TimeBase()
-    nanoseconds = 1_700_000_000 * 10**9 + 123_456_789
-    seconds = time_base.seconds_from_nanoseconds(nanoseconds)
-    assert time_base.stamp(seconds) == divmod(nanoseconds, 10**9)
-    assert time_base.stamp(seconds + 2.5) == divmod(nanoseconds + 2_500_000_000, 10**9)
-    assert time_base.stamp(seconds - 3.0) == divmod(nanoseconds - 3 * 10**9, 10**9)
 
 
 def test_body_frame_velocity_rotates_the_world_velocity_into_body_axes():
@@ -50,15 +32,20 @@ def report_values(report):
     return dict(report.values)
 
 
+def counts(rejections=None, new=None, received=10, accepted=10, gyro=False, **extra):
+    return PeriodCounts(elapsed=1.0, received=received, accepted=accepted, accepted_total=50,
+                        rejections=Counter(rejections or {}), new_rejections=Counter(new or {}),
+                        gyro_scene=gyro, **extra)
+
+
 def test_diagnostic_report_is_ok_for_a_fresh_torque_free_scene():
     propagator = build_propagator(load_scene('torque_free_box'))
     propagator.advance_to(1.0)
-    report = diagnostic_report(propagator, {}, {}, accepted=50, input_rate=0.0,
-                               step_text='0.001')
+    report = diagnostic_report(propagator, counts(), '0.001', 1.0)
     values = report_values(report)
     assert (report.level, report.message) == (LEVEL_OK, 'propagating')
     assert values['scene'] == 'torque_free_box' and values['integrator'] == 'rk4'
-    assert values['accepted'] == '50'
+    assert values['accepted'] == '50' and values['input_rate [Hz]'] == '10.0'
     assert [key for key, _ in report.values if key.startswith('rejected ')] == [
         f'rejected {key}' for key in REJECTION_KEYS]
     diagnostics = propagator.diagnostics()
@@ -68,16 +55,52 @@ def test_diagnostic_report_is_ok_for_a_fresh_torque_free_scene():
                        diagnostics.world_angular_momentum, rtol=1e-8)  # 9 digits
 
 
-def test_diagnostic_report_warns_about_gaps_and_jumps_of_the_last_period_only():
+def test_diagnostic_report_warns_about_the_last_period_only_and_names_the_parameter():
     propagator = build_propagator(load_scene('strapdown'))
     totals = {'gap': 3, 'time_jump': 1, 'stale_stamp': 4}
-    report = diagnostic_report(propagator, totals, {'gap': 2, 'stale_stamp': 1}, 10, 100.0,
-                               'gyro stamps')
+    report = diagnostic_report(propagator, counts(totals, {'gap': 2, 'stale_stamp': 1},
+                                                  gyro=True), 'gyro stamps', 0.0)
     assert report.level == LEVEL_WARN
-    assert report.message == '2 gap in the last period'
+    assert report.message == '2 gap in the last period (parameter `max_dt`)'
     assert report_values(report)['rejected gap'] == '3'
-    quiet = diagnostic_report(propagator, totals, {}, 10, 100.0, 'gyro stamps')
+    quiet = diagnostic_report(propagator, counts(totals, gyro=True), 'gyro stamps', 0.0)
     assert quiet.level == LEVEL_OK
+
+
+def test_inputs_with_none_accepted_warn_with_the_main_reason():
+    propagator = build_propagator(load_scene('strapdown'))
+    report = diagnostic_report(propagator, counts({'stale_stamp': 1949}, {'stale_stamp': 1949},
+                                                  received=1949, accepted=0, gyro=True),
+                               'gyro stamps', 0.0)
+    assert report.level == LEVEL_WARN
+    assert report.message == ('1949 inputs and none accepted in the last period, mostly '
+                              'stale_stamp (parameter `use_header_stamps`)')
+    assert report_values(report)['input_rate [Hz]'] == '0.0'
+    assert report_values(report)['received_rate [Hz]'] == '1949.0'
+
+
+def test_a_gyro_scene_without_input_warns_and_missed_samples_warn():
+    propagator = build_propagator(load_scene('strapdown'))
+    silent = diagnostic_report(propagator, counts(received=0, accepted=0, gyro=True), '', 0.0)
+    assert silent.level == LEVEL_WARN and silent.message.startswith('no gyro input')
+    missed = diagnostic_report(propagator, counts(gyro=True, missed=7, missed_total=9), '', 0.0)
+    assert missed.level == LEVEL_WARN and missed.message == (
+        '7 samples missed upstream in the last period (parameter '
+        '`qos_overrides./imu.subscription.depth`)')
+    assert report_values(missed)['missed_samples'] == '9'
+
+
+def test_a_dynamics_scene_behind_its_clock_warns_with_lag_and_real_time_factor():
+    propagator = build_propagator(load_scene('heavy_top'))
+    report = diagnostic_report(propagator, counts(real_time_factor=0.8, lag=0.05,
+                                                  tick_period=0.02), '0.0005', 0.0)
+    assert report.level == LEVEL_WARN
+    assert report.message == ('behind the clock: lag 0.050 s, real-time factor 0.80 (also '
+                              '`integrator`, `publish_rate`) (parameter `step`)')
+    assert report_values(report)['real_time_factor'] == '0.8'
+    on_time = diagnostic_report(propagator, counts(real_time_factor=40.0, lag=0.001,
+                                                   tick_period=0.02), '0.0005', 0.0)
+    assert on_time.level == LEVEL_OK
 
 
 @pytest.mark.parametrize('step, duration, level', [
@@ -87,7 +110,7 @@ def test_diagnostic_report_warns_about_gaps_and_jumps_of_the_last_period_only():
 def test_diagnostic_report_raises_the_level_with_the_drift(step, duration, level):
     propagator = build_propagator(load_scene('torque_free_box').with_overrides(step=step))
     propagator.advance_to(duration)
-    report = diagnostic_report(propagator, {}, {}, 0, 0.0, f'{step:g}')
+    report = diagnostic_report(propagator, counts(), f'{step:g}', duration)
     assert report.level == level
     assert 'momentum drift' in report.message
 
@@ -96,7 +119,7 @@ def test_diagnostic_report_checks_no_invariant_for_gyro_scenes():
     propagator = build_propagator(load_scene('strapdown'))
     propagator.start(0.0, [0.0, 0.0, 0.0])
     propagator.update(0.01, [5.0, -3.0, 1.0])  # energy jumps with the measured rate
-    report = diagnostic_report(propagator, {}, {}, 2, 100.0, 'gyro stamps')
+    report = diagnostic_report(propagator, counts(gyro=True), 'gyro stamps', 0.01)
     assert report.level == LEVEL_OK
     assert float(report_values(report)['quaternion_norm_error']) <= 1e-15
     assert quaternion.norm_error(propagator.state.attitude) <= 1e-15
@@ -104,8 +127,10 @@ def test_diagnostic_report_checks_no_invariant_for_gyro_scenes():
 
 def test_diagnostic_report_is_an_error_after_a_refused_integration():
     propagator = build_propagator(load_scene('commanded_torque'))
-    report = diagnostic_report(propagator, {'integration_failed': 1, 'gap': 1},
-                               {'integration_failed': 1, 'gap': 1}, 0, 50.0, '0.001')
+    report = diagnostic_report(propagator, counts({'integration_failed': 1, 'gap': 1},
+                                                  {'integration_failed': 1, 'gap': 1}),
+                               '0.001', 0.0)
     assert report.level == LEVEL_ERROR
-    assert report.message == ('1 integration_failed in the last period; '
-                              '1 gap in the last period')
+    assert report.message == ('1 integration_failed in the last period (parameter '
+                              '`integrator`); 1 gap in the last period (parameter '
+                              '`time_jump_threshold`)')

@@ -17,16 +17,19 @@ integrator's share (physics.md §3). Our measurements (deterministic: same data,
 ========  ================  ==================  ==================
 trial     method            max error, 10 s      max error, whole
 ========  ================  ==================  ==================
-07        exp_map           8.875°               9.355°
-07        trapezoid_coning  6.520°               7.405°
-15        exp_map           1.329°               7.262°
-15        trapezoid_coning  1.031°               6.509°
+07        exp_map           8.875°               9.357°
+07        trapezoid_coning  6.521°               7.407°
+15        exp_map           1.332°               7.269°
+15        trapezoid_coning  1.033°               6.519°
 ========  ================  ==================  ==================
 
 (the issue quotes about 9.2 / 6.9° and 1.3 / 1.0° for the first 10 s; ``test_broad.py``
 explains the set-up details behind the small difference on trial 07). The bounds asserted are
 the measurement plus 3 %: a regression in the replay, the stream rules or a method shows, while
-the figures may move by round-off only.
+the figures may move by round-off only. The converted trials start at stamp 0.0; the node (and
+so the replay) refuses that first sample as unstamped (``zero_stamp``), so the rest-phase
+average has one sample fewer than the trial (the figures moved by at most 0.01° when the
+replay moved onto the node's session).
 """
 
 from __future__ import annotations
@@ -48,10 +51,10 @@ WINDOW_NS = 10 * 10**9
 METHODS = ('exp_map', 'trapezoid_coning')
 #: Measured max errors [deg] (first 10 s, whole trial) per trial and method; see the table.
 MEASURED_DEG = {
-    (TRIAL_07, 'exp_map'): (8.875, 9.355),
-    (TRIAL_07, 'trapezoid_coning'): (6.520, 7.405),
-    (TRIAL_15, 'exp_map'): (1.329, 7.262),
-    (TRIAL_15, 'trapezoid_coning'): (1.031, 6.509),
+    (TRIAL_07, 'exp_map'): (8.875, 9.357),
+    (TRIAL_07, 'trapezoid_coning'): (6.521, 7.407),
+    (TRIAL_15, 'exp_map'): (1.332, 7.269),
+    (TRIAL_15, 'trapezoid_coning'): (1.033, 6.519),
 }
 MARGIN = 1.03
 
@@ -97,7 +100,8 @@ def test_real_data_error_stays_within_the_measured_gyro_limited_bound(trial_name
         motion_ns = round(trial.first_motion_index / trial.sampling_rate * 1e9)
         assert result.alignment_stamp_ns == motion_ns
         assert result.read['imu'] == counts['imu'] == trial.sample_count
-        assert sum(result.rejected.values()) == 0
+        # The first sample is stamped 0.0: the node refuses a zero stamp (unstamped input).
+        assert +result.rejected == {'zero_stamp': 1}
         errors = result.errors.within(motion_ns, 10**20)
         first = errors.within(motion_ns, motion_ns + WINDOW_NS)
         # Every ground-truth sample of the motion phase is compared (lost ones are absent).

@@ -21,7 +21,8 @@ from rigid_body_attitude.bag import (
 from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.tools.replay import (
     ReplayOptions, attitude_errors, main, replay_bag, summary)
-from rigid_body_attitude.session.settings import NODE_DEFAULTS, OUTPUT_TOPICS, timer_period_ns
+from rigid_body_attitude.session.parameters import PARAMETERS
+from rigid_body_attitude.session.settings import OUTPUT_TOPICS, timer_period_ns
 
 RATE = 1000.0
 OMEGA = np.array([0.4, -1.1, 2.3])
@@ -44,11 +45,15 @@ def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, 
     return code, captured.out, captured.err
 
 
-def test_settings_defaults_are_the_node_parameters():
-    from rigid_body_attitude.ros.node import PARAMETERS
-    assert set(PARAMETERS) == set(NODE_DEFAULTS)
-    assert ReplayOptions().scene == NODE_DEFAULTS['scene']
-    assert ReplayOptions().publish_rate == NODE_DEFAULTS['publish_rate']
+def test_options_are_the_node_parameters_with_their_defaults():
+    options = ReplayOptions().parameters()
+    assert options == {p.name: p.default for p in PARAMETERS if not p.node_only}
+    assert 'cpu_scheduling' not in options and 'max_angular_rate' in options
+    # From Python an integer may stand for a double; a boolean may not.
+    assert ReplayOptions(publish_rate=100).parameters()['publish_rate'] == 100.0
+    assert type(ReplayOptions(publish_rate=100).parameters()['publish_rate']) is float
+    with pytest.raises(InputError, match='Expected parameter `max_dt` to be a double'):
+        replay_bag('unused', 'unused', ReplayOptions(max_dt=True))
     # rclpy's create_timer(1 / rate): 50 Hz → 20 ms; 30 Hz truncates to 33333333 ns.
     assert timer_period_ns(50.0) == 20_000_000
     assert timer_period_ns(30.0) == 33_333_333
@@ -123,27 +128,38 @@ def test_imu_data_is_the_input_with_the_propagated_orientation(tmp_path, capsys)
 
 
 def test_rejections_follow_the_stream_rules_and_are_counted(tmp_path, capsys):
-    # Receive order: 0..4 ms, NaN at 5 ms, a repeat of 4 ms (stale), 6 ms, a gap to 500 ms,
-    # 501 ms, then a jump back by 400 ms (> 0.2 s threshold: reset) and 102 ms.
-    stamps = np.array([0, 1, 2, 3, 4, 5, 4, 6, 500, 501, 101, 102]) * 1e-3 + 20.0
+    # Receive order: 0..4 ms, NaN at 5 ms, a repeat of 4 ms (stale), 6 ms, an outlier at
+    # 900 ms that the next sample (7 ms) refutes, a gap to 500 ms confirmed by 501 and 502 ms,
+    # then a jump back by 400 ms (> 0.2 s threshold: reset) confirmed by 102 and 103 ms.
+    stamps = np.array([0, 1, 2, 3, 4, 5, 4, 6, 900, 7, 500, 501, 502, 101, 102, 103]) * 1e-3
+    stamps += 20.0
     rates = np.tile(OMEGA, (stamps.size, 1))
     rates[5] = np.nan
     receive = 30.0 + np.arange(stamps.size) * 1e-3
     bag = tmp_path / 'in'
     write_bag(bag, stamps=stamps, rates=rates, receive_times=receive, validate=False)
-    code, text, _ = run([str(bag), '-o', str(tmp_path / 'out'), '--scene', GYRO_SCENE,
-                         '--time-jump-threshold', '0.2'], capsys)
+    code, text, err = run([str(bag), '-o', str(tmp_path / 'out'), '--scene', GYRO_SCENE,
+                           '--time-jump-threshold', '0.2'], capsys)
     assert code == 0
-    assert 'rejected: gap 1, non_finite 1, stale_stamp 1, time_jump 1' in text
-    # Published: all but the NaN and the stale repeat (a gap or a time jump moves the state).
+    assert ('rejected: gap 1, non_finite 1, outlier_stamp 1, stale_stamp 1, time_jump 1'
+            in text)
+    # Published: every sample used, a jump once confirmed (at the confirming sample's stamp);
+    # not the NaN, the stale repeat, the outlier or the samples waiting for confirmation.
     series = read_series(tmp_path / 'out', 'orientation')
-    assert series.stamps == pytest.approx(np.delete(stamps, [5, 6]), abs=1e-9)
-    # After the gap the attitude holds (not integrated across); after the jump it is reset.
+    published = np.array([0, 1, 2, 3, 4, 6, 7, 502, 103]) * 1e-3 + 20.0
+    assert series.stamps == pytest.approx(published, abs=1e-9)
     q = series.values
-    assert np.array_equal(q[6], q[5])
-    assert np.array_equal(q[8], quaternion.identity())
-    # 0 → 6 ms integrated (the NaN sample skipped: 4 → 6 ms in one step of a constant rate).
-    assert quaternion.attitude_error(q[5], quaternion.exp(OMEGA * 6e-3)) < 1e-14
+    # 0 → 7 ms integrated (the NaN and the outlier skipped: a constant rate, so exact).
+    assert quaternion.attitude_error(q[6], quaternion.exp(OMEGA * 7e-3)) < 1e-14
+    # Not integrated across the gap: from 7 ms's attitude, 500 → 502 ms only.
+    expected = quaternion.multiply(q[6], quaternion.exp(OMEGA * 2e-3))
+    assert quaternion.attitude_error(q[7], expected) < 1e-14
+    # The jump back resets to the scene's initial attitude at 101 ms, integrated to 103 ms.
+    assert quaternion.attitude_error(q[8], quaternion.exp(OMEGA * 2e-3)) < 1e-14
+    # The session's warnings reach stderr (bag time), the summary counts them.
+    assert '[WARN] bag time 30.005 s: gyro: a non-finite rate' in err
+    assert 'stamps jumped back by more than time_jump_threshold' in err
+    assert 'logged: 5 warnings, 0 errors' in text
 
 
 def test_no_header_stamps_integrates_on_the_bag_times(tmp_path, capsys):
@@ -158,10 +174,11 @@ def test_no_header_stamps_integrates_on_the_bag_times(tmp_path, capsys):
     assert series.stamps == pytest.approx(receive, abs=1e-9)
     assert quaternion.attitude_error(series.values[-1], quaternion.exp(OMEGA * 49 * 2e-3)) \
         < 1e-14
-    # With header stamps the same bag is all stale after the first sample.
-    code, text, _ = run([str(bag), '-o', str(tmp_path / 'stale'), '--scene', GYRO_SCENE],
-                        capsys)
-    assert 'stale_stamp 49' in text
+    # With header stamps the node refuses zero stamps (unstamped input): nothing is used.
+    code, text, err = run([str(bag), '-o', str(tmp_path / 'stale'), '--scene', GYRO_SCENE],
+                          capsys)
+    assert code == 0 and 'used: 0; rejected: zero_stamp 50' in text
+    assert 'logged: 1 warnings' in text and 'set use_header_stamps:=false' in err
 
 
 def test_dynamics_ticks_at_the_period_multiples_within_the_bag(tmp_path, capsys):
@@ -177,8 +194,8 @@ def test_dynamics_ticks_at_the_period_multiples_within_the_bag(tmp_path, capsys)
     # 40 Hz → 25 ms; commands from 100.000 s to 101.950 s: ticks 100.000 ... 101.950.
     assert stamps_ns == list(range(100_000_000_000, 101_950_000_001, 25_000_000))
     assert 'read: ground_truth 40, torque 40' in text
-    # 79 ticks and 40 commands used.
-    assert 'used: 119; rejected: none' in text
+    # 40 commands used, 79 ticks.
+    assert 'used: 40; clock ticks: 79; rejected: none' in text
 
 
 def test_dynamics_bag_shorter_than_a_period_is_noted(tmp_path, capsys):
@@ -332,7 +349,12 @@ def test_default_output_path_is_beside_the_input(tmp_path, capsys):
      "expected one of"),
     (['{bag}', '--ground-truth', 'imu'], "error: Topic 'imu' .* expected one of"),
     (['{bag}', '--torque-topic', 'wrench'], "error: Command topic 'wrench' is not in bag"),
-    (['{bag}', '--publish-rate', '0'], "error: Expected `publish_rate` to be a finite number"),
+    (['{bag}', '--publish-rate', '0'],
+     r"error: Expected parameter `publish_rate` to be a finite number in \(0, 1000\], got 0\.0"),
+    (['{bag}', '--max-angular-rate', 'nan'],
+     "error: Expected parameter `max_angular_rate` to be a finite number"),
+    (['{bag}', '--world-frame', 'base_link'],
+     "error: Expected `world_frame` and `body_frame` to differ"),
     (['{bag}', '--scene', 'no_such_scene'], "error: Unknown scene 'no_such_scene'"),
     (['{bag}', '--integrator', 'nope'], "error: Unknown strapdown method 'nope'"),
     (['{bag}', '--start-from-ground-truth', '1.0'],
@@ -407,3 +429,15 @@ def test_ground_truth_types_are_read(tmp_path):
         result = replay_bag(bag, tmp_path / f'out_{kind}',
                             ReplayOptions(scene=GYRO_SCENE, ground_truth_topic='ground_truth'))
         assert result.errors.count == 200 and result.errors.errors.max() < 1e-13
+
+
+def test_stamps_within_the_first_second_are_valid(tmp_path, capsys):
+    # Simulators start their clock at 0: sec 0 with nanosec > 0 is a valid stamp; only the
+    # all-zero stamp means "unstamped" and is refused (zero_stamp).
+    bag = constant_rate_bag(tmp_path / 'in', count=20, start=0.0)
+    code, text, _ = run([str(bag), '-o', str(tmp_path / 'out'), '--scene', GYRO_SCENE],
+                        capsys)
+    assert code == 0 and 'used: 19; rejected: zero_stamp 1' in text
+    series = read_series(tmp_path / 'out', 'orientation')
+    assert series.stamps == pytest.approx(np.arange(1, 20) / RATE, abs=1e-9)
+    assert quaternion.attitude_error(series.values[-1], quaternion.exp(OMEGA * 18e-3)) < 1e-14

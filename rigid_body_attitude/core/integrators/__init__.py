@@ -66,9 +66,11 @@ def torque_integrators() -> tuple[str, ...]:
                         if cls.supports_torque))
 
 
-def dynamics_integrator(name: str, **options: Any) -> DynamicsMethod:
+def dynamics_integrator(name: str, **options: Any) -> Any:
     """A fresh dynamics integrator by name (``options`` go to its constructor, e.g. the
-    tolerances of ``dopri45``); :class:`IntegratorError` lists the valid names."""
+    tolerances of ``dopri45``): a :class:`~.dynamics_base.DynamicsMethod` (typed ``Any`` so
+    callers may read a method's own attributes, e.g. dopri45's counters);
+    :class:`IntegratorError` lists the valid names."""
     cls = DYNAMICS_INTEGRATORS.lookup(name)
     try:
         return cls(**options)

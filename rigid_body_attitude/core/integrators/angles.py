@@ -90,8 +90,9 @@ def _rk4_angles(rates: Callable[[Sequence[float], Sequence[float]], Angles],
     k2 = rates([a + 0.5 * h * b for a, b in zip(y0, k1)], wm)
     k3 = rates([a + 0.5 * h * b for a, b in zip(y0, k2)], wm)
     k4 = rates([a + h * b for a, b in zip(y0, k3)], w1)
-    return tuple(a + h / 6.0 * (b + 2.0 * (c + d) + e)
-                 for a, b, c, d, e in zip(y0, k1, k2, k3, k4))
+    first, second, third = (a + h / 6.0 * (b + 2.0 * (c + d) + e)
+                            for a, b, c, d, e in zip(y0, k1, k2, k3, k4))
+    return first, second, third
 
 
 def euler_zxz_rk4_step(angles: Sequence[float], omega_of_time: RateFunction, t: float,
@@ -108,7 +109,8 @@ def bryant_xyz_rk4_step(angles: Sequence[float], omega_of_time: RateFunction, t:
 
 def _poisson(matrix: FloatArray, w: Sequence[float]) -> FloatArray:
     skew = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-    return matrix @ skew
+    product: FloatArray = matrix @ skew
+    return product
 
 
 def dcm_poisson_rk4_step(matrix: FloatArray, omega_of_time: RateFunction, t: float, h: float,

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import cast
 import numpy as np
 
 from rigid_body_attitude.core import quaternion as quat
@@ -63,9 +64,11 @@ class SpinFrame:
     def _torque_function(self, model: BodyModel) -> FloatTorque:
         """The model's torque as a plain-float spin-frame function (see the module doc)."""
         torque_body = model.torque_body
-        if self.identity and getattr(model, 'torque_takes_floats', False):
-            return torque_body
         takes_floats = getattr(model, 'torque_takes_floats', False)
+        # a model that declares torque_takes_floats accepts float tuples as well as arrays
+        float_torque = cast(FloatTorque, torque_body)
+        if self.identity and takes_floats:
+            return float_torque
         a = self.axes
         r = self.rotation
         conjugate = (r[0], -r[1], -r[2], -r[3])
@@ -77,7 +80,7 @@ class SpinFrame:
                 omega = (a[0] * p + a[1] * s + a[2] * u, a[3] * p + a[4] * s + a[5] * u,
                          a[6] * p + a[7] * s + a[8] * u)
             if takes_floats:
-                mx, my, mz = torque_body(t, q, omega)
+                mx, my, mz = float_torque(t, q, omega)
             else:
                 value = torque_body(t, np.array(q), np.array(omega))
                 mx, my, mz = float(value[0]), float(value[1]), float(value[2])

@@ -14,10 +14,15 @@ class ExactTorqueFree(DynamicsMethod):
     """Exact torque-free step through :class:`TorqueFreeMotion` (Jacobi elliptic functions,
     Celledoni et al. 2008 attitude), in the model's principal frame.
 
-    Order: exact for any ``h`` (error a few ulps of the phase ψ ≈ 2T h/G). Cost ≈ 0.5 ms per
-    step whatever ``h``, so one step can cover a whole run. Invariants: world angular momentum,
-    energy, ``|m|`` and ``|q|`` to round-off. Refuses (:class:`IntegratorError`) a model with
-    a torque or a rotor. Source: see :mod:`rigid_body_attitude.core.integrators.exact_torque_free`.
+    Order: exact for any ``h`` (error a few ulps of the phase ψ ≈ 2T h/G). Cost 0.7–0.9 ms
+    per step whatever ``h`` (accuracy study, docs/accuracy/: 0.86 ms for one 10-s step, i.e.
+    0.09 ms per simulated second; 0.70 ms per step when the propagator steps it at 100 Hz,
+    i.e. 70 ms per simulated second). One step can cover a whole run; at a fixed rate of
+    100 Hz ``casimir8`` reaches round-off on the study's triaxial body (3.4e−13 rad) for a
+    twelfth of that, 5.7 ms per simulated second (its ``torque_free`` case). Invariants:
+    world angular momentum, energy, ``|m|`` and ``|q|`` to round-off. Refuses
+    (:class:`IntegratorError`) a model with a torque or a rotor. Source: see
+    :mod:`rigid_body_attitude.core.integrators.exact_torque_free`.
     """
 
     name = 'exact'
@@ -38,5 +43,7 @@ class ExactTorqueFree(DynamicsMethod):
         qp = q if frame.identity else q_multiply(q, frame.rotation)
         motion = TorqueFreeMotion(frame.moments, qp, omega_body=frame.principal_vector(omega))
         qp1, omega_p1 = motion.state(h)
-        q1 = frame.body_attitude(tuple(float(x) for x in qp1))
-        return q_normalize(q1), frame.body_vector(tuple(float(w) for w in omega_p1))
+        w, x, y, z = qp1.tolist()
+        rate_x, rate_y, rate_z = omega_p1.tolist()
+        return (q_normalize(frame.body_attitude((w, x, y, z))),
+                frame.body_vector((rate_x, rate_y, rate_z)))

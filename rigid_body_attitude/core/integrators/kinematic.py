@@ -112,8 +112,10 @@ def magnus4_step(q: Sequence[float], omega_of_time: RateFunction, t: float, h: f
 
         φ = (h/2)(ω₁ + ω₂) + (√3/12) h² ω₁ × ω₂,   q ⊗ exp(φ).
 
-    Order 4; two rate evaluations, one exponential. Keeps ``|q| = 1``. Source: Iserles &
-    Nørsett (1999); Blanes, Casas & Ros (2000).
+    Order 4; two rate evaluations, one exponential. Keeps ``|q| = 1``. Coning drift
+    ``+a²Ω(Ωh)⁴/1440`` (sign convention of :mod:`.strapdown`; physics.md §3; measured by
+    test/core/test_integrators_strapdown.py). Source: Iserles & Nørsett (1999); Blanes, Casas
+    & Ros (2000).
     """
     w1 = _rate(omega_of_time, t + (0.5 - _GAUSS_OFFSET) * h)
     w2 = _rate(omega_of_time, t + (0.5 + _GAUSS_OFFSET) * h)
@@ -142,7 +144,8 @@ def _dexpinv_truncated(theta: Sequence[float], w: Sequence[float]) -> Vec:
     """``ω + ½ θ × ω + (1/12) θ × (θ × ω)`` (enough for order 4)."""
     c = _cross(theta, w)
     cc = _cross(theta, c)
-    return tuple(a + 0.5 * b + e / 12.0 for a, b, e in zip(w, c, cc))
+    x, y, z = (a + 0.5 * b + e / 12.0 for a, b, e in zip(w, c, cc))
+    return x, y, z
 
 
 def _dexpinv_exact(theta: Sequence[float], w: Sequence[float]) -> Vec:
@@ -157,7 +160,8 @@ def _dexpinv_exact(theta: Sequence[float], w: Sequence[float]) -> Vec:
         factor = (1.0 - 0.5 * angle / math.tan(0.5 * angle)) / (angle * angle)
     c = _cross(theta, w)
     cc = _cross(theta, c)
-    return tuple(a + 0.5 * b + factor * e for a, b, e in zip(w, c, cc))
+    x, y, z = (a + 0.5 * b + factor * e for a, b, e in zip(w, c, cc))
+    return x, y, z
 
 
 def _rk4_rotation_vector(omega_of_time: RateFunction, t: float, h: float,
@@ -169,7 +173,8 @@ def _rk4_rotation_vector(omega_of_time: RateFunction, t: float, h: float,
     k2 = dexpinv([0.5 * h * a for a in k1], wm)
     k3 = dexpinv([0.5 * h * a for a in k2], wm)
     k4 = dexpinv([h * a for a in k3], w1)
-    return tuple(h / 6.0 * (a + 2.0 * (b + c) + d) for a, b, c, d in zip(k1, k2, k3, k4))
+    x, y, z = (h / 6.0 * (a + 2.0 * (b + c) + d) for a, b, c, d in zip(k1, k2, k3, k4))
+    return x, y, z
 
 
 def rkmk4_step(q: Sequence[float], omega_of_time: RateFunction, t: float, h: float) -> Quat:

@@ -13,8 +13,16 @@ is a small class with
 ``omega_current`` is the mean rate over the interval, ``Δθ/dt`` (what an integrating gyro
 reports), and ``omega_previous`` is not used (the method keeps its own history).
 
-Coning drift (physics.md §3, half-angle ``a``, frequency ``Ω``, sample spacing ``h``, update
-interval ``T``; mean rate of the error rotation about the cone axis) is given per method.
+**Coning drift** (physics.md §2.3 and §3): under classical coning of half-angle ``a`` at
+frequency ``Ω`` about the cone axis ``e``, the drift ``D`` of a method is the long-run rate
+[rad/s] of the ``e`` component of the error rotation ``log(q_computed* ⊗ q_true)`` (the
+rotation vector that takes the computed attitude to the true one, in body axes). ``D > 0``
+means the computed attitude lags the true one about the cone axis. Each method's
+:attr:`coning_drift` holds the leading-order term ``D = c a²Ω θᵖ`` with ``θ = Ω × (update
+interval)``: ``θ = Ωh`` for updates over one sample spacing ``h``, ``ΩH`` (``H = 2h``) for
+``simpson_coning`` and ``ΩT`` (``T`` = the group of 1, 2 or 3 delta angles) for the delta-angle
+methods; the class docstrings quote it, and test/core/test_integrators_strapdown.py measures
+every method's drift against it (within 5 %) over whole cone periods.
 Sources: Bortz (1971), Miller (JGCD 6(4), 1983), Ignagni (JGCD 13(2), 1990; 19(2), 1996),
 Savage (JGCD 21(1) and 21(2), 1998).
 
@@ -27,6 +35,8 @@ they remember), as flight software does with minor and major update rates.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 from rigid_body_attitude.core.errors import IntegratorError
@@ -34,6 +44,7 @@ from rigid_body_attitude.core.integrators.base import (
     q_multiply, q_normalize, q_rotate_step, Quat, Vec)
 
 __all__ = [
+    'ConingDrift',
     'DeltaOnePlusPrevious',
     'DeltaSingle',
     'DeltaThreeSample',
@@ -69,12 +80,44 @@ def _trapezoid_coning(a: Vec, b: Vec, h: float) -> Vec:
             0.5 * h * (a[2] + b[2]) + k * c[2])
 
 
+@dataclass(frozen=True)
+class ConingDrift:
+    """Leading-order coning drift ``D = coefficient · a²Ω · θ^power`` (module docstring).
+
+    Attributes:
+        coefficient: signed rational coefficient ``c``.
+        power: power ``p`` of ``θ``.
+        interval: the update interval in sample spacings (θ = Ω · interval · h).
+        symbol: how the docstring writes θ (``Ωh``, ``ΩH`` or ``ΩT``).
+    """
+
+    coefficient: Fraction
+    power: int
+    interval: int = 1
+    symbol: str = 'Ωh'
+
+    def rate(self, cone_angle: float, frequency: float, spacing: float) -> float:
+        """``D`` [rad/s] for half-angle ``a`` [rad], frequency ``Ω`` [rad/s], spacing ``h`` [s]."""
+        theta = frequency * self.interval * spacing
+        return float(self.coefficient) * cone_angle ** 2 * frequency * theta ** self.power
+
+    def text(self) -> str:
+        """The term as the docstrings write it, e.g. ``+a²Ω(Ωh)²/24``."""
+        sign = '+' if self.coefficient > 0 else '−'
+        numerator, denominator = abs(self.coefficient.numerator), self.coefficient.denominator
+        power = str(self.power).translate(str.maketrans('0123456789', '⁰¹²³⁴⁵⁶⁷⁸⁹'))
+        factor = '' if numerator == 1 else f'({numerator}/{denominator})'
+        tail = f'/{denominator}' if numerator == 1 else ''
+        return f'{sign}{factor}a²Ω({self.symbol}){power}{tail}'
+
+
 class _Strapdown:
     """Shared plumbing: a method without sample history."""
 
     name = ''
     order = 0
     input_kind = 'rate'
+    coning_drift = ConingDrift(Fraction(0), 0)
 
     def reset(self) -> None:
         """Forget any sample history (stateless methods have none)."""
@@ -83,13 +126,14 @@ class _Strapdown:
 class ExpMap(_Strapdown):
     """Rate held from the interval's first sample: ``φ = h ω_k`` (zero-order hold).
 
-    Order 1; cost one exponential and one product (≈1.5 µs). Keeps ``|q| = 1``. Coning drift
-    ``+a²Ω(Ωh)²/6``. The first-order gyro step of imu_filter_madgwick-style filters, done
-    exactly on the sphere (Savage 1998).
+    Order 1; cost one exponential and one product. Keeps ``|q| = 1``. Coning drift
+    ``+a²Ω(Ωh)²/24`` (the next term ``+a²Ω(Ωh)⁴/1440``; physics.md §3). The first-order gyro
+    step of imu_filter_madgwick-style filters, done exactly on the sphere (Savage 1998).
     """
 
     name = 'exp_map'
     order = 1
+    coning_drift = ConingDrift(Fraction(1, 24), 2)
 
     def propagate(self, q: Sequence[float], omega_previous: Sequence[float],
                   omega_current: Sequence[float], dt: float) -> Quat:
@@ -101,12 +145,14 @@ class ExpMap(_Strapdown):
 class ExpMidpoint(_Strapdown):
     """Mean of the end samples: ``φ = (h/2)(ω_k + ω_{k+1})`` (second-order Magnus, no commutator).
 
-    Order 2; cost one exponential. Keeps ``|q| = 1``. Coning drift ``−a²Ω(Ωh)²/12``.
-    Source: Savage (1998).
+    Order 2; cost one exponential. Keeps ``|q| = 1``. Coning drift ``+a²Ω(Ωh)²/6`` (four
+    times ``exp_map``'s: the mean of two point samples underestimates the transverse rotation
+    by ``cos(θ/2)``). Source: Savage (1998); physics.md §3.
     """
 
     name = 'exp_midpoint'
     order = 2
+    coning_drift = ConingDrift(Fraction(1, 6), 2)
 
     def propagate(self, q: Sequence[float], omega_previous: Sequence[float],
                   omega_current: Sequence[float], dt: float) -> Quat:
@@ -121,12 +167,15 @@ class TrapezoidConing(_Strapdown):
     """Trapezoid plus the coning term: ``φ = (h/2)(ω_k + ω_{k+1}) + (h²/12) ω_k × ω_{k+1}``.
 
     Order 2 (the trapezoid integral limits it; the coning term is exact to O(h⁵) for any
-    smooth rate); cost one exponential and a cross product. Coning drift
-    ``−(7/720)a²Ω(Ωh)⁴``. Source: Savage (1998), Bortz (1971) second-order expansion.
+    smooth rate); cost one exponential and a cross product. Coning drift ``+a²Ω(Ωh)²/12``:
+    half ``exp_midpoint``'s, not O(θ⁴) — point rate samples cannot cancel the θ² term, only
+    delta angles can (``delta_two_sample``). Source: Savage (1998), Bortz (1971) second-order
+    expansion; physics.md §3.
     """
 
     name = 'trapezoid_coning'
     order = 2
+    coning_drift = ConingDrift(Fraction(1, 12), 2)
 
     def propagate(self, q: Sequence[float], omega_previous: Sequence[float],
                   omega_current: Sequence[float], dt: float) -> Quat:
@@ -150,12 +199,16 @@ class Magnus4(_Strapdown):
     is fourth order. A spacing change of more than :data:`SPACING_TOLERANCE` (relative) or a
     ``omega_previous`` that is not the last sample restarts this sequence.
 
-    Order 4; cost one exponential, one cross product. Keeps ``|q| = 1``. Coning drift of the
-    order of ``a²Ω(Ωh)⁴``. Source: Iserles & Nørsett (1999) Magnus expansion; Savage (1998).
+    Order 4; cost one exponential, one cross product. Keeps ``|q| = 1``. Coning drift
+    ``−a²Ω(Ωh)⁴/60`` (negative: it leads the truth; the Magnus-4 step with the rate at the
+    Gauss points, :func:`~rigid_body_attitude.core.integrators.kinematic.magnus4_step`, drifts
+    ``+θ⁴/1440`` instead, physics.md §3). Source: Iserles & Nørsett (1999) Magnus expansion;
+    Savage (1998).
     """
 
     name = 'magnus4'
     order = 4
+    coning_drift = ConingDrift(Fraction(-1, 60), 4)
 
     def __init__(self) -> None:
         self.reset()
@@ -197,6 +250,8 @@ class Magnus4(_Strapdown):
         w0, w1, w2, w3 = self._rates
         k, k2 = dt / 24.0, dt * dt / 12.0
         q = self._anchor
+        if q is None:  # set with the first sample of the sequence
+            raise IntegratorError('magnus4 start-up without a stored initial attitude')
         weights = ((9.0, 19.0, -5.0, 1.0), (-1.0, 13.0, 13.0, -1.0), (1.0, -5.0, 19.0, 9.0))
         ends = ((w0, w1), (w1, w2), (w2, w3))
         for (a0, a1, a2, a3), (start, end) in zip(weights, ends):
@@ -212,11 +267,12 @@ class SimpsonConing(_Strapdown):
     Order 4 at the end of each pair of intervals (Simpson's rule, and the coning term exact
     to O(H⁵)); the attitude after the first interval of a pair is provisional
     (trapezoid + coning). Cost one exponential per pair plus one provisional. Keeps
-    ``|q| = 1``. Source: physics.md §3; Savage (1998).
+    ``|q| = 1``. Coning drift ``+(3/320)a²Ω(ΩH)⁴``. Source: physics.md §3; Savage (1998).
     """
 
     name = 'simpson_coning'
     order = 4
+    coning_drift = ConingDrift(Fraction(3, 320), 4, 2, 'ΩH')
 
     def __init__(self) -> None:
         self.reset()
@@ -249,11 +305,13 @@ class EulerNormalize(_Strapdown):
 
     Order 1; cost one product. ``|q|`` only by projection: without it the norm grows by
     ``(h|ω|)²/8`` per step, with it the attitude lags ``(h|ω|)³/12`` rad per step
-    (physics.md §6). The baseline of first-order filters (e.g. imu_filter_madgwick).
+    (physics.md §6). Coning drift ``+a²Ω(Ωh)²/24``, as ``exp_map`` (the norm projection's lag
+    is O(a³)). The baseline of first-order filters (e.g. imu_filter_madgwick).
     """
 
     name = 'euler_normalize'
     order = 1
+    coning_drift = ConingDrift(Fraction(1, 24), 2)
 
     def propagate(self, q: Sequence[float], omega_previous: Sequence[float],
                   omega_current: Sequence[float], dt: float) -> Quat:
@@ -271,11 +329,13 @@ class Rk4Quaternion(_Strapdown):
     method to order 2 on sampled rates (order 4 when the rate is known as a function of time,
     see :func:`rigid_body_attitude.core.integrators.kinematic.rk4_quaternion_step`). Cost four
     products; ``|q|`` kept by projection (RK4 alone shrinks it by ``(h|ω|)⁶/9216`` per step).
-    Source: Kutta (1901); physics.md §4.
+    Coning drift ``+a²Ω(Ωh)²/12``, as ``trapezoid_coning`` (to which it is equivalent to
+    O(h⁴) per step). Source: Kutta (1901); physics.md §4.
     """
 
     name = 'rk4_quaternion'
     order = 2
+    coning_drift = ConingDrift(Fraction(1, 12), 2)
 
     def propagate(self, q: Sequence[float], omega_previous: Sequence[float],
                   omega_current: Sequence[float], dt: float) -> Quat:
@@ -284,7 +344,7 @@ class Rk4Quaternion(_Strapdown):
         a, b = _vec(omega_previous), _vec(omega_current)
         mid = (0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]))
 
-        def rate(y: Quat, w: Vec) -> Quat:
+        def rate(y: Sequence[float], w: Vec) -> Quat:
             return q_multiply(y, (0.0, 0.5 * w[0], 0.5 * w[1], 0.5 * w[2]))
 
         y0 = (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
@@ -301,13 +361,14 @@ class DeltaSingle(_Strapdown):
     """Delta-angle single-sample update: ``φ = Δθ_k`` (no coning correction).
 
     Order 2 on a generic rate (the integral is exact, the missing commutator is O(h³) per
-    step); cost one exponential. Coning drift ``a²Ω(ΩT)²/12``, ``T = h``. Source: Savage
+    step); cost one exponential. Coning drift ``+a²Ω(ΩT)²/12``, ``T = h``. Source: Savage
     (1998), Miller (1983).
     """
 
     name = 'delta_single'
     order = 2
     input_kind = 'delta_angle'
+    coning_drift = ConingDrift(Fraction(1, 12), 2, 1, 'ΩT')
 
     def propagate(self, q: Sequence[float], omega_previous: Sequence[float],
                   omega_current: Sequence[float], dt: float) -> Quat:
@@ -321,13 +382,14 @@ class DeltaOnePlusPrevious(_Strapdown):
 
     Order 3 on a generic rate (the coning term is centred half a sample early); cost one
     exponential and a cross product; the first interval after ``reset`` has no previous
-    sample and uses ``Δθ_k``. Coning drift ``a²Ω(Ωh)⁴/60``. Source: Ignagni (1990), Savage
-    (1998).
+    sample and uses ``Δθ_k``. Coning drift ``+a²Ω(ΩT)⁴/60``, ``T = h``. Source: Ignagni
+    (1990), Savage (1998).
     """
 
     name = 'delta_one_plus_previous'
     order = 3
     input_kind = 'delta_angle'
+    coning_drift = ConingDrift(Fraction(1, 60), 4, 1, 'ΩT')
 
     def __init__(self) -> None:
         self.reset()
@@ -372,7 +434,8 @@ class _DeltaGroup(_Strapdown):
             return q_rotate_step(q, *delta)
         phi = self._rotation_vector(self._deltas)
         self._deltas = []
-        return q_rotate_step(self._anchor, *phi)
+        anchor = self._anchor if self._anchor is not None else q  # set at the group's start
+        return q_rotate_step(anchor, *phi)
 
     def _rotation_vector(self, deltas: list[Vec]) -> Vec:
         raise IntegratorError(f'{type(self).__name__} defines no rotation vector')
@@ -382,18 +445,20 @@ class DeltaTwoSample(_DeltaGroup):
     """Two-sample coning algorithm: ``φ = Δθ₁ + Δθ₂ + (2/3) Δθ₁ × Δθ₂`` over ``T = 2h``.
 
     Order 4 at the group ends (exact for a rate linear in time); cost one exponential per
-    two samples plus one provisional. Coning drift ``a²Ω(ΩT)⁴/960``. Source: Miller (1983),
+    two samples plus one provisional. Coning drift ``+a²Ω(ΩT)⁴/960``. Source: Miller (1983),
     Savage (1998).
     """
 
     name = 'delta_two_sample'
     order = 4
     size = 2
+    coning_drift = ConingDrift(Fraction(1, 960), 4, 2, 'ΩT')
 
     def _rotation_vector(self, deltas: list[Vec]) -> Vec:
         d1, d2 = deltas
         c = _cross(d1, d2)
-        return tuple(a + b + (2.0 / 3.0) * g for a, b, g in zip(d1, d2, c))
+        k = 2.0 / 3.0
+        return (d1[0] + d2[0] + k * c[0], d1[1] + d2[1] + k * c[1], d1[2] + d2[2] + k * c[2])
 
 
 class DeltaThreeSample(_DeltaGroup):
@@ -403,19 +468,22 @@ class DeltaThreeSample(_DeltaGroup):
 
     Order 4 at the group ends on a generic rate (the third Magnus term is not modelled);
     cost one exponential per three samples plus two provisional. Coning drift
-    ``a²Ω(ΩT)⁶/204120``. Source: Miller (1983), Ignagni (1996).
+    ``+a²Ω(ΩT)⁶/204120`` (leading order in ``a``; a residual of about ``7e−3 a⁴Ω(ΩT)⁴``
+    dominates it unless ``a ≲ 1e−3`` rad, physics.md §3). Source: Miller (1983), Ignagni (1996).
     """
 
     name = 'delta_three_sample'
     order = 4
     size = 3
+    coning_drift = ConingDrift(Fraction(1, 204120), 6, 3, 'ΩT')
 
     def _rotation_vector(self, deltas: list[Vec]) -> Vec:
         d1, d2, d3 = deltas
         c13 = _cross(d1, d3)
         c2 = _cross(d2, (d3[0] - d1[0], d3[1] - d1[1], d3[2] - d1[2]))
-        return tuple(a + b + e + 0.45 * g + 0.675 * f
-                     for a, b, e, g, f in zip(d1, d2, d3, c13, c2))
+        x, y, z = (a + b + e + 0.45 * g + 0.675 * f
+                   for a, b, e, g, f in zip(d1, d2, d3, c13, c2))
+        return x, y, z
 
 
 #: Strapdown methods by name (each value is a class; call it for a fresh instance).

@@ -51,7 +51,7 @@ def run_at_rest(effects, seconds=600.0, rate_hz=10.0):
     measured = quat.rotate_inverse(ATTITUDE, earth_rate_world(LATITUDE))
     count = int(seconds * rate_hz)
     for k in range(count + 1):
-        assert stream.add(k / rate_hz, measured).accepted
+        assert stream.add(round(k * 1e9 / rate_hz), measured).accepted
     return propagator, count
 
 

@@ -1,0 +1,240 @@
+"""What every session shares: its sink, settings, counting, poses, resets, warnings, reports.
+
+A session is the node without ROS. An adapter (the node, the replay tool, a test) decodes each
+message into plain values and calls the session with them; the session applies the time rules
+(:mod:`~rigid_body_attitude.session.stream`), advances the propagator, counts, and hands what
+is to be published to its :class:`OutputSink`. The adapter also gives it two clocks: the node
+clock (``clock_ns``: receive times, when header stamps are not used) and a monotonic clock
+(``monotonic``: warning throttling, work timing). No input, however malformed or absurd, raises
+out of a session, corrupts its state or reaches the sink as a non-finite value: it is rejected,
+counted by reason and warned about (at most every :data:`WARNING_INTERVAL` per reason).
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections import Counter
+from collections.abc import Callable, Mapping
+from typing import Any, Protocol
+
+from rigid_body_attitude.core.errors import InputError
+from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
+from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.session.outputs import OutputSample, OutputTracker
+from rigid_body_attitude.session.parameters import check_values
+from rigid_body_attitude.session.reports import (
+    DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, diagnostic_report,
+    stale_command_count)
+
+__all__ = ['LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session', 'WARNING_INTERVAL']
+
+#: Seconds between repeated warnings about the same reason.
+WARNING_INTERVAL = 5.0
+#: Log level of ordinary messages (warnings and errors use the diagnostics levels).
+LEVEL_INFO = 0
+#: Largest distance of a ``set_pose`` position from the origin [m] (0.1 light-year).
+POSITION_LIMIT = 1e15
+
+Quaternion = tuple[float, float, float, float]
+Vector = tuple[float, float, float]
+
+
+class OutputSink(Protocol):
+    """Where a session's outputs go (publishers, a bag writer, a list in a test)."""
+
+    def attitude(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
+        """A gyro sample's attitude (w, x, y, z) stamped ``(sec, nanosec)``."""
+
+    def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
+                 velocity_body: Vector) -> None:
+        """A dynamics tick's state (attitude, position, rate, velocity in body axes)."""
+
+    def wants_invariants(self) -> bool:
+        """Whether energy and angular momentum are wanted (computed only then)."""
+
+    def invariants(self, sec: int, nanosec: int, energy: float,
+                   world_momentum: Vector) -> None:
+        """Kinetic energy [J] and world angular momentum [N m s] stamped like the attitude."""
+
+    def diagnostics(self, report: DiagnosticReport) -> None:
+        """One diagnostics report."""
+
+    def log(self, level: int, text: str) -> None:
+        """A log line (:data:`LEVEL_INFO`, ``LEVEL_WARN`` or ``LEVEL_ERROR``)."""
+
+
+class Session(ABC):
+    """The shared part of :class:`~.gyro.GyroSession` and :class:`~.dynamics.DynamicsSession`.
+
+    ``values`` are the parameters (:mod:`~rigid_body_attitude.session.parameters`; run-time
+    ones again through :meth:`apply`).
+    """
+
+    propagator: DynamicsPropagator | GyroPropagator
+
+    def __init__(self, scene: Scene, values: Mapping[str, Any], sink: OutputSink,
+                 clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> None:
+        """Build the propagator of ``scene``; outputs go to ``sink``."""
+        self.scene = scene
+        self.sink = sink
+        self.clock_ns = clock_ns
+        self.monotonic = monotonic
+        self.tracker = OutputTracker()
+        self.rejections: Counter[str] = Counter()  # the session's own reasons
+        self.malformed_by_topic: Counter[str] = Counter()
+        self.poses_accepted = 0
+        self._last_warning: dict[str, float] = {}
+        self._period: tuple[float, int, int, Counter[str], int] = (
+            monotonic(), 0, 0, Counter(), 0)
+        self.apply(values)
+
+    # -- parameters -------------------------------------------------------------------------
+
+    def apply(self, values: Mapping[str, Any]) -> None:
+        """Take the run-time parameters (frames, stamps, thresholds)."""
+        self.world_frame: str = values['world_frame']
+        self.use_header_stamps: bool = values['use_header_stamps']
+
+    def check(self, values: Mapping[str, Any]) -> str:
+        """Why new parameter values are unusable for this session, or ``''``."""
+        return check_values(values)
+
+    # -- inputs -----------------------------------------------------------------------------
+
+    def malformed(self, topic: str, reason: str) -> None:
+        """A message on ``topic`` that could not be decoded (``reason``)."""
+        self.rejections['malformed'] += 1
+        self.malformed_by_topic[topic] += 1
+        self.warn('malformed', f'{topic}: malformed message rejected ({reason})')
+
+    def internal_error(self, topic: str, err: Exception) -> None:
+        """An input on ``topic`` that raised ``err`` inside the session (a bug): counted and
+        logged (throttled); the node goes on."""
+        self.rejections['internal_error'] += 1
+        self.warn('internal_error', f'{topic}: internal error {type(err).__name__}: '
+                                    f'{str(err)[:200]}; input ignored')
+
+    def set_pose(self, frame_id: str, attitude: Quaternion, position: Vector) -> None:
+        """Re-initialise the attitude (w, x, y, z) (and the position, with translation)."""
+        reason, detail = self._pose_problem(frame_id, attitude, position)
+        if reason:
+            self.rejections[reason] += 1
+            self.warn(reason, f'set_pose rejected ({reason}): {detail}')
+            return
+        propagator = self.propagator
+        scale = max(abs(value) for value in attitude)  # no overflow when squared below
+        unit = tuple(value / scale for value in attitude)
+        try:
+            propagator.set_attitude(unit, position if propagator.has_translation else None)
+        except InputError as err:
+            self.rejections['invalid_pose'] += 1
+            self.warn('invalid_pose', f'set_pose rejected (invalid_pose): {err}')
+            return
+        self.poses_accepted += 1
+        where = f', position {position}' if propagator.has_translation else ''
+        self.sink.log(LEVEL_INFO, f'set_pose: attitude (w, x, y, z) {attitude}{where}')
+
+    def _pose_problem(self, frame_id: str, attitude: Quaternion,
+                      position: Vector) -> tuple[str, str]:
+        if frame_id != self.world_frame:
+            return 'wrong_frame', (f'frame {frame_id[:100]!r}, expected world_frame '
+                                   f'{self.world_frame!r}')
+        if not all(math.isfinite(value) for value in attitude + position):
+            return 'non_finite', f'{attitude + position}'
+        if max(abs(value) for value in attitude) == 0.0:
+            return 'invalid_pose', 'zero quaternion'
+        if max(abs(value) for value in position) > POSITION_LIMIT:
+            return 'out_of_range', f'position {position} beyond {POSITION_LIMIT:g} m'
+        return '', ''
+
+    @abstractmethod
+    def reset(self) -> None:
+        """Back to the scene's initial state (the ``~/reset`` service)."""
+
+    # -- warnings and diagnostics -----------------------------------------------------------
+
+    def warn(self, reason: str, text: str) -> None:
+        """A warning per reason at most every :data:`WARNING_INTERVAL` seconds."""
+        now = self.monotonic()
+        if now - self._last_warning.get(reason, -math.inf) >= WARNING_INTERVAL:
+            self._last_warning[reason] = now
+            self.sink.log(LEVEL_WARN, f'{text} [{self.rejection_counts()[reason]} so far]')
+
+    def error(self, text: str) -> None:
+        """An error log line (never throttled: each marks a reset of the state)."""
+        self.sink.log(LEVEL_ERROR, text)
+
+    def rejection_counts(self) -> Counter[str]:
+        """Rejected inputs so far by reason."""
+        counts = Counter(self.rejections)
+        for stream_counts in self._stream_rejections():
+            counts.update(stream_counts)
+        counts['stale_torque'] = stale_command_count(self.propagator.counters())
+        return counts
+
+    def accepted_count(self) -> int:
+        """Inputs used so far (gyro samples, commands, poses; not clock ticks)."""
+        return self.poses_accepted
+
+    def received_count(self) -> int:
+        """Inputs received so far, whatever became of them."""
+        counts = self.rejection_counts()
+        counts.pop('stale_torque')  # commands that expired, not inputs
+        counts.pop('integration_failed', None)  # clock ticks, not inputs
+        counts.pop('non_finite_result', None)
+        counts.pop('internal_error', None)
+        return self.accepted_count() + sum(counts.values()) + self._pending_count()
+
+    def missed_count(self) -> int:
+        """Samples lost upstream so far."""
+        return 0
+
+    def publish_diagnostics(self) -> None:
+        """Hand the period's report to the sink and start a new period."""
+        self.sink.diagnostics(self.report())
+
+    def report(self) -> DiagnosticReport:
+        """The diagnostics report of the period since the last one (starts a new period)."""
+        now = self.monotonic()
+        start, received0, accepted0, rejections0, missed0 = self._period
+        received, accepted = self.received_count(), self.accepted_count()
+        rejections, missed = self.rejection_counts(), self.missed_count()
+        self._period = (now, received, accepted, rejections, missed)
+        counts = PeriodCounts(
+            elapsed=max(now - start, 1e-9), received=received - received0,
+            accepted=accepted - accepted0, accepted_total=accepted, received_total=received,
+            rejections=rejections,
+            new_rejections=rejections - rejections0, missed=missed - missed0,
+            missed_total=missed, malformed_by_topic=Counter(self.malformed_by_topic),
+            gyro_scene=isinstance(self.propagator, GyroPropagator))
+        self._timing(counts)
+        return diagnostic_report(self.propagator, counts, self.step_text(), self.time_s())
+
+    def _timing(self, counts: PeriodCounts) -> None:
+        """Dynamics: fill in the real-time factor and lag of the period."""
+
+    def step_text(self) -> str:
+        """The step, as the diagnostics describe it."""
+        return f'{self.scene.step:g}'
+
+    def time_s(self) -> float:
+        """The propagated time shown in the diagnostics [s]."""
+        return self.propagator.state.time
+
+    def _stream_rejections(self) -> list[Counter[str]]:
+        return []
+
+    def _pending_count(self) -> int:
+        return 0
+
+    def summary(self) -> str:
+        """The INFO line the node logs every few diagnostics periods."""
+        diagnostics = self.propagator.diagnostics()
+        momentum = math.sqrt(sum(h * h for h in diagnostics.world_angular_momentum.tolist()))
+        rejected = sum(self.rejection_counts().values())
+        return (f't={self.time_s():.3f} s: energy {diagnostics.kinetic_energy:.9g} J '
+                f'(drift {diagnostics.energy_drift:.2e}, balance residual '
+                f'{diagnostics.energy_balance_residual:.2e} J), |H| {momentum:.9g} N m s '
+                f'(drift {diagnostics.momentum_drift:.2e}), accepted {self.accepted_count()}, '
+                f'rejected {rejected}, missed {self.missed_count()}')

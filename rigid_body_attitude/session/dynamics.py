@@ -1,0 +1,192 @@
+"""The dynamics session: Euler's equations advanced to each tick of a clock, with commands.
+
+At each tick (:meth:`DynamicsSession.tick`, the node's timer on its clock, ``use_sim_time``
+works) the state is integrated up to the clock's time under the clock rules
+(:class:`~rigid_body_attitude.session.stream.ClockDriver`) and every output goes to the sink,
+stamped with the propagated time. Commands (``wrench``: torque and force; ``rotor_torque``)
+are held from their stamp on (:class:`~rigid_body_attitude.session.stream.CommandStream`).
+The session times its own work (the monotonic clock) to report a scene that cannot keep up:
+its real-time factor and its lag behind the clock.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+from rigid_body_attitude.core.errors import AttitudeError
+from rigid_body_attitude.core.propagator import DynamicsPropagator, MAX_STEPS_PER_CALL
+from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.session.base import OutputSink, Session
+from rigid_body_attitude.session.outputs import OutputSample
+from rigid_body_attitude.session.parameters import check_values
+from rigid_body_attitude.session.reports import LEVEL_WARN, PeriodCounts, body_frame_velocity
+from rigid_body_attitude.session.stream import ClockDriver, CommandStream, Outcome
+from rigid_body_attitude.session.times import TimeBase, split_ns, stamp_problem, to_ns
+
+__all__ = ['DynamicsSession']
+
+_DETAIL = {
+    'non_finite': 'a non-finite value (NaN or Inf); message ignored',
+    'out_of_range': 'a value beyond 1e12 (N, N m); message ignored',
+    'stale_stamp': 'a stamp older than the last command; message ignored (parameter '
+                   '`use_header_stamps`)',
+}
+
+
+class DynamicsSession(Session):
+    """Euler's equations of a dynamics scene, advanced to each clock tick."""
+
+    propagator: DynamicsPropagator
+
+    def __init__(self, scene: Scene, values: Mapping[str, Any], sink: OutputSink,
+                 clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> None:
+        """The scene's dynamics propagator, clock rules and command stream."""
+        self.propagator = DynamicsPropagator(scene)
+        self.clock = ClockDriver(self.propagator, values['time_jump_threshold'])
+        self.commands = CommandStream(self.propagator)
+        self.time_base = TimeBase()
+        inputs = self.propagator.input_names
+        #: The WrenchStamped fields the scene takes (``torque``, ``force``).
+        self.wrench_inputs = tuple(name for name in ('torque', 'force') if name in inputs)
+        self.tick_period = 1.0 / values['publish_rate']
+        self._work = self._simulated = self._lag = 0.0
+        #: Command messages used (a WrenchStamped is one, whatever fields the scene takes).
+        self.commands_accepted = 0
+        super().__init__(scene, values, sink, clock_ns, monotonic)
+
+    def apply(self, values: Mapping[str, Any]) -> None:
+        """Take the run-time parameters."""
+        super().apply(values)
+        self.clock.time_jump_threshold = values['time_jump_threshold']
+
+    def check(self, values: Mapping[str, Any]) -> str:
+        """The parameters' own checks, and a clock jump within the steps of one tick."""
+        return check_values(values, self.scene.step, MAX_STEPS_PER_CALL)
+
+    # -- inputs -----------------------------------------------------------------------------
+
+    def wrench(self, sec: int, nanosec: int, force: Sequence[float],
+               torque: Sequence[float]) -> None:
+        """A commanded wrench (force [N] and torque [N m], body axes) stamped ``(sec,
+        nanosec)``; a bad field rejects the whole message."""
+        stamp_ns = self._command_ns('torque', sec, nanosec)
+        if stamp_ns is None:
+            return
+        vectors = {'torque': torque, 'force': force}
+        bad = [name for name in self.wrench_inputs if self.commands.check(vectors[name])]
+        for name in bad[:1] or self.wrench_inputs:
+            if not self._command(name, stamp_ns, vectors[name]):
+                return
+        self.commands_accepted += 1
+
+    def rotor_torque(self, sec: int, nanosec: int, torque: Sequence[float]) -> None:
+        """A commanded motor torque on the rotor [N m] stamped ``(sec, nanosec)``."""
+        stamp_ns = self._command_ns('rotor_torque', sec, nanosec)
+        if stamp_ns is not None and self._command('rotor_torque', stamp_ns, torque):
+            self.commands_accepted += 1
+
+    def _command_ns(self, topic: str, sec: int, nanosec: int) -> int | None:
+        """The command's time: its stamp, or the receive time (no header stamps, zero
+        stamp); None (counted) for an invalid stamp."""
+        if self.use_header_stamps and (sec or nanosec):
+            problem = stamp_problem(sec, nanosec)
+            if not problem:
+                return to_ns(sec, nanosec)
+            self.rejections['invalid_stamp'] += 1
+            self.warn('invalid_stamp', f'{topic}: an invalid header stamp ({problem}); message '
+                                       f'ignored (parameter `use_header_stamps`)')
+            return None
+        return self.clock_ns()
+
+    def _command(self, name: str, stamp_ns: int, value: Sequence[float]) -> bool:
+        outcome = self.commands.add(name, stamp_ns, self.time_base.seconds(stamp_ns), value)
+        if outcome.reason:
+            self.warn(outcome.reason, f'{name}: {_DETAIL[outcome.reason]}')
+        return outcome.accepted
+
+    # -- ticks ------------------------------------------------------------------------------
+
+    def tick(self, now_ns: int) -> None:
+        """Integrate up to the clock time ``now_ns`` and hand every output to the sink."""
+        propagator = self.propagator
+        before, started = propagator.state.time, self.monotonic()
+        try:
+            outcome = self.clock.tick(self.time_base.seconds(now_ns))
+        except AttitudeError as err:  # the integrator refused the step; the state is intact
+            self._restart('integration_failed', f'integration refused at '
+                                                f't={propagator.state.time:.6f} s: {err}')
+            return
+        if outcome.integrated:
+            self._work += self.monotonic() - started
+            self._simulated += propagator.state.time - before
+            lag = self.time_base.seconds(self.clock_ns()) - propagator.state.time
+            self._lag = max(self._lag, lag)
+        if outcome.reason:
+            self._clock_rejected(outcome)
+        if outcome.moved:
+            self._publish()
+
+    def _publish(self) -> None:
+        sample = self.tracker.sample(self.propagator)
+        if not _finite(sample):
+            self._restart('non_finite_result', 'integration gave a non-finite state')
+            return
+        sec, nanosec = split_ns(self.time_base.nanoseconds(sample.stamp))
+        self.sink.dynamics(sec, nanosec, sample, body_frame_velocity(self.propagator))
+        self.sink.invariants(sec, nanosec, sample.energy, sample.world_momentum)
+
+    def _clock_rejected(self, outcome: Outcome) -> None:
+        if outcome.reset:
+            self.commands.reset()
+            self.sink.log(LEVEL_WARN, f'clock: time jumped back by more than '
+                                      f'time_jump_threshold ({self.clock.time_jump_threshold:g}'
+                                      f' s; looping bag?); reset to the initial state of scene '
+                                      f'{self.scene.name!r}')
+        elif outcome.reason == 'gap':
+            self.warn('gap', 'clock: a jump longer than time_jump_threshold; not integrated '
+                             'across, attitude held (parameter `time_jump_threshold`)')
+        else:
+            self.warn(outcome.reason, f'clock: {outcome.reason}; tick ignored')
+
+    def _restart(self, reason: str, text: str) -> None:
+        """Count a refused integration, log it and restart the scene at the next tick."""
+        self.rejections[reason] += 1
+        self.error(f'{text}; reset to the initial state of scene {self.scene.name!r} '
+                   f'(parameters `integrator`, `step`)')
+        self.reset()
+
+    def reset(self) -> None:
+        """The scene's initial state; the next tick restarts it at the clock's time."""
+        self.clock.reset()
+        self.propagator.reset(self.propagator.state.time)
+        self.commands.reset()
+
+    # -- counts -----------------------------------------------------------------------------
+
+    def accepted_count(self) -> int:
+        """Commands and poses used so far (clock ticks are not inputs)."""
+        return self.commands_accepted + self.poses_accepted
+
+    def received_count(self) -> int:
+        """Commands and poses received so far."""
+        own = sum(count for reason, count in self.rejections.items()
+                  if reason not in ('integration_failed', 'non_finite_result', 'internal_error'))
+        return self.accepted_count() + own + sum(self.commands.rejected.values())
+
+    def _stream_rejections(self) -> list[Counter[str]]:
+        return [self.commands.rejected, self.clock.rejected]
+
+    def _timing(self, counts: PeriodCounts) -> None:
+        counts.real_time_factor = (self._simulated / self._work if self._work > 0.0
+                                   else math.inf)
+        counts.lag, counts.tick_period = self._lag, self.tick_period
+        self._work = self._simulated = self._lag = 0.0
+
+
+def _finite(sample: OutputSample) -> bool:
+    return all(math.isfinite(value) for value in (
+        *sample.attitude, *sample.position, *sample.omega_body, sample.energy,
+        *sample.world_momentum))

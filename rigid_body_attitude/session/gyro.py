@@ -1,0 +1,163 @@
+"""The gyro session: strapdown integration of gyro samples, the node's hot path.
+
+Per sample (:meth:`GyroSession.gyro`): the stamp is checked (``nanosec`` in ``[0, 1e9)``,
+``sec`` non-negative; a zero stamp is refused while header stamps are used) or replaced by the
+receive time (``use_header_stamps`` false); the stream rules decide; when the state moved the
+attitude goes to the sink stamped with the time used. At each tick (:meth:`GyroSession.tick`)
+energy and angular momentum of the last attitude go to the sink, once per attitude published.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+from rigid_body_attitude.core.propagator import GyroPropagator
+from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.session.base import OutputSink, Session
+from rigid_body_attitude.session.reports import LEVEL_WARN
+from rigid_body_attitude.session.stream import GyroStream, Outcome
+from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns, stamp_problem
+
+__all__ = ['GyroSession']
+
+_DETAIL = {
+    'non_finite': 'a non-finite rate (NaN or Inf); sample ignored',
+    'out_of_range': 'a rate above max_angular_rate; sample ignored',
+    'stale_stamp': 'a stamp not newer than the last one; sample ignored',
+    'outlier_stamp': 'a stamp off the time line that the next samples did not confirm; '
+                     'ignored',
+    'gap': 'a gap longer than max_dt, confirmed by the next samples; not integrated across, '
+           'attitude held',
+}
+_HINT = {'stale_stamp': 'use_header_stamps', 'out_of_range': 'max_angular_rate',
+         'outlier_stamp': 'max_dt', 'gap': 'max_dt'}
+
+
+class GyroSession(Session):
+    """Strapdown integration of a gyro scene's samples."""
+
+    propagator: GyroPropagator
+
+    def __init__(self, scene: Scene, values: Mapping[str, Any], sink: OutputSink,
+                 clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> None:
+        """The scene's gyro propagator and stream, with the parameters ``values``."""
+        self.propagator = GyroPropagator(scene)
+        self.stream = GyroStream(self.propagator, values['max_dt'],
+                                 values['time_jump_threshold'])
+        self._fresh_output = False
+        self._output_sec = self._output_nanosec = 0
+        super().__init__(scene, values, sink, clock_ns, monotonic)
+
+    def apply(self, values: Mapping[str, Any]) -> None:
+        """Take the run-time parameters."""
+        super().apply(values)
+        stream = self.stream
+        stream.max_dt = values['max_dt']
+        stream.time_jump_threshold = values['time_jump_threshold']
+        stream.constant_dt = values['constant_dt']
+        stream.max_angular_rate = values['max_angular_rate']
+        stream.count_missed = values['use_header_stamps']
+
+    def gyro(self, sec: int, nanosec: int, rate: Sequence[float]) -> bool:
+        """One gyro sample stamped ``(sec, nanosec)`` with body rate ``rate`` [rad/s].
+
+        Returns whether the attitude went to the sink (the node then publishes ``imu/data``
+        with the same stamp, :attr:`output_stamp`).
+        """
+        if not self.use_header_stamps:
+            sec, nanosec = split_ns(self.clock_ns())
+        elif nanosec >= NANOSECONDS_PER_SECOND or (sec <= 0 and (sec < 0 or not nanosec)):
+            return self._bad_stamp(sec, nanosec)
+        stream = self.stream
+        outliers = stream.outliers
+        outcome = stream.add(sec * NANOSECONDS_PER_SECOND + nanosec, rate)
+        if outcome.reason:
+            self._rejected(outcome)
+        if stream.outliers != outliers:
+            self.warn('outlier_stamp', f'gyro: {_DETAIL["outlier_stamp"]} (parameter `max_dt`)')
+        if not outcome.moved:
+            return False
+        attitude = self.tracker.attitude(self.propagator)
+        if not math.isfinite(attitude[0] + attitude[1] + attitude[2] + attitude[3]):
+            return self._non_finite_result()
+        self.sink.attitude(sec, nanosec, attitude)
+        self._output_sec, self._output_nanosec = sec, nanosec
+        self._fresh_output = True
+        return True
+
+    @property
+    def output_stamp(self) -> tuple[int, int]:
+        """``(sec, nanosec)`` of the last attitude that went to the sink."""
+        return self._output_sec, self._output_nanosec
+
+    def _bad_stamp(self, sec: int, nanosec: int) -> bool:
+        if sec == 0 and nanosec == 0:
+            self.rejections['zero_stamp'] += 1
+            self.warn('zero_stamp', 'gyro: a zero header stamp; sample ignored (unstamped '
+                                    'input: set use_header_stamps:=false)')
+            return False
+        problem = stamp_problem(sec, nanosec) or f'sec {sec}'
+        self.rejections['invalid_stamp'] += 1
+        self.warn('invalid_stamp', f'gyro: an invalid header stamp ({problem}); sample ignored '
+                                   f'(parameter `use_header_stamps`)')
+        return False
+
+    def _rejected(self, outcome: Outcome) -> None:
+        reason = outcome.reason
+        if outcome.reset:  # once per jump, never throttled
+            self.sink.log(LEVEL_WARN, f'gyro: stamps jumped back by more than '
+                                      f'time_jump_threshold ({self.stream.time_jump_threshold:g}'
+                                      f' s; looping bag?), confirmed by the next samples; reset '
+                                      f'to the initial state of scene {self.scene.name!r}')
+            return
+        hint = _HINT.get(reason)
+        self.warn(reason, f'gyro: {_DETAIL[reason]}'
+                          + (f' (parameter `{hint}`)' if hint else ''))
+
+    def _non_finite_result(self) -> bool:
+        """An integration whose result is not finite: refused, counted, the scene restarts."""
+        self.rejections['non_finite_result'] += 1
+        self.error(f'gyro: integration gave a non-finite attitude; reset to the initial state '
+                   f'of scene {self.scene.name!r} (parameter `integrator`)')
+        self.stream.reset()
+        return False
+
+    def tick(self) -> None:
+        """The output timer: energy and angular momentum of the last attitude published."""
+        if not self._fresh_output:
+            return
+        self._fresh_output = False
+        if self.sink.wants_invariants():
+            x, y, z = self.propagator.world_momentum().tolist()
+            self.sink.invariants(self._output_sec, self._output_nanosec,
+                                 self.propagator.energy(), (x, y, z))
+
+    def reset(self) -> None:
+        """Back to the initial attitude; the next sample is a new baseline."""
+        self.stream.reset()
+
+    def accepted_count(self) -> int:
+        """Gyro samples and poses used so far."""
+        return self.stream.accepted + self.poses_accepted
+
+    def missed_count(self) -> int:
+        """Samples lost upstream so far (from the stamp spacing)."""
+        return self.stream.missed_samples
+
+    def step_text(self) -> str:
+        """``constant_dt`` when set, else the stamps."""
+        constant_dt = self.stream.constant_dt
+        return f'{constant_dt:g} (constant_dt)' if constant_dt > 0.0 else 'gyro stamps'
+
+    def time_s(self) -> float:
+        """The stamp of the last attitude published [s]."""
+        return self._output_sec + self._output_nanosec * 1e-9
+
+    def _stream_rejections(self) -> list[Counter[str]]:
+        return [self.stream.rejected]
+
+    def _pending_count(self) -> int:
+        return len(self.stream.pending)

@@ -1,0 +1,202 @@
+"""The node's parameters, declared once: name, type, default, bounds, description, read-only.
+
+The node's ROS descriptors (:mod:`rigid_body_attitude.ros.node`), ``propagation_node --help``,
+the replay tool's options and command line (:mod:`rigid_body_attitude.tools.replay`) and the
+validation of every value (at start, at run time, from the command line) are all derived from
+:data:`PARAMETERS`. A value is checked by :func:`check_values`: its type, its bounds, and the
+rules that tie parameters together.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ['PARAMETERS', 'Parameter', 'check_values', 'defaults', 'help_text']
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One parameter.
+
+    Attributes:
+        name: the ROS parameter name.
+        type: ``float``, ``bool`` or ``str``.
+        default: the default value (of ``type``).
+        description: one line, with the unit first for numbers (``'s: ...'``).
+        low, high: bounds of a number (``None``: unbounded on that side).
+        low_open: ``low`` itself is refused (``> low`` instead of ``>= low``).
+        read_only: fixed at start; otherwise it may be changed at run time.
+        choices: the allowed values of a string (empty: any non-empty name, or any string
+            when ``may_be_empty``).
+        may_be_empty: an empty string is allowed (it means "the scene's").
+        node_only: the replay tool has no such option (e.g. the node's thread scheduling).
+    """
+
+    name: str
+    type: type
+    default: Any
+    description: str
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    read_only: bool = True
+    choices: tuple[str, ...] = ()
+    may_be_empty: bool = False
+    node_only: bool = False
+
+    @property
+    def type_text(self) -> str:
+        """The type as an error message names it."""
+        return _TYPE_TEXT[self.type]
+
+    def problem(self, value: Any) -> str:
+        """Why ``value`` is not a valid value of this parameter, or ``''``."""
+        if type(value) is not self.type:  # bool is not a float, 1 is not 1.0
+            return (f'Expected parameter `{self.name}` to be a {_TYPE_TEXT[self.type]}, '
+                    f'got {_quoted(value)}')
+        if isinstance(value, float):
+            return self._number_problem(value)
+        if isinstance(value, str):
+            return self._text_problem(value)
+        return ''
+
+    def _number_problem(self, value: float) -> str:
+        low_ok = self.low is None or (value > self.low if self.low_open else value >= self.low)
+        high_ok = self.high is None or value <= self.high
+        if math.isfinite(value) and low_ok and high_ok:
+            return ''
+        return (f'Expected parameter `{self.name}` to be a finite number in '
+                f'{self.range_text()}, got {value!r}')
+
+    def _text_problem(self, value: str) -> str:
+        if self.choices and value not in self.choices:
+            return (f'Expected parameter `{self.name}` to be one of '
+                    f'{", ".join(map(repr, self.choices))}, got {_quoted(value)}')
+        if not self.may_be_empty and not value.strip():
+            return f'Expected parameter `{self.name}` to be a non-empty name, got {value!r}'
+        if len(value) > MAX_TEXT_LENGTH:
+            return (f'Expected parameter `{self.name}` to be at most {MAX_TEXT_LENGTH} '
+                    f'characters, got {len(value)}')
+        return ''
+
+    def range_text(self) -> str:
+        """The bounds as an interval, e.g. ``(0, 1000]``; ``''`` for non-numbers."""
+        if self.type is not float:
+            return ''
+        low = '-inf' if self.low is None else _number_text(self.low)
+        high = 'inf' if self.high is None else _number_text(self.high)
+        return f'{"(" if self.low_open or self.low is None else "["}{low}, {high}]'
+
+
+#: Longest string value accepted (frame ids, scene paths, integrator names).
+MAX_TEXT_LENGTH = 4096
+
+_TYPE_TEXT = {float: 'double (written with a decimal point, e.g. 50.0)',
+              bool: 'boolean (true or false)', str: 'string'}
+
+
+def _number_text(value: float) -> str:
+    """A bound as people write it: ``1e6``, not ``1e+06``."""
+    return re.sub(r'e\+?(-?)0*(\d)', r'e\1\2', f'{value:g}')
+
+
+def _quoted(value: Any) -> str:
+    """``repr`` of a value, cut to 100 characters (a hostile value may be huge)."""
+    text = repr(value)
+    return text if len(text) <= 100 else text[:97] + '...'
+
+
+#: Every parameter, in the order the README and ``--help`` list them.
+PARAMETERS: tuple[Parameter, ...] = (
+    Parameter('scene', str, 'torque_free_box',
+              'built-in scene name or path to a scene YAML file'),
+    Parameter('world_frame', str, 'world',
+              'frame of pose, orientation and angular_momentum; set_pose must carry it',
+              read_only=False),
+    Parameter('body_frame', str, 'base_link', 'frame of twist (the body)', read_only=False),
+    Parameter('publish_rate', float, 50.0,
+              'Hz: dynamics ticks; energy and angular_momentum output', 0.0, 1000.0,
+              low_open=True),
+    Parameter('use_header_stamps', bool, True,
+              'gyro and command times from header stamps (else the receive time on the node '
+              'clock)', read_only=False),
+    Parameter('constant_dt', float, 0.0,
+              's: integrate each gyro sample over this step (0 = the stamp differences)',
+              0.0, 10.0, read_only=False),
+    Parameter('max_dt', float, 0.1,
+              's: a longer gap between gyro samples is not integrated across', 0.0, 3600.0,
+              low_open=True, read_only=False),
+    Parameter('time_jump_threshold', float, 1.0,
+              's: a larger backward jump of input stamps or node clock resets to the initial '
+              'state; a larger forward jump of the clock is not integrated across', 0.0,
+              1.0e6, low_open=True, read_only=False),
+    Parameter('max_angular_rate', float, 1000.0,
+              'rad/s: a gyro sample of a larger magnitude is rejected (out_of_range)', 0.0,
+              1.0e6, low_open=True, read_only=False),
+    Parameter('torque_timeout', float, 0.0,
+              's: commands (torque, force, rotor torque) are held this long, then zeroed '
+              '(0 = the scene\'s)', 0.0, 3600.0),
+    Parameter('integrator', str, '',
+              'integrator (dynamics) or strapdown method (gyro) overriding the scene\'s '
+              '("" = the scene\'s)', may_be_empty=True),
+    Parameter('step', float, 0.0,
+              's: integration step of dynamics scenes (0 = the scene\'s)', 0.0, 10.0),
+    Parameter('cpu_scheduling', str, 'batch',
+              'policy of the node\'s threads: batch (SCHED_BATCH, no wake-up preemption) or '
+              'default (as started)', choices=('batch', 'default'), node_only=True),
+)
+
+_BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}
+
+
+def defaults(node_only: bool = True) -> dict[str, Any]:
+    """Parameter name → default (without the node-only ones when ``node_only`` is false)."""
+    return {p.name: p.default for p in PARAMETERS if node_only or not p.node_only}
+
+
+def check_values(values: Mapping[str, Any], dynamics_step: float = 0.0,
+                 max_steps_per_tick: int = 0) -> str:
+    """Why these parameter values are unusable, or ``''`` when they are fine.
+
+    Checks each value against its declaration, then the rules between parameters: distinct
+    frames and, with the ``dynamics_step`` [s] of a dynamics scene, that a clock jump just
+    below ``time_jump_threshold`` (integrated in one tick) stays within
+    ``max_steps_per_tick`` steps.
+    """
+    for name, value in values.items():
+        parameter = _BY_NAME.get(name)
+        if parameter is None:
+            return f'Unknown parameter `{name}`; parameters: {", ".join(_BY_NAME)}'
+        problem = parameter.problem(value)
+        if problem:
+            return problem
+    if values.get('world_frame', 'world') == values.get('body_frame', 'base_link'):
+        return (f'Expected `world_frame` and `body_frame` to differ, both are '
+                f'{values["world_frame"]!r}')
+    threshold = values.get('time_jump_threshold', 0.0)
+    if dynamics_step > 0.0 and max_steps_per_tick and (
+            threshold / dynamics_step > max_steps_per_tick):
+        return (f'Expected parameter `time_jump_threshold` to be at most '
+                f'{max_steps_per_tick * dynamics_step:g} s ({max_steps_per_tick} steps of '
+                f'{dynamics_step:g} s in one tick), got {threshold!r}')
+    return ''
+
+
+def help_text(parameters: Iterable[Parameter] = PARAMETERS) -> str:
+    """The parameter list as ``propagation_node --help`` prints it."""
+    lines = []
+    for p in parameters:
+        bounds = f' in {p.range_text()}' if p.range_text() else ''
+        choices = f' (one of: {", ".join(p.choices)})' if p.choices else ''
+        when = 'read-only' if p.read_only else 'changeable at run time'
+        default = repr(p.default) if p.type is str else str(p.default).lower()
+        lines.append(f'  {p.name} ({_TYPE_NAME[p.type]}, default {default}{bounds}, {when})')
+        lines.append(f'      {p.description}{choices}')
+    return '\n'.join(lines)
+
+
+_TYPE_NAME = {float: 'double', bool: 'bool', str: 'string'}

@@ -1,0 +1,222 @@
+"""The replay's event loop: the bag's messages and the node's timers on the bag's time axis.
+
+As the node runs with ``use_sim_time`` when a player publishes ``/clock`` with the bag times
+(bag time = the recorder's receive time):
+
+* **ticks** of the output timer at the multiples ``k P`` (``k ≥ 1``) of its period
+  ``P = timer_period_ns(publish_rate)`` within the bag's time span, each before the messages
+  recorded at the same instant (the player publishes ``/clock = T`` first): the session's
+  ``tick`` (dynamics: integrate to ``T`` and publish; gyro: energy and momentum of the last
+  attitude, once more at the first tick after the last message);
+* **diagnostics** every second of bag time from the first message, and once more at the next
+  second (or tick) after the end;
+* **messages**: decoded with the node's decoders (:mod:`rigid_body_attitude.session.decoding`)
+  and handed to the session as the node's callbacks hand them; one that cannot be decoded goes
+  to ``session.malformed`` and one that raises inside the session to
+  ``session.internal_error``, and the replay goes on, as the node does.
+
+The session's clocks read the bag time: ``clock_ns`` the time of the message or tick being
+handled, ``monotonic`` the same in seconds, so warnings are throttled on bag time and the
+dynamics timing (real-time factor, lag) does not depend on the machine.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Callable, Iterator
+from typing import Protocol
+
+from rigid_body_attitude.bag import BagMessage
+from rigid_body_attitude.session.decoding import DECODERS, MALFORMED, Decoded
+from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.settings import (
+    DIAGNOSTICS_PERIOD, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC, Session)
+from rigid_body_attitude.session.times import seconds_to_ns
+from rigid_body_attitude.tools.replay.plan import Plan
+from rigid_body_attitude.tools.replay.sink import BagSink
+from rigid_body_attitude.tools.replay.truth import AlignmentError
+
+__all__ = ['EventLoop', 'FLUSH_RECORDS', 'PROGRESS_CHUNK', 'Progress']
+
+#: Progress-bar updates and output flushes every this many messages (a tqdm update costs
+#: about a microsecond).
+PROGRESS_CHUNK = 4096
+#: Output records buffered at most before they are written (about 3 MB of messages).
+FLUSH_RECORDS = 4 * PROGRESS_CHUNK
+_DIAGNOSTICS_NS = seconds_to_ns(DIAGNOSTICS_PERIOD)
+
+
+class Progress(Protocol):
+    """A progress bar (tqdm's interface)."""
+
+    def update(self, n: int) -> object:
+        """``n`` more messages done."""
+
+    def close(self) -> None:
+        """The end."""
+
+
+class EventLoop:
+    """Feeds one bag's messages and the timers' events to a session, in bag-time order."""
+
+    def __init__(self, session: Session, sink: BagSink, plan: Plan, period_ns: int,
+                 first_ns: int) -> None:
+        """Ticks every ``period_ns`` and diagnostics every second from ``first_ns``, the bag
+        time of the first message."""
+        self.session = session
+        self.sink = sink
+        self.plan = plan
+        self.period_ns = period_ns
+        self.next_tick_ns = max(-(-first_ns // period_ns), 1) * period_ns
+        self.next_diagnostics_ns = first_ns + _DIAGNOSTICS_NS
+        #: Messages read per bag topic (the gyro topic's added at the end of the gyro loop).
+        self.read: Counter[str] = Counter()
+        #: Ticks of the output timer so far (the one after the end not included).
+        self.ticks = 0
+        self.handlers = {topic: self._handler(node_topic)
+                         for topic, node_topic in plan.inputs.items()}
+        sink.now_ns = first_ns
+
+    # -- timers -----------------------------------------------------------------------------
+
+    def next_event_ns(self) -> int:
+        """Bag time of the next tick or diagnostics message."""
+        return min(self.next_tick_ns, self.next_diagnostics_ns)
+
+    def run_until(self, bag_time_ns: int) -> None:
+        """Run the ticks and diagnostics due at or before ``bag_time_ns``, in time order (a
+        tick before the diagnostics of the same instant)."""
+        while True:
+            tick, diagnostics = self.next_tick_ns, self.next_diagnostics_ns
+            if min(tick, diagnostics) > bag_time_ns:
+                return
+            if tick <= diagnostics:
+                self.tick(tick)
+                self.next_tick_ns = tick + self.period_ns
+            else:
+                self.diagnostics(diagnostics)
+                self.next_diagnostics_ns = diagnostics + _DIAGNOSTICS_NS
+
+    def tick(self, now_ns: int) -> None:
+        """The output timer at bag time ``now_ns`` (the node's ``tick_callback``)."""
+        self.sink.now_ns = now_ns
+        session = self.session
+        if isinstance(session, DynamicsSession):
+            session.tick(now_ns)
+        else:
+            session.tick()
+        self.ticks += 1
+        if len(self.sink.records) >= FLUSH_RECORDS:
+            self.sink.flush()
+
+    def diagnostics(self, now_ns: int) -> None:
+        """The node's ``/diagnostics`` at bag time ``now_ns``."""
+        self.sink.now_ns = now_ns
+        self.session.publish_diagnostics()
+
+    def finish(self) -> None:
+        """After the last message: the gyro scene's pending energy and momentum at the next
+        tick, and the diagnostics at the next second (or that tick, if later)."""
+        if isinstance(self.session, GyroSession):
+            self.sink.now_ns = self.next_tick_ns
+            self.session.tick()
+        self.diagnostics(max(self.next_diagnostics_ns, self.next_tick_ns))
+
+    # -- messages ---------------------------------------------------------------------------
+
+    def _handler(self, node_topic: str) -> Callable[[bytes], None]:
+        """The node's callback of ``node_topic``: decode, then hand the values over."""
+        decode, deliver = DECODERS[node_topic], self._delivery(node_topic)
+        session = self.session
+
+        def handle(data: bytes) -> None:
+            try:
+                values = decode(data)
+            except MALFORMED as err:
+                session.malformed(node_topic, str(err)[:200])
+                return
+            try:
+                deliver(values)
+            except Exception as err:  # a bug must not end the replay (nor the node): counted
+                session.internal_error(node_topic, err)
+        return handle
+
+    def _delivery(self, node_topic: str) -> Callable[[Decoded], None]:
+        session = self.session
+        if node_topic == SET_POSE_TOPIC:
+            return lambda values: session.set_pose(values[2], values[3], values[4])
+        assert isinstance(session, DynamicsSession)  # plan: commands for dynamics scenes
+        if node_topic == TORQUE_TOPIC:
+            return lambda values: session.wrench(values[0], values[1], values[3], values[4])
+        assert node_topic == ROTOR_TORQUE_TOPIC
+        return lambda values: session.rotor_torque(values[0], values[1], values[3])
+
+    def run(self, messages: Iterator[BagMessage], progress: Progress) -> int:
+        """Replay every message, then :meth:`finish`; returns the gyro messages handled."""
+        if isinstance(self.session, GyroSession):
+            count = self._gyro_messages(self.session, messages, progress)
+        else:
+            count = 0
+            self._messages(messages, progress)
+        self.finish()
+        return count
+
+    def _messages(self, messages: Iterator[BagMessage], progress: Progress) -> None:
+        """Dynamics scenes: every message advances the clock; inputs go to the session."""
+        sink, handlers, read = self.sink, self.handlers, self.read
+        chunk = 0
+        for topic, bag_time_ns, _, data in messages:
+            if bag_time_ns >= self.next_event_ns():
+                self.run_until(bag_time_ns)
+            sink.now_ns = bag_time_ns
+            read[topic] += 1
+            handler = handlers.get(topic)
+            if handler is not None:
+                handler(data)
+            chunk += 1
+            if chunk == PROGRESS_CHUNK:
+                progress.update(chunk)
+                sink.flush()
+                chunk = 0
+        progress.update(chunk)
+
+    def _gyro_messages(self, session: GyroSession, messages: Iterator[BagMessage],
+                       progress: Progress) -> int:
+        """Gyro scenes (the hot path): per gyro message one decoder call, ``session.gyro``,
+        and the sink appending the encoded outputs to its buffer."""
+        plan, sink, handlers, read = self.plan, self.sink, self.handlers, self.read
+        gyro_topic, decode, gyro = plan.gyro_topic, plan.gyro_decoder, session.gyro
+        assert decode is not None
+        node_topic = 'imu' if plan.gyro_is_imu else 'angular_velocity'
+        next_event = self.next_event_ns()
+        count = chunk = 0
+        for topic, bag_time_ns, _, data in messages:
+            if bag_time_ns >= next_event:
+                self.run_until(bag_time_ns)
+                next_event = self.next_event_ns()
+            sink.now_ns = bag_time_ns
+            chunk += 1
+            if chunk == PROGRESS_CHUNK:
+                progress.update(chunk)
+                sink.flush()
+                chunk = 0
+            if topic != gyro_topic:
+                read[topic] += 1
+                handlers[topic](data)
+                continue
+            count += 1
+            try:
+                sec, nanosec, _, rate, sink.current_imu = decode(data)
+            except MALFORMED as err:
+                session.malformed(node_topic, str(err)[:200])
+                continue
+            try:
+                gyro(sec, nanosec, rate)
+            except AlignmentError:
+                raise
+            except Exception as err:  # a bug must not end the replay (nor the node): counted
+                session.internal_error(node_topic, err)
+        progress.update(chunk)
+        read[gyro_topic] += count
+        return count

@@ -1,0 +1,116 @@
+"""Replay options: the node's parameters, derived from the one parameter table, and the
+replay's own (topics, ground truth, outputs, storage).
+
+The node's parameters are the entries of
+:data:`rigid_body_attitude.session.parameters.PARAMETERS` that are not ``node_only``: the same
+names, defaults, bounds and checks (:func:`~rigid_body_attitude.session.parameters.check_values`).
+:class:`ReplayOptions` declares them as typed fields (so ``mypy`` and readers see them); the
+check at the end of this module fails at import when the fields and the table part ways.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+from rigid_body_attitude.bag import STORAGES
+from rigid_body_attitude.core.errors import InputError
+from rigid_body_attitude.session.parameters import PARAMETERS, Parameter, check_values
+from rigid_body_attitude.session.settings import (
+    OUTPUT_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC)
+
+__all__ = ['NODE_PARAMETERS', 'ReplayOptions', 'check_options']
+
+#: The node's parameters the replay takes (the table less the ``node_only`` ones).
+NODE_PARAMETERS: tuple[Parameter, ...] = tuple(p for p in PARAMETERS if not p.node_only)
+_DEFAULT = {p.name: p.default for p in NODE_PARAMETERS}
+
+
+@dataclass(frozen=True)
+class ReplayOptions:
+    """Replay settings.
+
+    The first fields are the node's parameters, with the node's names, defaults and bounds
+    (:data:`NODE_PARAMETERS`; their meaning: ``propagation_node --help`` or the README's
+    parameter table). Receive times are the bag times. The replay's own:
+
+    Attributes:
+        gyro_topic: gyro topic (``''``: ``imu`` or else ``angular_velocity``, as the node).
+        torque_topic: WrenchStamped commands.
+        rotor_torque_topic: Vector3Stamped rotor motor torque commands.
+        set_pose_topic: PoseStamped re-initialisations of the attitude (and position).
+        ground_truth_topic: QuaternionStamped or PoseStamped attitude to compare with.
+        start_from_ground_truth: stamp [s] from which on the attitude starts from the ground
+            truth (at the first output at or after it); ``None``: the scene's.
+        outputs: output topics to write (empty: all the node publishes for the scene).
+        storage: storage plugin of the output bag (``sqlite3`` or ``mcap``).
+    """
+
+    scene: str = _DEFAULT['scene']
+    world_frame: str = _DEFAULT['world_frame']
+    body_frame: str = _DEFAULT['body_frame']
+    publish_rate: float = _DEFAULT['publish_rate']
+    use_header_stamps: bool = _DEFAULT['use_header_stamps']
+    constant_dt: float = _DEFAULT['constant_dt']
+    max_dt: float = _DEFAULT['max_dt']
+    time_jump_threshold: float = _DEFAULT['time_jump_threshold']
+    max_angular_rate: float = _DEFAULT['max_angular_rate']
+    torque_timeout: float = _DEFAULT['torque_timeout']
+    integrator: str = _DEFAULT['integrator']
+    step: float = _DEFAULT['step']
+    gyro_topic: str = ''
+    torque_topic: str = TORQUE_TOPIC
+    rotor_torque_topic: str = ROTOR_TORQUE_TOPIC
+    set_pose_topic: str = SET_POSE_TOPIC
+    ground_truth_topic: str = ''
+    start_from_ground_truth: float | None = None
+    outputs: tuple[str, ...] = ()
+    storage: str = 'sqlite3'
+
+    def parameters(self) -> dict[str, Any]:
+        """The node's parameters by name (an ``int`` given for a double becomes a float)."""
+        values = {}
+        for parameter in NODE_PARAMETERS:
+            value = getattr(self, parameter.name)
+            if parameter.type is float and type(value) is int:  # Python callers write 50
+                value = float(value)
+            values[parameter.name] = value
+        return values
+
+
+def check_options(options: ReplayOptions) -> dict[str, Any]:
+    """The node's parameter values of ``options``, checked as the node checks them, and the
+    replay's own options; raises :class:`InputError` naming the bad value."""
+    values = options.parameters()
+    problem = check_values(values)
+    if problem:
+        raise InputError(problem)
+    if options.storage not in STORAGES:
+        raise InputError(f'Expected `storage` to be one of {sorted(STORAGES)}, got '
+                         f'{options.storage!r}')
+    start = options.start_from_ground_truth
+    if start is not None:
+        if not options.ground_truth_topic:
+            raise InputError('Expected a ground-truth topic with `start_from_ground_truth`, '
+                             'got none (use --ground-truth TOPIC)')
+        if not math.isfinite(start):
+            raise InputError(f'Expected `start_from_ground_truth` to be a finite stamp [s], '
+                             f'got {start!r}')
+    unknown = sorted(set(options.outputs) - set(OUTPUT_TOPICS))
+    if unknown:
+        raise InputError(f'Unknown output topic {unknown[0]!r}; valid choices: '
+                         f'{", ".join(OUTPUT_TOPICS)}')
+    return values
+
+
+def _check_fields() -> None:
+    """The dataclass declares the table's parameters, in its order, with its defaults."""
+    declared = [(f.name, f.default) for f in fields(ReplayOptions)][:len(NODE_PARAMETERS)]
+    table = [(p.name, p.default) for p in NODE_PARAMETERS]
+    if declared != table:
+        raise ImportError(f'ReplayOptions does not declare the node parameters of '
+                          f'session/parameters.py: fields {declared}, table {table}')
+
+
+_check_fields()

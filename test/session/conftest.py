@@ -1,0 +1,72 @@
+"""Shared builders of the session tests: a sink that records, clocks the test drives."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import pytest
+
+from rigid_body_attitude.session.parameters import defaults
+from rigid_body_attitude.session.settings import load_node_scene, open_session
+
+BASE_NS = 1_700_000_000 * 10**9 + 123_456_789
+MS = 1_000_000
+
+
+@dataclass
+class RecordingSink:
+    """Everything a session hands over, in order."""
+
+    attitudes: list[tuple[int, int, tuple[float, ...]]] = field(default_factory=list)
+    ticks: list[tuple[int, int, Any, tuple[float, ...]]] = field(default_factory=list)
+    invariant_samples: list[tuple[int, int, float, tuple[float, ...]]] = field(
+        default_factory=list)
+    reports: list[Any] = field(default_factory=list)
+    logs: list[tuple[int, str]] = field(default_factory=list)
+
+    def attitude(self, sec, nanosec, attitude):
+        self.attitudes.append((sec, nanosec, attitude))
+
+    def dynamics(self, sec, nanosec, sample, velocity_body):
+        self.ticks.append((sec, nanosec, sample, velocity_body))
+
+    def wants_invariants(self):
+        return True
+
+    def invariants(self, sec, nanosec, energy, world_momentum):
+        self.invariant_samples.append((sec, nanosec, energy, world_momentum))
+
+    def diagnostics(self, report):
+        self.reports.append(report)
+
+    def log(self, level, text):
+        self.logs.append((level, text))
+
+
+@dataclass
+class Clocks:
+    """The node clock [ns] and the monotonic clock [s], set by the test."""
+
+    now_ns: int = BASE_NS
+    monotonic: float = 0.0
+
+
+@pytest.fixture
+def clocks():
+    return Clocks()
+
+
+@pytest.fixture
+def open_scene(clocks):
+    """``open_scene(name, **parameters)`` → (session, sink)."""
+    def build(name, **parameters):
+        values = defaults()
+        values.update(parameters)
+        sink = RecordingSink()
+        scene = load_node_scene(name, values['integrator'], values['step'],
+                                values['torque_timeout'])
+        session = open_session(scene, values, sink, lambda: clocks.now_ns,
+                               lambda: clocks.monotonic)
+        return session, sink
+    return build

@@ -1,0 +1,70 @@
+"""The parameter table: every check derived from one declaration per parameter."""
+
+import math
+
+import pytest
+
+from rigid_body_attitude.session.parameters import (
+    check_values, defaults, help_text, PARAMETERS)
+
+
+def test_defaults_pass_their_own_checks():
+    assert check_values(defaults()) == ''
+    assert all(parameter.problem(parameter.default) == '' for parameter in PARAMETERS)
+
+
+def test_names_are_unique_and_replay_defaults_leave_out_node_only_ones():
+    names = [parameter.name for parameter in PARAMETERS]
+    assert len(names) == len(set(names))
+    assert 'cpu_scheduling' in defaults() and 'cpu_scheduling' not in defaults(node_only=False)
+
+
+@pytest.mark.parametrize('name, value, expected', [
+    ('max_dt', 0.0, 'Expected parameter `max_dt` to be a finite number in (0, 3600], got 0.0'),
+    ('publish_rate', math.nan, '`publish_rate` to be a finite number in (0, 1000], got nan'),
+    ('publish_rate', 50, '`publish_rate` to be a double (written with a decimal point'),
+    ('time_jump_threshold', -1.0, '`time_jump_threshold` to be a finite number in (0, 1e6]'),
+    ('constant_dt', -0.001, '`constant_dt` to be a finite number in [0, 10], got -0.001'),
+    ('step', math.inf, '`step` to be a finite number in [0, 10], got inf'),
+    ('max_angular_rate', 0.0, '`max_angular_rate` to be a finite number in (0, 1e6]'),
+    ('scene', ' ', '`scene` to be a non-empty name'),
+    ('scene', 'x' * 5000, '`scene` to be at most 4096 characters, got 5000'),
+    ('use_header_stamps', 1.0, '`use_header_stamps` to be a boolean (true or false), got 1.0'),
+    ('cpu_scheduling', 'fifo', "`cpu_scheduling` to be one of 'batch', 'default', got 'fifo'"),
+    ('body_frame', 'world', '`world_frame` and `body_frame` to differ, both are \'world\''),
+])
+def test_check_values_names_the_parameter_and_the_bad_value(name, value, expected):
+    values = defaults()
+    values[name] = value
+    assert expected in check_values(values)
+
+
+def test_a_huge_bad_value_is_quoted_short():
+    values = defaults()
+    values['publish_rate'] = 'x' * 10**6
+    problem = check_values(values)
+    assert problem.startswith('Expected parameter `publish_rate` to be a double')
+    assert len(problem) < 250
+
+
+def test_unknown_parameter_is_named():
+    assert check_values({'no_such': 1.0}).startswith('Unknown parameter `no_such`')
+
+
+def test_the_steps_of_one_tick_are_bounded():
+    values = defaults()
+    values['time_jump_threshold'] = 2e4
+    assert check_values(values) == ''  # gyro scenes: no integration over clock jumps
+    assert check_values(values, 0.002, 10_000_000) == ''  # 1e7 steps
+    assert check_values(values, 0.001, 10_000_000) == (
+        'Expected parameter `time_jump_threshold` to be at most 10000 s (10000000 steps of '
+        '0.001 s in one tick), got 20000.0')
+
+
+def test_help_lists_every_parameter_with_type_default_bounds_and_mutability():
+    text = help_text()
+    for parameter in PARAMETERS:
+        assert f'  {parameter.name} (' in text
+    assert '  publish_rate (double, default 50.0 in (0, 1000], read-only)' in text
+    assert '  max_dt (double, default 0.1 in (0, 3600], changeable at run time)' in text
+    assert '  use_header_stamps (bool, default true, changeable at run time)' in text
