@@ -39,7 +39,7 @@ import platform
 import statistics
 import sys
 import time
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -71,7 +71,7 @@ def gyro_samples(count: int) -> np.ndarray:
     return np.stack([0.5 * np.cos(7.0 * t), 0.5 * np.sin(7.0 * t), 2.0 + 0.1 * t], axis=1)
 
 
-def timed(loop: Callable[[], object], steps: int, repeats: int) -> dict:
+def timed(loop: Callable[[], object], steps: int, repeats: int) -> dict[str, Any]:
     """Per-step seconds (min and median over ``repeats`` runs of ``loop``) and its result."""
     result = loop()  # warm-up and the state compared across contenders
     times = []
@@ -129,14 +129,15 @@ def strapdown_contenders(samples: np.ndarray) -> dict[str, Callable[[], np.ndarr
 # -- RK4 dynamics ------------------------------------------------------------------------------
 
 def _numpy_derivative(q: np.ndarray, omega: np.ndarray, tensor: np.ndarray,
-                      inverse: np.ndarray, product: Callable) -> tuple[np.ndarray, np.ndarray]:
+                      inverse: np.ndarray,
+                      product: Callable[..., Any]) -> tuple[np.ndarray, np.ndarray]:
     """``(½ q ⊗ (0, ω), J⁻¹(−ω × Jω))`` the usual NumPy way, ``product`` the quaternion one."""
     return (0.5 * product(q, np.concatenate(([0.0], omega))),
             inverse @ (-np.cross(omega, tensor @ omega)))
 
 
 def _numpy_rk4(q: np.ndarray, omega: np.ndarray, h: float, tensor: np.ndarray,
-               inverse: np.ndarray, product: Callable) -> tuple[np.ndarray, np.ndarray]:
+               inverse: np.ndarray, product: Callable[..., Any]) -> tuple[np.ndarray, np.ndarray]:
     """One classical RK4 step of ``(q, ω)`` with arrays (not renormalised)."""
     dq1, dw1 = _numpy_derivative(q, omega, tensor, inverse, product)
     dq2, dw2 = _numpy_derivative(q + 0.5 * h * dq1, omega + 0.5 * h * dw1, tensor, inverse,
@@ -192,7 +193,7 @@ def rk4_contenders(steps: int) -> dict[str, Callable[[], np.ndarray]]:
 # -- driver ------------------------------------------------------------------------------------
 
 def measure(contenders: dict[str, Callable[[], np.ndarray]], steps: int, repeats: int,
-            tolerance: float) -> tuple[list[dict], list[str]]:
+            tolerance: float) -> tuple[list[dict[str, Any]], list[str]]:
     """Time every contender; compare its final state with the first one's (ours)."""
     rows, problems = [], []
     reference = None
@@ -209,7 +210,7 @@ def measure(contenders: dict[str, Callable[[], np.ndarray]], steps: int, repeats
     return rows, problems
 
 
-def machine() -> dict:
+def machine() -> dict[str, Any]:
     """CPU model, core count and library versions."""
     import importlib.metadata
     model = platform.processor()
@@ -222,7 +223,7 @@ def machine() -> dict:
     return {'cpu_model': model, 'python': platform.python_version(), **versions}
 
 
-def table(title: str, rows: list[dict], target_us: float) -> list[str]:
+def table(title: str, rows: list[dict[str, Any]], target_us: float) -> list[str]:
     """Markdown table of one comparison with the speed-up of ours (first row) over each."""
     ours = rows[0]['min_us']
     lines = [f'**{title}** (target ≤ {target_us:g} µs, ≥ {TARGET_SPEEDUP:g}× every baseline)',

@@ -13,68 +13,126 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
+from rigid_body_attitude.core.effects import Effect, RotorEffect, TorqueEffect
 from rigid_body_attitude.core.errors import InputError, IntegratorError
 from rigid_body_attitude.core.inertia import Inertia
+from rigid_body_attitude.core.integrators.base import body_derivative
 from rigid_body_attitude.core.integrators.rigid_body_rk4 import rk4_state_step
 
 __all__ = ['RigidBodyModel', 'euler_rate', 'rk4_step']
 
 FloatArray = NDArray[np.float64]
-TorqueFunction = Callable[[float, FloatArray, FloatArray], FloatArray]
-RotorFunction = Callable[[float], tuple[FloatArray, FloatArray]]
+Quat = tuple[float, float, float, float]
+Vec = tuple[float, float, float]
+#: ``(t, q, ω) -> M`` [N m, body] on plain floats (an effect's ``torque``).
+FloatTorque = Callable[[float, Quat, Vec], Vec]
+#: ``t -> (h, ḣ)`` [N m s, N m; body] on plain floats (an effect's ``rotor``).
+FloatRotor = Callable[[float], tuple[Vec, Vec]]
+#: Array callables ``(t, attitude, omega_body) -> torque_body`` for scripts.
+TorqueFunction = Callable[[float, FloatArray, FloatArray], ArrayLike]
+RotorFunction = Callable[[float], tuple[ArrayLike, ArrayLike]]
 
 _ZERO3 = np.zeros(3)
+_ZERO: Vec = (0.0, 0.0, 0.0)
 
 
-def euler_rate(inertia: Inertia, omega_body: FloatArray, torque_body: FloatArray,
-               rotor_momentum: FloatArray = _ZERO3,
-               rotor_momentum_rate: FloatArray = _ZERO3) -> FloatArray:
+def euler_rate(inertia: Inertia, omega_body: FloatArray, torque_body: ArrayLike,
+               rotor_momentum: ArrayLike = _ZERO3,
+               rotor_momentum_rate: ArrayLike = _ZERO3) -> FloatArray:
     """``ω̇ = J⁻¹ (M − ḣ − ω × (J ω + h))`` [rad/s²], all vectors in body axes."""
-    momentum = inertia.tensor @ omega_body + rotor_momentum
-    return inertia.inverse @ (torque_body - rotor_momentum_rate - np.cross(omega_body, momentum))
+    momentum = inertia.tensor @ omega_body + np.asarray(rotor_momentum)
+    return np.asarray(inertia.inverse @ (np.asarray(torque_body) - np.asarray(rotor_momentum_rate)
+                                         - np.cross(omega_body, momentum)))
 
 
-@dataclass
+def _float_torque(function: TorqueFunction) -> FloatTorque:
+    """An array torque callable as a plain-float one."""
+    def torque(t: float, q: Quat, omega: Vec) -> Vec:
+        x, y, z = np.asarray(function(t, np.array(q), np.array(omega)), dtype=np.float64).tolist()
+        return x, y, z
+    return torque
+
+
+def _float_rotor(function: RotorFunction) -> FloatRotor:
+    """An array rotor callable as a plain-float one."""
+    def rotor(t: float) -> tuple[Vec, Vec]:
+        momentum, rate = function(t)
+        hx, hy, hz = np.asarray(momentum, dtype=np.float64).tolist()
+        rx, ry, rz = np.asarray(rate, dtype=np.float64).tolist()
+        return (hx, hy, hz), (rx, ry, rz)
+    return rotor
+
+
+def _floats(values: Sequence[float] | FloatArray) -> tuple[float, ...]:
+    """Plain floats from a tuple (as is) or an array."""
+    return values if isinstance(values, tuple) else tuple(np.asarray(values).tolist())
+
+
 class RigidBodyModel:
     """What a dynamics integrator needs to know about the body: inertia, torques and rotors.
 
+    Every torque and rotor is held as a plain-float callable (:data:`FloatTorque`,
+    :data:`FloatRotor`; the effects' ``torque`` and ``rotor``), so the integrators' hot loops
+    build no array. ``torque_functions`` and ``rotor_functions`` take array callables for
+    scripts (converted once, at a NumPy round trip per call); :meth:`from_effects` takes the
+    scene's effects.
+
     Attributes:
         inertia: the validated inertia tensor [kg m²] in body axes.
-        torque_functions: callables ``(t, attitude, omega_body) -> torque_body [N m]`` summed
-            into ``M``; empty for a torque-free body.
-        rotor_functions: callables ``t -> (h_body [N m s], ḣ_body [N m])`` summed into the
-            gyrostat terms; empty when there is no rotor.
-        torque_depends_on_rate: False when no torque function uses ``omega_body`` (the
-            propagator sets it from its effects); the splitting methods then apply a torque
-            kick exactly, in one evaluation. True (the safe default) otherwise.
+        torques: plain-float torque callables summed into ``M``; empty for a torque-free body.
+        rotors: plain-float rotor callables summed into the gyrostat terms.
+        torque_depends_on_rate: False when no torque uses ``ω`` (the splitting methods then
+            apply a torque kick exactly, in one evaluation). True (the safe default) otherwise.
+        torque_takes_floats: always True: :attr:`torque_body` takes and returns plain floats.
+        has_rotor: whether a rotor acts.
+        has_torque: whether a torque acts.
+        torque_body: ``(t, q, ω) -> M`` [N m], the sum of :attr:`torques` (plain floats).
+        rotor_momentum: ``t -> (h, ḣ)``, the sum of :attr:`rotors` (plain floats).
+        tensor_entries, inverse_entries: ``J`` and ``J⁻¹`` as row-major 9-tuples of floats.
     """
 
-    inertia: Inertia
-    torque_functions: Sequence[TorqueFunction] = field(default_factory=tuple)
-    rotor_functions: Sequence[RotorFunction] = field(default_factory=tuple)
-    torque_depends_on_rate: bool = True
-    tensor_entries: tuple[float, ...] = field(init=False, repr=False)
-    inverse_entries: tuple[float, ...] = field(init=False, repr=False)
+    torque_body: FloatTorque
+    rotor_momentum: FloatRotor
 
-    def __post_init__(self) -> None:
-        """Keep ``J`` and ``J⁻¹`` as row-major float tuples for plain-float hot paths."""
-        self.tensor_entries = tuple(self.inertia.tensor.ravel().tolist())
-        self.inverse_entries = tuple(self.inertia.inverse.ravel().tolist())
+    def __init__(self, inertia: Inertia, torque_functions: Sequence[TorqueFunction] = (),
+                 rotor_functions: Sequence[RotorFunction] = (),
+                 torque_depends_on_rate: bool = True, *,
+                 float_torques: Sequence[FloatTorque] = (),
+                 float_rotors: Sequence[FloatRotor] = ()) -> None:
+        """A body of ``inertia`` under the given torques and rotors (array or plain-float)."""
+        self.inertia = inertia
+        self.torques = tuple(float_torques) + tuple(map(_float_torque, torque_functions))
+        self.rotors = tuple(float_rotors) + tuple(map(_float_rotor, rotor_functions))
+        self.torque_depends_on_rate = bool(torque_depends_on_rate)
+        self.torque_takes_floats = True
+        self.has_rotor = bool(self.rotors)
+        self.has_torque = bool(self.torques)
+        self.tensor_entries = tuple(inertia.tensor.ravel().tolist())
+        self.inverse_entries = tuple(inertia.inverse.ravel().tolist())
+        self.torque_body = self.torques[0] if len(self.torques) == 1 else self._torque_sum
+        self.rotor_momentum = self.rotors[0] if len(self.rotors) == 1 else self._rotor_sum
+
+    @classmethod
+    def from_effects(cls, inertia: Inertia, effects: Sequence[Effect]) -> RigidBodyModel:
+        """The model of a scene's effects: their torques and rotors (other kinds ignored)."""
+        torques = [e for e in effects if isinstance(e, TorqueEffect)]
+        return cls(inertia, float_torques=[e.torque for e in torques],
+                   float_rotors=[e.rotor for e in effects if isinstance(e, RotorEffect)],
+                   torque_depends_on_rate=any(e.torque_depends_on_rate for e in torques))
+
+    @property
+    def torque_functions(self) -> tuple[FloatTorque, ...]:
+        """:attr:`torques` (the name scripts used)."""
+        return self.torques
 
     @property
     def torque_free(self) -> bool:
         """True when no torque and no rotor act: the exact and splitting methods apply."""
-        return not self.torque_functions and not self.rotor_functions
-
-    @property
-    def has_rotor(self) -> bool:
-        """True when a rotor (gyrostat momentum) acts."""
-        return bool(self.rotor_functions)
+        return not self.torques and not self.rotors
 
     @property
     def inverse_inertia(self) -> FloatArray:
@@ -91,38 +149,38 @@ class RigidBodyModel:
         """Columns are the principal axes in body coordinates."""
         return self.inertia.principal_axes
 
-    def torque_body(self, t: float, attitude: FloatArray, omega_body: FloatArray) -> FloatArray:
-        """Sum of the effect torques at ``(t, attitude, omega_body)`` [N m, body axes]."""
-        total = np.zeros(3)
-        for torque in self.torque_functions:
-            total = total + torque(t, attitude, omega_body)
-        return total
+    def _torque_sum(self, t: float, q: Quat, omega: Vec) -> Vec:
+        """Sum of the torques at ``(t, q, ω)`` [N m, body axes]."""
+        x = y = z = 0.0
+        for torque in self.torques:
+            a, b, c = torque(t, q, omega)
+            x, y, z = x + a, y + b, z + c
+        return x, y, z
 
-    def rotor_momentum(self, t: float) -> tuple[FloatArray, FloatArray]:
+    def _rotor_sum(self, t: float) -> tuple[Vec, Vec]:
         """Summed rotor momentum ``h`` and its rate ``ḣ`` at ``t`` (body axes)."""
-        momentum = np.zeros(3)
-        rate = np.zeros(3)
-        for rotor in self.rotor_functions:
-            h, h_dot = rotor(t)
-            momentum = momentum + h
-            rate = rate + h_dot
-        return momentum, rate
+        hx = hy = hz = rx = ry = rz = 0.0
+        for rotor in self.rotors:
+            (a, b, c), (d, e, f) = rotor(t)
+            hx, hy, hz, rx, ry, rz = hx + a, hy + b, hz + c, rx + d, ry + e, rz + f
+        return (hx, hy, hz), (rx, ry, rz)
 
-    def omega_dot(self, t: float, attitude: FloatArray, omega_body: FloatArray) -> FloatArray:
-        """Angular acceleration from Euler's equations with every effect included."""
-        torque = self.torque_body(t, attitude, omega_body) if self.torque_functions else _ZERO3
-        if not self.rotor_functions:
-            return euler_rate(self.inertia, omega_body, torque)
-        h, h_dot = self.rotor_momentum(t)
-        return euler_rate(self.inertia, omega_body, torque, h, h_dot)
-
-    def external_torque(self, t: float, attitude: FloatArray,
-                        omega_body: FloatArray) -> FloatArray:
+    def external_torque(self, t: float, attitude: Sequence[float] | FloatArray,
+                        omega_body: Sequence[float] | FloatArray) -> Vec:
         """``M − ḣ``: the torque whose power ``ω·(M − ḣ)`` changes the kinetic energy."""
-        torque = self.torque_body(t, attitude, omega_body) if self.torque_functions else _ZERO3
-        if self.rotor_functions:
-            torque = torque - self.rotor_momentum(t)[1]
-        return torque
+        qw, qx, qy, qz = _floats(attitude)
+        p, r, s = _floats(omega_body)
+        x, y, z = self.torque_body(t, (qw, qx, qy, qz), (p, r, s)) if self.torques else _ZERO
+        if self.rotors:
+            _, (rx, ry, rz) = self.rotor_momentum(t)
+            x, y, z = x - rx, y - ry, z - rz
+        return x, y, z
+
+    def omega_dot(self, t: float, attitude: Sequence[float] | FloatArray,
+                  omega_body: Sequence[float] | FloatArray) -> FloatArray:
+        """Angular acceleration from Euler's equations with every effect included."""
+        state = _floats(attitude) + _floats(omega_body)
+        return np.array(body_derivative(self, t, state)[4:])
 
 
 def _all_finite(h: float, values: tuple[float, ...]) -> bool:

@@ -6,9 +6,11 @@
 * :class:`GyroPropagator` integrates measured body rates (strapdown), after the scene's rate
   corrections (bias, Earth rate), with the scene's strapdown method.
 
-Neither knows any particular effect: they ask each effect for the capabilities it has
-(:mod:`rigid_body_attitude.core.effects.base`). Time handling of input streams (stale stamps, gaps,
-jumps) is :mod:`rigid_body_attitude.session.stream`'s job.
+Neither knows any particular effect: each effect declares its kinds by the base classes it
+derives from (:mod:`rigid_body_attitude.core.effects.base`), and the propagators sort them by
+kind. The dynamics hot loop runs on plain floats from one call of :meth:`advance_to` to its
+end (arrays are built once per call, for the state's readers). Time handling of input
+streams (stale stamps, gaps, jumps) is :mod:`rigid_body_attitude.session.stream`'s job.
 """
 
 from __future__ import annotations
@@ -22,10 +24,15 @@ from numpy.typing import ArrayLike, NDArray
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.diagnostics import Diagnostics, DiagnosticsTracker
 from rigid_body_attitude.core.dynamics import RigidBodyModel
-from rigid_body_attitude.core.effects import Effect, StatefulEffect
+from rigid_body_attitude.core.effects import (
+    CommandedEffect, ConservativeTorque, Effect, ForceEffect, RateCorrection, RotorEffect,
+    StatefulEffect, TorqueEffect)
+from rigid_body_attitude.core.effects.base import ForceSum
 from rigid_body_attitude.core.errors import InputError, IntegratorError
 from rigid_body_attitude.core.integrators import (
     dynamics_integrator, strapdown_method, torque_integrators)
+from rigid_body_attitude.core.integrators.base import Quat, Vec
+from rigid_body_attitude.core.integrators.dynamics_base import ROTATION_LIMIT_SLACK
 from rigid_body_attitude.core.scene import Scene
 
 __all__ = ['DynamicsPropagator', 'GyroPropagator', 'PropagatorState', 'build_propagator']
@@ -35,21 +42,8 @@ FloatArray = NDArray[np.float64]
 #: A single call may not integrate more steps than this (a clock jump far ahead).
 MAX_STEPS_PER_CALL = 10_000_000
 
-#: Largest rotation per step ``h·|ω|`` [rad] for the explicit Runge–Kutta methods. For a
-#: torque-free body every eigenvalue of the linearised equations has ``|λ| ≤ |ω|`` (the
-#: attitude ``|ω|/2``; the body-frame precession of ``m`` at most ``|ω|`` because
-#: ``J₁ + J₂ ≥ J₃``), and RK4 is stable on the imaginary axis up to ``h|λ| = 2√2 ≈ 2.83``;
-#: at ``h|ω| = 3`` it diverges within ten steps. Steps above the limit are split into equal
-#: substeps (:meth:`DynamicsPropagator.step`). An integrator may declare its own
-#: ``max_rotation_per_step``; methods not listed (splitting, exact, adaptive) have none.
-MAX_ROTATION_PER_STEP = {'rk4': 2.0, 'rkmk4': 2.0}
-
 #: A single step may not be split into more substeps than this.
 MAX_SUBSTEPS = 1_000_000
-
-#: Relative slack on the limit, so that a step at the limit up to round-off (h·|ω| computed
-#: as 2·(1 + 2ε)) is not split into one substep more.
-_LIMIT_SLACK = 1.0 + 1e-9
 
 
 @dataclass
@@ -94,7 +88,7 @@ class GyroState(PropagatorState):
     _attitude_array: FloatArray | None
     _omega_array: FloatArray | None
 
-    @property  # type: ignore[override]
+    @property
     def attitude(self) -> FloatArray:
         """Unit quaternion (w, x, y, z), body → world (read-only array)."""
         if self._attitude_array is None:
@@ -107,7 +101,7 @@ class GyroState(PropagatorState):
         w, x, y, z = self._attitude_array.tolist()
         self._attitude_floats = (w, x, y, z)
 
-    @property  # type: ignore[override]
+    @property
     def omega_body(self) -> FloatArray:
         """Body rate [rad/s] (read-only array)."""
         if self._omega_array is None:
@@ -152,7 +146,7 @@ class _Propagator:
         self.scene = scene
         self.effects: list[Effect] = scene.build_effects()
         self.stateful = [e for e in self.effects if isinstance(e, StatefulEffect)]
-        self.rotors = [e for e in self.effects if hasattr(e, 'rotor_momentum')]
+        self.rotors = [e for e in self.effects if isinstance(e, RotorEffect)]
         self._inertia_entries = tuple(scene.inertia.tensor.ravel().tolist())
         self.input_routes: dict[str, list[Effect]] = {}
         for effect in self.effects:
@@ -168,7 +162,7 @@ class _Propagator:
     @property
     def has_translation(self) -> bool:
         """Whether an effect carries a position (the pose position moves)."""
-        return any('position' in e.outputs() for e in self.stateful)
+        return any(e.carries_position for e in self.stateful)
 
     def reset(self, time: float = 0.0) -> None:
         """Back to the scene's initial state at ``time``; every effect resets too."""
@@ -194,7 +188,7 @@ class _Propagator:
         self.state.attitude = new_attitude
         if new_position is not None:
             for effect in self.stateful:
-                if hasattr(effect, 'set_position'):
+                if effect.carries_position:
                     effect.set_position(new_position)
             self._sync_position()
         self.tracker = DiagnosticsTracker(self.energy(), self.world_momentum())
@@ -221,10 +215,11 @@ class _Propagator:
 
     def rotor_momentum(self, t: float) -> FloatArray:
         """Summed rotor momentum [N m s, body] at ``t`` (zero without rotors)."""
-        total = np.zeros(3)
+        x = y = z = 0.0
         for effect in self.rotors:
-            total = total + effect.rotor_momentum(t)[0]
-        return total
+            (a, b, c), _ = effect.rotor(t)
+            x, y, z = x + a, y + b, z + c
+        return np.array((x, y, z))
 
     def energy(self) -> float:
         """Kinetic energy [J]: rotation plus the effects' own (translation)."""
@@ -258,9 +253,8 @@ class _Propagator:
 
     def _sync_position(self) -> None:
         for effect in self.stateful:
-            outputs = effect.outputs()
-            if 'position' in outputs:
-                self.state.position = np.array(outputs['position'])
+            if effect.carries_position:
+                self.state.position = np.array(effect.outputs()['position'])
 
 
 class DynamicsPropagator(_Propagator):
@@ -272,87 +266,103 @@ class DynamicsPropagator(_Propagator):
             raise IntegratorError(f'DynamicsPropagator needs a dynamics scene, got '
                                   f'rate_source {scene.rate_source!r}')
         super().__init__(scene)
-        torque_effects = [e for e in self.effects if hasattr(e, 'torque_body')]
-        self.model = RigidBodyModel(
-            scene.inertia, tuple(e.torque_body for e in torque_effects),
-            tuple(e.rotor_momentum for e in self.effects if hasattr(e, 'rotor_momentum')),
-            torque_depends_on_rate=any(e.torque_depends_on_rate for e in torque_effects))
-        self.force_effects = [e for e in self.effects if hasattr(e, 'force_world')]
-        self.switching = [e for e in self.effects if hasattr(e, 'switch_times')]
+        self.model = RigidBodyModel.from_effects(scene.inertia, self.effects)
+        torques = [e for e in self.effects if isinstance(e, TorqueEffect)]
+        #: Every torque has a potential and no rotor acts: the work is ``V(q₀) − V(q₁)``.
+        self.potentials = ([e for e in torques if isinstance(e, ConservativeTorque)]
+                           if all(isinstance(e, ConservativeTorque) for e in torques)
+                           and torques and not self.model.has_rotor else [])
+        self.force_effects = [e for e in self.effects if isinstance(e, ForceEffect)]
+        self.switching = [e for e in self.effects if isinstance(e, CommandedEffect)]
+        #: Sum of the scene's forces at ``(t, q)`` (the one force effect's own, when alone).
+        self.force_sum: ForceSum = (self.force_effects[0].force if len(self.force_effects) == 1
+                                    else self._force)
         self.integrator = dynamics_integrator(scene.integrator)
         if not self.model.torque_free and not self.integrator.supports_torque:
             raise IntegratorError(f'Integrator {scene.integrator!r} handles torque-free bodies '
                                   f'only; scene {scene.name!r} has torques or rotors '
                                   f'({", ".join(e.name for e in self.effects)}). Use one of '
                                   f'{", ".join(torque_integrators())}')
-        self._power_start: float | None = None
-        self.rotation_limit = float(getattr(
-            self.integrator, 'max_rotation_per_step',
-            MAX_ROTATION_PER_STEP.get(self.integrator.name, math.inf)))
         self.substeps_taken = 0
+
+    @property
+    def rotation_limit(self) -> float:
+        """The integrator's stability limit ``h·|ω|`` [rad] (``inf`` when unconditional)."""
+        return float(self.integrator.max_rotation_per_step)
 
     def step(self, h: float) -> None:
         """Advance the state by one step of ``h`` seconds.
 
-        An explicit method whose stability limit :attr:`rotation_limit` the step would exceed
-        (``h·|ω| > limit``, :data:`MAX_ROTATION_PER_STEP`) takes equal substeps instead, each
+        An explicit method whose stability limit (:attr:`rotation_limit`, the integrator's
+        ``max_rotation_per_step``) the step would exceed takes equal substeps instead, each
         within the limit for the rate at its start; :attr:`substeps_taken` counts the extra
         ones. Raises :class:`InputError` unless ``h`` is a positive finite number, and
-        :class:`IntegratorError` if more than :data:`MAX_SUBSTEPS` substeps would be needed;
-        the state is then unchanged.
+        :class:`IntegratorError` if more than :data:`MAX_SUBSTEPS` substeps would be needed or
+        the result is not finite; the state is then unchanged.
         """
-        if not (isinstance(h, numbers.Real) and math.isfinite(h) and h > 0.0):
+        if not _positive_finite(h):
             raise InputError(f'Expected `h` to be a positive finite number of seconds, got {h!r}')
-        if h * _norm(self.state.omega_body) <= self.rotation_limit * _LIMIT_SLACK:
-            self._single_step(h)
-            return
-        start = (self.state.time, self.state.attitude, self.state.omega_body,
-                 self.state.position, self.tracker.work)
-        try:
-            self._substeps(h)
-        except IntegratorError:
-            (self.state.time, self.state.attitude, self.state.omega_body, self.state.position,
-             self.tracker.work) = start
-            raise
-        self.state.time = start[0] + h
-
-    def _substeps(self, h: float) -> None:
-        """Cover ``h`` with substeps of at most :attr:`rotation_limit` rad each."""
-        end = self.state.time + h
-        remaining = h
-        taken = 0
-        while remaining > 0.0:
-            needed = math.ceil(remaining * _norm(self.state.omega_body)
-                               / (self.rotation_limit * _LIMIT_SLACK))
-            if taken + needed > MAX_SUBSTEPS:
-                raise IntegratorError(
-                    f'Integrator {self.integrator.name!r} is stable only for h·|ω| <= '
-                    f'{self.rotation_limit} rad; a step of {h!r} s at |ω| = '
-                    f'{_norm(self.state.omega_body)!r} rad/s would need more than '
-                    f'{MAX_SUBSTEPS} substeps. Use a smaller step or the strang, yoshida4, '
-                    f'dopri45 or exact integrator')
-            substep = remaining / max(needed, 1)
-            self._single_step(substep)
-            taken += 1
-            remaining = end - self.state.time if needed > 1 else 0.0
-        self.substeps_taken += taken - 1
-
-    def _single_step(self, h: float) -> None:
         state = self.state
-        t, attitude, omega = state.time, state.attitude, state.omega_body
+        t = state.time
         for effect in self.switching:
             effect.begin_step(t, t + h)
         try:
-            new_attitude, new_omega = self.integrator.step(attitude, omega, t, h, self.model)
-            if not self.model.torque_free:
-                self.tracker.add_work(self._rotational_work(t, h, attitude, omega,
-                                                            new_attitude, new_omega))
-            for effect in self.stateful:
-                self.tracker.add_work(effect.advance(t, h, attitude, new_attitude, self._force))
+            q, omega, work = self._one_step(state.attitude_tuple(), state.omega_tuple(), t,
+                                            float(h))
         finally:
             for effect in self.switching:
                 effect.end_step()
-        state.time, state.attitude, state.omega_body = t + h, new_attitude, new_omega
+        self._store(t + h, q, omega, work)
+
+    def _one_step(self, q: Quat, omega: Vec, t: float, h: float) -> tuple[Quat, Vec, float]:
+        """One step of ``h`` on plain floats, split into substeps when the integrator's
+        stability limit asks for it; returns the new state and the work done [J]."""
+        integrator = self.integrator
+        speed = math.sqrt(omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2])
+        if integrator.substeps_needed(h, speed) == 1:
+            return self._checked_step(q, omega, t, h)
+        end, remaining, taken, work = t + h, h, 0, 0.0
+        while remaining > 0.0:
+            speed = math.sqrt(omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2])
+            needed = integrator.substeps_needed(remaining, speed)
+            if taken + needed > MAX_SUBSTEPS:
+                raise IntegratorError(
+                    f'Integrator {integrator.name!r} is stable only for h·|ω| <= '
+                    f'{self.rotation_limit} rad; a step of {h!r} s at |ω| = {speed!r} rad/s '
+                    f'would need more than {MAX_SUBSTEPS} substeps. Use a smaller step or the '
+                    f'strang, yoshida4, dopri45 or exact integrator')
+            substep = remaining / needed
+            q, omega, substep_work = self._checked_step(q, omega, t, substep)
+            work += substep_work
+            taken += 1
+            t += substep
+            remaining = end - t if needed > 1 else 0.0
+        self.substeps_taken += taken - 1
+        return q, omega, work
+
+    def _checked_step(self, q: Quat, omega: Vec, t: float,
+                      h: float) -> tuple[Quat, Vec, float]:
+        """One integrator step and the stateful effects' step; a non-finite result raises."""
+        if self.potentials:
+            new_q, new_omega = self.integrator.advance_floats(q, omega, t, h, self.model)
+            work = sum(effect.potential(q) - effect.potential(new_q)
+                       for effect in self.potentials)
+        else:
+            new_q, new_omega, work = self.integrator.advance_with_work(q, omega, t, h,
+                                                                       self.model)
+        if not math.isfinite(new_omega[0] + new_omega[1] + new_omega[2] + work):
+            raise IntegratorError(f'Integration produced a non-finite state: attitude '
+                                  f'{list(new_q)!r}, omega_body {list(new_omega)!r}; reduce '
+                                  f'the step')
+        for effect in self.stateful:
+            work += effect.advance(t, h, q, new_q, self.force_sum)
+        return new_q, new_omega, work
+
+    def _store(self, time: float, q: Quat, omega: Vec, work: float) -> None:
+        """Write the propagated state (arrays built once) and the work done."""
+        state = self.state
+        state.time, state.attitude, state.omega_body = time, np.array(q), np.array(omega)
+        self.tracker.add_work(work)
         if self.stateful:
             self._sync_position()
 
@@ -362,7 +372,8 @@ class DynamicsPropagator(_Propagator):
         Steps end exactly where a commanded input switches (a new command's stamp, a timeout),
         so no step straddles a jump of the torque and the integrator keeps its order. Returns
         the number of steps taken. Raises :class:`InputError` for a non-finite time or one
-        needing more than :data:`MAX_STEPS_PER_CALL` steps; the state is unchanged.
+        needing more than :data:`MAX_STEPS_PER_CALL` steps; the state is unchanged. A step
+        that fails (:class:`IntegratorError`) leaves the state after the last good step.
         """
         if not math.isfinite(t_end):
             raise InputError(f'Expected `t_end` to be finite, got {t_end!r}')
@@ -370,50 +381,54 @@ class DynamicsPropagator(_Propagator):
             raise InputError(f'Advancing to t_end={t_end!r} from {self.state.time!r} needs '
                              f'more than {MAX_STEPS_PER_CALL} steps of {self.scene.step} s')
         start = self.state.time
+        if not self.switching:
+            return self._advance_steps(t_end)
         switches = sorted({time for effect in self.switching for time in effect.switch_times()
                            if start < time < t_end})
         return sum(self._advance_steps(boundary) for boundary in switches + [t_end])
 
     def _advance_steps(self, t_end: float) -> int:
-        """Steps of the scene's step up to ``t_end``, the last one shorter."""
+        """Steps of the scene's step up to ``t_end``, the last one shorter (no input switches
+        inside: the commanded effects are pinned to the command in force once)."""
         step = self.scene.step
-        remaining = t_end - self.state.time
-        steps = 0
-        while remaining > 1e-12 * max(1.0, abs(t_end)):
-            self.step(min(step, remaining))
-            steps += 1
-            remaining = t_end - self.state.time
-        if steps:
+        t = self.state.time
+        remaining = t_end - t
+        tolerance = 1e-12 * max(1.0, abs(t_end))
+        if remaining <= tolerance:
+            return 0
+        q, omega = self.state.attitude_tuple(), self.state.omega_tuple()
+        steps, work = 0, 0.0
+        for effect in self.switching:
+            effect.begin_step(t, t_end)
+        # |ω|² below this needs no substeps at h ≤ step (the integrator's limit, its slack)
+        fast = (self.integrator.max_rotation_per_step * ROTATION_LIMIT_SLACK / step) ** 2
+        try:
+            while remaining > tolerance:
+                h = step if step < remaining else remaining
+                if omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2] <= fast:
+                    q, omega, step_work = self._checked_step(q, omega, t, h)
+                else:
+                    q, omega, step_work = self._one_step(q, omega, t, h)
+                work += step_work
+                steps += 1
+                t += h
+                remaining = t_end - t
             # t + h + h + ... misses t_end by round-off; the steps covered [t, t_end]
-            self.state.time = float(t_end)
+            t = float(t_end)
+        finally:
+            for effect in self.switching:
+                effect.end_step()
+            if steps:
+                self._store(t, q, omega, work)
         return steps
 
-    def _force(self, t: float, attitude: FloatArray) -> FloatArray:
-        total = np.zeros(3)
+    def _force(self, t: float, q: Quat) -> Vec:
+        """Sum of the scene's forces [N, world] at ``(t, q)``."""
+        x = y = z = 0.0
         for effect in self.force_effects:
-            total = total + effect.force_world(t, attitude)
-        return total
-
-    def _power(self, t: float, attitude: FloatArray, omega: FloatArray) -> float:
-        return float(omega @ self.model.external_torque(t, attitude, omega))
-
-    def _rotational_work(self, t: float, h: float, attitude: FloatArray, omega: FloatArray,
-                         new_attitude: FloatArray, new_omega: FloatArray) -> float:
-        """``∫ ω·(M − ḣ) dt`` over the step by Simpson's rule (error O(h⁵) per step).
-
-        The midpoint rate comes from cubic Hermite interpolation with the end slopes from
-        Euler's equations (error O(h⁴)); the midpoint attitude from the exponential map of
-        the mean rate.
-        """
-        slope_start = self.model.omega_dot(t, attitude, omega)
-        slope_end = self.model.omega_dot(t + h, new_attitude, new_omega)
-        omega_mid = 0.5 * (omega + new_omega) + 0.125 * h * (slope_start - slope_end)
-        attitude_mid = quaternion.multiply(
-            attitude, quaternion.exp(0.25 * h * (omega + omega_mid)))
-        power_start = self._power(t, attitude, omega)
-        power_mid = self._power(t + 0.5 * h, attitude_mid, omega_mid)
-        power_end = self._power(t + h, new_attitude, new_omega)
-        return h / 6.0 * (power_start + 4.0 * power_mid + power_end)
+            a, b, c = effect.force(t, q)
+            x, y, z = x + a, y + b, z + c
+        return x, y, z
 
 
 class GyroPropagator(_Propagator):
@@ -429,7 +444,7 @@ class GyroPropagator(_Propagator):
                                   f'{scene.rate_source!r}')
         self.method = strapdown_method(scene.integrator)
         super().__init__(scene)
-        self.corrections = [e for e in self.effects if hasattr(e, 'corrected_rate')]
+        self.corrections = [e for e in self.effects if isinstance(e, RateCorrection)]
 
     def reset(self, time: float = 0.0) -> None:
         """Back to the initial attitude; forget the previous sample."""
@@ -486,10 +501,10 @@ class GyroPropagator(_Propagator):
         state.set_sample(t, attitude, omega)
 
 
-def _norm(vector: FloatArray) -> float:
-    """Euclidean norm of a (3,) array in plain float math."""
-    x, y, z = vector.tolist()
-    return math.sqrt(x * x + y * y + z * z)
+def _positive_finite(value: object) -> bool:
+    """Whether ``value`` is a real number, finite and > 0."""
+    return (isinstance(value, numbers.Real) and math.isfinite(value)
+            and float(value) > 0.0)
 
 
 def _checked_sample(t: float, omega_measured: ArrayLike) -> FloatArray:

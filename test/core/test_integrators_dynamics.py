@@ -320,3 +320,25 @@ def test_integrators_accept_the_package_rigid_body_model():
         actual = dynamics_integrator(name).step(IDENTITY, HV_OMEGA, 0.0, 0.05, model)
         np.testing.assert_allclose(actual[0], expected[0], atol=1e-15)
         np.testing.assert_allclose(actual[1], expected[1], atol=1e-14)
+
+
+@pytest.mark.parametrize('tensor', [[1.0, 2.0, 3.0],
+                                    [[2.0, 0.1, 0.0], [0.1, 3.0, -0.2], [0.0, -0.2, 4.0]]])
+@pytest.mark.parametrize('terms', ['free', 'torque', 'rotor', 'torque+rotor'])
+def test_written_out_rk4_step_is_the_generic_step(tensor, terms):
+    # rk4_kernel inlines the same arithmetic term by term (a diagonal tensor's zero products
+    # left out, which are exact zeros): same floats as the generic step, and the same work.
+    from rigid_body_attitude.core.dynamics import RigidBodyModel
+    from rigid_body_attitude.core.inertia import Inertia
+    from rigid_body_attitude.core.integrators.rigid_body_rk4 import rk4_work_step
+    from rigid_body_attitude.core.integrators.rk4_kernel import rk4_kernel
+    torques = [lambda t, q, w: (0.1 * q[1], -0.2 * w[0], 0.3 * t)] if 'torque' in terms else []
+    rotors = ([lambda t: ((0.0, 0.3 + 0.1 * t, 0.0), (0.0, 0.1, 0.0))] if 'rotor' in terms
+              else [])
+    model = RigidBodyModel(Inertia(tensor), float_torques=torques, float_rotors=rotors)
+    state = (0.7, -0.1, 0.4, 0.2, 0.9, -1.2, 2.5)
+    kernel_state, kernel_work = rk4_kernel(model)(0.3, state, 0.01)
+    generic_state, generic_work = rk4_work_step(model, 0.3, state, 0.01)
+    assert kernel_state == generic_state
+    assert kernel_work == generic_work
+    assert (kernel_work != 0.0) == (terms != 'free')

@@ -13,9 +13,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.effects import BodyProperties, EFFECTS
+from rigid_body_attitude.core.effects import BodyProperties, EFFECTS, TorqueEffect
 from rigid_body_attitude.core.errors import IntegratorError
 from rigid_body_attitude.core.inertia import Inertia
+from rigid_body_attitude.core.dynamics import RigidBodyModel
 from rigid_body_attitude.core.integrators import DYNAMICS_INTEGRATORS
 from rigid_body_attitude.core.propagator import DynamicsPropagator
 from rigid_body_attitude.core.scene import scene_from_mapping
@@ -45,7 +46,7 @@ def top_scene(integrator, step, effects=(GRAVITY,)):
 
 
 def test_effects_declare_whether_their_torque_uses_the_rate():
-    torque_effects = sorted(name for name, cls in EFFECTS.items() if hasattr(cls, 'torque_body'))
+    torque_effects = sorted(name for name, cls in EFFECTS.items() if issubclass(cls, TorqueEffect))
     assert torque_effects == sorted(TORQUE_EFFECT_PARAMETERS)  # a new torque effect: add it
     attitude = quat.normalize([0.8, 0.1, -0.3, 0.5])
     for name, params in TORQUE_EFFECT_PARAMETERS.items():
@@ -84,7 +85,8 @@ def test_propagated_heavy_top_kicks_cost_one_torque_evaluation(name, kicks):
                 calls.append(t)
                 return torque(t, attitude, omega_body)
             return call
-        model.torque_functions = tuple(counted(f) for f in model.torque_functions)
+        model = RigidBodyModel(model.inertia, float_torques=[counted(f) for f in model.torques],
+                               torque_depends_on_rate=model.torque_depends_on_rate)
         propagator.integrator.step(propagator.state.attitude, propagator.state.omega_body, 0.0,
                                    0.01, model)
         assert len(calls) == evaluations * len(effects), effects

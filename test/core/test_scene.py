@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.effects import EFFECTS, Effect
+from rigid_body_attitude.core.effects import EFFECTS, RateCorrection, TorqueEffect
 from rigid_body_attitude.core.effects.base import Parameter, real, register
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.propagator import (
@@ -49,7 +49,7 @@ def probe(request):
     """Register the effect ``probe_effect`` for one test; count constructions and calls."""
     calls = {'init': 0, 'torque_body': 0, 'corrected_rate': 0}
 
-    class ProbeEffect(Effect):
+    class ProbeEffect(TorqueEffect, RateCorrection):
         name = 'probe_effect'
         description = 'counts its constructions and calls (test only)'
         parameters = {'gain': Parameter(real, 0.0, 'damping gain [N m s]')}
@@ -59,9 +59,13 @@ def probe(request):
             super().__init__(params, body)
             calls['init'] += 1
 
-        def torque_body(self, t, attitude, omega_body):
+        def torque(self, t, q, omega):
             calls['torque_body'] += 1
-            return -self.params['gain'] * omega_body
+            gain = self.params['gain']
+            return -gain * omega[0], -gain * omega[1], -gain * omega[2]
+
+        def add_batch_torque(self, t, q, omega, chunk, out):
+            out -= self.params['gain'] * omega
 
         def corrected_rate(self, t, attitude, omega_measured):
             calls['corrected_rate'] += 1

@@ -12,8 +12,8 @@ Bounds held here:
   form q₀ ⊗ exp(ω t) after 10⁶ steps (round-off bound below);
 * every strapdown method follows its own per-step rotation formula at h|ω| = 2 (no method
   drifts away silently);
-* explicit dynamics methods declare their stability limit (``max_rotation_per_step``, the
-  value of ``propagator.MAX_ROTATION_PER_STEP``): their own ``step`` and ``integrate`` refuse a
+* explicit dynamics methods declare their stability limit (``max_rotation_per_step``, held
+  only by the integrator; the propagator asks it): their own ``step`` and ``integrate`` refuse a
   step above it with an ``IntegratorError`` (before, they diverged silently until overflow),
   the propagator takes equal substeps instead and refuses only when that would need more than
   ``MAX_SUBSTEPS``; the implicit-free splitting and exact methods need neither.
@@ -33,8 +33,12 @@ from rigid_body_attitude.core.integrators import (
     DYNAMICS_INTEGRATORS, dynamics_integrator, SimpleBodyModel)
 from rigid_body_attitude.core.integrators.strapdown import STRAPDOWN_METHODS, strapdown_method
 from rigid_body_attitude.core.propagator import (
-    DynamicsPropagator, GyroPropagator, MAX_ROTATION_PER_STEP, MAX_SUBSTEPS)
+    DynamicsPropagator, GyroPropagator, MAX_SUBSTEPS)
 from rigid_body_attitude.core.scene import load_scene, scene_from_mapping
+
+#: The explicit Runge–Kutta methods: the dynamics integrators with a finite stability limit.
+LIMITED_METHODS = sorted(name for name, cls in DYNAMICS_INTEGRATORS.items()
+                         if cls.max_rotation_per_step < math.inf)
 
 mpmath.mp.dps = 40
 EPS = np.finfo(float).eps
@@ -235,7 +239,7 @@ def near_axis_state(rate):
     return Q0, omega, float(0.5 * np.sum(INERTIA * omega * omega))
 
 
-@pytest.mark.parametrize('name', sorted(MAX_ROTATION_PER_STEP))
+@pytest.mark.parametrize('name', LIMITED_METHODS)
 def test_direct_step_refuses_above_the_stability_limit(name):
     # RK4 on Euler's equations at h|ω| = 3 > 2√2 multiplies the nutation by |R(3i)| ≈ 1.4 per
     # step: the energy grew 11-fold in 10 steps and overflowed in the next 10, reported only
@@ -243,7 +247,7 @@ def test_direct_step_refuses_above_the_stability_limit(name):
     # leaves its inputs alone.
     q0, omega0, _ = near_axis_state(1000.0)
     integrator = dynamics_integrator(name)
-    assert integrator.max_rotation_per_step == MAX_ROTATION_PER_STEP[name] == 2.0
+    assert integrator.max_rotation_per_step == 2.0
     model = SimpleBodyModel(INERTIA)
     attitude, omega = q0.copy(), omega0.copy()
     message = (rf"'{name}' is stable only for h·\|ω\| <= 2\.0 rad; got h = 0\.003 s at "
@@ -260,7 +264,7 @@ def test_direct_step_refuses_above_the_stability_limit(name):
     assert abs(np.linalg.norm(q) - 1.0) <= 1e-15
 
 
-@pytest.mark.parametrize('name', sorted(MAX_ROTATION_PER_STEP))
+@pytest.mark.parametrize('name', LIMITED_METHODS)
 def test_integrate_refuses_the_first_step_whose_rate_passes_the_limit(name):
     # Spin about the major axis under a constant torque about it: ω₃ = 1905 + 10⁴ t rad/s
     # (ω × Jω = 0, so RK4 is exact up to round-off). With h = 1 ms, h|ω| = 1.995 after 9
@@ -282,7 +286,7 @@ def scene_with(integrator, step, inertia, omega_body):
         'initial_state': {'attitude': Q0.tolist(), 'omega_body': list(omega_body)}})
 
 
-@pytest.mark.parametrize('name', sorted(MAX_ROTATION_PER_STEP))
+@pytest.mark.parametrize('name', LIMITED_METHODS)
 @pytest.mark.parametrize('factor', [5, 50])
 def test_propagator_splits_a_step_into_equal_substeps_within_the_limit(name, factor):
     # A sphere keeps |ω| constant to the bit (ω × Jω = 0), so a step of h|ω| = 2·factor is
@@ -292,7 +296,7 @@ def test_propagator_splits_a_step_into_equal_substeps_within_the_limit(name, fac
     omega = (1000.0 * SPIN_DIRECTION).tolist()
     coarse = DynamicsPropagator(scene_with(name, 2.0 * factor / 1000.0, [2.0] * 3, omega))
     fine = DynamicsPropagator(scene_with(name, 2.0 / 1000.0, [2.0] * 3, omega))
-    assert coarse.rotation_limit == MAX_ROTATION_PER_STEP[name] == 2.0
+    assert coarse.rotation_limit == 2.0
     for _ in range(40):
         coarse.step(coarse.scene.step)
         for _ in range(factor):
@@ -306,7 +310,7 @@ def test_propagator_splits_a_step_into_equal_substeps_within_the_limit(name, fac
     assert coarse.state.time == pytest.approx(40 * coarse.scene.step, rel=1e-14)
 
 
-@pytest.mark.parametrize('name', sorted(MAX_ROTATION_PER_STEP))
+@pytest.mark.parametrize('name', LIMITED_METHODS)
 @pytest.mark.parametrize('rotation', [3.0, 10.0, 100.0])
 def test_propagator_keeps_explicit_methods_stable_above_their_limit(name, rotation):
     # The body and step that make bare RK4 blow up (test above): through the propagator the
@@ -343,8 +347,8 @@ def test_propagator_refuses_a_step_needing_too_many_substeps():
 def test_splitting_needs_no_substeps_at_any_step(name):
     # Exact sub-flows: unconditionally stable. h|ω| = 20 keeps |m| and world H to round-off.
     integrator = dynamics_integrator(name)
-    assert getattr(integrator, 'max_rotation_per_step', math.inf) == math.inf
-    assert name not in MAX_ROTATION_PER_STEP
+    assert integrator.max_rotation_per_step == math.inf
+    assert name not in LIMITED_METHODS
     q0, omega0, momentum_norm, _ = body_state(1000.0)
     q, omega = integrator.integrate(q0, omega0, 0.0, 0.02, 10_000, SimpleBodyModel(INERTIA))
     world = quat.rotate(q, INERTIA * omega)

@@ -9,9 +9,13 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from rigid_body_attitude.core.effects.base import EFFECTS, BodyProperties, Effect, StatefulEffect
+from rigid_body_attitude.core.effects.base import (
+    BatchChunk, BodyProperties, CommandedEffect, ConservativeTorque, Effect, EFFECTS, ForceEffect,
+    RateCorrection, RotorEffect, StatefulEffect, TorqueEffect)
 
-__all__ = ['EFFECTS', 'BodyProperties', 'Effect', 'StatefulEffect']
+__all__ = ['BatchChunk', 'BodyProperties', 'CommandedEffect', 'ConservativeTorque', 'EFFECTS',
+           'Effect', 'ForceEffect', 'RateCorrection', 'RotorEffect', 'StatefulEffect',
+           'TorqueEffect']
 
 for _module in pkgutil.iter_modules(__path__):
     if _module.name != 'base':

@@ -1,45 +1,60 @@
-"""The effect protocol: small classes the propagator sums without knowing any of them.
+"""Effect kinds: small classes the propagator combines without knowing any particular one.
 
 An effect is named in a scene file with its parameters; only the effects a scene names are
 constructed and evaluated. Each effect class declares its parameters (:class:`Parameter`), the
 scene kinds it applies to (``rate_sources``) and the commanded inputs it listens to
-(``inputs``), and implements one or more of these capabilities (Basilisk's split between
+(``inputs``), and says what it provides by the kinds it derives from (Basilisk's split between
 dynamic effectors and effectors with state of their own):
 
-* ``torque_body(t, attitude, omega_body) -> (3,)`` [N m, body] — a torque effect;
-* ``rotor_momentum(t) -> (h, ḣ)`` [N m s, N m; body] — a gyrostat rotor;
-* ``force_world(t, attitude) -> (3,)`` [N, world] — a force on the centre of mass;
-* ``corrected_rate(t, attitude, omega_measured) -> (3,)`` [rad/s, body] — a correction of
+* :class:`TorqueEffect` — ``torque(t, q, ω) -> (M₁, M₂, M₃)`` [N m, body], plain floats;
+* :class:`RotorEffect` — ``rotor(t) -> ((h₁, h₂, h₃), (ḣ₁, ḣ₂, ḣ₃))`` [N m s, N m; body];
+* :class:`ForceEffect` — ``force(t, q) -> (F₁, F₂, F₃)`` [N, world] on the centre of mass;
+* :class:`RateCorrection` — ``corrected_rate(t, attitude, ω_measured)`` [rad/s, body] for
   measured gyro rates (strapdown scenes);
-* :class:`StatefulEffect` — carries an integrated state of its own (centre-of-mass motion).
+* :class:`StatefulEffect` — an integrated state of its own (centre-of-mass motion);
+* :class:`CommandedEffect` — driven by a held commanded input whose switch times end steps.
 
-The registry maps scene names to classes; modules in this package register themselves on
-import, so adding an effect means adding a module, never editing the propagator.
+Hot paths take and return plain-float tuples (``Quat`` = (w, x, y, z), ``Vec``): a NumPy call
+costs about 1 µs, more than a whole torque. ``torque_body``, ``rotor_momentum`` and
+``force_world`` give the same values as arrays for scripts and tests. The registry
+:data:`EFFECTS` maps scene names to classes; modules in this package register themselves on
+import (``@register``), so adding an effect means adding a module, never editing the
+propagator.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.inertia import Inertia
+from rigid_body_attitude.core.registry import Registry
 
 __all__ = [
+    'BatchChunk',
     'BodyProperties',
     'CommandedEffect',
+    'ConservativeTorque',
     'Effect',
     'EFFECTS',
+    'ForceEffect',
     'HeldInput',
     'Parameter',
+    'Quat',
     'REQUIRED',
-    'boolean',
+    'RateCorrection',
+    'RotorEffect',
     'StatefulEffect',
+    'TorqueEffect',
+    'Vec',
+    'boolean',
     'nonnegative',
     'positive',
     'real',
@@ -48,14 +63,16 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+Quat = tuple[float, float, float, float]
+Vec = tuple[float, float, float]
 
-_ZERO3 = np.zeros(3)
+_ZERO: Vec = (0.0, 0.0, 0.0)
 
 #: Marks a parameter without default.
 REQUIRED: Any = object()
 
 #: Scene effect name → effect class; filled by :func:`register`.
-EFFECTS: dict[str, type[Effect]] = {}
+EFFECTS: Registry[type[Effect]] = Registry('effect', SceneError)
 
 
 @dataclass(frozen=True)
@@ -130,12 +147,25 @@ def boolean(value: Any) -> bool:
     return value
 
 
-def register(cls: type[Effect]) -> type[Effect]:
+EffectClass = TypeVar('EffectClass', bound='type[Effect]')
+
+
+def register(cls: EffectClass) -> EffectClass:
     """Class decorator adding an effect to :data:`EFFECTS` under ``cls.name``."""
-    if cls.name in EFFECTS:
-        raise SceneError(f'Effect name {cls.name!r} is registered twice')
-    EFFECTS[cls.name] = cls
+    EFFECTS.register(cls)
     return cls
+
+
+def as_quat(attitude: Sequence[float] | FloatArray) -> Quat:
+    """An attitude as a plain-float (w, x, y, z) tuple."""
+    w, x, y, z = np.asarray(attitude, dtype=np.float64).tolist()
+    return w, x, y, z
+
+
+def as_vec(vector: Sequence[float] | FloatArray) -> Vec:
+    """A 3-vector as a plain-float tuple."""
+    x, y, z = np.asarray(vector, dtype=np.float64).tolist()
+    return x, y, z
 
 
 class Effect:
@@ -143,9 +173,8 @@ class Effect:
 
     Subclasses set ``name``, ``description``, ``parameters``, ``rate_sources``, ``requires``
     (names of other effects the scene must also name) and, when they listen to a commanded
-    input, ``inputs`` (input name → description) and :meth:`accept_input`. A torque effect
-    whose ``torque_body`` uses ``omega_body`` sets ``torque_depends_on_rate`` True: otherwise
-    the splitting integrators apply its torque as an exact one-evaluation kick.
+    input, ``inputs`` (input name → description) and :meth:`accept_input`. What an effect
+    provides is said by the kinds it derives from (module docstring).
     """
 
     name: ClassVar[str] = ''
@@ -154,7 +183,6 @@ class Effect:
     rate_sources: ClassVar[frozenset[str]] = frozenset({'dynamics'})
     inputs: ClassVar[Mapping[str, str]] = {}
     requires: ClassVar[tuple[str, ...]] = ()
-    torque_depends_on_rate: ClassVar[bool] = False
 
     def __init__(self, params: Mapping[str, Any], body: BodyProperties) -> None:
         """Validate ``params`` against :attr:`parameters`; keep ``body``."""
@@ -179,26 +207,144 @@ class Effect:
         raise SceneError(f'Effect {self.name!r} takes no input {input_name!r}')
 
 
-class StatefulEffect(Effect):
+@dataclass(frozen=True)
+class BatchChunk:
+    """What a batch kernel sees of a chunk of ``n`` bodies (structure of arrays).
+
+    Attributes:
+        tensor: inertia tensors [kg m²], shape (3, 3, n) (``tensor[i, j]`` is ``J_ij`` of
+            every body).
+        mass: masses [kg], shape (n,).
+        parameters: the effect's numeric parameters for these bodies: a dispersed parameter
+            as an array over the bodies (shape (n,) or (3, n)), a shared one as a float or a
+            (3, 1) array (NumPy broadcasts both the same way).
+        diagonal: True when every tensor of the chunk is diagonal (kernels may then skip the
+            off-diagonal products, which are exact zeros). ``tensor`` has shape (3, 3, 1)
+            when every body has the same.
+    """
+
+    tensor: FloatArray
+    mass: FloatArray
+    parameters: Mapping[str, Any]
+    diagonal: bool = False
+
+
+class TorqueEffect(Effect, ABC):
+    """An effect exerting a torque ``M(t, q, ω)`` [N m] in body axes.
+
+    ``torque_depends_on_rate`` is True when :meth:`torque` uses ``ω``; otherwise the splitting
+    integrators apply the torque as an exact one-evaluation kick. :meth:`add_batch_torque`
+    is the same torque for many bodies at once (:mod:`rigid_body_attitude.core.batch`).
+    """
+
+    torque_depends_on_rate: ClassVar[bool] = False
+
+    @abstractmethod
+    def torque(self, t: float, q: Quat, omega: Vec) -> Vec:
+        """The torque [N m, body] at time ``t``, attitude ``q`` and body rate ``omega``."""
+
+    @abstractmethod
+    def add_batch_torque(self, t: float, q: FloatArray, omega: FloatArray, chunk: BatchChunk,
+                         out: FloatArray) -> None:
+        """Add the torque of every body of ``chunk`` to ``out`` (3, n); ``q`` is (4, n)
+        (rows w, x, y, z), ``omega`` (3, n)."""
+
+    def torque_body(self, t: float, attitude: Sequence[float] | FloatArray,
+                    omega_body: Sequence[float] | FloatArray) -> FloatArray:
+        """:meth:`torque` on array-likes, as a (3,) array."""
+        return np.array(self.torque(t, as_quat(attitude), as_vec(omega_body)))
+
+
+class ConservativeTorque(TorqueEffect, ABC):
+    """A torque with a potential ``V(q)``: ``M = −∂V/∂θ`` (body-frame rotation vector θ).
+
+    Its work over any step is ``V(q₀) − V(q₁)``, exactly: the propagator uses that for the
+    energy balance instead of a quadrature of the power, so ``T − T₀ − W`` is the drift of the
+    total energy ``T + V``.
+    """
+
+    @abstractmethod
+    def potential(self, q: Quat) -> float:
+        """Potential energy [J] at attitude ``q``."""
+
+
+class RotorEffect(Effect, ABC):
+    """A gyrostat rotor: momentum ``h(t)`` [N m s] relative to the body and its rate ``ḣ``."""
+
+    @abstractmethod
+    def rotor(self, t: float) -> tuple[Vec, Vec]:
+        """``(h, ḣ)`` at ``t`` [N m s, N m], body axes, plain floats."""
+
+    @abstractmethod
+    def batch_rotor(self, t: float, chunk: BatchChunk) -> tuple[FloatArray, Vec]:
+        """``h`` of every body of ``chunk`` ((3, n), or (3, 1) when shared) and ``ḣ``, shared
+        by every body (commands reach every body alike)."""
+
+    def rotor_momentum(self, t: float) -> tuple[FloatArray, FloatArray]:
+        """:meth:`rotor` as two (3,) arrays."""
+        momentum, rate = self.rotor(t)
+        return np.array(momentum), np.array(rate)
+
+
+class ForceEffect(Effect, ABC):
+    """A force [N] on the centre of mass, world frame (needs a translation state)."""
+
+    @abstractmethod
+    def force(self, t: float, q: Quat) -> Vec:
+        """The force [N, world] at time ``t`` and attitude ``q``."""
+
+    @abstractmethod
+    def add_batch_force(self, t: float, q: FloatArray, chunk: BatchChunk,
+                        out: FloatArray) -> None:
+        """Add the force on every body of ``chunk`` to ``out`` (3, n); ``q`` is (4, n)."""
+
+    def force_world(self, t: float, attitude: Sequence[float] | FloatArray) -> FloatArray:
+        """:meth:`force` on an array-like attitude, as a (3,) array."""
+        return np.array(self.force(t, as_quat(attitude)))
+
+
+class RateCorrection(Effect, ABC):
+    """A correction of measured gyro rates (strapdown scenes)."""
+
+    rate_sources: ClassVar[frozenset[str]] = frozenset({'gyro'})
+
+    @abstractmethod
+    def corrected_rate(self, t: float, attitude: FloatArray,
+                       omega_measured: FloatArray) -> FloatArray:
+        """The corrected body rate [rad/s] for a measurement at ``t``."""
+
+
+#: Sum of the scene's forces at ``(t, q)`` [N, world], plain floats.
+ForceSum = Callable[[float, Quat], Vec]
+
+
+class StatefulEffect(Effect, ABC):
     """An effect with an integrated state of its own, advanced by the propagator each step.
 
     ``advance`` receives the attitude at both ends of the step and a function summing the
-    scene's forces; it returns the work [J] those forces did over the step.
+    scene's forces; it returns the work [J] those forces did over the step. An effect whose
+    state includes the body's position sets ``carries_position`` and implements
+    :meth:`set_position`.
     """
 
-    def advance(self, t: float, h: float, attitude_start: FloatArray,
-                attitude_end: FloatArray,
-                force_world: Callable[[float, FloatArray], FloatArray]) -> float:
-        """Advance the own state from ``t`` to ``t + h``; return the work done [J]."""
-        raise SceneError(f'Effect {self.name!r} does not define advance()')
+    carries_position: ClassVar[bool] = False
 
+    @abstractmethod
+    def advance(self, t: float, h: float, attitude_start: Quat, attitude_end: Quat,
+                force_world: ForceSum) -> float:
+        """Advance the own state from ``t`` to ``t + h``; return the work done [J]."""
+
+    @abstractmethod
     def kinetic_energy(self) -> float:
         """Kinetic energy [J] stored in the own state."""
-        return 0.0
 
+    @abstractmethod
     def outputs(self) -> dict[str, FloatArray]:
         """Named vectors of the own state for publishing (e.g. ``position``)."""
-        return {}
+
+    def set_position(self, position_world: FloatArray) -> None:
+        """Re-initialise the position [m, world] (effects with ``carries_position``)."""
+        raise SceneError(f'Effect {self.name!r} carries no position')
 
 
 def validate_parameters(effect_name: str, spec: Mapping[str, Parameter],
@@ -255,22 +401,23 @@ class HeldInput:
 
     def reset(self) -> None:
         """Forget every command."""
-        self.segments: list[tuple[float, float, FloatArray]] = []
-        self.folded = np.zeros(3)
+        self.segments: list[tuple[float, float, Vec]] = []
+        self.folded: Vec = _ZERO
         self.window: float | None = None
+        self.pinned: tuple[float, Vec, Vec] = (0.0, _ZERO, _ZERO)
         self.expiry_counted = True
 
     @property
     def value(self) -> FloatArray:
         """The latest command (zero before any)."""
-        return self.segments[-1][2] if self.segments else np.zeros(3)
+        return np.array(self.segments[-1][2] if self.segments else _ZERO)
 
     @property
     def stamp(self) -> float:
         """Stamp of the latest command (−inf before any)."""
         return self.segments[-1][0] if self.segments else -math.inf
 
-    def set(self, t: float, value: FloatArray) -> None:
+    def set(self, t: float, value: Sequence[float] | FloatArray) -> None:
         """Hold ``value`` from time ``t`` (ending the previous command there)."""
         t = float(t)
         while self.segments and self.segments[-1][0] >= t:
@@ -278,9 +425,11 @@ class HeldInput:
         if self.segments and self.segments[-1][1] > t:
             start, _, previous = self.segments[-1]
             self.segments[-1] = (start, t, previous)
-        self.segments.append((t, t + self.timeout, np.array(value, dtype=np.float64)))
+        self.segments.append((t, t + self.timeout, as_vec(value)))
         for start, end, old in self.segments[:-self.KEPT]:
-            self.folded = self.folded + old * (end - start)
+            span = end - start
+            self.folded = (self.folded[0] + old[0] * span, self.folded[1] + old[1] * span,
+                           self.folded[2] + old[2] * span)
         del self.segments[:-self.KEPT]
         self.expiry_counted = False
 
@@ -289,14 +438,26 @@ class HeldInput:
         return [time for start, end, _ in self.segments for time in (start, end)]
 
     def begin_step(self, t_start: float, t_end: float) -> None:
-        """Evaluate as the command in force inside ``(t_start, t_end)`` until :meth:`end_step`."""
-        self.window = 0.5 * (t_start + t_end)
+        """Evaluate as the command in force inside ``(t_start, t_end)`` until :meth:`end_step`.
+
+        No command starts or ends inside the interval (the propagator ends its steps at
+        :meth:`switch_times`), so the command in force and the integral at its start are
+        looked up once here: :meth:`vector_at` and :meth:`integral_at` then cost no search.
+        """
+        self.window = None
+        middle = 0.5 * (t_start + t_end)
+        segment = self.segment_at(middle)
+        if segment is None:
+            self.pinned = (middle, self.integral_at(middle), _ZERO)
+        else:
+            self.pinned = (segment[0], self.integral_at(segment[0]), segment[2])
+        self.window = middle
 
     def end_step(self) -> None:
         """Evaluate at the times asked again."""
         self.window = None
 
-    def segment_at(self, t: float) -> tuple[float, float, FloatArray] | None:
+    def segment_at(self, t: float) -> tuple[float, float, Vec] | None:
         """The command in force at ``t`` (the step's midpoint during a step), or None."""
         probe = t if self.window is None else self.window
         for segment in reversed(self.segments):
@@ -313,19 +474,34 @@ class HeldInput:
         """Whether a command is in force at ``t``; counts an expiry once."""
         return self.segment_at(t) is not None
 
-    def value_at(self, t: float) -> FloatArray:
-        """The command in force at ``t``, or zero."""
+    def vector_at(self, t: float) -> Vec:
+        """The command in force at ``t``, or zero (plain floats)."""
+        if self.window is not None:
+            return self.pinned[2]
         segment = self.segment_at(t)
-        return _ZERO3 if segment is None else segment[2]
+        return _ZERO if segment is None else segment[2]
 
-    def integral(self, t: float) -> FloatArray:
+    def value_at(self, t: float) -> FloatArray:
+        """:meth:`vector_at` as a (3,) array."""
+        return np.array(self.vector_at(t))
+
+    def integral_at(self, t: float) -> Vec:
         """``∫ command dt`` from the first command to ``t`` (exact for the piecewise constant)."""
-        total = self.folded
+        if self.window is not None:
+            start, (x, y, z), (u, v, w) = self.pinned
+            span = t - start
+            return x + u * span, y + v * span, z + w * span
+        x, y, z = self.folded
         for start, end, value in self.segments:
             if t <= start:
                 break
-            total = total + value * (min(t, end) - start)
-        return total
+            span = min(t, end) - start
+            x, y, z = x + value[0] * span, y + value[1] * span, z + value[2] * span
+        return x, y, z
+
+    def integral(self, t: float) -> FloatArray:
+        """:meth:`integral_at` as a (3,) array."""
+        return np.array(self.integral_at(t))
 
 
 class CommandedEffect(Effect):

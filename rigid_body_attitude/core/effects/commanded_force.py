@@ -1,21 +1,22 @@
 """commanded_force: a force on the centre of mass from the ``force`` input (body axes).
 
 ``F_world = R(q) F_cmd``, held from the command's stamp until ``timeout``, then zero (counted
-as ``stale``). Needs ``translation`` in the same scene.
+as ``stale``). Needs ``translation`` in the same scene. Assumption: the force acts at the
+centre of mass (no torque). Source: Newton's second law; Basilisk's ``extForceTorque``.
 """
 
 from __future__ import annotations
 
-from typing import Any
-
-from numpy.typing import NDArray
+import numpy as np
 
 from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.core.effects.base import CommandedEffect, Parameter, positive, register
+from rigid_body_attitude.core.effects.base import (
+    BatchChunk, CommandedEffect, FloatArray, ForceEffect, Parameter, positive, Quat, register,
+    Vec)
 
 
 @register
-class CommandedForce(CommandedEffect):
+class CommandedForce(CommandedEffect, ForceEffect):
     """Held commanded force [N], body axes, applied at the centre of mass."""
 
     name = 'commanded_force'
@@ -24,6 +25,11 @@ class CommandedForce(CommandedEffect):
     inputs = {'force': 'force_body [N] (WrenchStamped.wrench.force)'}
     requires = ('translation',)
 
-    def force_world(self, t: float, attitude: NDArray[Any]) -> NDArray[Any]:
+    def force(self, t: float, q: Quat) -> Vec:
         """``R(q) F_cmd`` [N], zero after the timeout."""
-        return quaternion.rotate(attitude, self.command.value_at(t))
+        return quaternion.rotate_floats(q, self.command.vector_at(t))
+
+    def add_batch_force(self, t: float, q: FloatArray, chunk: BatchChunk,
+                        out: FloatArray) -> None:
+        """The same held command on every body, rotated by each body's attitude."""
+        out += quaternion.rotate_rows(q, np.array(self.command.vector_at(t))[:, None])

@@ -1,17 +1,18 @@
 """constant_torque: a torque of fixed magnitude and direction, in body or world axes.
 
 ``M_body = M`` (``frame: body``) or ``M_body = R(q)ᵀ M`` (``frame: world``, e.g. a thruster
-fixed in inertial space). Assumption: constant in time.
+fixed in inertial space). Assumption: constant in time. Source: Euler's equations with an
+external torque (physics.md §1).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from numpy.typing import NDArray
-
 from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.core.effects.base import REQUIRED, Effect, Parameter, register, vector3
+from rigid_body_attitude.core.effects.base import (
+    as_vec, BatchChunk, BodyProperties, FloatArray, Parameter, Quat, register, REQUIRED,
+    TorqueEffect, Vec, vector3)
 
 
 def _frame(value: Any) -> str:
@@ -21,7 +22,7 @@ def _frame(value: Any) -> str:
 
 
 @register
-class ConstantTorque(Effect):
+class ConstantTorque(TorqueEffect):
     """Constant torque [N m] in body or world axes."""
 
     name = 'constant_torque'
@@ -31,9 +32,20 @@ class ConstantTorque(Effect):
         'frame': Parameter(_frame, 'body', "'body' or 'world'"),
     }
 
-    def torque_body(self, t: float, attitude: NDArray[Any],
-                    omega_body: NDArray[Any]) -> NDArray[Any]:
-        """The torque in body axes at ``attitude``."""
-        if self.params['frame'] == 'body':
-            return self.params['torque']
-        return quaternion.rotate_inverse(attitude, self.params['torque'])
+    def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
+        """Keep the torque as plain floats."""
+        super().__init__(params, body)
+        self.vector = as_vec(self.params['torque'])
+        self.in_world = self.params['frame'] == 'world'
+
+    def torque(self, t: float, q: Quat, omega: Vec) -> Vec:
+        """The torque in body axes at attitude ``q``."""
+        if self.in_world:
+            return quaternion.rotate_inverse_floats(q, self.vector)
+        return self.vector
+
+    def add_batch_torque(self, t: float, q: FloatArray, omega: FloatArray, chunk: BatchChunk,
+                         out: FloatArray) -> None:
+        """Per-body torque vectors (``torque`` may be dispersed), rotated when in world axes."""
+        vector = chunk.parameters['torque']
+        out += quaternion.rotate_rows(q, vector, inverse=True) if self.in_world else vector

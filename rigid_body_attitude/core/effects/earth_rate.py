@@ -3,8 +3,8 @@
 A gyro measures the rate relative to inertial space; a ROS world frame (ENU, REP-103/105) is
 fixed to the rotating Earth. The rate relative to the world frame is
 ``ω = ω_measured − R(q)ᵀ Ω_E (0, cos φ, sin φ)`` with ``φ`` the latitude and
-``Ω_E = 7.2921150e−5 rad/s`` (WGS-84). Assumptions: stationary or slowly moving platform
-(transport rate neglected), ENU world frame.
+``Ω_E = 7.2921150e−5 rad/s`` (Source: WGS-84; ROS frames: REP-103/105). Assumptions:
+stationary or slowly moving platform (transport rate neglected), ENU world frame.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.effects.base import (
-    REQUIRED, BodyProperties, Effect, Parameter, nonnegative, real, register)
+    as_vec, REQUIRED, BodyProperties, RateCorrection, Parameter, nonnegative, real, register)
 
 WGS84_EARTH_RATE = 7.2921150e-5
 
@@ -30,7 +30,7 @@ def _latitude(value: Any) -> float:
 
 
 @register
-class EarthRate(Effect):
+class EarthRate(RateCorrection):
     """Earth-rotation compensation for strapdown scenes."""
 
     name = 'earth_rate'
@@ -39,7 +39,6 @@ class EarthRate(Effect):
         'latitude': Parameter(_latitude, REQUIRED, 'geodetic latitude [deg]'),
         'rate': Parameter(nonnegative, WGS84_EARTH_RATE, 'Earth rotation rate [rad/s]'),
     }
-    rate_sources = frozenset({'gyro'})
 
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Precompute the Earth rate in the ENU world frame."""
@@ -47,8 +46,12 @@ class EarthRate(Effect):
         latitude = math.radians(self.params['latitude'])
         self.earth_rate_world = self.params['rate'] * np.array(
             [0.0, math.cos(latitude), math.sin(latitude)])
+        self.earth_rate = as_vec(self.earth_rate_world)
 
     def corrected_rate(self, t: float, attitude: NDArray[Any],
                        omega_measured: NDArray[Any]) -> NDArray[Any]:
         """``ω_measured − R(q)ᵀ Ω_E`` [rad/s]."""
-        return omega_measured - quaternion.rotate_inverse(attitude, self.earth_rate_world)
+        w, x, y, z = np.asarray(attitude, dtype=np.float64).tolist()
+        corrected: NDArray[Any] = omega_measured - np.array(
+            quaternion.rotate_inverse_floats((w, x, y, z), self.earth_rate))
+        return corrected

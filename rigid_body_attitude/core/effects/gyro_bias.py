@@ -4,7 +4,9 @@
 first ``N`` seconds of samples: during that window the samples are averaged into ``b`` (plus
 the given ``bias`` as a prior offset of zero weight) and the corrected rate is zero, so the
 attitude holds still; afterwards ``b`` is the mean. Assumption: a constant bias over the run
-(no temperature drift); Earth rate, when also named, should come after this effect.
+(no temperature drift); Earth rate, when also named, should come after this effect. Source:
+the constant-bias term of the usual gyro error model (Titterton & Weston, *Strapdown Inertial
+Navigation Technology*, gyro errors).
 """
 
 from __future__ import annotations
@@ -15,11 +17,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.effects.base import (
-    BodyProperties, Effect, Parameter, nonnegative, register, vector3)
+    BodyProperties, RateCorrection, Parameter, nonnegative, register, vector3)
 
 
 @register
-class GyroBias(Effect):
+class GyroBias(RateCorrection):
     """Constant gyro bias [rad/s], fixed or estimated from an initial rest phase."""
 
     name = 'gyro_bias'
@@ -29,7 +31,6 @@ class GyroBias(Effect):
         'estimate_seconds': Parameter(nonnegative, 0.0,
                                       'average the first N seconds at rest (0 = off) [s]'),
     }
-    rate_sources = frozenset({'gyro'})
 
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Start with the given bias, or an empty estimate."""
@@ -57,4 +58,5 @@ class GyroBias(Effect):
             self.estimating = False
             if self.sample_count:
                 self.bias = self.sample_sum / self.sample_count
-        return omega_measured - self.bias
+        corrected: NDArray[Any] = omega_measured - self.bias
+        return corrected

@@ -2,7 +2,8 @@
 
 Models eddy-current or fluid damping. ``coefficient`` is one number or one per body axis
 [N m s/rad], each ≥ 0. The power ``ω·M = −Σ c_i ω_i²`` is never positive, so the kinetic
-energy decays monotonically.
+energy decays monotonically. Assumption: linear in the rate (no stiction, no quadratic drag).
+Source: the power theorem ``dT/dt = ω·M`` (physics.md §1).
 """
 
 from __future__ import annotations
@@ -10,13 +11,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from rigid_body_attitude.core.effects.base import (
-    REQUIRED, Effect, Parameter, nonnegative, register)
+    as_vec, BatchChunk, BodyProperties, FloatArray, nonnegative, Parameter, Quat, register,
+    REQUIRED, TorqueEffect, Vec)
 
 
-def _coefficient(value: Any) -> NDArray[np.float64]:
+def _coefficient(value: Any) -> FloatArray:
     if isinstance(value, (list, tuple)):
         if len(value) != 3:
             raise TypeError('one number or a list of 3 numbers >= 0')
@@ -25,7 +26,7 @@ def _coefficient(value: Any) -> NDArray[np.float64]:
 
 
 @register
-class ViscousDamping(Effect):
+class ViscousDamping(TorqueEffect):
     """Linear rate damping [N m s/rad]."""
 
     name = 'viscous_damping'
@@ -34,7 +35,17 @@ class ViscousDamping(Effect):
                                            'damping coefficient(s) [N m s/rad]')}
     torque_depends_on_rate = True
 
-    def torque_body(self, t: float, attitude: NDArray[Any],
-                    omega_body: NDArray[Any]) -> NDArray[Any]:
+    def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
+        """Keep the coefficients as plain floats."""
+        super().__init__(params, body)
+        self.coefficients = as_vec(self.params['coefficient'])
+
+    def torque(self, t: float, q: Quat, omega: Vec) -> Vec:
         """``−c ∘ ω`` [N m]."""
-        return -self.params['coefficient'] * omega_body
+        c1, c2, c3 = self.coefficients
+        return -c1 * omega[0], -c2 * omega[1], -c3 * omega[2]
+
+    def add_batch_torque(self, t: float, q: FloatArray, omega: FloatArray, chunk: BatchChunk,
+                         out: FloatArray) -> None:
+        """``−c ∘ ω`` per body (``coefficient`` may be dispersed)."""
+        out -= chunk.parameters['coefficient'] * omega

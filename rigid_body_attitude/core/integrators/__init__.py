@@ -1,6 +1,6 @@
 """Integrators: the exact torque-free solution, strapdown (gyro-driven) updates, dynamics.
 
-Conventions are those of :mod:`rigid_body_attitude.core.quaternion`. Three registries, each a
+Conventions are those of :mod:`rigid_body_attitude.core.quaternion`. Three menus, each a
 mapping name → class (instantiate for a fresh, independent integrator):
 
 * :data:`DYNAMICS_INTEGRATORS` — ``step(attitude, omega_body, t, h, model)`` on the coupled
@@ -20,9 +20,11 @@ from __future__ import annotations
 from typing import Any
 
 from rigid_body_attitude.core.errors import IntegratorError
+from rigid_body_attitude.core.registry import Registry
 from rigid_body_attitude.core.integrators.adaptive import DormandPrince45
 from rigid_body_attitude.core.integrators.base import (
     BodyModel, DynamicsIntegrator, SimpleBodyModel)
+from rigid_body_attitude.core.integrators.dynamics_base import DynamicsMethod
 from rigid_body_attitude.core.integrators.exact_step import ExactTorqueFree
 from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
 from rigid_body_attitude.core.integrators.kinematic import KINEMATIC_METHODS, kinematic_method
@@ -47,11 +49,14 @@ __all__ = [
     'torque_integrators',
 ]
 
-#: Dynamics integrators by name (values are classes).
-DYNAMICS_INTEGRATORS: dict[str, Any] = {cls.name: cls for cls in (
-    RigidBodyRk4, RigidBodyRkmk4, StrangSplitting, Yoshida4Splitting, Casimir6Splitting,
-    Casimir8Splitting, BlanesMoan4Splitting, BlanesMoan6Splitting, DormandPrince45,
-    ExactTorqueFree)}
+#: Dynamics integrators by name (values are classes): a :class:`~.registry.Registry`, the
+#: mechanism the effects use too.
+DYNAMICS_INTEGRATORS: Registry[type[DynamicsMethod]] = Registry('dynamics integrator',
+                                                                IntegratorError)
+for _cls in (RigidBodyRk4, RigidBodyRkmk4, StrangSplitting, Yoshida4Splitting,
+             Casimir6Splitting, Casimir8Splitting, BlanesMoan4Splitting, BlanesMoan6Splitting,
+             DormandPrince45, ExactTorqueFree):
+    DYNAMICS_INTEGRATORS.register(_cls)
 
 
 def torque_integrators() -> tuple[str, ...]:
@@ -63,12 +68,12 @@ def torque_integrators() -> tuple[str, ...]:
 
 def dynamics_integrator(name: str, **options: Any) -> Any:
     """A fresh dynamics integrator by name (``options`` go to its constructor, e.g. the
-    tolerances of ``dopri45``); :class:`IntegratorError` lists the valid names."""
-    if name not in DYNAMICS_INTEGRATORS:
-        raise IntegratorError(f'Unknown dynamics integrator {name!r}; expected one of '
-                              f'{", ".join(sorted(DYNAMICS_INTEGRATORS))}')
+    tolerances of ``dopri45``): a :class:`~.dynamics_base.DynamicsMethod` (typed ``Any`` so
+    callers may read a method's own attributes, e.g. dopri45's counters);
+    :class:`IntegratorError` lists the valid names."""
+    cls = DYNAMICS_INTEGRATORS.lookup(name)
     try:
-        return DYNAMICS_INTEGRATORS[name](**options)
+        return cls(**options)
     except TypeError as err:
         raise IntegratorError(f'Unexpected options {sorted(options)!r} for dynamics '
                               f'integrator {name!r}') from err

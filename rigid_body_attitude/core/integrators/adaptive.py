@@ -108,7 +108,7 @@ class DormandPrince45(DynamicsMethod):
             if error <= 1.0:
                 t = end if last else t + step
                 qn = q_normalize(new[:4])
-                y = qn + new[4:]
+                y = qn + (new[4], new[5], new[6])
                 k1 = stages[6] if qn == new[:4] else body_derivative(model, t, y)
                 self.steps_taken += 1
                 if not last:

@@ -35,6 +35,7 @@ __all__ = [
     'Vec',
     'as_state',
     'body_derivative',
+    'body_derivative_power',
     'check_step',
     'omega_derivative',
     'output',
@@ -62,16 +63,21 @@ class BodyModel(Protocol):
     9-tuples of floats), ``principal_moments`` (ascending, (3,)), ``principal_axes``
     (rotation whose columns are the principal axes), ``torque_free`` (no torque, no rotor),
     ``torque_body(t, attitude, omega_body) -> (3,)`` [N m] and
-    ``rotor_momentum(t) -> (h [N m s], ḣ [N m])``. Optional: ``torque_depends_on_rate``
-    (bool, taken as True when absent); False lets the splitting methods apply a torque kick
-    exactly in one evaluation. ``has_rotor`` (bool, True when absent); False skips the rotor
-    query. ``torque_takes_floats`` (bool, False when absent); True lets the splitting methods
-    call ``torque_body(t, (w, x, y, z), (ω₁, ω₂, ω₃))`` with plain-float tuples and take any
-    three numbers back (no NumPy conversion in their hot loop).
+    ``rotor_momentum(t) -> (h [N m s], ḣ [N m])``, and four declarations: ``has_torque``
+    (False: ``torque_body`` is zero, never called by the written-out RK4 step),
+    ``torque_depends_on_rate`` (False lets the splitting methods apply a torque kick exactly
+    in one evaluation), ``has_rotor`` (False skips the rotor query) and
+    ``torque_takes_floats`` (True: the integrators call
+    ``torque_body(t, (w, x, y, z), (ω₁, ω₂, ω₃))`` with plain-float tuples and take any three
+    numbers back, no NumPy conversion in their hot loops).
     """
 
     tensor_entries: tuple[float, ...]
     inverse_entries: tuple[float, ...]
+    torque_depends_on_rate: bool
+    has_torque: bool
+    has_rotor: bool
+    torque_takes_floats: bool
 
     @property
     def torque_free(self) -> bool:
@@ -85,11 +91,17 @@ class BodyModel(Protocol):
     def principal_axes(self) -> FloatArray:
         """Right-handed rotation whose columns are the principal axes (body coordinates)."""
 
-    def torque_body(self, t: float, attitude: FloatArray, omega_body: FloatArray) -> Any:
-        """External torque [N m] in body axes."""
+    def torque_body(self, t: float, attitude: Any, omega_body: Any) -> Any:
+        """External torque [N m] in body axes (arrays, or plain floats when
+        ``torque_takes_floats``)."""
 
     def rotor_momentum(self, t: float) -> tuple[Any, Any]:
         """Rotor momentum ``h`` [N m s] and its rate ``ḣ`` [N m] in body axes."""
+
+
+def _no_torque(t: float, attitude: Any, omega_body: Any) -> FloatArray:
+    """Zero torque [N m]."""
+    return np.zeros(3)
 
 
 class SimpleBodyModel:
@@ -121,11 +133,13 @@ class SimpleBodyModel:
         self._axes = axes
         self._torque = torque_body
         self._rotor = rotor_momentum
-        if torque_body is not None:
-            self.torque_body = torque_body  # call the user's function directly (hot path)
+        # the user's function itself (no wrapper call on the hot path), or zero
+        self.torque_body: Callable[[float, Any, Any], Any] = (
+            _no_torque if torque_body is None else torque_body)
         self.torque_depends_on_rate = bool(torque_depends_on_rate)
         self.torque_takes_floats = bool(torque_takes_floats) and torque_body is not None
         self.has_rotor = rotor_momentum is not None
+        self.has_torque = torque_body is not None
 
     @property
     def torque_free(self) -> bool:
@@ -141,12 +155,6 @@ class SimpleBodyModel:
     def principal_axes(self) -> FloatArray:
         """Right-handed rotation whose columns are the principal axes (body coordinates)."""
         return self._axes
-
-    def torque_body(self, t: float, attitude: FloatArray, omega_body: FloatArray) -> Any:
-        """The torque callable's value, or zero [N m]."""
-        if self._torque is None:
-            return np.zeros(3)
-        return self._torque(t, attitude, omega_body)
 
     def rotor_momentum(self, t: float) -> tuple[Any, Any]:
         """The rotor callable's ``(h, ḣ)``, or zeros."""
@@ -221,23 +229,37 @@ def body_derivative(model: BodyModel, t: float, state: Sequence[float]) -> tuple
     """``(q̇, ω̇)`` for the 7-float state ``(w, x, y, z, ω₁, ω₂, ω₃)`` (plain floats).
 
     ``ω̇ = J⁻¹ (M − ḣ − ω × (J ω + h))``; the torque and rotor callables are only called when
-    the model is not torque-free (they take and return arrays).
+    the model is not torque-free (:func:`body_derivative_power` also returns the power).
+    """
+    return body_derivative_power(model, t, state)[:7]
+
+
+def body_derivative_power(model: BodyModel, t: float,
+                          state: Sequence[float]) -> tuple[float, ...]:
+    """:func:`body_derivative` and, eighth, the power ``ω·(M − ḣ)`` [W] of the torques.
+
+    The torque is called with plain-float tuples when the model declares
+    ``torque_takes_floats``, with arrays otherwise.
     """
     qw, qx, qy, qz, p, q, r = state
     j00, j01, j02, j10, j11, j12, j20, j21, j22 = model.tensor_entries
     mx = j00 * p + j01 * q + j02 * r
     my = j10 * p + j11 * q + j12 * r
     mz = j20 * p + j21 * q + j22 * r
-    tx = ty = tz = 0.0
+    tx = ty = tz = power = 0.0
     if not model.torque_free:
-        attitude = np.array((qw, qx, qy, qz))
-        omega = np.array((p, q, r))
-        torque = model.torque_body(t, attitude, omega)
-        rotor, rotor_rate = model.rotor_momentum(t)
-        tx = float(torque[0]) - float(rotor_rate[0])
-        ty = float(torque[1]) - float(rotor_rate[1])
-        tz = float(torque[2]) - float(rotor_rate[2])
-        mx, my, mz = mx + float(rotor[0]), my + float(rotor[1]), mz + float(rotor[2])
+        if model.torque_takes_floats:
+            tx, ty, tz = model.torque_body(t, (qw, qx, qy, qz), (p, q, r))
+        else:
+            torque = model.torque_body(t, np.array((qw, qx, qy, qz)), np.array((p, q, r)))
+            tx, ty, tz = float(torque[0]), float(torque[1]), float(torque[2])
+        if model.has_rotor:
+            rotor, rotor_rate = model.rotor_momentum(t)
+            tx -= float(rotor_rate[0])
+            ty -= float(rotor_rate[1])
+            tz -= float(rotor_rate[2])
+            mx, my, mz = mx + float(rotor[0]), my + float(rotor[1]), mz + float(rotor[2])
+        power = p * tx + q * ty + r * tz
     bx = tx - (q * mz - r * my)
     by = ty - (r * mx - p * mz)
     bz = tz - (p * my - q * mx)
@@ -248,7 +270,8 @@ def body_derivative(model: BodyModel, t: float, state: Sequence[float]) -> tuple
             0.5 * (qw * r + qx * q - qy * p),
             i00 * bx + i01 * by + i02 * bz,
             i10 * bx + i11 * by + i12 * bz,
-            i20 * bx + i21 * by + i22 * bz)
+            i20 * bx + i21 * by + i22 * bz,
+            power)
 
 
 def omega_derivative(model: BodyModel, t: float, attitude: Sequence[float],

@@ -291,43 +291,52 @@ def exact_free_flow(q: Quat, m: Vec, h: float, frame: PrincipalFrame) -> tuple[Q
             (float(omega[0]) * j[0], float(omega[1]) * j[1], float(omega[2]) * j[2]))
 
 
+def _torque(model: BodyModel, t: float, q: Quat, omega: Vec) -> Vec:
+    """The model's torque [N m, body] as plain floats (arrays only for a model that needs
+    them, ``torque_takes_floats`` False)."""
+    if model.torque_takes_floats:
+        x, y, z = model.torque_body(t, q, omega)
+        return x, y, z
+    torque = model.torque_body(t, np.array(q), np.array(omega))
+    return float(torque[0]), float(torque[1]), float(torque[2])
+
+
 def _kick(q: Quat, m: Vec, t: float, tau: float, model: BodyModel,
           frame: PrincipalFrame) -> Vec:
     """Advance ``ṁ = M(t, q, ω) − ḣ(t) − ω × h(t)`` over ``τ`` with q and t frozen.
 
-    ``q`` and ``m`` are principal-frame; the torque and rotor callables see body-frame arrays.
+    ``q`` and ``m`` are principal-frame; the torque and rotor callables see the body frame.
     """
-    attitude = np.array(frame.body_attitude(q))
+    attitude = frame.body_attitude(q)
     j = frame.moments
-    if getattr(model, 'has_rotor', True):
+    if model.has_rotor:
         rotor, rotor_rate = model.rotor_momentum(t)
         hx, hy, hz = frame.principal_vector((float(rotor[0]), float(rotor[1]), float(rotor[2])))
         rx, ry, rz = frame.principal_vector(
             (float(rotor_rate[0]), float(rotor_rate[1]), float(rotor_rate[2])))
     else:
         hx = hy = hz = rx = ry = rz = 0.0
-    if hx == hy == hz == 0.0 and not getattr(model, 'torque_depends_on_rate', True):
+    if hx == hy == hz == 0.0 and not model.torque_depends_on_rate:
         omega = frame.body_vector((m[0] / j[0], m[1] / j[1], m[2] / j[2]))
-        torque = model.torque_body(t, attitude, np.array(omega))
-        mx, my, mz = frame.principal_vector((float(torque[0]), float(torque[1]),
-                                             float(torque[2])))
+        mx, my, mz = frame.principal_vector(_torque(model, t, attitude, omega))
         return m[0] + tau * (mx - rx), m[1] + tau * (my - ry), m[2] + tau * (mz - rz)
 
     def field(momentum: Vec) -> Vec:
         p, r, s = momentum[0] / j[0], momentum[1] / j[1], momentum[2] / j[2]
-        torque = model.torque_body(t, attitude, np.array(frame.body_vector((p, r, s))))
-        mx, my, mz = frame.principal_vector((float(torque[0]), float(torque[1]),
-                                             float(torque[2])))
+        mx, my, mz = frame.principal_vector(
+            _torque(model, t, attitude, frame.body_vector((p, r, s))))
         return (mx - rx - (r * hz - s * hy), my - ry - (s * hx - p * hz),
                 mz - rz - (p * hy - r * hx))
 
     half = 0.5 * tau
     k1 = field(m)
-    k2 = field(tuple(a + half * b for a, b in zip(m, k1)))
-    k3 = field(tuple(a + half * b for a, b in zip(m, k2)))
-    k4 = field(tuple(a + tau * b for a, b in zip(m, k3)))
+    k2 = field((m[0] + half * k1[0], m[1] + half * k1[1], m[2] + half * k1[2]))
+    k3 = field((m[0] + half * k2[0], m[1] + half * k2[1], m[2] + half * k2[2]))
+    k4 = field((m[0] + tau * k3[0], m[1] + tau * k3[1], m[2] + tau * k3[2]))
     sixth = tau / 6.0
-    return tuple(a + sixth * (b + 2.0 * (c + d) + e) for a, b, c, d, e in zip(m, k1, k2, k3, k4))
+    return (m[0] + sixth * (k1[0] + 2.0 * (k2[0] + k3[0]) + k4[0]),
+            m[1] + sixth * (k1[1] + 2.0 * (k2[1] + k3[1]) + k4[1]),
+            m[2] + sixth * (k1[2] + 2.0 * (k2[2] + k3[2]) + k4[2]))
 
 
 def _exact_kick(q: Quat, m: Vec, t: float, tau: float, model: BodyModel,
@@ -335,13 +344,10 @@ def _exact_kick(q: Quat, m: Vec, t: float, tau: float, model: BodyModel,
     """``m += τ M(t, q)`` (principal frame): exact for a rate-independent torque, no rotor."""
     j = frame.moments
     if frame.identity:
-        torque = model.torque_body(t, np.array(q),
-                                   np.array((m[0] / j[0], m[1] / j[1], m[2] / j[2])))
-        return (m[0] + tau * float(torque[0]), m[1] + tau * float(torque[1]),
-                m[2] + tau * float(torque[2]))
+        mx, my, mz = _torque(model, t, q, (m[0] / j[0], m[1] / j[1], m[2] / j[2]))
+        return m[0] + tau * mx, m[1] + tau * my, m[2] + tau * mz
     omega = frame.body_vector((m[0] / j[0], m[1] / j[1], m[2] / j[2]))
-    torque = model.torque_body(t, np.array(frame.body_attitude(q)), np.array(omega))
-    mx, my, mz = frame.principal_vector((float(torque[0]), float(torque[1]), float(torque[2])))
+    mx, my, mz = frame.principal_vector(_torque(model, t, frame.body_attitude(q), omega))
     return m[0] + tau * mx, m[1] + tau * my, m[2] + tau * mz
 
 
@@ -375,8 +381,7 @@ class _Composition(DynamicsMethod):
 
     def _kick_function(self, model: BodyModel) -> Any:
         """The exact one-evaluation kick when allowed, else the general (RK4) one."""
-        if (not getattr(model, 'torque_depends_on_rate', True)
-                and not getattr(model, 'has_rotor', True)):
+        if not model.torque_depends_on_rate and not model.has_rotor:
             return _exact_kick
         return _kick
 
