@@ -82,6 +82,7 @@ for _variable in ('ROS_LOCALHOST_ONLY', 'ROS_STATIC_PEERS', 'FASTRTPS_DEFAULT_PR
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ['ROS_DOMAIN_ID'] = str(TEST_DOMAIN_ID)
 os.environ['AMENT_PREFIX_PATH'] = _ament_prefix_path_with(sys.prefix)
+os.environ['PYTHONFAULTHANDLER'] = '1'  # a crashing node subprocess leaves its stacks in stderr
 
 if importlib.util.find_spec('rigid_body_attitude') is None:
     sys.path.insert(0, str(REPO_ROOT))
