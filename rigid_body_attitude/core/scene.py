@@ -56,7 +56,7 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.effects import EFFECTS, BodyProperties, Effect
-from rigid_body_attitude.core.effects.base import real
+from rigid_body_attitude.core.effects.base import MAGNITUDE_LIMIT, real
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.inertia import Inertia
 from rigid_body_attitude.core.paths import config_folders
@@ -87,8 +87,9 @@ MAX_DESCRIPTION_CHARS = 1024
 #: :data:`MAX_ERROR_CHARS`.
 QUOTE_LIMIT = 100
 MAX_ERROR_CHARS = 600
-#: Bound on every physical magnitude of a scene (SI units), and 1/bound on the positive ones.
-SCALE_LIMIT = 1e75
+#: Bound on every physical magnitude of a scene (SI units), and 1/bound on the positive ones
+#: (the effects' parameters share it).
+SCALE_LIMIT = MAGNITUDE_LIMIT
 _FLOAT_MAX = 1.7976931348623157e308
 _QUOTE = reprlib.Repr()
 _QUOTE.maxstring = _QUOTE.maxother = _QUOTE.maxlong = QUOTE_LIMIT

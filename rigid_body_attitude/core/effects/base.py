@@ -96,16 +96,29 @@ class Parameter:
     description: str
 
 
+#: Largest magnitude of an effect's number: the scene's own bound
+#: (:data:`rigid_body_attitude.core.scene.SCALE_LIMIT`), so that products of a few such numbers
+#: (torques, momenta, energies) stay finite; far beyond any physical parameter (the Sun's
+#: gravitational parameter is 1.3e20 m³/s²).
+MAGNITUDE_LIMIT = 1e75
+
+
 def real(value: Any) -> float:
-    """A finite real number (booleans and strings are refused)."""
+    """A finite real number of magnitude at most :data:`MAGNITUDE_LIMIT` (booleans and strings
+    are refused)."""
     if isinstance(value, str) and _looks_numeric(value):
         raise TypeError(f'a number (YAML 1.1 reads {value} as text: write it with a sign in '
                         f'the exponent and a dot, e.g. 7.0e+6)')
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TypeError('a number')
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError as err:  # an integer too large for a float
+        raise ValueError('a number of magnitude at most 1e75') from err
     if not np.isfinite(number):
         raise ValueError('a finite number')
+    if abs(number) > MAGNITUDE_LIMIT:
+        raise ValueError('a number of magnitude at most 1e75')
     return number
 
 
@@ -373,8 +386,10 @@ def validate_parameters(effect_name: str, spec: Mapping[str, Parameter],
         try:
             checked[key] = parameter.convert(params[key])
         except (TypeError, ValueError) as err:
+            shown = repr(params[key])
+            shown = shown if len(shown) <= 100 else shown[:97] + '...'
             raise SceneError(f'Effect {effect_name!r}: parameter {key!r} must be {err}, '
-                             f'got {params[key]!r}') from err
+                             f'got {shown}') from err
     return checked
 
 
