@@ -16,10 +16,10 @@ class ExactTorqueFree(DynamicsMethod):
 
     Order: exact for any ``h`` (error a few ulps of the phase ψ ≈ 2T h/G). Cost 0.7–0.9 ms
     per step whatever ``h`` (accuracy study, docs/accuracy/: 0.86 ms for one 10-s step, i.e.
-    0.09 ms per simulated second; 0.70 ms per step when the propagator steps it at 100 Hz,
-    i.e. 70 ms per simulated second). One step can cover a whole run; at a fixed rate of
+    0.09 ms per simulated second; 0.67 ms per step when the propagator steps it at 100 Hz,
+    i.e. 67 ms per simulated second). One step can cover a whole run; at a fixed rate of
     100 Hz ``casimir8`` reaches round-off on the study's triaxial body (3.4e−13 rad) for a
-    twelfth of that, 5.7 ms per simulated second (its ``torque_free`` case). Invariants:
+    sixteenth of that, 4.1 ms per simulated second (its ``torque_free`` case). Invariants:
     world angular momentum, energy, ``|m|`` and ``|q|`` to round-off. Refuses
     (:class:`IntegratorError`) a model with a torque or a rotor. Source: see
     :mod:`rigid_body_attitude.core.integrators.exact_torque_free`.

@@ -520,9 +520,10 @@ class Casimir8Splitting(_Composition):
 
     As :class:`Casimir6Splitting` with the s17odr8 weights. Order 8 when kicks are exact,
     otherwise 4. Cost seventeen free flows and eighteen kicks per step: expensive per step,
-    but on the symmetric heavy top (fast spin exact) it reaches 1e−9 rad at T = 10 s with ~130
-    steps, ≈2.8 ms in the fused loop of :mod:`.axisymmetric` (≈1.1 µs per stage with a
-    plain-float torque; scipy's DOP853 needs ≈40 ms, docs/accuracy). Invariants as
+    but on the symmetric heavy top (fast spin exact) it reaches 1.0e−9 rad at T = 10 s with 130
+    steps, 3.8 ms in the fused loop of :mod:`.axisymmetric` (≈1.7 µs per stage with the
+    plain-float gravity torque); scipy's DOP853 needs 21 ms per simulated second on the same
+    model, 54× more (accuracy study, docs/accuracy/, ``heavy_top``). Invariants as
     :class:`StrangSplitting`. Source: Kahan & Li, Math. Comp. 66 (1997); Hairer, Lubich &
     Wanner, *Geometric Numerical Integration*, §V.3.
     """
