@@ -62,7 +62,6 @@ from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidParameterTypeException, ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from sensor_msgs.msg import Imu
@@ -79,6 +78,7 @@ from rigid_body_attitude.session.reports import (
     NANOSECONDS_PER_SECOND, stale_command_count, TimeBase)
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.middleware import check_cpu_scheduling
+from rigid_body_attitude.ros.qos import INPUT_QOS, OUTPUT_QOS
 from rigid_body_attitude.session.outputs import OutputTracker
 from rigid_body_attitude.core.propagator import (
     build_propagator, DynamicsPropagator, MAX_STEPS_PER_CALL)
@@ -98,11 +98,6 @@ LOG_EVERY_PERIODS = 5
 
 _LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN,
                 LEVEL_ERROR: DiagnosticStatus.ERROR}
-
-#: Inputs: best effort (receives from best-effort and reliable publishers), keep last 5.
-INPUT_QOS = qos_profile_sensor_data
-#: Outputs: reliable, keep last 10 (reaches reliable and best-effort subscribers).
-OUTPUT_QOS = QoSProfile(depth=10)
 
 #: Position published in the pose of gyro scenes (they carry no translation).
 _ZERO_POSITION = (0.0, 0.0, 0.0)

@@ -17,7 +17,6 @@ import threading
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.task import Future
 
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
@@ -33,17 +32,60 @@ def _error_text(err: BaseException) -> str:
     return str(err).splitlines()[0].split(', at /')[0] if str(err) else type(err).__name__
 
 
-def _serve_rest(executor: SingleThreadedExecutor, done: Future, loop: GyroLoop,
-                failures: list[BaseException]) -> None:
-    """Body of the executor thread: spin until ``done`` or shutdown; a callback's exception
-    stops the gyro loop too."""
-    try:
-        executor.spin_until_future_complete(done)
-    except ExternalShutdownException:
-        pass
-    except BaseException as err:  # handed to the main thread, which re-raises it
-        failures.append(err)
-        loop.stop()
+class _ExecutorThread:
+    """The executor serving the rest of the node, in a thread of its own, until :meth:`stop`.
+
+    It calls ``executor.spin_once()`` until stopped; :meth:`stop` sets a flag and triggers a
+    guard condition of the node, whose (empty) callback makes the pending ``spin_once``
+    return. Not ``spin_until_future_complete`` on a future done at shutdown: rclpy 7.1.6 adds
+    a done-callback to that future on every wake-up (ros2/rclpy#1371), so the process grew by
+    about 280 bytes per ``set_pose`` message, parameter set or service call. Nor
+    ``executor.shutdown()`` from the other thread: it destroys the guard conditions of a wait
+    set that may still be waiting (rclpy issue #968).
+    """
+
+    def __init__(self, executor: SingleThreadedExecutor, node: AttitudePropagatorNode,
+                 loop: GyroLoop) -> None:
+        """Serve ``node``'s remaining entities with ``executor``; stop ``loop`` on failure."""
+        self.executor, self.node, self.loop = executor, node, loop
+        self.failures: list[BaseException] = []
+        self._stopping = threading.Event()
+        self._stop_guard = node.create_guard_condition(_nothing)
+        self.thread = threading.Thread(target=self._serve, name='executor', daemon=True)
+
+    def _serve(self) -> None:
+        """Thread body: spin until stopped or shutdown; a callback's exception stops the gyro
+        loop too (the main thread re-raises it)."""
+        try:
+            while not self._stopping.is_set() and self.executor.context.ok():
+                self.executor.spin_once()
+        except ExternalShutdownException:
+            pass
+        except BaseException as err:  # handed to the main thread, which re-raises it
+            self.failures.append(err)
+            self.loop.stop()
+
+    def stop(self) -> None:
+        """End the thread and wait for it, even through KeyboardInterrupt.
+
+        rclpy raises KeyboardInterrupt in the main thread some time after SIGINT; if it cut
+        this wait short, the node would be destroyed under callbacks still running in the
+        thread.
+        """
+        while True:
+            try:
+                if self.thread.ident is not None:  # started
+                    self._stopping.set()
+                    self._stop_guard.trigger()
+                    self.thread.join()
+                self.node.destroy_guard_condition(self._stop_guard)
+                return
+            except KeyboardInterrupt:
+                continue
+
+
+def _nothing() -> None:
+    """The stop guard's callback: running it is what makes ``spin_once`` return."""
 
 
 def spin(node: AttitudePropagatorNode) -> None:
@@ -70,20 +112,17 @@ def spin(node: AttitudePropagatorNode) -> None:
         rclpy.spin(node, executor)
         return
     executor.add_node(node)
-    done, failures = Future(), []
-    rest = threading.Thread(target=_serve_rest, args=(executor, done, loop, failures),
-                            name='executor', daemon=True)
+    rest = _ExecutorThread(executor, node, loop)
     try:
-        rest.start()
+        rest.thread.start()
         _apply_cpu_scheduling(node)
         loop.run()
     finally:
-        if rest.ident is not None:  # started
-            _stop(done, rest)
+        rest.stop()
         executor.shutdown()  # only now: its thread no longer waits (rclpy issue #968)
         loop.close()
-    if failures:
-        raise failures[0]
+    if rest.failures:
+        raise rest.failures[0]
 
 
 def _apply_cpu_scheduling(node: AttitudePropagatorNode) -> None:
@@ -95,22 +134,6 @@ def _apply_cpu_scheduling(node: AttitudePropagatorNode) -> None:
             f'({outcome.refused}); the other threads keep their policy')
     node.get_logger().info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} '
                            f'threads changed; serving')
-
-
-def _stop(done: Future, thread: threading.Thread) -> None:
-    """End the executor thread (``done``) and wait for it, even through KeyboardInterrupt.
-
-    rclpy raises KeyboardInterrupt in the main thread some time after SIGINT; if it cut this
-    wait short, the node would be destroyed under callbacks still running in ``thread``.
-    """
-    while True:
-        try:
-            if not done.done():
-                done.set_result(None)  # wakes the executor, whose spin then returns
-            thread.join()
-            return
-        except KeyboardInterrupt:
-            continue
 
 
 def main(args: list[str] | None = None) -> int:
