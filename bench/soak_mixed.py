@@ -40,7 +40,11 @@ import _report  # noqa: E402
 from node_throughput import (CLOCK_TICKS, delivery, display, NODE_ARGS,  # noqa: E402
                              ProcessCrashed, Session, start_processes)
 
-DEFAULT_NODE = ['propagation_node'] + NODE_ARGS
+
+def default_node() -> List[str]:
+    """``propagation_node`` next to this interpreter (a venv's bin), else on PATH."""
+    beside = Path(sys.executable).parent / 'propagation_node'
+    return [str(beside) if beside.is_file() else 'propagation_node'] + NODE_ARGS
 
 
 def growth_rate_kib_per_minute(samples: List[Dict[str, float]]) -> float:
@@ -143,7 +147,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--drain', type=float, default=1.0)
     parser.add_argument('--depth', type=int, default=10000,
                         help='KEEP_LAST depth of the publisher and subscriber')
-    parser.add_argument('--node-cmd', default=shlex.join(DEFAULT_NODE))
+    parser.add_argument('--node-cmd', default=shlex.join(default_node()))
     parser.add_argument('--domain-id', type=int,
                         default=int(os.environ.get('ROS_DOMAIN_ID', '71')))
     parser.add_argument('--match-timeout', type=float, default=30.0)

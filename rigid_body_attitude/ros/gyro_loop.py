@@ -44,16 +44,20 @@ class DedicatedGroup(MutuallyExclusiveCallbackGroup):
 
     def __init__(self) -> None:
         """Unclaimed: executors serve the entities."""
-        super().__init__()
+        super().__init__()  # type: ignore[no-untyped-call]
         self.claimed = False
 
     def can_execute(self, entity: Any) -> bool:
         """Executors may wait on ``entity`` only while the group is unclaimed."""
-        return not self.claimed and super().can_execute(entity)
+        allowed: bool = super().can_execute(entity)  # type: ignore[no-untyped-call]
+        return not self.claimed and allowed
 
     def beginning_execution(self, entity: Any) -> bool:
         """An executor may run ``entity``'s callback only while the group is unclaimed."""
-        return not self.claimed and super().beginning_execution(entity)
+        if self.claimed:
+            return False
+        began: bool = super().beginning_execution(entity)  # type: ignore[no-untyped-call]
+        return began
 
 
 class GyroLoop:
@@ -82,8 +86,9 @@ class GyroLoop:
         self.timers = [(timer.handle, timer.callback) for timer in timers]
         self.handled = 0
         self._stopping = threading.Event()
-        self._sigint_guard = SignalHandlerGuardCondition(context)
-        self._wake_guard = GuardCondition(None, None, context=context)
+        self._sigint_guard = SignalHandlerGuardCondition(context)  # type: ignore[no-untyped-call]
+        self._wake_guard = GuardCondition(  # type: ignore[no-untyped-call]
+            None, None, context=context)
         self._closed = False
         context.on_shutdown(self.stop)
 
@@ -92,7 +97,7 @@ class GyroLoop:
         self._stopping.set()
         if not self._closed:
             try:
-                self._wake_guard.trigger()
+                self._wake_guard.trigger()  # type: ignore[no-untyped-call]
             except InvalidHandle:  # closed meanwhile: run() has returned already
                 pass
 
@@ -132,5 +137,5 @@ class GyroLoop:
         """Release the guard conditions (after :meth:`run` returned)."""
         if not self._closed:
             self._closed = True
-            self._sigint_guard.destroy()
-            self._wake_guard.destroy()
+            self._sigint_guard.destroy()  # type: ignore[no-untyped-call]
+            self._wake_guard.destroy()  # type: ignore[no-untyped-call]

@@ -43,11 +43,11 @@ INPUT_DEPTH = 5000
 OUTPUT_DEPTH = 10
 
 #: Inputs: best effort (matches best-effort and reliable publishers), keep last 5 000.
-INPUT_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=INPUT_DEPTH,
-                       reliability=ReliabilityPolicy.BEST_EFFORT,
-                       durability=DurabilityPolicy.VOLATILE)
+INPUT_QOS = QoSProfile(  # type: ignore[no-untyped-call]
+    history=HistoryPolicy.KEEP_LAST, depth=INPUT_DEPTH,
+    reliability=ReliabilityPolicy.BEST_EFFORT, durability=DurabilityPolicy.VOLATILE)
 
 #: Outputs: reliable (reaches reliable and best-effort subscribers), keep last 10.
-OUTPUT_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
-                        reliability=ReliabilityPolicy.RELIABLE,
-                        durability=DurabilityPolicy.VOLATILE)
+OUTPUT_QOS = QoSProfile(  # type: ignore[no-untyped-call]
+    history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
+    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)

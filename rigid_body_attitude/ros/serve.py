@@ -19,6 +19,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
 from rigid_body_attitude.core.errors import AttitudeError
+from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
 from rigid_body_attitude.ros.middleware import apply_cpu_scheduling, use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
@@ -76,7 +77,7 @@ class _ExecutorThread:
             try:
                 if self.thread.ident is not None:  # started
                     self._stopping.set()
-                    self._stop_guard.trigger()
+                    self._stop_guard.trigger()  # type: ignore[no-untyped-call]
                     self.thread.join()
                 self.node.destroy_guard_condition(self._stop_guard)
                 return
@@ -128,16 +129,25 @@ def spin(node: AttitudePropagatorNode) -> None:
 def _apply_cpu_scheduling(node: AttitudePropagatorNode) -> None:
     """Give every thread of the process the node's ``cpu_scheduling`` policy; log it."""
     outcome = apply_cpu_scheduling(node.cpu_scheduling)
+    logger = node.get_logger()  # type: ignore[no-untyped-call]
     if outcome.refused:
-        node.get_logger().warning(
+        logger.warning(
             f'cpu_scheduling {node.cpu_scheduling!r} refused by the system '
             f'({outcome.refused}); the other threads keep their policy')
-    node.get_logger().info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} '
-                           f'threads changed; serving')
+    logger.info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} threads changed; '
+                'serving')
 
 
 def main(args: list[str] | None = None) -> int:
-    """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2."""
+    """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2.
+
+    ``args`` as ``sys.argv`` (program name first; default ``sys.argv``). With ``-h`` or
+    ``--help`` outside the ROS arguments it prints the parameters and returns 0 before
+    anything of ROS starts.
+    """
+    if wants_help((sys.argv if args is None else args)[1:]):
+        print(usage_text(node_parameter_rows()))
+        return 0
     profile_note = use_packaged_fastdds_profile()  # before the participant exists
     try:
         rclpy.init(args=args)
@@ -147,7 +157,7 @@ def main(args: list[str] | None = None) -> int:
     node = None
     try:
         node = AttitudePropagatorNode()
-        node.get_logger().info(profile_note)
+        node.get_logger().info(profile_note)  # type: ignore[no-untyped-call]
         spin(node)
     except (AttitudeError, ParameterException, OSError) as err:
         print(f'error: {_error_text(err)}', file=sys.stderr)
@@ -160,7 +170,7 @@ def main(args: list[str] | None = None) -> int:
             raise
     finally:
         if node is not None:
-            node.destroy_node()
+            node.destroy_node()  # type: ignore[no-untyped-call]
         rclpy.try_shutdown()
     return 0
 
