@@ -6,18 +6,20 @@ kHz gyro rates that is the whole budget. A :class:`GyroLoop` holds one reused ``
 with the gyro subscriptions and the node's timers; after each wake-up it takes *every* queued
 message of each subscription and hands the CDR bytes to its handler, then runs the timers that
 are due. The entities it serves belong to a :class:`DedicatedGroup`: executors run them like
-any mutually exclusive group until a loop claims the group. rclpy's private wait-set binding is
-reached through :mod:`rigid_body_attitude.ros.rclpy_internals` only.
+any mutually exclusive group until a loop claims the group; the subscriptions' QoS event
+handlers stay with the executors. rclpy's private wait-set binding is reached through
+:mod:`rigid_body_attitude.ros.rclpy_internals` only.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 import threading
-from typing import Any
+from typing import Any, cast
 
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.context import Context
+from rclpy.event_handler import EventHandler
 from rclpy.exceptions import InvalidHandle
 from rclpy.guard_condition import GuardCondition
 from rclpy.signals import SignalHandlerGuardCondition
@@ -60,6 +62,25 @@ class DedicatedGroup(MutuallyExclusiveCallbackGroup):
         return began
 
 
+def _hand_events_to_executors(subscriptions: Sequence[Subscription]
+                              ) -> MutuallyExclusiveCallbackGroup:
+    """Move the subscriptions' event handlers (QoS events: incompatible QoS, incompatible
+    type) into a group of their own that executors serve, and return it.
+
+    rclpy creates a subscription's event handlers in the subscription's callback group; once
+    a loop claims that group no executor would run them, and a publisher offering an
+    incompatible QoS on a gyro topic would go unreported, while the node's other
+    subscriptions log rclpy's warning about it.
+    """
+    group = MutuallyExclusiveCallbackGroup()  # type: ignore[no-untyped-call]
+    for subscription in subscriptions:
+        # A list, although rclpy 7.1.6 annotates it as one EventHandler.
+        for handler in cast('list[EventHandler]', subscription.event_handlers):
+            handler.callback_group = group
+            group.add_entity(handler)
+    return group
+
+
 class GyroLoop:
     """Waits on raw subscriptions and timers; hands every queued message to its handler and
     runs the timers that are due.
@@ -80,6 +101,7 @@ class GyroLoop:
             if not isinstance(entity.callback_group, DedicatedGroup):
                 raise ValueError(f'Expected entities in a DedicatedGroup, got {entity!r}')
             entity.callback_group.claimed = True
+        self.events_group = _hand_events_to_executors([sub for sub, _ in served])
         self.context = context
         self.served = [(subscription.handle, subscription.msg_type, handler)
                        for subscription, handler in served]
