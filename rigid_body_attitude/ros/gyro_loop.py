@@ -6,15 +6,16 @@ kHz gyro rates that is the whole budget. A :class:`GyroLoop` holds one reused ``
 with the gyro subscriptions and the node's timers; after each wake-up it takes *every* queued
 message of each subscription and hands the CDR bytes to its handler, then runs the timers that
 are due. The entities it serves belong to a :class:`DedicatedGroup`: executors run them like
-any mutually exclusive group until a loop claims the group; the subscriptions' QoS event
-handlers stay with the executors. rclpy's private wait-set binding is reached through
-:mod:`rigid_body_attitude.ros.rclpy_internals` only.
+any mutually exclusive group until a loop claims the group; the loop then also serves the
+subscriptions' QoS events (rclpy's warning about an incompatible publisher). rclpy's private
+wait-set binding is reached through :mod:`rigid_body_attitude.ros.rclpy_internals` only.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 import threading
+import time
 from typing import Any, cast
 
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -28,10 +29,14 @@ from rclpy.timer import Timer
 
 from rigid_body_attitude.ros.rclpy_internals import new_wait_set
 
-__all__ = ['DedicatedGroup', 'GyroLoop', 'Handler', 'WAIT_TIMEOUT_NS']
+__all__ = ['DedicatedGroup', 'EVENT_CHECK_PERIOD', 'GyroLoop', 'Handler', 'WAIT_TIMEOUT_NS']
 
 #: Nanoseconds one wait may last before the loop re-checks its context (guards wake it first).
 WAIT_TIMEOUT_NS = 1_000_000_000
+
+#: Seconds between two looks at the subscriptions' QoS events (a warning about an incompatible
+#: publisher comes at most this late).
+EVENT_CHECK_PERIOD = 1.0
 
 #: A handler gets one message's serialized (CDR) bytes.
 Handler = Callable[[bytes], Any]
@@ -62,23 +67,13 @@ class DedicatedGroup(MutuallyExclusiveCallbackGroup):
         return began
 
 
-def _hand_events_to_executors(subscriptions: Sequence[Subscription]
-                              ) -> MutuallyExclusiveCallbackGroup:
-    """Move the subscriptions' event handlers (QoS events: incompatible QoS, incompatible
-    type) into a group of their own that executors serve, and return it.
-
-    rclpy creates a subscription's event handlers in the subscription's callback group; once
-    a loop claims that group no executor would run them, and a publisher offering an
-    incompatible QoS on a gyro topic would go unreported, while the node's other
-    subscriptions log rclpy's warning about it.
-    """
-    group = MutuallyExclusiveCallbackGroup()  # type: ignore[no-untyped-call]
-    for subscription in subscriptions:
-        # A list, although rclpy 7.1.6 annotates it as one EventHandler.
-        for handler in cast('list[EventHandler]', subscription.event_handlers):
-            handler.callback_group = group
-            group.add_entity(handler)
-    return group
+def _run_event(handler: EventHandler) -> None:
+    """Take a ready QoS event and run its callback (what an executor does with it)."""
+    coroutine = handler.execute(handler.take_data())  # type: ignore[no-untyped-call]
+    try:
+        coroutine.send(None)  # a plain callback: done in one step
+    except StopIteration:
+        pass
 
 
 class GyroLoop:
@@ -101,7 +96,11 @@ class GyroLoop:
             if not isinstance(entity.callback_group, DedicatedGroup):
                 raise ValueError(f'Expected entities in a DedicatedGroup, got {entity!r}')
             entity.callback_group.claimed = True
-        self.events_group = _hand_events_to_executors([sub for sub, _ in served])
+        # QoS events of the subscriptions (incompatible QoS, incompatible type): rclpy puts
+        # them in the subscription's group, so no executor serves them once it is claimed.
+        # (A list, although rclpy 7.1.6 annotates it as one EventHandler.)
+        self.events = [handler for subscription, _ in served
+                       for handler in cast('list[EventHandler]', subscription.event_handlers)]
         self.context = context
         self.served = [(subscription.handle, subscription.msg_type, handler)
                        for subscription, handler in served]
@@ -126,21 +125,21 @@ class GyroLoop:
     def run(self) -> None:
         """Wait and handle messages until :meth:`stop`, SIGINT or context shutdown.
 
-        A handler's exception ends the loop and propagates.
+        A handler's exception ends the loop and propagates. The subscriptions' QoS events are
+        waited on once every :data:`EVENT_CHECK_PERIOD` seconds only: the middleware keeps an
+        event's status until it is taken, and an event in the wait set wakes it up with every
+        message of its subscription (a ``SingleThreadedExecutor`` serving them woke for every
+        gyro message: 70 % of a core at 1 kHz).
         """
-        context, served, timers = self.context, self.served, self.timers
-        stopping = self._stopping
-        wait_set = new_wait_set(context, len(served), 2, len(timers))
-        sigint_handle, wake_handle = self._sigint_guard.handle, self._wake_guard.handle
+        context, served, timers, events = self.context, self.served, self.timers, self.events
+        stopping, monotonic = self._stopping, time.monotonic
+        wait_set = new_wait_set(context, len(served), 2, len(timers), len(events))
+        guards = (self._sigint_guard.handle, self._wake_guard.handle)
+        next_event_check = monotonic()
         try:
             while context.ok() and not stopping.is_set():
-                wait_set.clear_entities()
-                for handle, _, _ in served:
-                    wait_set.add_subscription(handle)
-                for handle, _ in timers:
-                    wait_set.add_timer(handle)
-                wait_set.add_guard_condition(sigint_handle)
-                wait_set.add_guard_condition(wake_handle)
+                with_events = monotonic() >= next_event_check
+                self._fill(wait_set, guards, with_events)
                 wait_set.wait(WAIT_TIMEOUT_NS)
                 for handle, msg_type, handler in served:
                     taken = handle.take_message(msg_type, True)
@@ -152,8 +151,27 @@ class GyroLoop:
                     if handle.is_timer_ready():
                         handle.call_timer()
                         callback()
+                if with_events:
+                    next_event_check = monotonic() + EVENT_CHECK_PERIOD
+                    for event in events:
+                        if event.is_ready(wait_set):  # type: ignore[no-untyped-call]
+                            _run_event(event)
         finally:
             wait_set.destroy_when_not_in_use()
+
+    def _fill(self, wait_set: Any, guards: tuple[Any, Any], with_events: bool) -> None:
+        """Put the subscriptions, timers, guards (and with ``with_events`` the QoS events)
+        into the cleared ``wait_set``."""
+        wait_set.clear_entities()
+        for handle, _, _ in self.served:
+            wait_set.add_subscription(handle)
+        for handle, _ in self.timers:
+            wait_set.add_timer(handle)
+        for guard in guards:
+            wait_set.add_guard_condition(guard)
+        if with_events:
+            for event in self.events:
+                event.add_to_wait_set(wait_set)  # type: ignore[no-untyped-call]
 
     def close(self) -> None:
         """Release the guard conditions (after :meth:`run` returned)."""
