@@ -11,6 +11,9 @@ waits until it serves, lets it warm up (``--warmup``), then measures the process
    ``/diagnostics``), counting what arrives: a scene that falls behind real time shows up as
    fewer than ``publish_rate`` poses per second.
 
+It also times the scene's propagator alone in this process (advancing to the same 50 Hz
+tick times, no ROS): the node's CPU minus that is the node's own per-tick cost.
+
 Targets (issue 13, item 2): at most 3 % of one core unsubscribed, 5 % subscribed. The
 machine is shared: the other load (busy cores minus the node's and the subscriber's) is
 reported per row. Results go to ``bench/results/node_dynamics_cpu.json``;
@@ -50,6 +53,21 @@ def dynamics_scenes() -> List[str]:
     """Names of the shipped scenes whose rate source is ``dynamics``."""
     from rigid_body_attitude.core.scene import builtin_scenes, load_scene
     return [name for name in builtin_scenes() if load_scene(name).rate_source == 'dynamics']
+
+
+def propagator_percent(scene: str, rate: float = 50.0, seconds: float = 4.0) -> float:
+    """CPU (% of one core) of the scene's propagator alone, in this process, advancing to the
+    node's tick times at ``rate`` Hz as the node does (no ROS): the part of the node's CPU
+    that the propagator and its effects cost."""
+    from rigid_body_attitude.core.propagator import build_propagator
+    from rigid_body_attitude.session.settings import load_node_scene
+    propagator = build_propagator(load_node_scene(scene))
+    ticks = int(seconds * rate)
+    propagator.advance_to(1.0 / rate)  # warm-up (first calls build caches)
+    start = time.thread_time_ns()
+    for k in range(2, ticks + 2):
+        propagator.advance_to(k / rate)
+    return 100.0 * (time.thread_time_ns() - start) * 1e-9 / seconds
 
 
 def output_topics() -> str:
@@ -121,6 +139,7 @@ def measure_scene(scene: str, args: argparse.Namespace) -> dict:
         finally:
             problems = session.close()
     return {'scene': scene, 'unsubscribed': alone, 'subscribed': subscribed,
+            'propagator_cpu_percent': propagator_percent(scene),
             'received_per_s': {topic: count / listened_s for topic, count in counts.items()},
             'problems': problems}
 
@@ -129,7 +148,8 @@ def row_text(row: dict) -> str:
     """One terminal line per scene."""
     alone, subscribed = row['unsubscribed'], row['subscribed']
     return (f'{row["scene"]:28s} unsubscribed {alone["node_cpu_percent"]:5.1f} %  '
-            f'subscribed {subscribed["node_cpu_percent"]:5.1f} %  pose '
+            f'subscribed {subscribed["node_cpu_percent"]:5.1f} %  propagator alone '
+            f'{row["propagator_cpu_percent"]:5.1f} %  pose '
             f'{row["received_per_s"].get("pose", 0.0):5.1f}/s  other load '
             f'{alone["other_load_cores"]:.2f} / {subscribed["other_load_cores"]:.2f} cores')
 
