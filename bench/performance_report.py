@@ -37,6 +37,7 @@ BENCH = Path(__file__).resolve().parent
 REPO = BENCH.parent
 sys.path.insert(0, str(BENCH))
 
+import _node_sections  # noqa: E402
 import _report  # noqa: E402
 
 #: What limits the 1 kHz CPU figure, from per-thread CPU and context switches
@@ -78,24 +79,47 @@ rmw_fastrtps allows (another rmw, or the gyro path in a C++ component)."""
 
 #: How the node was configured for the throughput runs, and why.
 QOS_NOTE = """\
-**Configuration.** The node runs as a user would start it, with the `qos_overrides` its README
-documents: `imu` subscription RELIABLE, KEEP_LAST 10000 and `pose` publisher KEEP_LAST 10000,
-matching the publisher's and the relays' deep queues. With the documented defaults (input
-best effort, keep last 5; outputs keep last 10) a wake-up late by 5 ms at 1 kHz loses samples:
-`bench/NOTES.md` (section 5) counts 2 028 of 600 000 lost over a 10-minute soak at 1 kHz and
-thousands at 10 kHz, against none with the deep input queue. At 20 kHz the publisher, the node
-and the subscriber together need about the two cores (a publisher that falls short of the
-rate is marked "(short)"), so that row also measures the machine, not the node alone."""
+**Configuration.** The node runs as a user would start it, with its default parameters and
+QoS (`rigid_body_attitude/ros/qos.py`): inputs RELIABLE, KEEP_LAST 5000; outputs RELIABLE,
+KEEP_LAST 1000. The publisher, the subscriber and the relays use RELIABLE, KEEP_LAST 10000.
+At 20 kHz the publisher, the node and the subscriber together need about the two cores (a
+publisher that falls short of the rate is marked "(short)"), so that row also measures the
+machine, not the node alone."""
 
 
-#: What the soak's RSS did (the committed run), from its per-minute samples.
-SOAK_NOTE = """\
-**Memory.** In the committed soak (600 000 messages at 1 kHz, none lost, p99 0.36 ms over the
-10 minutes) the RSS rose by 32 KiB in the second minute and by 12–16 KiB a minute at the end,
-188 KiB in all from minute 1 to 10. The previous soak (first session) crept by 12–20 KiB a
-minute with two steps of +0.3 and +0.8 MiB while test suites loaded the machine: stalled
-wake-ups let the deep `imu` queue fill, and Fast DDS keeps the sample buffers it grew
-(bounded by the queue depths: 10 000 Imu samples are about 4 MB)."""
+#: What caused the ~300 ms latency stalls, and what removed them (issue 13, item 5).
+STALLS_NOTE = """\
+**The ~300 ms stalls.** Earlier reports showed a p99 of about 300 ms in some 4 s windows
+(292 ms at 500 Hz and 323 ms at 20 kHz in the previous version of this page), never for the
+relays. Keeping each run's poses (`node_throughput.py --keep-traces`) shows their shape: the
+subscriber receives nothing for 300–340 ms, then every pose of the gap at once (in one trace
+of the previous node at 1 kHz, the poses of 1.507–1.842 s all arrived within 1.5 ms at
+1.842 s); the node falls silent and then catches up. Served by the previous `serve.py`
+(`spin_until_future_complete` in the executor thread), the node showed one such stall (335 ms)
+in two 40 s runs at 500 Hz and 1 kHz; the node of this branch none, in the same runs and in
+the sweeps above. While the executor thread was woken by every gyro message (the QoS events of
+the gyro subscriptions, moved to the executor on this branch for a while) the stalls were many
+and long (p99 40–1 025 ms at 500–2 000 Hz, nine runs), with that thread at 70 % of a core:
+the gyro loop waits for the GIL while the executor thread rebuilds its wait set in Python.
+The stalls therefore come from the executor thread holding the GIL, not from the middleware:
+the node now keeps that thread asleep (no done-callback per wake-up, the gyro subscriptions'
+QoS events served once a second by the gyro loop itself, and, for dynamics scenes, the timers
+in the loop too)."""
+
+
+#: What limits the dynamics scenes' node CPU (issue 13, item 2).
+DYNAMICS_NOTE = """\
+**What the dynamics figures depend on.** The propagator alone is most of every figure: its
+cost per simulated second is the other helper's work on the core (branch `dynamics`), so the
+rows that miss the targets by more than the node's own share (`commanded_torque`, `gyrostat`,
+`free_flyer`, `heavy_top`, which cannot keep up at all: `pose` arrives at a few Hz) depend on
+it. The node's own share was cut by serving the ticks from the gyro loop instead of the
+executor (a wait set of every entity rebuilt per tick: about 2.8 % of a core at 50 Hz on
+`torque_free_box`, measured in-process); what remains is the outputs (`_publish_dynamics`
+35 µs per tick, 0.2 % at 50 Hz, built even when nobody subscribes), `/diagnostics` (0.17 ms
+once a second) and the propagator's steps running with cold caches between ticks (25–30 %
+slower for the light scenes than back to back: `torque_free_box` 3.1 % paced at 50 Hz
+against 2.5 % back to back)."""
 
 
 def _load(path: Path) -> Optional[dict]:
@@ -217,10 +241,20 @@ def render(results_dir: Path, png_name: str) -> str:
     if batch is not None:
         lines += _batch_verdicts(batch)
     lines += ['', QOS_NOTE, '']
-    if soak is not None:
-        lines += [SOAK_NOTE, '']
     lines += [LIMITS, '']
+    lines += _node_sections.sweeps_section(_sweeps(results_dir))
+    lines += STALLS_NOTE.splitlines() + ['']
+    lines += _node_sections.mixed_soak_section(_load(results_dir / 'soak_mixed.json'))
+    lines += _node_sections.dynamics_cpu_section(_load(results_dir / 'node_dynamics_cpu.json'))
+    lines += DYNAMICS_NOTE.splitlines() + ['']
     return '\n'.join(lines)
+
+
+def _sweeps(results_dir: Path) -> list[dict]:
+    """The repeated sweeps, ``sweeps/sweep_<n>/throughput.json``, in order."""
+    found = sorted((results_dir / 'sweeps').glob('sweep_*/throughput.json'),
+                   key=lambda path: int(path.parent.name.split('_')[1]))
+    return [json.loads(path.read_text()) for path in found]
 
 
 def main(argv: Optional[list[str]] = None) -> int:
