@@ -89,31 +89,42 @@ machine, not the node alone."""
 
 #: What caused the ~300 ms latency stalls, and what removed them (issue 13, item 5).
 STALLS_NOTE = """\
-**The ~300 ms stalls.** Earlier reports showed a p99 of about 300 ms in some 4 s windows
-(292 ms at 500 Hz and 323 ms at 20 kHz in the previous version of this page), never for the
-relays. Keeping each run's poses (`node_throughput.py --keep-traces`) shows their shape: the
-subscriber receives nothing for 300–340 ms, then every pose of the gap at once (in one trace
-of the previous node at 1 kHz, the poses of 1.507–1.842 s all arrived within 1.5 ms at
-1.842 s); the node falls silent and then catches up. Served by the previous `serve.py`
-(`spin_until_future_complete` in the executor thread), the node showed one such stall (335 ms)
-in two 40 s runs at 500 Hz and 1 kHz; the node of this branch none, in the same runs and in
-the sweeps above. While the executor thread was woken by every gyro message (the QoS events of
-the gyro subscriptions, moved to the executor on this branch for a while) the stalls were many
-and long (p99 40–1 025 ms at 500–2 000 Hz, nine runs), with that thread at 70 % of a core:
-the gyro loop waits for the GIL while the executor thread rebuilds its wait set in Python.
-The stalls therefore come from the executor thread holding the GIL, not from the middleware:
-the node now keeps that thread asleep (no done-callback per wake-up, the gyro subscriptions'
-QoS events served once a second by the gyro loop itself, and, for dynamics scenes, the timers
-in the loop too)."""
+**The ~300 ms stalls: characterized, not removed.** In the sweeps above the node's p99 is
+0.3–0.8 ms at most rates up to 5 kHz, but 17 of its 40 rows contain one stall (maximum
+325–347 ms up to 5 kHz; 446–835 ms at 15–20 kHz, where catching up takes longer), against 1 of
+40 for the fast relay (267 ms). The losses of the node at 5–20 kHz (232, 234, 3 723, 6 546 and
+18 samples) are all in rows with a stall: after one, more than the 1 000 samples of the `pose`
+writer's history were outstanding. Keeping each run's poses
+(`node_throughput.py --keep-traces`) shows every stall the same way: the subscriber receives
+no pose for 250–350 ms, then every pose of the gap within about 1 ms (the node falls silent
+and catches up; the publisher was on time, its stamps are 1 ms apart), **once per run, about
+2.4 s after the publisher's first sample (about 3 s after it matched the node)**. Measured
+(node at 500–2 000 Hz, three runs per variant): with a 6 s warm-up instead of 0.5 s the
+measured windows had none (p99 0.24–0.43 ms, 6 of 6; the one stall of those runs fell in the
+warm-up, at 2.2 s); it stays the same with the node on UDP only
+(`FASTDDS_BUILTIN_TRANSPORTS=UDPv4`), with every writer's heartbeat period at 100 ms instead
+of 3 s, with `cpu_scheduling:=default` (no `SCHED_BATCH`) and with Fast DDS's default profile
+instead of the package's. It is not the executor thread either: a version whose executor
+thread woke for every gyro message (the gyro subscriptions' QoS events in the executor, 70 %
+of a core at 1 kHz) had many more and longer stalls (p99 40–1 025 ms), and the node now keeps
+that thread asleep; the previous `serve.py` showed the same 335 ms start-up stall. So in
+steady state the node meets p99 ≤ 1 ms; the one start-up stall per new publisher remains, its
+cause (something in the node process about 3 s after a new publisher is discovered, not in
+the transport, the scheduler policy or the heartbeats) is not found. The mixed soak's
+maximum (335.8 ms over 10 minutes) has the same size; that script keeps no traces."""
 
 
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).
 DYNAMICS_NOTE = """\
-**What the dynamics figures depend on.** The propagator alone is most of every figure: its
-cost per simulated second is the other helper's work on the core (branch `dynamics`), so the
-rows that miss the targets by more than the node's own share (`commanded_torque`, `gyrostat`,
-`free_flyer`, `heavy_top`, which cannot keep up at all: `pose` arrives at a few Hz) depend on
-it. The node's own share was cut by serving the ticks from the gyro loop instead of the
+**What the dynamics figures depend on.** Every row misses in this run. The node's own share
+(node − propagator alone) is 0.9–3.7 points; the rest is the propagator, the other helper's
+work on the core (branch `dynamics`). With the issue's core target (10 ms per simulated
+second, 1 % of a core) the light scenes (`torque_free_box`, `dzhanibekov`,
+`gravity_gradient_satellite`) would be at about 2–3.5 % unsubscribed, at or near the 3 %
+target; `commanded_torque`, `gyrostat` and `free_flyer` depend on the propagator first, and
+`heavy_top` cannot keep up at all (`pose` at 3.3 per second: its propagator alone needs 1.4
+cores).
+The node's own share was cut by serving the ticks from the gyro loop instead of the
 executor (a wait set of every entity rebuilt per tick: about 2.8 % of a core at 50 Hz on
 `torque_free_box`, measured in-process); what remains is the outputs (`_publish_dynamics`
 35 µs per tick, 0.2 % at 50 Hz, built even when nobody subscribes), `/diagnostics` (0.17 ms
