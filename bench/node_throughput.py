@@ -260,6 +260,17 @@ def display(argv: List[str]) -> str:
     return shlex.join(words).replace(f'{REPO}/', '')
 
 
+def keep_traces(args: argparse.Namespace, workdir: Path, name: str) -> None:
+    """With ``--keep-traces DIR``: copy the run's poses (stamps, receive times) and the
+    target's log there as ``NAME.poses.bin`` / ``NAME.target.log``."""
+    if args.keep_traces is None:
+        return
+    args.keep_traces.mkdir(parents=True, exist_ok=True)
+    for source, suffix in (('poses.bin', 'poses.bin'), ('target.log', 'target.log')):
+        if (workdir / source).exists():
+            shutil.copyfile(workdir / source, args.keep_traces / f'{name}.{suffix}')
+
+
 def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> dict:
     """Measure every target at every rate; return the results document."""
     results = {'machine': _report.machine_description(), 'duration_s': args.duration,
@@ -280,6 +291,7 @@ def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> d
                 finally:
                     problems.extend(f'{label} at {rate:.0f} Hz: {problem}'
                                     for problem in session.close())
+                    keep_traces(args, Path(tmp), f'{label}_{rate:.0f}')
             if row is not None:
                 results['targets'][label]['rows'].append(row)
                 print(_report.row_line(label, row), flush=True)
@@ -353,6 +365,8 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--soak-minutes', type=int, default=10)
     parser.add_argument('--soak-rate', type=float, default=1000.0)
     parser.add_argument('--results-dir', type=Path, default=BENCH / 'results')
+    parser.add_argument('--keep-traces', type=Path, default=None, metavar='DIR',
+                        help='keep each run\'s poses.bin and target log in DIR')
     parser.add_argument('--report', type=Path, default=BENCH / 'results' / 'throughput.md')
     args = parser.parse_args(argv)
     if args.soak_minutes < 2:

@@ -43,6 +43,7 @@ BENCH = Path(__file__).resolve().parent
 REPO = BENCH.parent
 sys.path.insert(0, str(BENCH))
 
+import _node_sections  # noqa: E402
 import _report  # noqa: E402
 
 #: What limits the 1 kHz CPU figure, from per-thread CPU and context switches
@@ -84,24 +85,58 @@ rmw_fastrtps allows (another rmw, or the gyro path in a C++ component)."""
 
 #: How the node was configured for the throughput runs, and why.
 QOS_NOTE = """\
-**Configuration.** The node runs as a user would start it, with the `qos_overrides` its README
-documents: `imu` subscription RELIABLE, KEEP_LAST 10000 and `pose` publisher KEEP_LAST 10000,
-matching the publisher's and the relays' deep queues. With the documented defaults (input
-best effort, keep last 5; outputs keep last 10) a wake-up late by 5 ms at 1 kHz loses samples:
-`bench/NOTES.md` (section 5) counts 2 028 of 600 000 lost over a 10-minute soak at 1 kHz and
-thousands at 10 kHz, against none with the deep input queue. At 20 kHz the publisher, the node
-and the subscriber together need about the two cores (a publisher that falls short of the
-rate is marked "(short)"), so that row also measures the machine, not the node alone."""
+**Configuration.** The node runs as a user would start it, with its default parameters and
+QoS (`rigid_body_attitude/ros/qos.py`): inputs RELIABLE, KEEP_LAST 5000; outputs RELIABLE,
+KEEP_LAST 1000. The publisher, the subscriber and the relays use RELIABLE, KEEP_LAST 10000.
+At 20 kHz the publisher, the node and the subscriber together need about the two cores (a
+publisher that falls short of the rate is marked "(short)"), so that row also measures the
+machine, not the node alone."""
 
 
-#: What the soak's RSS did (the committed run), from its per-minute samples.
-SOAK_NOTE = """\
-**Memory.** In the committed soak (600 000 messages at 1 kHz, none lost, p99 0.36 ms over the
-10 minutes) the RSS rose by 32 KiB in the second minute and by 12–16 KiB a minute at the end,
-188 KiB in all from minute 1 to 10. The previous soak (first session) crept by 12–20 KiB a
-minute with two steps of +0.3 and +0.8 MiB while test suites loaded the machine: stalled
-wake-ups let the deep `imu` queue fill, and Fast DDS keeps the sample buffers it grew
-(bounded by the queue depths: 10 000 Imu samples are about 4 MB)."""
+#: What caused the ~300 ms latency stalls, and what removed them (issue 13, item 5).
+STALLS_NOTE = """\
+**The ~300 ms stalls: characterized, not removed.** In the sweeps above the node's p99 is
+0.3–0.8 ms at most rates up to 5 kHz, but 17 of its 40 rows contain one stall (maximum
+325–347 ms up to 5 kHz; 446–835 ms at 15–20 kHz, where catching up takes longer), against 1 of
+40 for the fast relay (267 ms). The losses of the node at 5–20 kHz (232, 234, 3 723, 6 546 and
+18 samples) are all in rows with a stall: after one, more than the 1 000 samples of the `pose`
+writer's history were outstanding. Keeping each run's poses
+(`node_throughput.py --keep-traces`) shows every stall the same way: the subscriber receives
+no pose for 250–350 ms, then every pose of the gap within about 1 ms (the node falls silent
+and catches up; the publisher was on time, its stamps are 1 ms apart), **once per run, about
+2.4 s after the publisher's first sample (about 3 s after it matched the node)**. Measured
+(node at 500–2 000 Hz, three runs per variant): with a 6 s warm-up instead of 0.5 s the
+measured windows had none (p99 0.24–0.43 ms, 6 of 6; the one stall of those runs fell in the
+warm-up, at 2.2 s); it stays the same with the node on UDP only
+(`FASTDDS_BUILTIN_TRANSPORTS=UDPv4`), with every writer's heartbeat period at 100 ms instead
+of 3 s, with `cpu_scheduling:=default` (no `SCHED_BATCH`) and with Fast DDS's default profile
+instead of the package's. It is not the executor thread either: a version whose executor
+thread woke for every gyro message (the gyro subscriptions' QoS events in the executor, 70 %
+of a core at 1 kHz) had many more and longer stalls (p99 40–1 025 ms), and the node now keeps
+that thread asleep; the previous `serve.py` showed the same 335 ms start-up stall. So in
+steady state the node meets p99 ≤ 1 ms; the one start-up stall per new publisher remains, its
+cause (something in the node process about 3 s after a new publisher is discovered, not in
+the transport, the scheduler policy or the heartbeats) is not found. The mixed soak's
+maximum (335.8 ms over 10 minutes) has the same size; that script keeps no traces."""
+
+
+#: What limits the dynamics scenes' node CPU (issue 13, item 2).
+DYNAMICS_NOTE = """\
+**What the dynamics figures depend on.** Every row misses in this run. The node's own share
+(node − propagator alone) is 0.9–3.7 points; the rest is the propagator, the other helper's
+work on the core (branch `dynamics`). With the issue's core target (10 ms per simulated
+second, 1 % of a core) the light scenes (`torque_free_box`, `dzhanibekov`,
+`gravity_gradient_satellite`) would be at about 2–3.5 % unsubscribed, at or near the 3 %
+target; `commanded_torque`, `gyrostat` and `free_flyer` depend on the propagator first, and
+`heavy_top` cannot keep up at all (`pose` at 3.3 per second: its propagator alone needs 1.4
+cores).
+The node's own share was cut by serving the ticks from the gyro loop instead of the
+executor (a wait set of every entity rebuilt per tick: about 2.8 % of a core at 50 Hz on
+`torque_free_box`, measured in-process); what remains is the outputs (`_publish_dynamics`
+35 µs per tick, 0.2 % at 50 Hz, built even when nobody subscribes), `/diagnostics` (0.17 ms
+once a second) and the propagator's steps running with cold caches between ticks (25–30 %
+slower for the light scenes than back to back: `torque_free_box` 3.1 % paced at 50 Hz
+against 2.5 % back to back)."""
 
 
 def _load(path: Path) -> Optional[dict]:
@@ -361,10 +396,20 @@ def render(results_dir: Path, png_name: str) -> str:
     if batch is not None:
         lines += _batch_verdicts(batch)
     lines += ['', QOS_NOTE, '']
-    if soak is not None:
-        lines += [SOAK_NOTE, '']
     lines += [LIMITS, '']
+    lines += _node_sections.sweeps_section(_sweeps(results_dir))
+    lines += STALLS_NOTE.splitlines() + ['']
+    lines += _node_sections.mixed_soak_section(_load(results_dir / 'soak_mixed.json'))
+    lines += _node_sections.dynamics_cpu_section(_load(results_dir / 'node_dynamics_cpu.json'))
+    lines += DYNAMICS_NOTE.splitlines() + ['']
     return '\n'.join(lines)
+
+
+def _sweeps(results_dir: Path) -> list[dict]:
+    """The repeated sweeps, ``sweeps/sweep_<n>/throughput.json``, in order."""
+    found = sorted((results_dir / 'sweeps').glob('sweep_*/throughput.json'),
+                   key=lambda path: int(path.parent.name.split('_')[1]))
+    return [json.loads(path.read_text()) for path in found]
 
 
 def main(argv: Optional[list[str]] = None) -> int:

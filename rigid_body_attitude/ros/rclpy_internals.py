@@ -23,6 +23,7 @@ RCLError: type[Exception] = _binding.RCLError
 
 
 def new_wait_set(context: Context, subscriptions: int, guard_conditions: int,
-                 timers: int) -> Any:
-    """An rcl wait set with room for the given entities (no clients, services or events)."""
-    return _binding.WaitSet(subscriptions, guard_conditions, timers, 0, 0, 0, context.handle)
+                 timers: int, events: int = 0) -> Any:
+    """An rcl wait set with room for the given entities (no clients or services)."""
+    return _binding.WaitSet(subscriptions, guard_conditions, timers, 0, 0, events,
+                            context.handle)

@@ -1,10 +1,11 @@
 """Serving the node: :func:`main` (the ``propagation_node`` executable) and :func:`spin`.
 
-Gyro scenes are served by a :class:`~rigid_body_attitude.ros.gyro_loop.GyroLoop` on the main
-thread (gyro messages and timers) and a ``SingleThreadedExecutor`` in a second thread for the
-rest (parameter services, ``~/reset``, ``set_pose``), which then sleeps in ``rcl_wait`` (GIL
-released) nearly all the time; :attr:`AttitudePropagatorNode.state_lock` keeps the two threads'
-changes of the state apart. Dynamics scenes are served by ``rclpy.spin``. :func:`main` also
+Every scene is served by a :class:`~rigid_body_attitude.ros.gyro_loop.GyroLoop` on the main
+thread (gyro messages, if any, and the two timers) and a ``SingleThreadedExecutor`` in a second
+thread for the rest (parameter services, ``~/reset``, ``set_pose``, commands), which then
+sleeps in ``rcl_wait`` (GIL released) nearly all the time;
+:attr:`AttitudePropagatorNode.state_lock` keeps the two threads' changes of the state apart.
+:func:`main` also
 sets Fast DDS and the scheduler up for kHz rates (:mod:`rigid_body_attitude.ros.middleware`).
 """
 
@@ -17,9 +18,9 @@ import threading
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.task import Future
 
 from rigid_body_attitude.core.errors import AttitudeError
+from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
 from rigid_body_attitude.ros.middleware import apply_cpu_scheduling, use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
@@ -33,23 +34,66 @@ def _error_text(err: BaseException) -> str:
     return str(err).splitlines()[0].split(', at /')[0] if str(err) else type(err).__name__
 
 
-def _serve_rest(executor: SingleThreadedExecutor, done: Future, loop: GyroLoop,
-                failures: list[BaseException]) -> None:
-    """Body of the executor thread: spin until ``done`` or shutdown; a callback's exception
-    stops the gyro loop too."""
-    try:
-        executor.spin_until_future_complete(done)
-    except ExternalShutdownException:
-        pass
-    except BaseException as err:  # handed to the main thread, which re-raises it
-        failures.append(err)
-        loop.stop()
+class _ExecutorThread:
+    """The executor serving the rest of the node, in a thread of its own, until :meth:`stop`.
+
+    It calls ``executor.spin_once()`` until stopped; :meth:`stop` sets a flag and triggers a
+    guard condition of the node, whose (empty) callback makes the pending ``spin_once``
+    return. Not ``spin_until_future_complete`` on a future done at shutdown: rclpy 7.1.6 adds
+    a done-callback to that future on every wake-up (ros2/rclpy#1371), so the process grew by
+    about 280 bytes per ``set_pose`` message, parameter set or service call. Nor
+    ``executor.shutdown()`` from the other thread: it destroys the guard conditions of a wait
+    set that may still be waiting (rclpy issue #968).
+    """
+
+    def __init__(self, executor: SingleThreadedExecutor, node: AttitudePropagatorNode,
+                 loop: GyroLoop) -> None:
+        """Serve ``node``'s remaining entities with ``executor``; stop ``loop`` on failure."""
+        self.executor, self.node, self.loop = executor, node, loop
+        self.failures: list[BaseException] = []
+        self._stopping = threading.Event()
+        self._stop_guard = node.create_guard_condition(_nothing)
+        self.thread = threading.Thread(target=self._serve, name='executor', daemon=True)
+
+    def _serve(self) -> None:
+        """Thread body: spin until stopped or shutdown; a callback's exception stops the gyro
+        loop too (the main thread re-raises it)."""
+        try:
+            while not self._stopping.is_set() and self.executor.context.ok():
+                self.executor.spin_once()
+        except ExternalShutdownException:
+            pass
+        except BaseException as err:  # handed to the main thread, which re-raises it
+            self.failures.append(err)
+            self.loop.stop()
+
+    def stop(self) -> None:
+        """End the thread and wait for it, even through KeyboardInterrupt.
+
+        rclpy raises KeyboardInterrupt in the main thread some time after SIGINT; if it cut
+        this wait short, the node would be destroyed under callbacks still running in the
+        thread.
+        """
+        while True:
+            try:
+                if self.thread.ident is not None:  # started
+                    self._stopping.set()
+                    self._stop_guard.trigger()
+                    self.thread.join()
+                self.node.destroy_guard_condition(self._stop_guard)
+                return
+            except KeyboardInterrupt:
+                continue
+
+
+def _nothing() -> None:
+    """The stop guard's callback: running it is what makes ``spin_once`` return."""
 
 
 def spin(node: AttitudePropagatorNode) -> None:
-    """Serve ``node`` until SIGINT or shutdown. Gyro scenes: gyro messages and timers in a
-    :class:`GyroLoop` on this thread, the rest (services, parameters, set_pose) with a
-    ``SingleThreadedExecutor`` in a daemon thread. Dynamics scenes: ``rclpy.spin``.
+    """Serve ``node`` until SIGINT or shutdown: gyro messages (gyro scenes) and timers in a
+    :class:`GyroLoop` on this thread, the rest (services, parameters, set_pose, commands) with
+    a ``SingleThreadedExecutor`` in a daemon thread.
 
     An exception of a callback in either thread ends both and propagates. Before serving,
     the objects of the start-up (about 60 000: rclpy, NumPy, SciPy, the scene) are collected
@@ -63,58 +107,45 @@ def spin(node: AttitudePropagatorNode) -> None:
     """
     gc.collect()
     gc.freeze()
-    loop = node.gyro_loop()  # claims the gyro subscriptions and timers before any spin
+    # Claims the gyro subscriptions and the timers before any executor spins.
+    loop = node.gyro_loop()
     executor = SingleThreadedExecutor(context=node.context)
-    if loop is None:
-        _apply_cpu_scheduling(node)
-        rclpy.spin(node, executor)
-        return
     executor.add_node(node)
-    done, failures = Future(), []
-    rest = threading.Thread(target=_serve_rest, args=(executor, done, loop, failures),
-                            name='executor', daemon=True)
+    rest = _ExecutorThread(executor, node, loop)
     try:
-        rest.start()
+        rest.thread.start()
         _apply_cpu_scheduling(node)
         loop.run()
     finally:
-        if rest.ident is not None:  # started
-            _stop(done, rest)
+        rest.stop()
         executor.shutdown()  # only now: its thread no longer waits (rclpy issue #968)
         loop.close()
-    if failures:
-        raise failures[0]
+    if rest.failures:
+        raise rest.failures[0]
 
 
 def _apply_cpu_scheduling(node: AttitudePropagatorNode) -> None:
     """Give every thread of the process the node's ``cpu_scheduling`` policy; log it."""
     outcome = apply_cpu_scheduling(node.cpu_scheduling)
+    logger = node.get_logger()
     if outcome.refused:
-        node.get_logger().warning(
+        logger.warning(
             f'cpu_scheduling {node.cpu_scheduling!r} refused by the system '
             f'({outcome.refused}); the other threads keep their policy')
-    node.get_logger().info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} '
-                           f'threads changed; serving')
-
-
-def _stop(done: Future, thread: threading.Thread) -> None:
-    """End the executor thread (``done``) and wait for it, even through KeyboardInterrupt.
-
-    rclpy raises KeyboardInterrupt in the main thread some time after SIGINT; if it cut this
-    wait short, the node would be destroyed under callbacks still running in ``thread``.
-    """
-    while True:
-        try:
-            if not done.done():
-                done.set_result(None)  # wakes the executor, whose spin then returns
-            thread.join()
-            return
-        except KeyboardInterrupt:
-            continue
+    logger.info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} threads changed; '
+                'serving')
 
 
 def main(args: list[str] | None = None) -> int:
-    """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2."""
+    """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2.
+
+    ``args`` as ``sys.argv`` (program name first; default ``sys.argv``). With ``-h`` or
+    ``--help`` outside the ROS arguments it prints the parameters and returns 0 before
+    anything of ROS starts.
+    """
+    if wants_help((sys.argv if args is None else args)[1:]):
+        print(usage_text(node_parameter_rows()))
+        return 0
     profile_note = use_packaged_fastdds_profile()  # before the participant exists
     try:
         rclpy.init(args=args)

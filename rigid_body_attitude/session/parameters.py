@@ -1,6 +1,7 @@
 """The node's parameters, declared once: name, type, default, bounds, description, read-only.
 
-The node's ROS descriptors (:mod:`rigid_body_attitude.ros.node`), ``propagation_node --help``,
+The node's ROS descriptors (:mod:`rigid_body_attitude.ros.node`), ``propagation_node --help``
+(:mod:`rigid_body_attitude.ros.cli_help`),
 the replay tool's options and command line (:mod:`rigid_body_attitude.tools.replay`) and the
 validation of every value (at start, at run time, from the command line) are all derived from
 :data:`PARAMETERS`. A value is checked by :func:`check_values`: its type, its bounds, and the
@@ -11,11 +12,11 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ['PARAMETERS', 'Parameter', 'check_values', 'defaults', 'help_text']
+__all__ = ['PARAMETERS', 'Parameter', 'check_values', 'defaults']
 
 
 @dataclass(frozen=True)
@@ -184,19 +185,3 @@ def check_values(values: Mapping[str, Any], dynamics_step: float = 0.0,
                 f'{max_steps_per_tick * dynamics_step:g} s ({max_steps_per_tick} steps of '
                 f'{dynamics_step:g} s in one tick), got {threshold!r}')
     return ''
-
-
-def help_text(parameters: Iterable[Parameter] = PARAMETERS) -> str:
-    """The parameter list as ``propagation_node --help`` prints it."""
-    lines = []
-    for p in parameters:
-        bounds = f' in {p.range_text()}' if p.range_text() else ''
-        choices = f' (one of: {", ".join(p.choices)})' if p.choices else ''
-        when = 'read-only' if p.read_only else 'changeable at run time'
-        default = repr(p.default) if p.type is str else str(p.default).lower()
-        lines.append(f'  {p.name} ({_TYPE_NAME[p.type]}, default {default}{bounds}, {when})')
-        lines.append(f'      {p.description}{choices}')
-    return '\n'.join(lines)
-
-
-_TYPE_NAME = {float: 'double', bool: 'bool', str: 'string'}

@@ -26,6 +26,7 @@ from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 
 from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.session.parameters import defaults
 
 PACKAGE = 'rigid_body_attitude'
 START_TIMEOUT = 30.0  # seconds for the process to start and discover the harness
@@ -224,3 +225,39 @@ def test_sigint_right_as_serving_starts_exits_0_without_a_traceback(processes, s
         stderr = ''.join(head) + stderr
         assert code == 0, stderr
         assert 'Traceback' not in stderr and 'Exception ignored' not in stderr, stderr
+
+
+@pytest.mark.parametrize('flag', ['--help', '-h'])
+def test_help_lists_every_parameter_and_exits_0_without_starting_ros(flag):
+    """``--help`` prints name, type, default, range, description and whether each parameter
+    changes at run time, then exits 0. The ROS arguments are ones rcl refuses (``-p`` without
+    ``:=value``: an rcl error and exit 2 when ROS starts, the next test), so exit
+    0 with an empty stderr means ROS was never started."""
+    result = subprocess.run([str(executable()), flag, '--ros-args', '-p', 'scene'],
+                            capture_output=True, text=True, timeout=START_TIMEOUT)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ''
+    lines = result.stdout.splitlines()
+    assert lines[0].startswith('usage: propagation_node [-h]')
+    for name in defaults():
+        assert sum(line.startswith(f'  {name}: ') for line in lines) == 1, name
+    assert ('  publish_rate: double, default 50.0, range (0, 1000], fixed at start'
+            in lines)
+    assert '  max_dt: double, default 0.1, range (0, 3600], changeable at run time' in lines
+    assert "  scene: string, default 'torque_free_box', fixed at start" in lines
+    assert '  use_header_stamps: bool, default true, changeable at run time' in lines
+    description = lines[lines.index("  scene: string, default 'torque_free_box', "
+                                    'fixed at start') + 1]
+    assert description == '      built-in scene name or path to a scene YAML file'
+
+
+@pytest.mark.parametrize('arguments', [('--ros-args', '-p', 'scene'), ('--ros-args', '-h')])
+def test_without_help_rcl_refuses_bad_ros_arguments(processes, arguments):
+    """Without ``--help`` those ROS arguments reach rcl, which refuses them: exit 2. ``-h``
+    inside ``--ros-args`` is a ROS argument, not a request for the node's help."""
+    process = start(*arguments)
+    processes.append(process)
+    stdout, stderr = process.communicate(timeout=START_TIMEOUT)
+    assert 'usage: propagation_node' not in stdout
+    assert process.returncode == 2, stderr
+    assert 'error: ' in stderr and 'Traceback' not in stderr

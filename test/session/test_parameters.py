@@ -5,7 +5,7 @@ import math
 import pytest
 
 from rigid_body_attitude.session.parameters import (
-    check_values, defaults, help_text, PARAMETERS)
+    check_values, defaults, PARAMETERS)
 
 
 def test_defaults_pass_their_own_checks():
@@ -59,12 +59,3 @@ def test_the_steps_of_one_tick_are_bounded():
     assert check_values(values, 0.001, 10_000_000) == (
         'Expected parameter `time_jump_threshold` to be at most 10000 s (10000000 steps of '
         '0.001 s in one tick), got 20000.0')
-
-
-def test_help_lists_every_parameter_with_type_default_bounds_and_mutability():
-    text = help_text()
-    for parameter in PARAMETERS:
-        assert f'  {parameter.name} (' in text
-    assert '  publish_rate (double, default 50.0 in (0, 1000], read-only)' in text
-    assert '  max_dt (double, default 0.1 in (0, 3600], changeable at run time)' in text
-    assert '  use_header_stamps (bool, default true, changeable at run time)' in text

@@ -1,0 +1,140 @@
+"""Sections of ``docs/performance.md`` about the node beyond the throughput tables.
+
+Used by ``bench/performance_report.py``; each function takes saved results and returns
+Markdown lines:
+
+* :func:`sweeps_section`: latency (p99 and maximum) of the node and the fast relay in every one
+  of several repeated ``bench/node_throughput.py`` sweeps (issue 13, item 5);
+* :func:`mixed_soak_section`: ``bench/soak_mixed.py`` (issue 11, item 6);
+* :func:`dynamics_cpu_section`: ``bench/node_dynamics_cpu.py`` (issue 13, item 2).
+"""
+
+from __future__ import annotations
+
+from typing import Dict, List, Optional
+
+#: p99 latency target up to 5 kHz (ms), issue 13 item 5.
+TARGET_P99_MS = 1.0
+TARGET_P99_UP_TO_HZ = 5000.0
+#: RSS growth target from minute 1 to 10 of the mixed soak, issue 11 item 6.
+TARGET_MIXED_GROWTH_KIB = 1024
+
+
+def _fmt(value: Optional[float], digits: int = 2) -> str:
+    return '–' if value is None else f'{value:.{digits}f}'
+
+
+def _rows_by_rate(sweep: dict, label: str) -> Dict[float, dict]:
+    target = sweep['targets'].get(label)
+    return {} if target is None else {row['rate_hz']: row for row in target['rows']}
+
+
+def sweeps_section(sweeps: List[dict], target: str = 'node',
+                   yardstick: str = 'fast_relay') -> List[str]:
+    """One table per sweep: p99 / max latency, loss and CPU of ``target`` and ``yardstick``
+    per rate, and the verdicts of issue 13 item 5 per sweep."""
+    if not sweeps:
+        return []
+    lines = ['## Latency in repeated sweeps', '',
+             f'{len(sweeps)} sweeps of `bench/node_throughput.py` in a row (fresh processes '
+             'per row, 4 s windows). Per rate: p99 / maximum latency (ms), lost, CPU (% of a '
+             f'core) of the node with its default parameters and of the fast relay in the same '
+             f'sweep, and the other load on the machine (cores; other engineers\' jobs). '
+             f'Target: node p99 ≤ {TARGET_P99_MS:g} ms at every rate up to '
+             f'{TARGET_P99_UP_TO_HZ:.0f} Hz, and above that no worse than the fast relay\'s; '
+             'zero loss to 20 kHz; 1 kHz CPU no worse than the fast relay\'s.', '']
+    for number, sweep in enumerate(sweeps, 1):
+        node, relay = _rows_by_rate(sweep, target), _rows_by_rate(sweep, yardstick)
+        lines += [f'**Sweep {number}** (load average at start '
+                  f'{sweep["machine"]["load_average_at_start"]})', '',
+                  '| rate (Hz) | node p99 / max | node lost | node CPU | relay p99 / max | '
+                  'relay lost | relay CPU | other load | verdict |',
+                  '|---:|---:|---:|---:|---:|---:|---:|---:|---|']
+        for rate in sorted(node):
+            mine, theirs = node[rate], relay.get(rate, {})
+            lines.append(
+                f'| {rate:.0f} | {_fmt(mine["latency_p99_ms"])} / '
+                f'{_fmt(mine["latency_max_ms"], 1)} | {mine["lost"]} | '
+                f'{mine["cpu_percent"]:.1f} | {_fmt(theirs.get("latency_p99_ms"))} / '
+                f'{_fmt(theirs.get("latency_max_ms"), 1)} | {theirs.get("lost", "–")} | '
+                f'{_fmt(theirs.get("cpu_percent"), 1)} | {mine["other_load_cores"]:.2f} | '
+                f'{_latency_verdict(rate, mine, theirs)} |')
+        lines.append('')
+    return lines
+
+
+def _latency_verdict(rate: float, node: dict, relay: dict) -> str:
+    """'met' / 'NOT met' for one rate of one sweep (latency and loss)."""
+    p99 = node['latency_p99_ms']
+    if node['lost'] or p99 is None:
+        return 'NOT met (loss)'
+    if rate <= TARGET_P99_UP_TO_HZ:
+        return 'met' if p99 <= TARGET_P99_MS else 'NOT met'
+    theirs = relay.get('latency_p99_ms')
+    if theirs is None:
+        return 'met (relay lost all)'
+    return 'met' if p99 <= theirs else f'NOT met ({p99 / theirs:.1f}× relay)'
+
+
+def mixed_soak_section(soak: Optional[dict]) -> List[str]:
+    """The mixed-traffic soak: RSS growth, loss, replies."""
+    if soak is None:
+        return []
+    mixed = soak['mixed']
+    growth = soak['growth_kib']
+    samples = ', '.join(f'{s["rss_kib"] / 1024:.2f}' for s in soak['samples']
+                        if abs(s['minute'] - round(s['minute'])) < 0.09)
+    return [
+        '## Mixed-traffic soak', '',
+        f'`python bench/soak_mixed.py` ({soak["minutes"]:g} minutes): `{soak["command"]}` '
+        f'with `imu` at {soak["gyro_rate_hz"]:.0f} Hz and, at {soak["mixed_rate_hz"]:.0f} Hz '
+        'each, a `set_pose`, a `set_parameters` request (`max_dt`, `body_frame`) and a '
+        '`~/reset` call.', '',
+        f'- RSS from minute 1 to {soak["minutes"]:g}: {soak["rss_minute_1_kib"] / 1024:.2f} → '
+        f'{soak["rss_end_kib"] / 1024:.2f} MiB ({growth:+d} KiB; least-squares slope '
+        f'{soak["growth_kib_per_minute"]:+.1f} KiB/min). Target ≤ '
+        f'{TARGET_MIXED_GROWTH_KIB // 1024} MiB: '
+        f'{"met" if growth <= TARGET_MIXED_GROWTH_KIB else "NOT met"}. '
+        f'RSS each minute (MiB): {samples}.',
+        f'- gyro samples: sent {soak["sent"]}, poses received {soak["received"]}, lost '
+        f'{soak["lost"]}; latency p50 {_fmt(soak["latency_p50_ms"])} ms, p99 '
+        f'{_fmt(soak["latency_p99_ms"])} ms, max {_fmt(soak["latency_max_ms"], 1)} ms.',
+        f'- mixed ticks {mixed["ticks"]}: parameter replies {mixed["parameter_replies"]} '
+        f'(refused {mixed["parameters_refused"]}), reset replies {mixed["reset_replies"]} '
+        f'(failed {mixed["resets_failed"]}); the last few requests were in flight at the end.',
+        f'- node CPU {soak["cpu_percent"]:.1f} % of a core; the whole machine was '
+        f'{soak["machine_busy_cores"]:.2f} cores busy (all processes, other engineers\' '
+        'included).', '']
+
+
+def dynamics_cpu_section(result: Optional[dict]) -> List[str]:
+    """Node CPU per dynamics scene, unsubscribed and subscribed, beside the propagator."""
+    if result is None:
+        return []
+    targets = result['targets_percent']
+    lines = [
+        '## Dynamics scenes: the node\'s CPU', '',
+        f'`python bench/node_dynamics_cpu.py`: the installed node per shipped dynamics scene '
+        f'at default parameters (50 Hz ticks), {result["duration_s"]:g} s windows after '
+        f'{result["warmup_s"]:g} s of warm-up; CPU of the whole process (% of one core) with '
+        'nobody subscribed and with every output subscribed; "propagator alone" is the '
+        'scene\'s `DynamicsPropagator.advance_to` at the same tick times in one process, '
+        'warm, without ROS: the difference is what the node adds (wake-ups, outputs, '
+        'diagnostics, and the propagator running with cold caches between ticks). Targets: '
+        f'≤ {targets["unsubscribed"]:g} % unsubscribed, ≤ {targets["subscribed"]:g} % '
+        'subscribed.', '',
+        '| scene | unsubscribed | subscribed | propagator alone | node − propagator '
+        '(unsubscribed) | pose received (/s) | other load (cores) | verdict |',
+        '|---|---:|---:|---:|---:|---:|---:|---|']
+    for row in result['rows']:
+        alone, subscribed = row['unsubscribed'], row['subscribed']
+        ok = (alone['node_cpu_percent'] <= targets['unsubscribed']
+              and subscribed['node_cpu_percent'] <= targets['subscribed'])
+        lines.append(
+            f'| {row["scene"]} | {alone["node_cpu_percent"]:.1f} | '
+            f'{subscribed["node_cpu_percent"]:.1f} | {row["propagator_cpu_percent"]:.1f} | '
+            f'{alone["node_cpu_percent"] - row["propagator_cpu_percent"]:+.1f} | '
+            f'{row["received_per_s"].get("pose", 0.0):.1f} | '
+            f'{alone["other_load_cores"]:.2f} / {subscribed["other_load_cores"]:.2f} | '
+            f'{"met" if ok else "NOT met"} |')
+    return lines + ['']
