@@ -137,4 +137,6 @@ def dynamics_cpu_section(result: Optional[dict]) -> List[str]:
             f'{row["received_per_s"].get("pose", 0.0):.1f} | '
             f'{alone["other_load_cores"]:.2f} / {subscribed["other_load_cores"]:.2f} | '
             f'{"met" if ok else "NOT met"} |')
+    if result.get('note'):
+        lines += ['', result['note'] + '.']
     return lines + ['']

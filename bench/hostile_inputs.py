@@ -89,7 +89,7 @@ def malformed_cases(good: bytes, seed: int) -> dict[str, list[bytes]]:
         # From 1 byte: an empty payload never reaches the node (rmw_fastrtps drops it; on a
         # reliable connection it stalls that writer's later samples: docs/robustness.md).
         'truncated at every length': [good[:n] for n in range(1, len(good))],
-        'encapsulation id not CDR': encapsulations,
+        'encapsulation id other than CDR_BE, CDR_LE': encapsulations,
         'frame_id length absurd or wrong': lengths,
         'random bytes': [generator.randbytes(generator.randrange(1, 600)) for _ in range(200)],
     }

@@ -16,7 +16,7 @@ tick times, no ROS): the node's CPU minus that is the node's own per-tick cost.
 
 Targets (issue 13, item 2): at most 3 % of one core unsubscribed, 5 % subscribed. The
 machine is shared: the other load (busy cores minus the node's and the subscriber's) is
-reported per row. Results go to ``bench/results/node_dynamics_cpu.json``;
+reported per row. Results go to ``bench/results/node/node_dynamics_cpu.json``;
 ``bench/performance_report.py`` puts them in ``docs/performance.md``.
 
 Example::
@@ -168,7 +168,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         default=int(os.environ.get('ROS_DOMAIN_ID', '72')))
     parser.add_argument('--match-timeout', type=float, default=30.0)
     parser.add_argument('--results', type=Path,
-                        default=BENCH / 'results' / 'node_dynamics_cpu.json')
+                        default=BENCH / 'results' / 'node' / 'node_dynamics_cpu.json')
     return parser.parse_args(argv)
 
 

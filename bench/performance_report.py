@@ -122,21 +122,15 @@ maximum (335.8 ms over 10 minutes) has the same size; that script keeps no trace
 
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).
 DYNAMICS_NOTE = """\
-**What the dynamics figures depend on.** Every row misses in this run. The node's own share
-(node − propagator alone) is 0.9–3.7 points; the rest is the propagator, the other helper's
-work on the core (branch `dynamics`). With the issue's core target (10 ms per simulated
-second, 1 % of a core) the light scenes (`torque_free_box`, `dzhanibekov`,
-`gravity_gradient_satellite`) would be at about 2–3.5 % unsubscribed, at or near the 3 %
-target; `commanded_torque`, `gyrostat` and `free_flyer` depend on the propagator first, and
-`heavy_top` cannot keep up at all (`pose` at 3.3 per second: its propagator alone needs 1.4
-cores).
-The node's own share was cut by serving the ticks from the gyro loop instead of the
-executor (a wait set of every entity rebuilt per tick: about 2.8 % of a core at 50 Hz on
-`torque_free_box`, measured in-process); what remains is the outputs (`_publish_dynamics`
-35 µs per tick, 0.2 % at 50 Hz, built even when nobody subscribes), `/diagnostics` (0.17 ms
-once a second) and the propagator's steps running with cold caches between ticks (25–30 %
-slower for the light scenes than back to back: `torque_free_box` 3.1 % paced at 50 Hz
-against 2.5 % back to back)."""
+**What the dynamics figures depend on.** With the fast core (plain-float effects, the
+generated RK4 kernel, `casimir8` for `heavy_top`: "Dynamics scenes and effects" above) the
+propagator alone is 0.1–0.7 % of a core per scene; the rest is the node's own share: the
+wake-ups of the 50 Hz ticks, the outputs (`RosOutputs.dynamics`, 35 µs per tick, 0.2 % at
+50 Hz, built even when nobody subscribes), `/diagnostics` (0.17 ms once a second) and the
+propagator's steps running with cold caches between ticks. Serving the ticks from the gyro
+loop instead of the executor saved about 2.8 % of a core at 50 Hz (a wait set of every
+entity rebuilt per tick, measured in-process on `torque_free_box`). Subscribed windows are
+noisier than unsubscribed ones: the subscriber process shares the two cores."""
 
 
 def _load(path: Path) -> Optional[dict]:
