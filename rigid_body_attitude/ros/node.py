@@ -41,12 +41,11 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.session.decoding import DECODERS, Decoded, MALFORMED
+from rigid_body_attitude.session.decoding import input_handler
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.outputs import RosOutputs
 from rigid_body_attitude.ros.qos import INPUT_QOS
 from rigid_body_attitude.session.dynamics import DynamicsSession
-from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
 from rigid_body_attitude.session.settings import (
     DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, Session)
@@ -156,48 +155,13 @@ class AttitudePropagatorNode(Node):
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(), raw=True)
 
     def _handler(self, topic: str) -> Callable[[bytes], None]:
-        """The callback of ``topic``: decode, then hand the values to the session."""
-        decode, deliver = DECODERS[topic], self._delivery(topic)
-        session, lock = self.session, self.state_lock
+        """The session's handler of ``topic`` (:func:`input_handler`) under the state lock."""
+        handle, lock = input_handler(self.session, topic), self.state_lock
 
-        def handle(data: bytes) -> None:
-            try:
-                values = decode(data)
-            except MALFORMED as err:
-                with lock:
-                    session.malformed(topic, str(err)[:200])
-                return
+        def locked(data: bytes) -> None:
             with lock:
-                try:
-                    deliver(values)
-                except Exception as err:  # a bug must not end the node: counted, logged
-                    session.internal_error(topic, err)
-        return handle
-
-    def _delivery(self, topic: str) -> Callable[[Decoded], None]:
-        session, outputs = self.session, self.outputs
-        if topic == 'imu':
-            assert isinstance(session, GyroSession)
-            gyro = session.gyro
-
-            def imu(values: Decoded) -> None:
-                sec, nanosec, _, rate, data = values
-                outputs.current_imu, outputs.current_stamp = data, (sec, nanosec)
-                gyro(sec, nanosec, rate)
-                outputs.current_imu = None
-            return imu
-        if topic == 'angular_velocity':
-            assert isinstance(session, GyroSession)
-
-            def rate(values: Decoded) -> None:
-                session.gyro(values[0], values[1], values[3])
-            return rate
-        if topic == 'set_pose':
-            return lambda values: session.set_pose(values[2], values[3], values[4])
-        assert isinstance(session, DynamicsSession)
-        if topic == 'torque':
-            return lambda values: session.wrench(values[0], values[1], values[3], values[4])
-        return lambda values: session.rotor_torque(values[0], values[1], values[3])
+                handle(data)
+        return locked
 
     def _create_timers(self) -> None:
         """The output timer (node clock) and the diagnostics timer (steady clock), in the

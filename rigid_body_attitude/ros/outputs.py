@@ -79,9 +79,10 @@ class RosOutputs:
             self.imu_raw = RawOutput(self.imu)
         else:
             self.twist = self._publisher(TwistStamped, 'twist')
-        #: The Imu message being handled (its stamp) while the session runs it, else None.
+        #: The Imu message being handled while the session runs it, else None.
         self.current_imu: bytes | None = None
-        self.current_stamp = (0, 0)
+        #: Set by the session: outputs carry the inputs' stamps (else the receive time).
+        self.use_header_stamps = True
         self.orientation_message = QuaternionStamped()
         self.world_header = self.orientation_message.header
         self.pose_message = PoseStamped(header=self.world_header)
@@ -114,7 +115,7 @@ class RosOutputs:
             pose.publish(self.encode_pose(sec, nanosec, _ZERO_POSITION, attitude))
         imu = self.current_imu
         if imu is not None and self.imu_raw.subscription_count():
-            stamp = None if (sec, nanosec) == self.current_stamp else (sec, nanosec)
+            stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
             self.imu_raw.publish(imu_with_orientation(imu, attitude, stamp))
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,

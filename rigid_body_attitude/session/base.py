@@ -33,6 +33,9 @@ __all__ = ['LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session', 'WARNING_INT
 WARNING_INTERVAL = 5.0
 #: Log level of ordinary messages (warnings and errors use the diagnostics levels).
 LEVEL_INFO = 0
+#: Rejection reasons that count no input: expired commands, refused integrations of clock
+#: ticks, and the session's own failures.
+NOT_INPUTS = ('stale_torque', 'integration_failed', 'non_finite_result', 'internal_error')
 #: Largest distance of a ``set_pose`` position from the origin [m] (0.1 light-year).
 POSITION_LIMIT = 1e15
 
@@ -42,6 +45,11 @@ Vector = tuple[float, float, float]
 
 class OutputSink(Protocol):
     """Where a session's outputs go (publishers, a bag writer, a list in a test)."""
+
+    #: The serialized Imu being handled, for ``imu/data`` (set around each gyro call).
+    current_imu: bytes | None
+    #: Whether outputs carry the inputs' header stamps (else the receive time was used).
+    use_header_stamps: bool
 
     def attitude(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
         """A gyro sample's attitude (w, x, y, z) stamped ``(sec, nanosec)``."""
@@ -95,6 +103,7 @@ class Session(ABC):
         """Take the run-time parameters (frames, stamps, thresholds)."""
         self.world_frame: str = values['world_frame']
         self.use_header_stamps: bool = values['use_header_stamps']
+        self.sink.use_header_stamps = self.use_header_stamps
 
     def check(self, values: Mapping[str, Any]) -> str:
         """Why new parameter values are unusable for this session, or ``''``."""
@@ -178,13 +187,12 @@ class Session(ABC):
         return self.poses_accepted
 
     def received_count(self) -> int:
-        """Inputs received so far, whatever became of them."""
-        counts = self.rejection_counts()
-        counts.pop('stale_torque')  # commands that expired, not inputs
-        counts.pop('integration_failed', None)  # clock ticks, not inputs
-        counts.pop('non_finite_result', None)
-        counts.pop('internal_error', None)
-        return self.accepted_count() + sum(counts.values()) + self._pending_count()
+        """Inputs received so far, whatever became of them (not clock ticks, not commands
+        that expired: :data:`NOT_INPUTS`)."""
+        rejected = sum(count for reason, count in self.rejections.items()
+                       if reason not in NOT_INPUTS)
+        rejected += sum(sum(counts.values()) for counts in self._input_rejections())
+        return self.accepted_count() + rejected + self._pending_count()
 
     def missed_count(self) -> int:
         """Samples lost upstream so far."""
@@ -223,6 +231,11 @@ class Session(ABC):
         return self.propagator.state.time
 
     def _stream_rejections(self) -> list[Counter[str]]:
+        """The rejection counters of the session's streams (inputs and clock ticks)."""
+        return self._input_rejections()
+
+    def _input_rejections(self) -> list[Counter[str]]:
+        """The rejection counters of the streams of inputs."""
         return []
 
     def _pending_count(self) -> int:

@@ -2,8 +2,10 @@
 
 Shared by the node (:mod:`rigid_body_attitude.ros.node`, by topic: :data:`DECODERS`) and the
 replay tool (:mod:`rigid_body_attitude.tools.replay`, by message type: :data:`RATE_DECODERS`),
-so both accept and refuse exactly the same bytes. Built on the checked decoders of
-:mod:`rigid_body_attitude.bag.decoders`; imports no rclpy.
+so both accept and refuse exactly the same bytes, and :func:`input_handler`, the callback of
+one input topic (decode, then the session method of the topic), so both hand the same values
+to the session. Built on the checked decoders of :mod:`rigid_body_attitude.bag.decoders`;
+imports no rclpy.
 
 Each decoder returns ``(sec, nanosec, frame_id, first, second)``: the header stamp as sent
 (not normalised: the session judges it) and frame, and the message's values (rate and the
@@ -22,8 +24,11 @@ from rigid_body_attitude.bag.decoders import (
     decode_wrench_stamped)
 from rigid_body_attitude.bag.errors import MalformedMessage
 from rigid_body_attitude.bag.msgtypes import IMU
+from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.settings import Session
 
-__all__ = ['DECODERS', 'Decoded', 'MALFORMED', 'RATE_DECODERS']
+__all__ = ['DECODERS', 'Decoded', 'MALFORMED', 'RATE_DECODERS', 'input_handler']
 
 #: What a decoder returns: stamp sec, stamp nanosec, frame id, two values.
 Decoded = tuple[int, int, str, Any, Any]
@@ -68,4 +73,40 @@ RATE_DECODERS: dict[str, Callable[[bytes], Decoded]] = {
     msgtype: _rate_decoder(decode_rate, keep_bytes=msgtype == IMU)
     for msgtype, decode_rate in GYRO_DECODERS.items()
 }
-RATE_DECODERS[IMU] = imu
+
+
+def input_handler(session: Session, topic: str) -> Callable[[bytes], None]:
+    """The callback of the node's input ``topic``: decode the bytes and hand the values to
+    the session; malformed bytes and a session's own failure are counted, never raised."""
+    decode, deliver = DECODERS[topic], _delivery(session, topic)
+
+    def handle(data: bytes) -> None:
+        try:
+            values = decode(data)
+        except MALFORMED as err:
+            session.malformed(topic, str(err)[:200])
+            return
+        try:
+            deliver(values)
+        except Exception as err:  # a bug must not end the node (nor the replay): counted
+            session.internal_error(topic, err)
+    return handle
+
+
+def _delivery(session: Session, topic: str) -> Callable[[Decoded], object]:
+    """The session method of ``topic`` applied to the decoded values."""
+    if topic == 'set_pose':
+        return lambda values: session.set_pose(values[2], values[3], values[4])
+    if isinstance(session, GyroSession):
+        gyro, sink = session.gyro, session.sink
+        if topic == 'imu':
+            def imu(values: Decoded) -> None:
+                sink.current_imu = values[4]  # for imu/data
+                gyro(values[0], values[1], values[3])
+                sink.current_imu = None
+            return imu
+        return lambda values: gyro(values[0], values[1], values[3])
+    assert isinstance(session, DynamicsSession), topic  # commands: dynamics scenes only
+    if topic == 'torque':
+        return lambda values: session.wrench(values[0], values[1], values[3], values[4])
+    return lambda values: session.rotor_torque(values[0], values[1], values[3])

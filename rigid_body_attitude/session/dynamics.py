@@ -170,14 +170,11 @@ class DynamicsSession(Session):
         """Commands and poses used so far (clock ticks are not inputs)."""
         return self.commands_accepted + self.poses_accepted
 
-    def received_count(self) -> int:
-        """Commands and poses received so far."""
-        own = sum(count for reason, count in self.rejections.items()
-                  if reason not in ('integration_failed', 'non_finite_result', 'internal_error'))
-        return self.accepted_count() + own + sum(self.commands.rejected.values())
-
     def _stream_rejections(self) -> list[Counter[str]]:
         return [self.commands.rejected, self.clock.rejected]
+
+    def _input_rejections(self) -> list[Counter[str]]:
+        return [self.commands.rejected]
 
     def _timing(self, counts: PeriodCounts) -> None:
         counts.real_time_factor = (self._simulated / self._work if self._work > 0.0

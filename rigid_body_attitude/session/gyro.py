@@ -100,7 +100,7 @@ class GyroSession(Session):
             self.warn('zero_stamp', 'gyro: a zero header stamp; sample ignored (unstamped '
                                     'input: set use_header_stamps:=false)')
             return False
-        problem = stamp_problem(sec, nanosec) or f'sec {sec}'
+        problem = stamp_problem(sec, nanosec)
         self.rejections['invalid_stamp'] += 1
         self.warn('invalid_stamp', f'gyro: an invalid header stamp ({problem}); sample ignored '
                                    f'(parameter `use_header_stamps`)')
@@ -157,7 +157,7 @@ class GyroSession(Session):
         """The stamp of the last attitude published [s]."""
         return self._output_sec + self._output_nanosec * 1e-9
 
-    def _stream_rejections(self) -> list[Counter[str]]:
+    def _input_rejections(self) -> list[Counter[str]]:
         return [self.stream.rejected]
 
     def _pending_count(self) -> int:

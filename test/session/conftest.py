@@ -24,6 +24,8 @@ class RecordingSink:
         default_factory=list)
     reports: list[Any] = field(default_factory=list)
     logs: list[tuple[int, str]] = field(default_factory=list)
+    current_imu: bytes | None = None
+    use_header_stamps: bool = True
 
     def attitude(self, sec, nanosec, attitude):
         self.attitudes.append((sec, nanosec, attitude))

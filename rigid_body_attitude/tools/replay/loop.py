@@ -23,15 +23,14 @@ dynamics timing (real-time factor, lag) does not depend on the machine.
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from typing import Protocol
 
 from rigid_body_attitude.bag import BagMessage
-from rigid_body_attitude.session.decoding import DECODERS, MALFORMED, Decoded
+from rigid_body_attitude.session.decoding import MALFORMED, input_handler
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
-from rigid_body_attitude.session.settings import (
-    DIAGNOSTICS_PERIOD, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC, Session)
+from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD, Session
 from rigid_body_attitude.session.times import seconds_to_ns
 from rigid_body_attitude.tools.replay.plan import Plan
 from rigid_body_attitude.tools.replay.sink import BagSink
@@ -74,7 +73,7 @@ class EventLoop:
         self.read: Counter[str] = Counter()
         #: Ticks of the output timer so far (the one after the end not included).
         self.ticks = 0
-        self.handlers = {topic: self._handler(node_topic)
+        self.handlers = {topic: input_handler(self.session, node_topic)
                          for topic, node_topic in plan.inputs.items()}
         sink.now_ns = first_ns
 
@@ -124,33 +123,6 @@ class EventLoop:
         self.diagnostics(max(self.next_diagnostics_ns, self.next_tick_ns))
 
     # -- messages ---------------------------------------------------------------------------
-
-    def _handler(self, node_topic: str) -> Callable[[bytes], None]:
-        """The node's callback of ``node_topic``: decode, then hand the values over."""
-        decode, deliver = DECODERS[node_topic], self._delivery(node_topic)
-        session = self.session
-
-        def handle(data: bytes) -> None:
-            try:
-                values = decode(data)
-            except MALFORMED as err:
-                session.malformed(node_topic, str(err)[:200])
-                return
-            try:
-                deliver(values)
-            except Exception as err:  # a bug must not end the replay (nor the node): counted
-                session.internal_error(node_topic, err)
-        return handle
-
-    def _delivery(self, node_topic: str) -> Callable[[Decoded], None]:
-        session = self.session
-        if node_topic == SET_POSE_TOPIC:
-            return lambda values: session.set_pose(values[2], values[3], values[4])
-        assert isinstance(session, DynamicsSession)  # plan: commands for dynamics scenes
-        if node_topic == TORQUE_TOPIC:
-            return lambda values: session.wrench(values[0], values[1], values[3], values[4])
-        assert node_topic == ROTOR_TORQUE_TOPIC
-        return lambda values: session.rotor_torque(values[0], values[1], values[3])
 
     def run(self, messages: Iterator[BagMessage], progress: Progress) -> int:
         """Replay every message, then :meth:`finish`; returns the gyro messages handled."""

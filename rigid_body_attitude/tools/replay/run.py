@@ -197,7 +197,6 @@ def _replay(messages: Any, sink: BagSink, scene: Scene, values: dict[str, Any], 
     if problem:
         raise InputError(problem)
     sink.set_frames(values['world_frame'], values['body_frame'])
-    sink.use_header_stamps = values['use_header_stamps']
     if truth is not None and options.start_from_ground_truth is not None:
         sink.start_from(GroundTruthStart(truth, seconds_to_ns(options.start_from_ground_truth)),
                         session)
