@@ -83,7 +83,6 @@ def decoder_rates(count: int, repeats: int) -> dict[str, float]:
         'decode_vector3_stamped, one frame id': (decoders.decode_vector3_stamped, [vector]),
         'decode_wrench_stamped, one frame id': (decoders.decode_wrench_stamped, [wrench]),
         'decode_pose_stamped, one frame id': (decoders.decode_pose_stamped, [pose]),
-        'RATE_SAMPLE_DECODERS[Imu] (no frame id)': (cdr.RATE_SAMPLE_DECODERS[bag.IMU], [imu]),
         'cdr.imu_rates (float stamp)': (cdr.imu_rates, [imu]),
     }
     results = {name: best_rate(count, repeats, _each(decode, messages, count))

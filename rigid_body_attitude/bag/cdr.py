@@ -24,8 +24,9 @@ because the NumPy versions cost microseconds per call (the tests check the codec
 them). Encoders take integer nanoseconds. Encoders do not check finiteness (fault-injection
 bags need NaN values); :func:`rigid_body_attitude.bag.write_bag` does.
 
-Per-sample fast paths of the replay tool: :data:`RATE_SAMPLE_DECODERS` read the header stamp
-as integers ``(sec, nanosec)`` and the rate in one pass; :func:`quaternion_stamped_encoder`
+Per-sample fast paths of the node and the replay tool: the gyro decoders of
+:mod:`rigid_body_attitude.bag.decoders` read the header stamp as integers ``(sec, nanosec)``,
+the frame id and the rate in one pass; :func:`quaternion_stamped_encoder`
 and :func:`pose_stamped_encoder` precompute the header bytes of one frame id (one ``struct``
 call per message); :func:`imu_with_orientation` splices the orientation into an Imu's bytes.
 They give the bytes of the general functions (tested).
@@ -40,9 +41,7 @@ from struct import Struct
 
 from rigid_body_attitude.bag.decoders import (
     IMU_COUNT,
-    GYRO_DECODERS,
     Floats,
-    GyroDecoder,
     body_offset,
     decode_float64,
     decode_header,
@@ -68,10 +67,8 @@ from rigid_body_attitude.core.errors import InputError
 __all__ = [
     'ATTITUDE_DECODERS',
     'RATE_DECODERS',
-    'RATE_SAMPLE_DECODERS',
     'TORQUE_DECODERS',
     'Decoder',
-    'SampleDecoder',
     'encode_float64',
     'encode_imu',
     'encode_pose_stamped',
@@ -101,7 +98,6 @@ __all__ = [
 #: A decoder maps CDR bytes to ``(stamp_seconds, values)``.
 Decoder = Callable[[bytes], tuple[float, Floats]]
 #: A sample decoder maps CDR bytes to ``(sec, nanosec, values)`` (the header stamp as is).
-SampleDecoder = Callable[[bytes], tuple[int, int, Floats]]
 
 _NS_PER_S = 1_000_000_000
 _ENCAPSULATION_LE = b'\x00\x01\x00\x00'
@@ -201,19 +197,6 @@ RATE_DECODERS: dict[str, Decoder] = {
 }
 
 
-def _sample_decoder(decode: GyroDecoder) -> SampleDecoder:
-    """``(sec, nanosec, values)`` of ``decode``'s result (the frame id left out)."""
-    def decode_sample(data: bytes) -> tuple[int, int, Floats]:
-        sec, nanosec, _, values = decode(data)
-        return sec, nanosec, values
-    decode_sample.__doc__ = decode.__doc__
-    return decode_sample
-
-
-#: Decoders of ``(sec, nanosec, rate)`` (header stamp as integers), by message type:
-#: :data:`~rigid_body_attitude.bag.decoders.GYRO_DECODERS` without the frame id.
-RATE_SAMPLE_DECODERS: dict[str, SampleDecoder] = {
-    msgtype: _sample_decoder(decode) for msgtype, decode in GYRO_DECODERS.items()}
 #: Decoders of a body-frame torque, by message type.
 TORQUE_DECODERS: dict[str, Decoder] = {
     WRENCH_STAMPED: wrench_torque,

@@ -131,19 +131,19 @@ def test_decoders_read_rosbags_serialized_messages(frame_id, little_endian):
 
 @pytest.mark.parametrize('little_endian', [True, False])
 @pytest.mark.parametrize('frame_id', FRAME_IDS)
-def test_sample_decoders_read_the_integer_stamp_and_the_rate(frame_id, little_endian):
+def test_gyro_decoders_read_the_integer_stamp_and_the_rate(frame_id, little_endian):
     sec, nanosec = divmod(STAMP_NS, 1_000_000_000)
     for msgtype, message, _ in _reference_messages(frame_id):
-        if msgtype not in bag.RATE_SAMPLE_DECODERS:
+        if msgtype not in bag.GYRO_DECODERS:
             continue
         data = bytes(bag.typestore().serialize_cdr(message, msgtype, little_endian=little_endian))
         _, rate = bag.RATE_DECODERS[msgtype](data)
-        assert bag.RATE_SAMPLE_DECODERS[msgtype](data) == (sec, nanosec, rate), msgtype
+        assert bag.GYRO_DECODERS[msgtype](data) == (sec, nanosec, frame_id, rate), msgtype
 
 
-def test_sample_decoders_reject_what_the_rate_decoders_reject():
+def test_gyro_decoders_reject_what_the_rate_decoders_reject():
     imu = cdr.encode_imu(0, 'base_link', [1.0, 2.0, 3.0])
-    decode = bag.RATE_SAMPLE_DECODERS[bag.IMU]
+    decode = bag.GYRO_DECODERS[bag.IMU]
     for data, message in [(cdr.encode_vector3_stamped(0, 'base_link', [1.0, 2.0, 3.0]),
                            'malformed sensor_msgs/msg/Imu: truncated: 52 of 324 bytes'),
                           (imu[:100], 'truncated: 100 of 324 bytes'),
