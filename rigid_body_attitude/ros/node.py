@@ -48,7 +48,7 @@ from rigid_body_attitude.ros.qos import INPUT_QOS
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
 from rigid_body_attitude.session.settings import (
-    DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, Session)
+    DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, AnySession)
 
 __all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor']
 
@@ -96,7 +96,7 @@ class AttitudePropagatorNode(Node):
         self.publish_rate: float = values['publish_rate']
         self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro')
         self.outputs.hardware_id = self.scene.name
-        self.session: Session = open_session(
+        self.session: AnySession = open_session(
             self.scene, values, self.outputs, self._clock_ns, time.monotonic)
         problem = self.session.check(values)
         if problem:

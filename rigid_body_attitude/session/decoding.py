@@ -26,7 +26,7 @@ from rigid_body_attitude.bag.errors import MalformedMessage
 from rigid_body_attitude.bag.msgtypes import IMU
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
-from rigid_body_attitude.session.settings import Session
+from rigid_body_attitude.session.settings import AnySession
 
 __all__ = ['DECODERS', 'Decoded', 'MALFORMED', 'RATE_DECODERS', 'input_handler']
 
@@ -75,7 +75,7 @@ RATE_DECODERS: dict[str, Callable[[bytes], Decoded]] = {
 }
 
 
-def input_handler(session: Session, topic: str) -> Callable[[bytes], None]:
+def input_handler(session: AnySession, topic: str) -> Callable[[bytes], None]:
     """The callback of the node's input ``topic``: decode the bytes and hand the values to
     the session; malformed bytes and a session's own failure are counted, never raised."""
     decode, deliver = DECODERS[topic], _delivery(session, topic)
@@ -93,7 +93,7 @@ def input_handler(session: Session, topic: str) -> Callable[[bytes], None]:
     return handle
 
 
-def _delivery(session: Session, topic: str) -> Callable[[Decoded], object]:
+def _delivery(session: AnySession, topic: str) -> Callable[[Decoded], object]:
     """The session method of ``topic`` applied to the decoded values."""
     if topic == 'set_pose':
         return lambda values: session.set_pose(values[2], values[3], values[4])

@@ -22,8 +22,9 @@ from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
 
 __all__ = [
-    'COMMAND_EFFECTS', 'DIAGNOSTICS_PERIOD', 'DIAGNOSTICS_TOPIC', 'GYRO_TOPICS', 'NODE_NAME',
-    'OUTPUT_TOPICS', 'ROTOR_TORQUE_TOPIC', 'SET_POSE_TOPIC', 'TORQUE_TOPIC', 'input_topics',
+    'AnySession', 'COMMAND_EFFECTS', 'DIAGNOSTICS_PERIOD', 'DIAGNOSTICS_TOPIC', 'GYRO_TOPICS',
+    'NODE_NAME', 'OUTPUT_TOPICS', 'ROTOR_TORQUE_TOPIC', 'SET_POSE_TOPIC', 'TORQUE_TOPIC',
+    'input_topics',
     'load_node_scene', 'open_session', 'output_topics', 'timer_period_ns',
 ]
 
@@ -55,7 +56,8 @@ DIAGNOSTICS_PERIOD = 1.0
 #: Effects whose ``timeout`` the ``torque_timeout`` parameter overrides.
 COMMAND_EFFECTS = ('commanded_torque', 'commanded_force', 'rotor')
 
-Session = GyroSession | DynamicsSession
+#: A session of either rate source (what :func:`open_session` returns).
+AnySession = GyroSession | DynamicsSession
 
 
 def input_topics(scene: Scene, input_names: frozenset[str]) -> dict[str, str]:
@@ -100,7 +102,7 @@ def load_node_scene(scene: str, integrator: str = '', step: float = 0.0,
 
 
 def open_session(scene: Scene, values: Mapping[str, Any], sink: OutputSink,
-                 clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> Session:
+                 clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> AnySession:
     """The session of the scene's rate source (see :class:`~.base.Session`)."""
     kind = GyroSession if scene.rate_source == 'gyro' else DynamicsSession
     return kind(scene, values, sink, clock_ns, monotonic)

@@ -30,7 +30,7 @@ from rigid_body_attitude.bag import BagMessage
 from rigid_body_attitude.session.decoding import MALFORMED, input_handler
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
-from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD, Session
+from rigid_body_attitude.session.settings import AnySession, DIAGNOSTICS_PERIOD
 from rigid_body_attitude.session.times import seconds_to_ns
 from rigid_body_attitude.tools.replay.plan import Plan
 from rigid_body_attitude.tools.replay.sink import BagSink
@@ -59,7 +59,7 @@ class Progress(Protocol):
 class EventLoop:
     """Feeds one bag's messages and the timers' events to a session, in bag-time order."""
 
-    def __init__(self, session: Session, sink: BagSink, plan: Plan, period_ns: int,
+    def __init__(self, session: AnySession, sink: BagSink, plan: Plan, period_ns: int,
                  first_ns: int) -> None:
         """Ticks every ``period_ns`` and diagnostics every second from ``first_ns``, the bag
         time of the first message."""

@@ -24,7 +24,7 @@ from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.settings import (
-    Session, load_node_scene, open_session, timer_period_ns)
+    AnySession, load_node_scene, open_session, timer_period_ns)
 from rigid_body_attitude.session.times import seconds_to_ns, to_ns
 from rigid_body_attitude.tools.replay.loop import EventLoop, Progress
 from rigid_body_attitude.tools.replay.options import ReplayOptions, check_options
@@ -123,7 +123,7 @@ def _output_custom_data(reader: BagReader, scene: Scene, options: ReplayOptions,
 class _Run:
     """What the replay loop leaves for the result."""
 
-    session: Session
+    session: AnySession
     sink: BagSink
     loop: EventLoop | None
     gyro_messages: int
