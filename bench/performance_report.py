@@ -87,7 +87,8 @@ rmw_fastrtps allows (another rmw, or the gyro path in a C++ component)."""
 QOS_NOTE = """\
 **Configuration.** The node runs as a user would start it, with its default parameters and
 QoS (`rigid_body_attitude/ros/qos.py`): inputs RELIABLE, KEEP_LAST 5000; outputs RELIABLE,
-KEEP_LAST 1000. The publisher, the subscriber and the relays use RELIABLE, KEEP_LAST 10000.
+KEEP_LAST 1000 (the output default when measured; 5000 since). The publisher, the subscriber
+and the relays use RELIABLE, KEEP_LAST 10000.
 At 20 kHz the publisher, the node and the subscriber together need about the two cores (a
 publisher that falls short of the rate is marked "(short)"), so that row also measures the
 machine, not the node alone."""
