@@ -42,7 +42,8 @@ def ros_env(domain_id: int) -> Dict[str, str]:
     """Return a copy of the environment for a benchmark process on ``domain_id`` (localhost)."""
     env = dict(os.environ)
     env['ROS_DOMAIN_ID'] = str(domain_id)
-    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    # BENCH_DISCOVERY_RANGE=SUBNET measures ROS's default range (then pick an unused domain).
+    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = os.environ.get('BENCH_DISCOVERY_RANGE', 'LOCALHOST')
     env['PYTHONUNBUFFERED'] = '1'
     env['PYTHONFAULTHANDLER'] = '1'  # a crash of a Python target leaves its traceback in the log
     return env

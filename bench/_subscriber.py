@@ -40,10 +40,14 @@ def _record(subscription, context, stamps: array, receive_times: array) -> None:
     wall_ns = time.time_ns
     wait_set = _rclpy.WaitSet(1, 0, 0, 0, 0, 0, context.handle)
     matched = False
+    import os
+    wakes = array('q') if os.environ.get('BENCH_WAKE_LOG') else None
     while not _stop_requested:
         wait_set.clear_entities()
         wait_set.add_subscription(handle)
         wait_set.wait(50_000_000)
+        if wakes is not None:
+            wakes.append(wall_ns())
         taken = take(PoseStamped, True)
         while taken is not None:
             receive_times.append(wall_ns())
@@ -53,6 +57,9 @@ def _record(subscription, context, stamps: array, receive_times: array) -> None:
             matched = True
             print(json.dumps({'event': 'matched'}), flush=True)
     wait_set.destroy_when_not_in_use()
+    if wakes is not None:
+        with open(os.environ['BENCH_WAKE_LOG'] + str(os.getpid()), 'wb') as out:
+            wakes.tofile(out)
 
 
 def main() -> int:
