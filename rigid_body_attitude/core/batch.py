@@ -41,8 +41,13 @@ __all__ = ['SceneBatch', 'TorqueFreeBatch']
 
 FloatArray = NDArray[np.float64]
 
-#: Bodies per chunk: the state and the work arrays (about 1 MB) stay in the L2 cache.
+#: Bodies per chunk of :class:`TorqueFreeBatch`: the state and the work arrays (about 1 MB)
+#: stay in the L2 cache.
 DEFAULT_CHUNK = 4096
+#: Bodies per chunk of :class:`SceneBatch`: its work arrays and per-body tensors outgrow the
+#: L2 cache anyway, and longer rows spread NumPy's per-call cost over more bodies (the fastest
+#: of 2048 to 32768 in a sweep with ``bench/batch_throughput.py --chunk``).
+SCENE_CHUNK = 8192
 
 
 def _principal(inertia: ArrayLike, count: int) -> tuple[FloatArray, FloatArray]:
@@ -216,16 +221,18 @@ class SceneBatch:
     :class:`~rigid_body_attitude.core.propagator.DynamicsPropagator` would take for the scene
     with the ``rk4`` integrator (the scene's step, the last one shorter, ends at the commanded
     inputs' switch times) and the same arithmetic per body, vectorised over bodies in the body
-    frame (structure of arrays, chunks that stay in the cache); each effect adds its own
-    batch torque or force (:meth:`.TorqueEffect.add_batch_torque`). So each body matches the
-    single-body result up to round-off (``test/core/test_batch.py``: 1e−12). Order 4; no
-    substeps: every body must keep ``h·|ω|`` within RK4's limit (checked per call).
+    frame (structure of arrays, chunks of :data:`SCENE_CHUNK` bodies, work arrays allocated
+    once per chunk, the body-frame angular momentum as the state: :class:`_Chunk`); each
+    effect adds its own batch torque or force (:meth:`.TorqueEffect.add_batch_torque`). So
+    each body matches the single-body result up to round-off (``test/core/test_batch.py``:
+    1e−12). Order 4; no substeps: every body must keep ``h·|ω|`` within RK4's limit (checked
+    per call).
     """
 
     def __init__(self, scene: Scene, attitude: ArrayLike, omega_body: ArrayLike,
                  inertia: ArrayLike | None = None, mass: ArrayLike | None = None,
                  effect_parameters: Mapping[str, Mapping[str, ArrayLike]] | None = None,
-                 chunk: int = DEFAULT_CHUNK) -> None:
+                 chunk: int = SCENE_CHUNK) -> None:
         """Bodies of ``scene`` at ``attitude`` (N, 4) and ``omega_body`` (N, 3) [rad/s].
 
         ``inertia`` (one tensor for all or (N, 3, 3); default the scene's) and ``mass``
@@ -442,10 +449,10 @@ class _Chunk:
             effect.add_batch_force(t, q, view, total)
         return total
 
-    def derivative(self, t: float, y: FloatArray) -> FloatArray:
-        """``(q̇, ḣ)`` of every body (``y`` holds ``(q, h)``), (7, n): Euler's equations with
-        the effects (the returned array is overwritten by the next call)."""
-        q, out, work = y[:4], self.out, self.work
+    def derivative(self, t: float, y: FloatArray, out: FloatArray) -> FloatArray:
+        """``(q̇, ḣ)`` of every body (``y`` holds ``(q, h)``) into ``out`` (7, n): Euler's
+        equations with the effects."""
+        q, work = y[:4], self.work
         omega = self.rate(y[4:], self.omega)
         momentum = y[4:]
         if self.rotors:
@@ -476,17 +483,15 @@ class _Chunk:
     def rk4(self, t: float, y: FloatArray, h: float) -> None:
         """One RK4 step of every body in place, ``q`` renormalised."""
         half, total, stage = 0.5 * h, self.total, self.stage
-        k = self.derivative(t, y)
-        np.copyto(total, k)
-        np.multiply(k, half, out=stage)
+        np.multiply(self.derivative(t, y, total), half, out=stage)
         stage += y
         for step in (half, h):
-            k = self.derivative(t + half, stage)
+            k = self.derivative(t + half, stage, self.out)
             np.multiply(k, step, out=stage)
             stage += y
             k *= 2.0
             total += k
-        total += self.derivative(t + h, stage)
+        total += self.derivative(t + h, stage, self.out)
         total *= h / 6.0
         y += total
         norm, work = self.norm, self.work

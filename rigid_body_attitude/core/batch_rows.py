@@ -1,14 +1,10 @@
 """Structure-of-arrays kernels shared by the batch and the effects' batch methods.
 
 A chunk of ``n`` bodies holds every vector as rows: ``v[i]`` is component ``i`` of every body,
-shape (3, n). The kernels here write into preallocated arrays (``out=``) and work on whole
-(3, n) blocks, so a product of every body's tensor with its vector, or a cross product, costs
-a handful of NumPy calls instead of one call per component.
-
-**Cyclic rows**: a cross product ``(a × b)ᵢ = a_{i+1} b_{i+2} − a_{i+2} b_{i+1}`` reads rows
-``1..3`` and ``2..4`` of the vectors extended cyclically to five rows ``(x, y, z, x, y)``
-(:func:`cross_rows`); the products are the same as the component-wise formula's, so the
-result is the same to the last bit.
+shape (3, n). NumPy's cost here is per pass over a row and per call, so the kernels write
+into work arrays kept by the chunk (``out=``, no temporaries) and use the fewest passes over
+the rows: one ``einsum`` for a product with one matrix per body, row operations with plain floats
+for a matrix shared by every body.
 """
 
 from __future__ import annotations
@@ -74,8 +70,8 @@ def matrix_rows_product(matrix: FloatArray, vector: FloatArray, out: FloatArray,
     ``vector`` and ``out`` (3, n), ``work`` (n,); ``diagonal`` skips the off-diagonal entries
     (exact zeros).
 
-    One matrix per body takes one ``einsum`` (it reads every entry once: 2× faster than row
-    operations at 4096 bodies); a shared matrix takes row operations with plain floats."""
+    One matrix per body takes one ``einsum`` (one pass that reads every entry once, where row
+    operations take fifteen); a shared matrix takes row operations with plain floats."""
     shared = matrix.shape[2] == 1
     if diagonal:
         for i in range(3):
