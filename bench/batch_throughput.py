@@ -12,10 +12,10 @@ scaling with N shows too.
 **With effects** (``SceneBatch``): a satellite scene with gravity gradient (7000 km orbit) and
 viscous damping, 1 ms RK4 steps, each body with its own attitude, rate and damping
 coefficients; once with the scene's (diagonal) inertia for every body and once with a
-dispersed full inertia tensor per body (the off-diagonal products then cost about a fifth
-more). The issue asks for ≥ 3·10⁶ body-steps/s at N = 10⁵. ``--check`` bodies are compared
-with the single-body ``DynamicsPropagator`` of the same scene and parameters (every component
-within 1e-12, or exit 1).
+dispersed full inertia tensor per body (its products read nine entries per body instead of
+three numbers shared by every body). The issue asks for ≥ 3·10⁶ body-steps/s at N = 10⁵.
+``--check`` bodies are compared with the single-body ``DynamicsPropagator`` of the same scene
+and parameters (every component within 1e-12, or exit 1).
 
 ``--chunk`` sets SceneBatch's bodies per chunk (default ``SCENE_CHUNK``), for a sweep.
 
