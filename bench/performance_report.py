@@ -340,12 +340,16 @@ below)."""
 
 #: What limits the batch with effects.
 BATCH_NOTE = """\
-**What limits the batch with effects.** Each NumPy operation on a chunk of 4 096 bodies costs
-about 0.6 ns per element on this machine: the batch is bound by the element operations per
-body-step (≈ 500 with gravity gradient and damping and a diagonal inertia: the attitude
-rotation of the orbit vector, J r̂ and the cross products at each of RK4's four stages, the
-stage combinations), not by Python. A dispersed full inertia tensor adds the 24 off-diagonal
-products per stage. Fewer operations would need the bodies' principal frames (as
+**What limits the batch with effects.** NumPy's passes over the rows of a chunk (8 192 bodies,
+`SCENE_CHUNK`), not Python: each RK4 stage with gravity gradient and damping takes one
+`einsum` for ω = J⁻¹ h (the chunk's state holds the body-frame momentum h = J ω, so Euler's
+equations ḣ = M − ω × h need no product J ω), one for J r̂ of the gravity gradient, one 3 × 3
+matrix product for the rotation's τ = 2 r̂_w × q_v, and about 70 passes over single rows, most
+of them the four cross products (ω × h, τ × q_v, r̂ × J r̂, q_v × ω), then the stage
+combinations over the state's 7 rows, all into work arrays allocated once per chunk. With the
+scene's diagonal inertia the two `einsum`s are three row products with plain floats each; a
+dispersed tensor per body reads nine entries per body instead, which is what differs between
+the two rows above. Fewer operations would need the bodies' principal frames (as
 `TorqueFreeBatch` does) with every effect's parameters turned into them, or a compiled loop
 that keeps each body's state in registers."""
 

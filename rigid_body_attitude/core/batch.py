@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.batch_rows import cross_rows, matrix_rows_product
 from rigid_body_attitude.core.effects import (
     BatchChunk, CommandedEffect, Effect, ForceEffect, RotorEffect, TorqueEffect)
 from rigid_body_attitude.core.effects.translation import Translation
@@ -40,8 +41,13 @@ __all__ = ['SceneBatch', 'TorqueFreeBatch']
 
 FloatArray = NDArray[np.float64]
 
-#: Bodies per chunk: the state and the work arrays (about 1 MB) stay in the L2 cache.
+#: Bodies per chunk of :class:`TorqueFreeBatch`: the state and the work arrays (about 1 MB)
+#: stay in the L2 cache.
 DEFAULT_CHUNK = 4096
+#: Bodies per chunk of :class:`SceneBatch`: its work arrays and per-body tensors outgrow the
+#: L2 cache anyway, and longer rows spread NumPy's per-call cost over more bodies (the fastest
+#: of 2048 to 32768 in a sweep with ``bench/batch_throughput.py --chunk``).
+SCENE_CHUNK = 8192
 
 
 def _principal(inertia: ArrayLike, count: int) -> tuple[FloatArray, FloatArray]:
@@ -215,16 +221,18 @@ class SceneBatch:
     :class:`~rigid_body_attitude.core.propagator.DynamicsPropagator` would take for the scene
     with the ``rk4`` integrator (the scene's step, the last one shorter, ends at the commanded
     inputs' switch times) and the same arithmetic per body, vectorised over bodies in the body
-    frame (structure of arrays, chunks that stay in the cache); each effect adds its own
-    batch torque or force (:meth:`.TorqueEffect.add_batch_torque`). So each body matches the
-    single-body result up to round-off (``test/core/test_batch.py``: 1e−12). Order 4; no
-    substeps: every body must keep ``h·|ω|`` within RK4's limit (checked per call).
+    frame (structure of arrays, chunks of :data:`SCENE_CHUNK` bodies, work arrays allocated
+    once per chunk, the body-frame angular momentum as the state: :class:`_Chunk`); each
+    effect adds its own batch torque or force (:meth:`.TorqueEffect.add_batch_torque`). So
+    each body matches the single-body result up to round-off (``test/core/test_batch.py``:
+    1e−12). Order 4; no substeps: every body must keep ``h·|ω|`` within RK4's limit (checked
+    per call).
     """
 
     def __init__(self, scene: Scene, attitude: ArrayLike, omega_body: ArrayLike,
                  inertia: ArrayLike | None = None, mass: ArrayLike | None = None,
                  effect_parameters: Mapping[str, Mapping[str, ArrayLike]] | None = None,
-                 chunk: int = DEFAULT_CHUNK) -> None:
+                 chunk: int = SCENE_CHUNK) -> None:
         """Bodies of ``scene`` at ``attitude`` (N, 4) and ``omega_body`` (N, 3) [rad/s].
 
         ``inertia`` (one tensor for all or (N, 3, 3); default the scene's) and ``mass``
@@ -306,20 +314,23 @@ class SceneBatch:
     def _advance_chunk(self, bodies: slice, steps: list[tuple[float, float]]) -> None:
         """Every step of ``steps`` on one cache-sized chunk of bodies, in place."""
         chunk = _Chunk(self, bodies)
-        y = np.ascontiguousarray(self._state[:, bodies])
+        y = np.empty((7, chunk.mass.shape[0]))  # (q, h = J ω)
+        y[:4] = self._state[:4, bodies]
+        chunk.momentum(self._state[4:, bodies], y[4:])
         translation = self.translation is not None
         if translation:
             position = self.position[:, bodies]
             velocity = self.velocity[:, bodies]
             force_start = chunk.force(steps[0][0], y[:4])
         for t, h in steps:
-            y = chunk.rk4(t, y, h)
+            chunk.rk4(t, y, h)
             if translation:
                 force_end = chunk.force(t + h, y[:4])
                 Translation.batch_advance(h, chunk.mass, position, velocity, force_start,
                                           force_end)
                 force_start = force_end
-        self._state[:, bodies] = y
+        self._state[:4, bodies] = y[:4]
+        chunk.rate(y[4:], self._state[4:, bodies])
         if translation:
             self.position[:, bodies] = position
             self.velocity[:, bodies] = velocity
@@ -390,7 +401,12 @@ def _effect_parameters(effect: Effect, dispersed: Mapping[str, ArrayLike],
 
 class _Chunk:
     """One chunk of a :class:`SceneBatch`: its bodies' inertia, masses, effect parameters, and
-    the RK4 step on them (the single-body kernel's arithmetic, vectorised)."""
+    the RK4 step on them: the single-body kernel's arithmetic, vectorised into work arrays
+    allocated once per chunk, with the body-frame angular momentum ``h = J ω`` in place of
+    ``ω`` as the state (:meth:`momentum`, :meth:`rate`): ``ḣ = M − ω × h`` then needs one
+    product with ``J⁻¹`` per evaluation instead of ``J ω`` and ``J⁻¹ (M − ω × J ω)``. RK4
+    commutes with a constant linear change of variables, so the step equals the one in
+    ``(q, ω)`` up to round-off."""
 
     def __init__(self, batch: SceneBatch, bodies: slice) -> None:
         shared = batch._tensor.shape[2] == 1 and batch.count > 1
@@ -400,9 +416,10 @@ class _Chunk:
         off_diagonal = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]
         self.diagonal = not any(np.any(self.tensor[i, j]) or np.any(self.inverse[i, j])
                                 for i, j in off_diagonal)
-        self.out = np.empty((7, self.mass.shape[0]))
-        #: Every body has its own full tensor (not shared, not diagonal).
-        self.per_body = not self.diagonal and self.tensor.shape[2] > 1
+        n = self.mass.shape[0]
+        self.out, self.total, self.stage = np.empty((3, 7, n))
+        self.omega, self.half_omega, self.total_momentum = np.empty((3, 3, n))
+        self.work, self.norm = np.empty((2, n))
         self.torques: list[tuple[TorqueEffect, BatchChunk]] = []
         self.rotors: list[tuple[RotorEffect, BatchChunk]] = []
         self.forces: list[tuple[ForceEffect, BatchChunk]] = []
@@ -417,6 +434,14 @@ class _Chunk:
             if isinstance(effect, ForceEffect):
                 self.forces.append((effect, view))
 
+    def momentum(self, omega: FloatArray, out: FloatArray) -> FloatArray:
+        """``out = J ω`` (3, n)."""
+        return matrix_rows_product(self.tensor, omega, out, self.work, self.diagonal)
+
+    def rate(self, momentum: FloatArray, out: FloatArray) -> FloatArray:
+        """``out = J⁻¹ h`` (3, n)."""
+        return matrix_rows_product(self.inverse, momentum, out, self.work, self.diagonal)
+
     def force(self, t: float, q: FloatArray) -> FloatArray:
         """Sum of the forces [N, world] on every body, (3, n)."""
         total = np.zeros((3, q.shape[1]))
@@ -424,62 +449,56 @@ class _Chunk:
             effect.add_batch_force(t, q, view, total)
         return total
 
-    def derivative(self, t: float, y: FloatArray) -> FloatArray:
-        """``(q̇, ω̇)`` of every body, (7, n): Euler's equations with the effects."""
-        q, omega = y[:4], y[4:]
-        torque = np.zeros((3, y.shape[1]))
-        for torque_effect, view in self.torques:
-            torque_effect.add_batch_torque(t, q, omega, view, torque)
-        tensor = self.tensor
-        p, r, s = omega
-        if self.diagonal:
-            mx, my, mz = tensor[0, 0] * p, tensor[1, 1] * r, tensor[2, 2] * s
-        elif self.per_body:  # one contraction beats fifteen row operations (3×)
-            mx, my, mz = np.einsum('ijn,jn->in', tensor, omega)
-        else:
-            mx = tensor[0, 0] * p + tensor[0, 1] * r + tensor[0, 2] * s
-            my = tensor[1, 0] * p + tensor[1, 1] * r + tensor[1, 2] * s
-            mz = tensor[2, 0] * p + tensor[2, 1] * r + tensor[2, 2] * s
+    def derivative(self, t: float, y: FloatArray, out: FloatArray) -> FloatArray:
+        """``(q̇, ḣ)`` of every body (``y`` holds ``(q, h)``) into ``out`` (7, n): Euler's
+        equations with the effects."""
+        q, work = y[:4], self.work
+        omega = self.rate(y[4:], self.omega)
+        momentum = y[4:]
+        if self.rotors:
+            momentum = self.total_momentum
+            momentum[:] = y[4:]
+            out[4:] = 0.0
         for rotor_effect, view in self.rotors:
-            momentum, rate = rotor_effect.batch_rotor(t, view)
-            torque[0] -= rate[0]
-            torque[1] -= rate[1]
-            torque[2] -= rate[2]
-            mx, my, mz = mx + momentum[0], my + momentum[1], mz + momentum[2]
-        bx = torque[0] - (r * mz - s * my)
-        by = torque[1] - (s * mx - p * mz)
-        bz = torque[2] - (p * my - r * mx)
-        inverse, out = self.inverse, self.out
-        w, x, yy, z = q
-        np.multiply(-x * p - yy * r - z * s, 0.5, out=out[0])
-        np.multiply(w * p + yy * s - z * r, 0.5, out=out[1])
-        np.multiply(w * r - x * s + z * p, 0.5, out=out[2])
-        np.multiply(w * s + x * r - yy * p, 0.5, out=out[3])
-        if self.diagonal:
-            np.multiply(inverse[0, 0], bx, out=out[4])
-            np.multiply(inverse[1, 1], by, out=out[5])
-            np.multiply(inverse[2, 2], bz, out=out[6])
-        elif self.per_body:
-            np.einsum('ijn,jn->in', inverse, np.stack((bx, by, bz)), out=out[4:])
-        else:
-            np.add(inverse[0, 0] * bx + inverse[0, 1] * by, inverse[0, 2] * bz, out=out[4])
-            np.add(inverse[1, 0] * bx + inverse[1, 1] * by, inverse[1, 2] * bz, out=out[5])
-            np.add(inverse[2, 0] * bx + inverse[2, 1] * by, inverse[2, 2] * bz, out=out[6])
+            rotor_momentum, rotor_rate = rotor_effect.batch_rotor(t, view)
+            momentum += rotor_momentum
+            for row in range(3):
+                out[4 + row] -= rotor_rate[row]
+        cross_rows(momentum, omega, out[4:], work, accumulate=bool(self.rotors))
+        for torque_effect, view in self.torques:
+            torque_effect.add_batch_torque(t, q, omega, view, out[4:])
+        # q̇ = q ⊗ (0, ω/2) = (−q_v·ω/2, w ω/2 + q_v × ω/2)
+        half = self.half_omega
+        np.multiply(omega, 0.5, out=half)
+        np.multiply(q[1], half[0], out=out[0])
+        for row in (2, 3):
+            np.multiply(q[row], half[row - 1], out=work)
+            out[0] += work
+        np.negative(out[0], out=out[0])
+        for row in range(3):
+            np.multiply(q[0], half[row], out=out[1 + row])
+        cross_rows(q[1:], half, out[1:4], work, accumulate=True)
         return out
 
-    def rk4(self, t: float, y: FloatArray, h: float) -> FloatArray:
-        """One RK4 step of every body, ``q`` renormalised (a new array)."""
-        half = 0.5 * h
-        k = self.derivative(t, y)
-        total = k.copy()
-        k = self.derivative(t + half, y + half * k)
-        total += 2.0 * k
-        k = self.derivative(t + half, y + half * k)
-        total += 2.0 * k
-        k = self.derivative(t + h, y + h * k)
-        total += k
+    def rk4(self, t: float, y: FloatArray, h: float) -> None:
+        """One RK4 step of every body in place, ``q`` renormalised."""
+        half, total, stage = 0.5 * h, self.total, self.stage
+        np.multiply(self.derivative(t, y, total), half, out=stage)
+        stage += y
+        for step in (half, h):
+            k = self.derivative(t + half, stage, self.out)
+            np.multiply(k, step, out=stage)
+            stage += y
+            k *= 2.0
+            total += k
+        total += self.derivative(t + h, stage, self.out)
         total *= h / 6.0
-        result = y + total
-        q = result[:4]
-        q *= 1.0 / np.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-        return result
+        y += total
+        norm, work = self.norm, self.work
+        np.multiply(y[0], y[0], out=norm)
+        for row in (1, 2, 3):
+            np.multiply(y[row], y[row], out=work)
+            norm += work
+        np.sqrt(norm, out=norm)
+        np.divide(1.0, norm, out=norm)
+        y[:4] *= norm

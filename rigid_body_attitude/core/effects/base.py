@@ -33,6 +33,7 @@ from typing import Any, ClassVar, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from rigid_body_attitude.core.batch_rows import BatchChunk
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.inertia import Inertia
 from rigid_body_attitude.core.registry import Registry
@@ -218,28 +219,6 @@ class Effect:
     def accept_input(self, input_name: str, t: float, value: FloatArray) -> None:
         """Take a commanded input (only called for names in :attr:`inputs`)."""
         raise SceneError(f'Effect {self.name!r} takes no input {input_name!r}')
-
-
-@dataclass(frozen=True)
-class BatchChunk:
-    """What a batch kernel sees of a chunk of ``n`` bodies (structure of arrays).
-
-    Attributes:
-        tensor: inertia tensors [kg m²], shape (3, 3, n) (``tensor[i, j]`` is ``J_ij`` of
-            every body).
-        mass: masses [kg], shape (n,).
-        parameters: the effect's numeric parameters for these bodies: a dispersed parameter
-            as an array over the bodies (shape (n,) or (3, n)), a shared one as a float or a
-            (3, 1) array (NumPy broadcasts both the same way).
-        diagonal: True when every tensor of the chunk is diagonal (kernels may then skip the
-            off-diagonal products, which are exact zeros). ``tensor`` has shape (3, 3, 1)
-            when every body has the same.
-    """
-
-    tensor: FloatArray
-    mass: FloatArray
-    parameters: Mapping[str, Any]
-    diagonal: bool = False
 
 
 class TorqueEffect(Effect, ABC):

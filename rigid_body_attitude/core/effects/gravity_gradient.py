@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.batch_rows import cross_rows
 from rigid_body_attitude.core.effects.base import (
     as_vec, BatchChunk, BodyProperties, FloatArray, Parameter, positive, Quat, real, register,
     REQUIRED, TorqueEffect, Vec, vector3)
@@ -80,19 +81,19 @@ class GravityGradient(TorqueEffect):
 
     def add_batch_torque(self, t: float, q: FloatArray, omega: FloatArray, chunk: BatchChunk,
                          out: FloatArray) -> None:
-        """The same orbit for every body; each body's own inertia and attitude."""
-        radial = np.array(self.radial(t))[:, None]
-        x, y, z = quaternion.rotate_rows(q, radial, inverse=True)
-        tensor = chunk.tensor
-        if chunk.diagonal:
-            jx, jy, jz = tensor[0, 0] * x, tensor[1, 1] * y, tensor[2, 2] * z
-        elif tensor.shape[2] > 1:  # a tensor per body: one contraction
-            jx, jy, jz = np.einsum('ijn,jn->in', tensor, np.stack((x, y, z)))
-        else:
-            jx = tensor[0, 0] * x + tensor[0, 1] * y + tensor[0, 2] * z
-            jy = tensor[1, 0] * x + tensor[1, 1] * y + tensor[1, 2] * z
-            jz = tensor[2, 0] * x + tensor[2, 1] * y + tensor[2, 2] * z
-        gain = self.gain
-        out[0] += gain * (y * jz - z * jy)
-        out[1] += gain * (z * jx - x * jz)
-        out[2] += gain * (x * jy - y * jx)
+        """The same orbit for every body; each body's own inertia and attitude: ``r̂_b`` by
+        the formula of :func:`~rigid_body_attitude.core.quaternion.rotate_inverse_floats`
+        (``τ = 2 r̂_w × q_v`` as one product with a constant matrix), then ``r̂_b × (gain J)
+        r̂_b``, row by row into work arrays kept by the chunk."""
+        x, y, z = self.radial(t)
+        work = chunk.scratch('work', 1)[0]
+        turn = chunk.scratch('turn', 3)
+        np.matmul(np.array([[0.0, -2.0 * z, 2.0 * y], [2.0 * z, 0.0, -2.0 * x],
+                            [-2.0 * y, 2.0 * x, 0.0]]), q[1:], out=turn)
+        radial = chunk.scratch('radial', 3)  # r̂_w + w τ + τ × q_v
+        for row, component in enumerate((x, y, z)):
+            np.multiply(q[0], turn[row], out=radial[row])
+            radial[row] += component
+        cross_rows(turn, q[1:], radial, work, accumulate=True)
+        inertial = chunk.inertia_product(radial, chunk.scratch('inertial', 3), self.gain)
+        cross_rows(radial, inertial, out, work, accumulate=True)

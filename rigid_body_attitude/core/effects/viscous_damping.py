@@ -48,4 +48,6 @@ class ViscousDamping(TorqueEffect):
     def add_batch_torque(self, t: float, q: FloatArray, omega: FloatArray, chunk: BatchChunk,
                          out: FloatArray) -> None:
         """``−c ∘ ω`` per body (``coefficient`` may be dispersed)."""
-        out -= chunk.parameters['coefficient'] * omega
+        work = chunk.scratch('work', 3)
+        np.multiply(chunk.parameters['coefficient'], omega, out=work)
+        out -= work
