@@ -60,7 +60,38 @@ def sweeps_section(sweeps: List[dict], target: str = 'node',
                 f'{_fmt(theirs.get("cpu_percent"), 1)} | {mine["other_load_cores"]:.2f} | '
                 f'{_latency_verdict(rate, mine, theirs)} |')
         lines.append('')
-    return lines
+    return lines + _sweeps_summary(sweeps, target, yardstick)
+
+
+#: A row whose maximum latency exceeds this has a stall (the Fast DDS listener's 333 ms one
+#: before the package profile bounded it to 10 ms: ``bench/NOTES.md``, section 9).
+STALL_MS = 100.0
+
+
+def _sweeps_summary(sweeps: List[dict], target: str, yardstick: str) -> List[str]:
+    """Across all sweeps: rows met, rows with a stall, the largest maxima."""
+    pairs = [(rate, mine, _rows_by_rate(sweep, yardstick).get(rate, {}))
+             for sweep in sweeps for rate, mine in sorted(_rows_by_rate(sweep, target).items())]
+    met = sum(_latency_verdict(rate, mine, theirs).startswith('met')
+              for rate, mine, theirs in pairs)
+
+    def stalls(rows: List[dict]) -> str:
+        maxima = [row.get('latency_max_ms') for row in rows]
+        stalled = [value for value in maxima if value is not None and value > STALL_MS]
+        return f'{len(stalled)} of {len(rows)}'
+
+    def largest(rows: List[dict]) -> str:
+        maxima = [row['latency_max_ms'] for row in rows if row.get('latency_max_ms') is not None]
+        return _fmt(max(maxima), 1) if maxima else '–'
+
+    low = [mine for rate, mine, _ in pairs if rate <= TARGET_P99_UP_TO_HZ]
+    high = [mine for rate, mine, _ in pairs if rate > TARGET_P99_UP_TO_HZ]
+    relay_rows = [theirs for _, _, theirs in pairs if theirs]
+    return [f'**Across the {len(sweeps)} sweeps:** the node met the latency and loss target in '
+            f'{met} of {len(pairs)} rows; rows with a maximum latency over {STALL_MS:g} ms: '
+            f'node {stalls([mine for _, mine, _ in pairs])}, fast relay {stalls(relay_rows)}. '
+            f'Largest node maximum up to {TARGET_P99_UP_TO_HZ:.0f} Hz: {largest(low)} ms; '
+            f'above: {largest(high)} ms.', '']
 
 
 def _latency_verdict(rate: float, node: dict, relay: dict) -> str:

@@ -68,7 +68,7 @@ def row_line(label: str, row: dict) -> str:
             f'lost {row["lost"]:>6}  pub {row["publisher_hz"]:>8.0f} Hz  '
             f'cpu {row["cpu_percent"]:5.1f} %  others {row["other_load_cores"]:4.2f}  '
             f'p50 {_fmt(row["latency_p50_ms"])} ms  '
-            f'p99 {_fmt(row["latency_p99_ms"])} ms')
+            f'p99 {_fmt(row["latency_p99_ms"])} ms  max {_fmt(row.get("latency_max_ms"))} ms')
 
 
 def publisher_kept_up(row: dict) -> bool:

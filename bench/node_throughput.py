@@ -171,9 +171,12 @@ class Session:
         self.workdir = workdir
         self.processes: List[Process] = []
 
-    def start(self, name: str, argv: List[str], json_stdout: bool = False) -> Process:
-        """Start ``argv`` with its log in ``workdir/name.log``."""
-        process = Process(argv, self.env, self.workdir / f'{name}.log', json_stdout)
+    def start(self, name: str, argv: List[str], json_stdout: bool = False,
+              extra_env: Optional[Dict[str, str]] = None) -> Process:
+        """Start ``argv`` (environment plus ``extra_env``) with its log in
+        ``workdir/name.log``."""
+        process = Process(argv, {**self.env, **(extra_env or {})}, self.workdir / f'{name}.log',
+                          json_stdout)
         self.processes.append(process)
         return process
 
@@ -184,18 +187,29 @@ class Session:
         return [problem for problem in problems if problem]
 
 
+def endpoint_environment(profile: str) -> Dict[str, str]:
+    """The Fast DDS profile of the bench's own publisher and subscriber: the package's
+    ``config/fastdds.xml`` by default, as the README tells users to give the processes that
+    talk to the node (its shared-memory setting protects the receiving process from Fast DDS's
+    333 ms listener stall, ``bench/NOTES.md`` section 9); ``none`` = Fast DDS's defaults."""
+    if profile == 'none':
+        return {}
+    return {'FASTRTPS_DEFAULT_PROFILES_FILE': profile, 'FASTDDS_DEFAULT_PROFILES_FILE': profile}
+
+
 def start_processes(session: Session, target_argv: List[str], rate: float, duration: float,
                     warmup: float, args: argparse.Namespace) -> Dict[str, Process]:
     """Start subscriber, target and publisher; return once the publisher is matched."""
     python = sys.executable
+    endpoint_env = endpoint_environment(args.endpoint_profile)
     subscriber = session.start('subscriber', [
         python, str(BENCH / '_subscriber.py'), '--out', str(session.workdir / 'poses.bin')],
-        json_stdout=True)
+        json_stdout=True, extra_env=endpoint_env)
     target = session.start('target', target_argv)
     subscriber.wait_event('matched', args.match_timeout, watch=[target])
     publisher = session.start('publisher', [
         python, str(BENCH / '_publisher.py'), '--rate', str(rate), '--duration', str(duration),
-        '--warmup', str(warmup)], json_stdout=True)
+        '--warmup', str(warmup)], json_stdout=True, extra_env=endpoint_env)
     publisher.wait_event('matched', args.match_timeout, watch=[target])
     return {'target': target, 'publisher': publisher, 'subscriber': subscriber}
 
@@ -365,6 +379,9 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--soak-minutes', type=int, default=10)
     parser.add_argument('--soak-rate', type=float, default=1000.0)
     parser.add_argument('--results-dir', type=Path, default=BENCH / 'results')
+    parser.add_argument('--endpoint-profile', default=str(REPO / 'config' / 'fastdds.xml'),
+                        help='Fast DDS profile of the bench publisher and subscriber (default '
+                        'the package\'s; "none" = Fast DDS defaults); targets keep their own')
     parser.add_argument('--keep-traces', type=Path, default=None, metavar='DIR',
                         help='keep each run\'s poses.bin and target log in DIR')
     parser.add_argument('--report', type=Path, default=BENCH / 'results' / 'throughput.md')

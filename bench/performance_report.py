@@ -87,8 +87,10 @@ rmw_fastrtps allows (another rmw, or the gyro path in a C++ component)."""
 QOS_NOTE = """\
 **Configuration.** The node runs as a user would start it, with its default parameters and
 QoS (`rigid_body_attitude/ros/qos.py`): inputs RELIABLE, KEEP_LAST 5000; outputs RELIABLE,
-KEEP_LAST 1000 (the output default when measured; 5000 since). The publisher, the subscriber
-and the relays use RELIABLE, KEEP_LAST 10000.
+KEEP_LAST 5000, and the package's Fast DDS profile. The publisher, the subscriber and the
+relays use RELIABLE, KEEP_LAST 10000; the publisher and the subscriber load the package's Fast
+DDS profile as the README asks of processes that talk to the node (`--endpoint-profile`), the
+relays run on Fast DDS's defaults.
 At 20 kHz the publisher, the node and the subscriber together need about the two cores (a
 publisher that falls short of the rate is marked "(short)"), so that row also measures the
 machine, not the node alone."""
@@ -96,29 +98,22 @@ machine, not the node alone."""
 
 #: What caused the ~300 ms latency stalls, and what removed them (issue 13, item 5).
 STALLS_NOTE = """\
-**The ~300 ms stalls: characterized, not removed.** In the sweeps above the node's p99 is
-0.3–0.8 ms at most rates up to 5 kHz, but 17 of its 40 rows contain one stall (maximum
-325–347 ms up to 5 kHz; 446–835 ms at 15–20 kHz, where catching up takes longer), against 1 of
-40 for the fast relay (267 ms). The losses of the node at 5–20 kHz (232, 234, 3 723, 6 546 and
-18 samples) are all in rows with a stall: after one, more than the 1 000 samples of the `pose`
-writer's history were outstanding. Keeping each run's poses
-(`node_throughput.py --keep-traces`) shows every stall the same way: the subscriber receives
-no pose for 250–350 ms, then every pose of the gap within about 1 ms (the node falls silent
-and catches up; the publisher was on time, its stamps are 1 ms apart), **once per run, about
-2.4 s after the publisher's first sample (about 3 s after it matched the node)**. Measured
-(node at 500–2 000 Hz, three runs per variant): with a 6 s warm-up instead of 0.5 s the
-measured windows had none (p99 0.24–0.43 ms, 6 of 6; the one stall of those runs fell in the
-warm-up, at 2.2 s); it stays the same with the node on UDP only
-(`FASTDDS_BUILTIN_TRANSPORTS=UDPv4`), with every writer's heartbeat period at 100 ms instead
-of 3 s, with `cpu_scheduling:=default` (no `SCHED_BATCH`) and with Fast DDS's default profile
-instead of the package's. It is not the executor thread either: a version whose executor
-thread woke for every gyro message (the gyro subscriptions' QoS events in the executor, 70 %
-of a core at 1 kHz) had many more and longer stalls (p99 40–1 025 ms), and the node now keeps
-that thread asleep; the previous `serve.py` showed the same 335 ms start-up stall. So in
-steady state the node meets p99 ≤ 1 ms; the one start-up stall per new publisher remains, its
-cause (something in the node process about 3 s after a new publisher is discovered, not in
-the transport, the scheduler policy or the heartbeats) is not found. The mixed soak's
-maximum (335.8 ms over 10 minutes) has the same size; that script keeps no traces."""
+**The ~300 ms stalls: found in Fast DDS, bounded by the package profile.** Before this
+session about one run in three had one stall: the subscriber received no pose for 225–335 ms,
+then all of them within 1 ms (17 of 40 node rows in session 3's five sweeps). Measured this
+session (`bench/NOTES.md`, section 9): the node handles and publishes every gyro message on
+time through a stall (a 1 ms in-process sampler); uprobes on Fast DDS show the node's writer
+pushing every sample of the stall (334 of 334 successful) into the subscriber's shared-memory
+port while the subscriber's listener thread sleeps in `wait_pop` until its own timeout,
+333 ms (Fast DDS 2.14's default `healthy_check_timeout_ms` 1000 / 3), right after that
+process handled a peer's participant re-announcement: a lost wake-up in the *receiving*
+process. The package's `config/fastdds.xml` now sets `healthy_check_timeout_ms` 30 (the
+listener wakes every 10 ms, so such a stall lasts at most 10 ms). It protects the node's own
+inputs, and the README tells users to give the same file to the processes that subscribe to
+the node; the bench's publisher and subscriber load it (`--endpoint-profile`), the relays keep
+Fast DDS's defaults. In interleaved 1 kHz runs: bench endpoints with the default check 2 of 8
+runs stalled (263 and 334 ms); with 30 ms 0 of 24 (maximum 9.4 ms); the profile on the node
+alone, 4 of 8. The sweeps above are with the profile on both ends."""
 
 
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).

@@ -1,16 +1,25 @@
 """How the node sets up the middleware and the Linux scheduler for itself before it serves.
 
-At kHz gyro rates most of the node's CPU goes to per-message thread wake-ups, not to its own
-work (``bench/NOTES.md``, section 3). Two of those wake-ups do nothing useful and can be
-avoided without touching the ROS QoS:
+The package's Fast DDS profile (``config/fastdds.xml``, :func:`use_packaged_fastdds_profile`)
+must be in place before the participant exists, so :func:`main
+<rigid_body_attitude.ros.node.main>` applies it before ``rclpy.init``, through the environment
+variable Fast DDS reads, and never over a profile the user chose. It holds two settings:
 
-* **Fast DDS NACK suppression** (:func:`use_packaged_fastdds_profile`). With Fast DDS's
-  default ``nackSupressionDuration`` of 0, every sample a reliable writer sends to a reader in
-  another process restarts a timer on the participant's event thread, which wakes up for it.
-  The package's ``config/fastdds.xml`` sets 10 ms; the timer then fires at most 100 times a
-  second. It must be in place before the participant exists, so :func:`main
-  <rigid_body_attitude.ros.node.main>` applies it before ``rclpy.init``, through the environment
-  variable Fast DDS reads, and never over a profile the user chose.
+* **A 30 ms shared-memory health check.** Fast DDS 2.14's shared-memory listener sleeps on an
+  interprocess condition that can miss its wake-ups for a while after the process handles a
+  peer's participant re-announcement; the listener then wakes only on its own timeout, a third
+  of ``healthy_check_timeout_ms`` (default 1000 ms: the "~300 ms stall" of issue 13, in about
+  one run of three of ``bench/node_throughput.py``). With 30 ms such a stall lasts at most
+  10 ms. It protects the process that receives, so the node's own gyro and command inputs,
+  and any subscriber that loads the same file (``bench/NOTES.md``, section 9).
+* **Fast DDS NACK suppression.** At kHz gyro rates most of the node's CPU goes to per-message
+  thread wake-ups, not to its own work (``bench/NOTES.md``, section 3). With Fast DDS's
+  default ``nackSupressionDuration`` of 0, every sample a reliable writer sends to a reader
+  in another process restarts a timer on the participant's event thread, which wakes up for
+  it. The profile sets 10 ms; the timer then fires at most 100 times a second.
+
+And for the scheduler:
+
 * **SCHED_BATCH** (:func:`apply_cpu_scheduling`, parameter ``cpu_scheduling``). When a Fast
   DDS receive thread hands a message to the gyro loop, Linux lets each newly woken thread
   preempt the one that woke it; the loop then blocks on the reader's mutex, which the receive
@@ -21,7 +30,7 @@ avoided without touching the ROS QoS:
   ``cpu_scheduling: default`` keeps the usual policy.
 
 Measured on this project's machine at 1 kHz (``bench/fast_relay.py``): Fast DDS defaults 12.5 %
-of a core; with the profile 9.8–10.3 %; with the profile and SCHED_BATCH 8.8–9.2 %, p99
+of a core; with the NACK suppression 9.8–10.3 %; with it and SCHED_BATCH 8.8–9.2 %, p99
 latency unchanged (0.31 ms).
 """
 
@@ -35,9 +44,12 @@ from typing import NamedTuple
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.paths import config_folders
 
-__all__ = ['CPU_SCHEDULING', 'FASTDDS_PROFILE_VARIABLES', 'SchedulingOutcome',
-           'apply_cpu_scheduling', 'check_cpu_scheduling', 'packaged_fastdds_profile',
-           'use_packaged_fastdds_profile']
+__all__ = ['CPU_SCHEDULING', 'FASTDDS_PROFILE_VARIABLES', 'PROFILE_SETTINGS',
+           'SchedulingOutcome', 'apply_cpu_scheduling', 'check_cpu_scheduling',
+           'packaged_fastdds_profile', 'use_packaged_fastdds_profile']
+
+#: What the packaged profile sets, for the start-up log.
+PROFILE_SETTINGS = 'shared-memory health check 30 ms, NACK suppression 10 ms'
 
 #: RMW implementations that read Fast DDS XML profiles ('' = the default RMW, rmw_fastrtps_cpp).
 FASTDDS_RMWS = ('', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp')
@@ -94,7 +106,7 @@ def use_packaged_fastdds_profile(environ: MutableMapping[str, str] | None = None
         return 'Fast DDS profile not used: config/fastdds.xml is not installed'
     for variable in FASTDDS_PROFILE_VARIABLES:
         environ[variable] = str(profile)
-    return f'Fast DDS profile {profile} (NACK suppression 10 ms)'
+    return f'Fast DDS profile {profile} ({PROFILE_SETTINGS})'
 
 
 def check_cpu_scheduling(value: str) -> str:

@@ -1,8 +1,9 @@
 """The node's own middleware and scheduler set-up (:mod:`rigid_body_attitude.ros.middleware`).
 
-What the settings buy is measured, not tested: ``bench/NOTES.md`` section 3 and
+What the settings buy is measured, not tested: ``bench/NOTES.md`` sections 3 and 9 and
 ``docs/performance.md``. Here: which profile is used when, that the shipped profile is what
-its comment says, and that the scheduling policy reaches every thread of the installed node.
+its comment says and reaches the node's participant, and that the scheduling policy reaches
+every thread of the installed node.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from pathlib import Path
 import subprocess
 import sys
 import textwrap
+import time
 import xml.etree.ElementTree as ElementTree
 
 import pytest
@@ -19,25 +21,101 @@ from test_node_subprocess import read_until, start, stop_with_sigint
 
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.ros.middleware import (
-    apply_cpu_scheduling, check_cpu_scheduling, FASTDDS_PROFILE_VARIABLES,
+    apply_cpu_scheduling, check_cpu_scheduling, FASTDDS_PROFILE_VARIABLES, PROFILE_SETTINGS,
     packaged_fastdds_profile, use_packaged_fastdds_profile)
 
 FASTDDS_NAMESPACE = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
 
 
-def test_the_packaged_profile_is_installed_and_sets_10_ms_nack_suppression_only():
+def _element(parent: ElementTree.Element, path: str) -> ElementTree.Element:
+    """The one element at ``path`` (tags without the Fast DDS namespace) below ``parent``."""
+    found = parent.findall('/'.join(FASTDDS_NAMESPACE + tag for tag in path.split('/')))
+    assert len(found) == 1, path
+    return found[0]
+
+
+def _children(element: ElementTree.Element) -> list[str]:
+    return [child.tag.removeprefix(FASTDDS_NAMESPACE) for child in element]
+
+
+def test_the_packaged_profile_sets_its_two_settings_and_nothing_else():
     profile = packaged_fastdds_profile()
     assert profile is not None and profile.is_file()
-    root = ElementTree.parse(profile).getroot()
-    writers = root.findall(f'{FASTDDS_NAMESPACE}profiles/{FASTDDS_NAMESPACE}data_writer')
-    assert len(writers) == 1 and writers[0].get('is_default_profile') == 'true'
-    assert [child.tag for child in writers[0]] == [f'{FASTDDS_NAMESPACE}times']
-    times = writers[0].find(f'{FASTDDS_NAMESPACE}times')
-    assert [child.tag for child in times] == [f'{FASTDDS_NAMESPACE}nackSupressionDuration']
-    duration = times.find(f'{FASTDDS_NAMESPACE}nackSupressionDuration')
-    seconds = (int(duration.find(f'{FASTDDS_NAMESPACE}sec').text)
-               + int(duration.find(f'{FASTDDS_NAMESPACE}nanosec').text) * 1e-9)
+    profiles = _element(ElementTree.parse(profile).getroot(), 'profiles')
+    assert _children(profiles) == ['transport_descriptors', 'participant', 'data_writer']
+    # Every writer: NACK suppression 10 ms.
+    writer = _element(profiles, 'data_writer')
+    assert writer.get('is_default_profile') == 'true'
+    assert _children(writer) == ['times']
+    assert _children(_element(writer, 'times')) == ['nackSupressionDuration']
+    duration = _element(writer, 'times/nackSupressionDuration')
+    seconds = (int(_element(duration, 'sec').text)
+               + int(_element(duration, 'nanosec').text) * 1e-9)
     assert seconds == pytest.approx(0.010, abs=1e-12)
+    # The participant: Fast DDS's two built-in transports, the shared-memory one with a 30 ms
+    # health check (its listener wakes every 10 ms).
+    participant = _element(profiles, 'participant')
+    assert participant.get('is_default_profile') == 'true'
+    assert _children(_element(participant, 'rtps')) == ['userTransports', 'useBuiltinTransports']
+    assert _element(participant, 'rtps/useBuiltinTransports').text == 'false'
+    used = [entry.text for entry in _element(participant, 'rtps/userTransports')]
+    descriptors = {_element(entry, 'transport_id').text: entry
+                   for entry in _element(profiles, 'transport_descriptors')}
+    assert sorted(used) == sorted(descriptors)
+    settings = {_element(entry, 'type').text: {
+        tag: _element(entry, tag).text for tag in _children(entry)
+        if tag not in ('transport_id', 'type')} for entry in descriptors.values()}
+    assert settings == {'SHM': {'healthy_check_timeout_ms': '30'}, 'UDPv4': {}}
+
+
+def _user_data_listener_wakeups(pid: int, seconds: float) -> dict[int, int]:
+    """Voluntary context switches over ``seconds`` of each Fast DDS shared-memory listener
+    thread of ``pid`` that serves a user-data port of this run's domain (threads are named
+    ``dds.shm.<port>``; user-data ports are 7400 + 250 domain + 11 + 2 participant, while the
+    metatraffic ports 7000 + participant are shared by every domain, so one left behind by a
+    crashed process keeps that process's settings)."""
+    first_user_port = 7400 + 250 * int(os.environ['ROS_DOMAIN_ID'])
+
+    def switches() -> dict[int, int]:
+        counts = {}
+        for task in Path(f'/proc/{pid}/task').iterdir():
+            name = (task / 'comm').read_text().strip()
+            port = name.removeprefix('dds.shm.')
+            if port.isdigit() and int(port) >= first_user_port:
+                status = (task / 'status').read_text()
+                counts[int(port)] = int(status.split('voluntary_ctxt_switches:')[1].split()[0])
+        return counts
+    before = switches()
+    time.sleep(seconds)
+    after = switches()
+    return {port: after[port] - before[port] for port in before}
+
+
+@pytest.mark.parametrize('profile, least, most', [
+    ('packaged', 60, 400),  # 2 s / 10 ms = 200 wake-ups; 60 leaves room for a loaded machine
+    ('fast_dds_defaults', 0, 20),  # 2 s / 333 ms = 6
+])
+def test_the_nodes_idle_shared_memory_listener_wakes_every_10_ms_with_the_profile(
+        processes, monkeypatch, tmp_path, profile, least, most):
+    """The listener's own wake-up period is what bounds Fast DDS's lost-wake-up stall, so the
+    profile must reach the node's participant (a participant profile that did not apply, or
+    an rmw that replaced its transports, would leave the 333 ms default)."""
+    for variable in FASTDDS_PROFILE_VARIABLES:
+        monkeypatch.delenv(variable, raising=False)
+    if profile == 'fast_dds_defaults':
+        empty = tmp_path / 'empty.xml'
+        empty.write_text('<?xml version="1.0" encoding="UTF-8"?>\n<dds xmlns='
+                         '"http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>'
+                         '</profiles></dds>\n')
+        monkeypatch.setenv('FASTRTPS_DEFAULT_PROFILES_FILE', str(empty))
+    process = start('--ros-args', '-p', 'scene:=strapdown')
+    processes.append(process)
+    lines = read_until(process, 'serving')
+    wakeups = _user_data_listener_wakeups(process.pid, 2.0)
+    code, stderr = stop_with_sigint(process)
+    assert code == 0, ''.join(lines) + stderr
+    assert len(wakeups) == 1, wakeups  # one participant, one user-data port
+    assert least <= next(iter(wakeups.values())) <= most, wakeups
 
 
 @pytest.mark.parametrize('rmw', ['', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp'])
@@ -46,7 +124,7 @@ def test_the_profile_is_used_when_fast_dds_is_not_configured(tmp_path, rmw):
     note = use_packaged_fastdds_profile(environ, tmp_path)
     profile = str(packaged_fastdds_profile())
     assert all(environ[variable] == profile for variable in FASTDDS_PROFILE_VARIABLES)
-    assert note == f'Fast DDS profile {profile} (NACK suppression 10 ms)'
+    assert note == f'Fast DDS profile {profile} ({PROFILE_SETTINGS})'
 
 
 @pytest.mark.parametrize('environ, reason', [
@@ -164,7 +242,7 @@ def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(processes, m
     stderr = ''.join(lines) + stderr
     assert code == 0, stderr
     # The profile is the packaged one and Fast DDS parsed it without complaint.
-    assert f'Fast DDS profile {packaged_fastdds_profile()} (NACK suppression 10 ms)' in stderr
+    assert f'Fast DDS profile {packaged_fastdds_profile()} ({PROFILE_SETTINGS})' in stderr
     assert 'XMLPARSER' not in stderr and 'Error' not in stderr and 'Traceback' not in stderr
 
 
