@@ -120,13 +120,22 @@ alone, 4 of 8. The sweeps above are with the profile on both ends."""
 DYNAMICS_NOTE = """\
 **What the dynamics figures depend on.** With the fast core (plain-float effects, the
 generated RK4 kernel, `casimir8` for `heavy_top`: "Dynamics scenes and effects" above) the
-propagator alone is 0.1–0.7 % of a core per scene; the rest is the node's own share: the
+propagator alone is 0.1–1.0 % of a core per scene; the rest is the node's own share: the
 wake-ups of the 50 Hz ticks, the outputs (`RosOutputs.dynamics`, 35 µs per tick, 0.2 % at
 50 Hz, built even when nobody subscribes), `/diagnostics` (0.17 ms once a second) and the
 propagator's steps running with cold caches between ticks. Serving the ticks from the gyro
 loop instead of the executor saved about 2.8 % of a core at 50 Hz (a wait set of every
 entity rebuilt per tick, measured in-process on `torque_free_box`). Subscribed windows are
-noisier than unsubscribed ones: the subscriber process shares the two cores."""
+noisier than unsubscribed ones: the subscriber process shares the two cores.
+**Since the Fast DDS profile bounds the shared-memory stall** ("Latency in repeated sweeps"),
+the node's two idle shared-memory listeners wake every 10 ms: 0.7–0.9 % of a core per scene
+(threads `dds.shm.*` in `bench/results/node/node_dynamics_cpu.json`), which puts most scenes
+over the 3 % target on this machine today. Interleaved 12 s windows on `torque_free_box`,
+unsubscribed: 3.1–3.7 % with the package profile, 2.8–3.4 % with a 90 ms health check (30 ms
+stall bound), 2.6–3.1 % with Fast DDS's defaults (333 ms stalls). Session 3 measured 1.8–2.8 %
+for these scenes with the old profile (NACK suppression only) on a quieter machine; the
+propagator's own share is the same as then (0.1–1.0 % against 0.1–0.7 %), the main thread's
+wake-ups and outputs cost more today (2.2–4.0 %)."""
 
 
 def _load(path: Path) -> Optional[dict]:
