@@ -15,6 +15,7 @@ receive times (ns), and exits.
 import argparse
 from array import array
 import json
+import os
 import signal
 import sys
 import time
@@ -40,7 +41,6 @@ def _record(subscription, context, stamps: array, receive_times: array) -> None:
     wall_ns = time.time_ns
     wait_set = _rclpy.WaitSet(1, 0, 0, 0, 0, 0, context.handle)
     matched = False
-    import os
     wakes = array('q') if os.environ.get('BENCH_WAKE_LOG') else None
     while not _stop_requested:
         wait_set.clear_entities()

@@ -194,7 +194,8 @@ def endpoint_environment(profile: str) -> Dict[str, str]:
     333 ms listener stall, ``bench/NOTES.md`` section 9); ``none`` = Fast DDS's defaults."""
     if profile == 'none':
         return {}
-    return {'FASTRTPS_DEFAULT_PROFILES_FILE': profile, 'FASTDDS_DEFAULT_PROFILES_FILE': profile}
+    from rigid_body_attitude.ros.middleware import FASTDDS_PROFILE_VARIABLES
+    return {variable: profile for variable in FASTDDS_PROFILE_VARIABLES}
 
 
 def start_processes(session: Session, target_argv: List[str], rate: float, duration: float,

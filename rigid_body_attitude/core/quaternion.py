@@ -225,15 +225,9 @@ def rotate_rows(q: FloatArray, v: FloatArray, inverse: bool = False) -> FloatArr
         vx, vy, vz = (float(c) for c in v[:, 0])
     else:
         vx, vy, vz = v
+    if inverse:  # rotation by q* = (w, -x, -y, -z): the same formula, bit for bit
+        x, y, z = -x, -y, -z
     out = np.empty((3, q.shape[1]))
-    if inverse:  # rotation by q* (the formula of rotate_inverse_floats)
-        tx = 2.0 * (z * vy - y * vz)
-        ty = 2.0 * (x * vz - z * vx)
-        tz = 2.0 * (y * vx - x * vy)
-        np.add(vx + w * tx, z * ty - y * tz, out=out[0])
-        np.add(vy + w * ty, x * tz - z * tx, out=out[1])
-        np.add(vz + w * tz, y * tx - x * ty, out=out[2])
-        return out
     tx = 2.0 * (y * vz - z * vy)
     ty = 2.0 * (z * vx - x * vz)
     tz = 2.0 * (x * vy - y * vx)
