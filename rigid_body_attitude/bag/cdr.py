@@ -88,6 +88,7 @@ __all__ = [
     'quaternion_stamped',
     'quaternion_stamped_encoder',
     'stamp_to_ns',
+    'stamped_floats_encoder',
     'twist_angular',
     'twist_linear',
     'vector3_stamped',
@@ -395,6 +396,24 @@ def pose_stamped_encoder(frame_id: str
         w, x, y, z = attitude
         try:
             return pack(_ENCAPSULATION_LE, sec, nanosec, constant, px, py, pz, x, y, z, w)
+        except struct.error as err:
+            raise _stamp_error(sec, nanosec) from err
+    return encode
+
+
+def stamped_floats_encoder(frame_id: str, count: int
+                           ) -> Callable[[int, int, Sequence[float]], bytes]:
+    """``encode(sec, nanosec, values)``: a header with ``frame_id`` then ``count`` float64,
+    the layout of ``Vector3Stamped`` (3: :func:`encode_vector3_stamped`) and ``TwistStamped``
+    (6, linear then angular: :func:`encode_twist_stamped`).
+
+    The header bytes of ``frame_id`` are packed once; each call is one ``struct`` call.
+    """
+    pack, constant = _header_struct(frame_id, f'{count}d')
+
+    def encode(sec: int, nanosec: int, values: Sequence[float]) -> bytes:
+        try:
+            return pack(_ENCAPSULATION_LE, sec, nanosec, constant, *values)
         except struct.error as err:
             raise _stamp_error(sec, nanosec) from err
     return encode

@@ -45,6 +45,7 @@ from rigid_body_attitude.session.decoding import input_handler
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.outputs import RosOutputs
 from rigid_body_attitude.ros.qos import INPUT_QOS
+from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
 from rigid_body_attitude.session.settings import (
@@ -85,6 +86,7 @@ class AttitudePropagatorNode(Node):
     def __init__(self, **node_options: Any) -> None:
         """Declare the parameters, load the scene, create the session, topics and timers."""
         super().__init__(NODE_NAME, **node_options)
+        self._read_clock = clock_nanoseconds(self.get_clock())
         self.state_lock = threading.Lock()
         values = self._declare_parameters()
         problem = check_values(values)
@@ -119,8 +121,7 @@ class AttitudePropagatorNode(Node):
 
     def _clock_ns(self) -> int:
         """The node clock (receive times; ``use_sim_time`` makes it the ``/clock``)."""
-        nanoseconds: int = self.get_clock().now().nanoseconds
-        return nanoseconds
+        return self._read_clock()
 
     # -- set-up -----------------------------------------------------------------------------
 

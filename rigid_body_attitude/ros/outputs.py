@@ -1,11 +1,12 @@
 """The node's outputs: a session's :class:`~rigid_body_attitude.session.base.OutputSink` over
 rclpy publishers.
 
-Gyro-rate outputs (``orientation``, ``pose``, ``imu/data``) are written as CDR bytes with the
-header packed once (:mod:`rigid_body_attitude.bag.cdr`, the replay tool's codecs) and only
-when a subscription is matched (:class:`RawOutput`); the rest are ordinary messages reused from
-tick to tick. ``imu/data`` is the input Imu with the orientation filled in (REP-145:
-orientation covariance all zeros = known, unknown covariance) and the stamp the session used.
+Every per-sample and per-tick output (``orientation``, ``pose``, ``imu/data``, ``twist``,
+``energy``, ``angular_momentum``) is written as CDR bytes with the header packed once
+(:mod:`rigid_body_attitude.bag.cdr`, the replay tool's codecs) and only when a subscription is
+matched (:class:`RawOutput`); ``/diagnostics`` (once a second) is an ordinary message.
+``imu/data`` is the input Imu with the orientation filled in (REP-145: orientation covariance
+all zeros = known, unknown covariance) and the stamp the session used.
 """
 
 from __future__ import annotations
@@ -13,7 +14,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped, QuaternionStamped, TwistStamped, Vector3Stamped
 from rclpy.node import Node
@@ -22,7 +22,8 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 
 from rigid_body_attitude.bag.cdr import (
-    imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder)
+    encode_float64, imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder,
+    stamped_floats_encoder)
 from rigid_body_attitude.ros.qos import OUTPUT_QOS
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
@@ -38,7 +39,7 @@ _ZERO_POSITION = (0.0, 0.0, 0.0)
 
 
 class RawOutput:
-    """A gyro-rate output: its subscription count and CDR-bytes publish, bound once.
+    """An output's subscription count and CDR-bytes publish, bound once.
 
     Both go straight to rclpy's publisher handle, without :class:`rclpy.publisher.Publisher`'s
     per-call wrapper (it enters the handle as a context manager, against destruction by
@@ -72,24 +73,24 @@ class RosOutputs:
         self.momentum = self._publisher(Vector3Stamped, 'angular_momentum')
         self.diagnostics_publisher = node.create_publisher(
             DiagnosticArray, '/diagnostics', OUTPUT_QOS)
+        self.orientation_raw = RawOutput(self.orientation)
+        self.pose_raw = RawOutput(self.pose)
+        self.energy_raw = RawOutput(self.energy)
+        self.momentum_raw = RawOutput(self.momentum)
         if gyro_scene:
             self.imu = self._publisher(Imu, 'imu/data')
-            self.orientation_raw = RawOutput(self.orientation)
-            self.pose_raw = RawOutput(self.pose)
             self.imu_raw = RawOutput(self.imu)
         else:
             self.twist = self._publisher(TwistStamped, 'twist')
+            self.twist_raw = RawOutput(self.twist)
         #: The Imu message being handled while the session runs it, else None.
         self.current_imu: bytes | None = None
         #: Set by the session: outputs carry the inputs' stamps (else the receive time).
         self.use_header_stamps = True
-        self.orientation_message = QuaternionStamped()
-        self.world_header = self.orientation_message.header
-        self.pose_message = PoseStamped(header=self.world_header)
-        self.pose_message.pose.orientation = self.orientation_message.quaternion
-        self.momentum_message = Vector3Stamped(header=self.world_header)
-        self.energy_message = Float64()
-        self.twist_message = TwistStamped()
+        #: Frame of ``orientation``, ``pose`` and ``angular_momentum`` (:meth:`set_frames`).
+        self.world_frame = ''
+        #: Frame of ``twist`` (:meth:`set_frames`).
+        self.body_frame = ''
         self.hardware_id = ''
 
     def _publisher(self, message_type: Any, topic: str) -> Any:
@@ -99,10 +100,11 @@ class RosOutputs:
 
     def set_frames(self, world_frame: str, body_frame: str) -> None:
         """Frames of the world-frame outputs and of ``twist``."""
-        self.world_header.frame_id = world_frame
+        self.world_frame, self.body_frame = world_frame, body_frame
         self.encode_orientation = quaternion_stamped_encoder(world_frame)
         self.encode_pose = pose_stamped_encoder(world_frame)
-        self.twist_message.header.frame_id = body_frame
+        self.encode_momentum = stamped_floats_encoder(world_frame, 3)
+        self.encode_twist = stamped_floats_encoder(body_frame, 6)
 
     # -- OutputSink -------------------------------------------------------------------------
 
@@ -121,35 +123,26 @@ class RosOutputs:
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:
         """``orientation``, ``pose`` and ``twist`` of one dynamics tick."""
-        stamp = Time(sec=sec, nanosec=nanosec)
-        self.world_header.stamp = stamp
-        q = self.orientation_message.quaternion
-        q.w, q.x, q.y, q.z = sample.attitude
-        position = self.pose_message.pose.position
-        position.x, position.y, position.z = sample.position
-        self.orientation.publish(self.orientation_message)
-        self.pose.publish(self.pose_message)
-        twist = self.twist_message
-        twist.header.stamp = stamp
-        angular, linear = twist.twist.angular, twist.twist.linear
-        angular.x, angular.y, angular.z = sample.omega_body
-        linear.x, linear.y, linear.z = velocity_body
-        self.twist.publish(twist)
+        orientation, pose, twist = self.orientation_raw, self.pose_raw, self.twist_raw
+        if orientation.subscription_count():
+            orientation.publish(self.encode_orientation(sec, nanosec, sample.attitude))
+        if pose.subscription_count():
+            pose.publish(self.encode_pose(sec, nanosec, sample.position, sample.attitude))
+        if twist.subscription_count():
+            twist.publish(self.encode_twist(sec, nanosec, velocity_body + sample.omega_body))
 
     def wants_invariants(self) -> bool:
         """Whether ``energy`` or ``angular_momentum`` has a subscriber."""
-        return bool(self.energy.get_subscription_count()
-                    or self.momentum.get_subscription_count())
+        return bool(self.energy_raw.subscription_count()
+                    or self.momentum_raw.subscription_count())
 
     def invariants(self, sec: int, nanosec: int, energy: float,
                    world_momentum: Vector) -> None:
         """``energy`` and ``angular_momentum`` (stamped like the attitude)."""
-        self.energy_message.data = energy
-        self.energy.publish(self.energy_message)
-        self.world_header.stamp = Time(sec=sec, nanosec=nanosec)
-        vector = self.momentum_message.vector
-        vector.x, vector.y, vector.z = world_momentum
-        self.momentum.publish(self.momentum_message)
+        if self.energy_raw.subscription_count():
+            self.energy_raw.publish(encode_float64(energy))
+        if self.momentum_raw.subscription_count():
+            self.momentum_raw.publish(self.encode_momentum(sec, nanosec, world_momentum))
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the node clock."""

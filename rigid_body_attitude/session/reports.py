@@ -125,9 +125,8 @@ def body_frame_velocity(propagator: DynamicsPropagator | GyroPropagator
     for effect in propagator.stateful:
         velocity_world = effect.outputs().get('velocity')
         if velocity_world is not None:
-            x, y, z = quaternion.rotate_inverse(propagator.state.attitude,
-                                                velocity_world).tolist()
-            return x, y, z
+            return quaternion.rotate_inverse_floats(propagator.state.attitude_tuple(),
+                                                    velocity_world.tolist())
     return (0.0, 0.0, 0.0)
 
 

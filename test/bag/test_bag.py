@@ -159,6 +159,8 @@ def test_frame_encoders_give_the_general_encoders_bytes(frame_id):
     rng = np.random.default_rng(len(frame_id))
     encode_orientation = cdr.quaternion_stamped_encoder(frame_id)
     encode_pose = cdr.pose_stamped_encoder(frame_id)
+    encode_vector = cdr.stamped_floats_encoder(frame_id, 3)
+    encode_twist = cdr.stamped_floats_encoder(frame_id, 6)
     for stamp_ns in (0, STAMP_NS, 2 ** 31 * 1_000_000_000 - 1):
         sec, nanosec = divmod(stamp_ns, 1_000_000_000)
         attitude = tuple(normalize(rng.normal(size=4)).tolist())
@@ -167,6 +169,11 @@ def test_frame_encoders_give_the_general_encoders_bytes(frame_id):
             stamp_ns, frame_id, attitude)
         assert encode_pose(sec, nanosec, position, attitude) == cdr.encode_pose_stamped(
             stamp_ns, frame_id, position, attitude)
+        linear, angular = tuple(rng.normal(size=3).tolist()), tuple(rng.normal(size=3).tolist())
+        assert encode_vector(sec, nanosec, linear) == cdr.encode_vector3_stamped(
+            stamp_ns, frame_id, linear)
+        assert encode_twist(sec, nanosec, linear + angular) == cdr.encode_twist_stamped(
+            stamp_ns, frame_id, linear, angular)
 
 
 def test_frame_encoders_reject_bad_frames_and_stamps():
@@ -178,6 +185,10 @@ def test_frame_encoders_reject_bad_frames_and_stamps():
         cdr.quaternion_stamped_encoder('world')(2 ** 31, 0, (1.0, 0.0, 0.0, 0.0))
     with pytest.raises(InputError, match='nanosec=-1'):
         cdr.pose_stamped_encoder('world')(0, -1, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+    with pytest.raises(InputError, match='`frame_id` to be a string without NUL'):
+        cdr.stamped_floats_encoder('a\x00b', 3)
+    with pytest.raises(InputError, match='`sec` in int32 .* got sec=-2147483649'):
+        cdr.stamped_floats_encoder('world', 3)(-2 ** 31 - 1, 0, (0.0, 0.0, 0.0))
 
 
 @pytest.mark.parametrize('little_endian', [True, False])

@@ -26,6 +26,7 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 
+from rigid_body_attitude.bag.decoders import decode_pose_stamped
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import InputError, IntegratorError, SceneError
 from rigid_body_attitude.session.reports import body_frame_velocity
@@ -150,8 +151,9 @@ def test_runtime_parameter_changes_are_checked_and_applied(ros, request):
     assert not node.set_parameters([Parameter('body_frame', value='world')])[0].successful
     assert not node.set_parameters([Parameter('scene', value='dzhanibekov')])[0].successful
     assert node.set_parameters([Parameter('world_frame', value='map')])[0].successful
-    assert node.outputs.pose_message.header.frame_id == 'map'
-    assert node.outputs.orientation_message.header.frame_id == 'map'
+    assert node.outputs.world_frame == 'map'
+    pose = node.outputs.encode_pose(1, 2, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+    assert decode_pose_stamped(pose)[2] == 'map'
 
 
 @pytest.mark.parametrize('scene, inputs, outputs', [

@@ -1,6 +1,8 @@
 """The adapter over rclpy's private binding fails here, loudly, when rclpy changes."""
 
 import rclpy
+from rclpy.clock import Clock, ClockType, ROSClock
+from rclpy.time import Time
 from rclpy.impl.implementation_singleton import rclpy_implementation as binding
 
 from rigid_body_attitude.ros import rclpy_internals
@@ -25,3 +27,17 @@ def test_new_wait_set_holds_and_clears_entities(ros_domain_id: int) -> None:
         wait_set.destroy_when_not_in_use()
     finally:
         rclpy.shutdown(context=context)
+
+
+def test_clock_nanoseconds_reads_the_clock_and_its_ros_time_override() -> None:
+    steady = Clock(clock_type=ClockType.STEADY_TIME)
+    read = rclpy_internals.clock_nanoseconds(steady)
+    before = steady.now().nanoseconds
+    value = read()
+    after = steady.now().nanoseconds
+    assert isinstance(value, int) and before <= value <= after
+    ros_clock = ROSClock()
+    read = rclpy_internals.clock_nanoseconds(ros_clock)
+    ros_clock._set_ros_time_is_active(True)
+    ros_clock.set_ros_time_override(Time(seconds=12, nanoseconds=345))
+    assert read() == 12_000_000_345
