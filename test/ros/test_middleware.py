@@ -2,8 +2,9 @@
 
 What the settings buy is measured, not tested: ``bench/NOTES.md`` sections 3 and 9 and
 ``docs/performance.md``. Here: which profile is used when, that the shipped profile is what
-its comment says and reaches the node's participant, and that the scheduling policy reaches
-every thread of the installed node.
+its comment says and reaches the node's participant, that the node publishes asynchronously
+unless told otherwise, and that the scheduling policy reaches every thread of the installed
+node.
 """
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ from test_node_subprocess import read_until, start, stop_with_sigint
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.ros.middleware import (
     apply_cpu_scheduling, check_cpu_scheduling, FASTDDS_PROFILE_VARIABLES, PROFILE_SETTINGS,
-    packaged_fastdds_profile, use_packaged_fastdds_profile)
+    packaged_fastdds_profile, PUBLICATION_MODE_VARIABLE, use_asynchronous_publication,
+    use_packaged_fastdds_profile)
 
 FASTDDS_NAMESPACE = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
 
@@ -222,6 +224,62 @@ def _thread_policies(pid: int) -> dict[str, int]:
     """Thread id → scheduling policy of every thread of process ``pid``."""
     return {entry.name: os.sched_getscheduler(int(entry.name))
             for entry in Path(f'/proc/{pid}/task').iterdir()}
+
+
+@pytest.mark.parametrize('rmw', ['', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp'])
+def test_asynchronous_publication_is_asked_for_when_no_mode_is_chosen(rmw):
+    environ = {'RMW_IMPLEMENTATION': rmw} if rmw else {}
+    note = use_asynchronous_publication(environ)
+    assert environ[PUBLICATION_MODE_VARIABLE] == 'ASYNCHRONOUS'
+    assert note == 'asynchronous publication (RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS)'
+
+
+@pytest.mark.parametrize('environ, reason', [
+    ({'RMW_IMPLEMENTATION': 'rmw_cyclonedds_cpp'}, "RMW_IMPLEMENTATION is 'rmw_cyclonedds_cpp'"),
+    ({'RMW_FASTRTPS_PUBLICATION_MODE': 'SYNCHRONOUS'},
+     "RMW_FASTRTPS_PUBLICATION_MODE is 'SYNCHRONOUS'"),
+    ({'RMW_FASTRTPS_USE_QOS_FROM_XML': '1'}, 'RMW_FASTRTPS_USE_QOS_FROM_XML is 1'),
+])
+def test_a_users_publication_mode_is_never_overridden(environ, reason):
+    before = dict(environ)
+    note = use_asynchronous_publication(environ)
+    assert environ == before
+    assert note == f'publication mode left alone: {reason}'
+
+
+def _thread_names(pid: int) -> list[str]:
+    names = []
+    for task in Path(f'/proc/{pid}/task').iterdir():
+        try:
+            names.append((task / 'comm').read_text().strip())
+        except FileNotFoundError:  # the thread ended meanwhile
+            continue
+    return names
+
+
+@pytest.mark.parametrize('mode, asynchronous_threads', [
+    ('', 2),  # the node's default: discovery's own and the writers' asynchronous thread
+    ('SYNCHRONOUS', 1),  # discovery's only
+])
+def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
+        processes, monkeypatch, mode, asynchronous_threads):
+    """Fast DDS names its asynchronous sender threads ``dds.asyn.*``: the participant's
+    discovery always has one; writers publishing asynchronously add one."""
+    if mode:
+        monkeypatch.setenv(PUBLICATION_MODE_VARIABLE, mode)
+    else:  # set by an in-process main() of another test
+        monkeypatch.delenv(PUBLICATION_MODE_VARIABLE, raising=False)
+    process = start('--ros-args', '-p', 'scene:=strapdown')
+    processes.append(process)
+    lines = read_until(process, 'serving')
+    names = _thread_names(process.pid)
+    code, stderr = stop_with_sigint(process)
+    stderr = ''.join(lines) + stderr
+    assert code == 0, stderr
+    assert sum(name.startswith('dds.asyn.') for name in names) == asynchronous_threads, names
+    expected = (f"publication mode left alone: {PUBLICATION_MODE_VARIABLE} is '{mode}'" if mode
+                else 'asynchronous publication (RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS)')
+    assert expected in stderr
 
 
 @pytest.mark.parametrize('arguments, policy, logged', [
