@@ -77,7 +77,9 @@ per message, not by the node's arithmetic:
   floats), rclpy's per-call publisher wrapper, garbage-collector pauses. Tried without gain:
   handling messages in the receive thread itself (`rcl_subscription_set_on_new_message_callback`),
   pinning the process to one core, a 100 µs scheduler slice for the node's threads,
-  `RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS`, UDP instead of shared memory.
+  UDP instead of shared memory; `RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS` saves no CPU at
+  1 kHz (one more thread hand-over per message) but the node now uses it for its latency at
+  10–20 kHz (`bench/NOTES.md`, section 10).
 
 Under 10 % at 1 kHz on this machine would need fewer wake-ups per message than rclpy over
 rmw_fastrtps allows (another rmw, or the gyro path in a C++ component)."""

@@ -17,10 +17,15 @@ from rclpy.clock import Clock
 from rclpy.context import Context
 from rclpy.impl.implementation_singleton import rclpy_implementation as _binding
 
-__all__ = ['RCLError', 'USED_NAMES', 'clock_nanoseconds', 'new_wait_set']
+__all__ = ['RCLError', 'USED_NAMES', 'WAIT_SET_METHODS', 'clock_nanoseconds', 'new_wait_set']
 
 #: The binding's attributes this adapter uses (checked by the test).
 USED_NAMES = ('WaitSet', 'RCLError')
+
+#: The methods of the binding's ``WaitSet`` that :class:`~.gyro_loop.GyroLoop` calls, itself
+#: or through rclpy's event handlers (checked by the test).
+WAIT_SET_METHODS = ('add_event', 'add_guard_condition', 'add_subscription', 'add_timer',
+                    'clear_entities', 'destroy_when_not_in_use', 'wait')
 
 #: rcl's error type (raised e.g. when the context shuts down during a take or publish).
 RCLError: type[Exception] = _binding.RCLError

@@ -13,6 +13,12 @@ def test_every_private_name_the_adapter_uses_exists() -> None:
     assert missing == [], f'rclpy no longer has {missing}: update ros/rclpy_internals.py'
 
 
+def test_every_wait_set_method_the_gyro_loop_calls_exists() -> None:
+    missing = [name for name in rclpy_internals.WAIT_SET_METHODS
+               if not hasattr(binding.WaitSet, name)]
+    assert missing == [], f'rclpy WaitSet no longer has {missing}: update ros/gyro_loop.py'
+
+
 def test_rcl_error_is_an_exception_type() -> None:
     assert issubclass(rclpy_internals.RCLError, Exception)
 
