@@ -87,15 +87,16 @@ rmw_fastrtps allows (another rmw, or the gyro path in a C++ component)."""
 
 #: How the node was configured for the throughput runs, and why.
 QOS_NOTE = """\
-**Configuration.** The node runs as a user would start it, with its default parameters and
-QoS (`rigid_body_attitude/ros/qos.py`): inputs RELIABLE, KEEP_LAST 5000; outputs RELIABLE,
-KEEP_LAST 5000, and the package's Fast DDS profile. The publisher, the subscriber and the
-relays use RELIABLE, KEEP_LAST 10000; the publisher and the subscriber load the package's Fast
-DDS profile as the README asks of processes that talk to the node (`--endpoint-profile`), the
-relays run on Fast DDS's defaults.
-At 20 kHz the publisher, the node and the subscriber together need about the two cores (a
-publisher that falls short of the rate is marked "(short)"), so that row also measures the
-machine, not the node alone."""
+**Configuration.** The node runs as a user would start it, with its default parameters and QoS
+(`rigid_body_attitude/ros/qos.py`): inputs RELIABLE, KEEP_LAST 5000; outputs RELIABLE, KEEP_LAST
+5000, the package's Fast DDS profile, and asynchronous publication (the node sets
+`RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS` for itself: a Fast DDS thread sends while the gyro
+loop handles the next message; `bench/NOTES.md`, section 10). The publisher, the subscriber and
+the relays use RELIABLE, KEEP_LAST 10000; the publisher and the subscriber load the package's
+Fast DDS profile as the README asks of processes that talk to the node (`--endpoint-profile`),
+the relays run on Fast DDS's defaults. At 20 kHz the publisher, the node and the subscriber
+together need about the two cores (a publisher that falls short of the rate is marked
+"(short)"), so that row also measures the machine, not the node alone."""
 
 
 #: What caused the ~300 ms latency stalls, and what removed them (issue 13, item 5).
@@ -120,24 +121,23 @@ alone, 4 of 8. The sweeps above are with the profile on both ends."""
 
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).
 DYNAMICS_NOTE = """\
-**What the dynamics figures depend on.** With the fast core (plain-float effects, the
-generated RK4 kernel, `casimir8` for `heavy_top`: "Dynamics scenes and effects" above) the
-propagator alone is 0.1–1.0 % of a core per scene; the rest is the node's own share: the
-wake-ups of the 50 Hz ticks, the outputs (`RosOutputs.dynamics`, 35 µs per tick, 0.2 % at
-50 Hz, built even when nobody subscribes), `/diagnostics` (0.17 ms once a second) and the
-propagator's steps running with cold caches between ticks. Serving the ticks from the gyro
-loop instead of the executor saved about 2.8 % of a core at 50 Hz (a wait set of every
-entity rebuilt per tick, measured in-process on `torque_free_box`). Subscribed windows are
-noisier than unsubscribed ones: the subscriber process shares the two cores.
-**Since the Fast DDS profile bounds the shared-memory stall** ("Latency in repeated sweeps"),
-the node's two idle shared-memory listeners wake every 10 ms: 0.7–0.9 % of a core per scene
-(threads `dds.shm.*` in `bench/results/node/node_dynamics_cpu.json`), which puts most scenes
-over the 3 % target on this machine today. Interleaved 12 s windows on `torque_free_box`,
-unsubscribed: 3.1–3.7 % with the package profile, 2.8–3.4 % with a 90 ms health check (30 ms
-stall bound), 2.6–3.1 % with Fast DDS's defaults (333 ms stalls). Session 3 measured 1.8–2.8 %
-for these scenes with the old profile (NACK suppression only) on a quieter machine; the
-propagator's own share is the same as then (0.1–1.0 % against 0.1–0.7 %), the main thread's
-wake-ups and outputs cost more today (2.2–4.0 %)."""
+**What the dynamics figures depend on.** With the fast core (plain-float effects, the generated
+RK4 kernel, `casimir8` for `heavy_top`: "Dynamics scenes and effects" above) the propagator
+alone is 0.0–0.7 % of a core per scene in this run; the rest is the node's own share. Session 5
+made the outputs cheap: `orientation`, `pose`, `twist`, `energy` and `angular_momentum` are
+written as CDR bytes with the header packed once and published only to matched subscriptions,
+like the gyro outputs (before, five message objects were filled and converted by rclpy every
+tick, subscribed or not), the body-frame velocity is rotated with plain floats instead of two
+`numpy.cross` calls, and the node clock is read through its handle without a `Time` object
+(session 4 measured 2.8–4.8 % unsubscribed and 3.2–5.8 % subscribed for these scenes, with the
+main thread at 2.2–4.0 %). Per thread in this run (`bench/results/node/node_dynamics_cpu.json`):
+the main thread 1.0–1.6 % unsubscribed and 1.0–1.9 % subscribed, the two shared-memory listeners
+of the package's Fast DDS profile (they wake every 10 ms, "Latency in repeated sweeps") 0.4–0.6
+%, and with subscribers the asynchronous sender thread (`dds.asyn.0.1`, "Configuration" above)
+0.2–0.4 % and the event thread 0.1–0.3 %. Subscribed windows are noisier than unsubscribed ones:
+the subscriber process shares the two cores; an earlier run of the same code this session had
+one subscribed window at 5.2 % (`free_flyer`, its main thread at 3.2 % against 1.8 %
+unsubscribed) and two reruns of that scene gave 2.5 and 2.7 %."""
 
 
 def _load(path: Path) -> Optional[dict]:

@@ -20,14 +20,14 @@ variable Fast DDS reads, and never over a profile the user chose. It holds two s
 
 And, through rmw_fastrtps's own variable (:func:`use_asynchronous_publication`):
 
-* **Asynchronous publication.** rmw_fastrtps publishes synchronously by default: the gyro
-  loop's thread itself hands every output sample to the readers (of the 26–37 µs that thread
-  spent per message at 15–20 kHz, the node's own Python was 4.7 µs; the rest is taking and
-  publishing). With ``RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS``
-  a Fast DDS thread sends while the loop decodes and integrates the next message, so a
-  backlog drains on both cores: in interleaved runs at 15–20 kHz the node's p99 latency was
-  0.4–1.4× the fast relay's with it and 1.5–3.9× without (``bench/NOTES.md``, section 10).
-  The user's own choice of the variable is kept.
+* **Asynchronous publication.** rmw_fastrtps publishes synchronously by default: the gyro loop's
+  thread itself hands every output sample to the readers (of the 26–37 µs that thread spent per
+  message at 15–20 kHz, the node's own Python was 5 µs, ``bench/gyro_handler_costs.py``; the
+  rest is taking and publishing). With ``RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS`` a Fast DDS
+  thread sends while the loop decodes and integrates the next message, so a backlog drains on
+  both cores: in interleaved runs at 15–20 kHz the node's p99 latency was 0.4–1.4× the fast
+  relay's with it and 1.5–3.9× without (``bench/NOTES.md``, section 10). The user's own choice
+  of the variable is kept.
 
 And for the scheduler:
 
