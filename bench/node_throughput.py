@@ -198,6 +198,14 @@ def endpoint_environment(profile: str) -> Dict[str, str]:
     return {variable: profile for variable in FASTDDS_PROFILE_VARIABLES}
 
 
+def add_endpoint_profile_argument(parser: argparse.ArgumentParser) -> None:
+    """``--endpoint-profile`` (:func:`endpoint_environment`), for every script that starts the
+    bench's publisher and subscriber with :func:`start_processes`."""
+    parser.add_argument('--endpoint-profile', default=str(REPO / 'config' / 'fastdds.xml'),
+                        help='Fast DDS profile of the bench publisher and subscriber (default '
+                        'the package\'s; "none" = Fast DDS defaults); targets keep their own')
+
+
 def start_processes(session: Session, target_argv: List[str], rate: float, duration: float,
                     warmup: float, args: argparse.Namespace) -> Dict[str, Process]:
     """Start subscriber, target and publisher; return once the publisher is matched."""
@@ -380,9 +388,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--soak-minutes', type=int, default=10)
     parser.add_argument('--soak-rate', type=float, default=1000.0)
     parser.add_argument('--results-dir', type=Path, default=BENCH / 'results')
-    parser.add_argument('--endpoint-profile', default=str(REPO / 'config' / 'fastdds.xml'),
-                        help='Fast DDS profile of the bench publisher and subscriber (default '
-                        'the package\'s; "none" = Fast DDS defaults); targets keep their own')
+    add_endpoint_profile_argument(parser)
     parser.add_argument('--keep-traces', type=Path, default=None, metavar='DIR',
                         help='keep each run\'s poses.bin and target log in DIR')
     parser.add_argument('--report', type=Path, default=BENCH / 'results' / 'throughput.md')

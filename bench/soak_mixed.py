@@ -13,7 +13,7 @@ to change it), a ``pose`` subscriber (``bench/_subscriber.py``), an ``imu`` publ
   difference), the mixed ticks sent and the replies received;
 * the node's CPU over the whole soak and the machine's other load.
 
-Results go to ``bench/results/soak_mixed.json`` (``bench/performance_report.py`` puts them in
+Results go to ``bench/results/node/soak_mixed.json`` (``bench/performance_report.py`` puts them in
 ``docs/performance.md``). Exit code 0 unless a process crashed or hung on SIGINT.
 
 Example::
@@ -37,8 +37,9 @@ sys.path.insert(0, str(BENCH))
 
 from _common import busy_ticks, cpu_ticks, rss_kib  # noqa: E402
 import _report  # noqa: E402
-from node_throughput import (CLOCK_TICKS, delivery, display, NODE_ARGS,  # noqa: E402
-                             ProcessCrashed, Session, start_processes)
+from node_throughput import (add_endpoint_profile_argument, CLOCK_TICKS,  # noqa: E402
+                             delivery, display, NODE_ARGS, ProcessCrashed, Session,
+                             start_processes)
 
 
 def default_node() -> List[str]:
@@ -151,7 +152,9 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--domain-id', type=int,
                         default=int(os.environ.get('ROS_DOMAIN_ID', '71')))
     parser.add_argument('--match-timeout', type=float, default=30.0)
-    parser.add_argument('--results', type=Path, default=BENCH / 'results' / 'soak_mixed.json')
+    add_endpoint_profile_argument(parser)
+    parser.add_argument('--results', type=Path,
+                        default=BENCH / 'results' / 'node' / 'soak_mixed.json')
     args = parser.parse_args(argv)
     if args.minutes < 2:
         parser.error(f'expected --minutes >= 2 (RSS from minute 1 on), got {args.minutes}')
