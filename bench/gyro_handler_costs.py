@@ -44,7 +44,6 @@ def measure(count: int) -> List[Tuple[str, float]]:
     use_packaged_fastdds_profile()
     import rclpy
     from rclpy.parameter import Parameter
-    from rigid_body_attitude.bag.cdr import encode_imu
     from rigid_body_attitude.ros.node import AttitudePropagatorNode
     from rigid_body_attitude.session.decoding import DECODERS
 
@@ -53,14 +52,10 @@ def measure(count: int) -> List[Tuple[str, float]]:
         node = AttitudePropagatorNode(
             parameter_overrides=[Parameter('scene', value='strapdown')])
         session, outputs = node.session, node.outputs
-
-        def messages(first: int) -> List[bytes]:
-            return [encode_imu(STAMP0_NS + (first + k) * PERIOD_NS, 'imu_link', RATE)
-                    for k in range(count)]
         handler = node.handlers['imu']
-        per_message_us(handler, messages(0), count)  # warm-up
-        rows = [('decode (session decoder)', per_message_us(DECODERS['imu'], messages(0),
-                                                            count))]
+        per_message_us(handler, imu_messages(0, count), count)  # warm-up
+        rows = [('decode (session decoder)', per_message_us(DECODERS['imu'],
+                                                            imu_messages(0, count), count))]
         stamps = [STAMP0_NS + (2 * count + k) * PERIOD_NS for k in range(count)]
         add = session.stream.add
         rows.append(('gyro stream: time rules and exp-map step',
@@ -75,20 +70,21 @@ def measure(count: int) -> List[Tuple[str, float]]:
         rows.append(('pose encoder', per_message_us(
             lambda _: encode(1, 2, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)), range(count),
             count)))
-        rows.append(('whole raw handler', per_message_us(handler, messages(3 * count),
+        rows.append(('whole raw handler', per_message_us(handler, imu_messages(3 * count, count),
                                                          count)))
         node.destroy_node()
     finally:
         rclpy.try_shutdown()
     rows.append(('fast relay: decode rate, pack pose', per_message_us(
-        relay_work(), messages_for_relay(count), count)))
+        relay_work(), imu_messages(0, count), count)))
     return rows
 
 
-def messages_for_relay(count: int) -> List[bytes]:
-    """Serialized Imu messages for the relay's work."""
+def imu_messages(first: int, count: int) -> List[bytes]:
+    """``count`` serialized Imu messages, the ``first``-th sample's stamp on."""
     from rigid_body_attitude.bag.cdr import encode_imu
-    return [encode_imu(STAMP0_NS + k * PERIOD_NS, 'imu_link', RATE) for k in range(count)]
+    return [encode_imu(STAMP0_NS + (first + k) * PERIOD_NS, 'imu_link', RATE)
+            for k in range(count)]
 
 
 def relay_work() -> Callable[[bytes], Optional[bytes]]:

@@ -86,7 +86,9 @@ class AttitudePropagatorNode(Node):
     def __init__(self, **node_options: Any) -> None:
         """Declare the parameters, load the scene, create the session, topics and timers."""
         super().__init__(NODE_NAME, **node_options)
-        self._read_clock = clock_nanoseconds(self.get_clock())
+        #: The node clock in nanoseconds (receive times; ``use_sim_time`` makes it the
+        #: ``/clock``).
+        self.clock_ns = clock_nanoseconds(self.get_clock())
         self.state_lock = threading.Lock()
         values = self._declare_parameters()
         problem = check_values(values)
@@ -99,7 +101,7 @@ class AttitudePropagatorNode(Node):
         self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro')
         self.outputs.hardware_id = self.scene.name
         self.session: AnySession = open_session(
-            self.scene, values, self.outputs, self._clock_ns, time.monotonic)
+            self.scene, values, self.outputs, self.clock_ns, time.monotonic)
         problem = self.session.check(values)
         if problem:
             raise InputError(problem)
@@ -118,10 +120,6 @@ class AttitudePropagatorNode(Node):
     def is_dynamics(self) -> bool:
         """Whether the scene integrates Euler's equations (else gyro samples)."""
         return isinstance(self.session, DynamicsSession)
-
-    def _clock_ns(self) -> int:
-        """The node clock (receive times; ``use_sim_time`` makes it the ``/clock``)."""
-        return self._read_clock()
 
     # -- set-up -----------------------------------------------------------------------------
 
@@ -220,7 +218,7 @@ class AttitudePropagatorNode(Node):
         with self.state_lock:
             session = self.session
             if isinstance(session, DynamicsSession):
-                session.tick(self._clock_ns())
+                session.tick(self.clock_ns())
             else:
                 session.tick()
 
