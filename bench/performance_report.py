@@ -132,7 +132,7 @@ tick, subscribed or not), the body-frame velocity is rotated with plain floats i
 (session 4 measured 2.8–4.8 % unsubscribed and 3.2–5.8 % subscribed for these scenes, with the
 main thread at 2.2–4.0 %). Per thread in this run (`bench/results/node/node_dynamics_cpu.json`):
 the main thread 1.0–1.6 % unsubscribed and 1.0–1.9 % subscribed, the two shared-memory listeners
-of the package's Fast DDS profile (they wake every 10 ms, "Latency in repeated sweeps") 0.4–0.6
+of the package's Fast DDS profile (they wake every 10 ms, "Latency in repeated sweeps") 0.4–0.7
 %, and with subscribers the asynchronous sender thread (`dds.asyn.0.1`, "Configuration" above)
 0.2–0.4 % and the event thread 0.1–0.3 %. Subscribed windows are noisier than unsubscribed ones:
 the subscriber process shares the two cores; an earlier run of the same code this session had
