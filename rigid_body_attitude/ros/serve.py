@@ -16,8 +16,10 @@ import sys
 import threading
 
 import rclpy
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.timer import Timer
 
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
@@ -26,6 +28,7 @@ from rigid_body_attitude.ros.middleware import (
     apply_cpu_scheduling, use_asynchronous_publication, use_packaged_fastdds_profile)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import RCLError
+from rigid_body_attitude.ros.sender_threads import GUARD_PERIOD, idle_sender_guard, SenderGuard
 
 __all__ = ['main', 'spin']
 
@@ -108,14 +111,16 @@ def spin(node: AttitudePropagatorNode) -> None:
     """
     gc.collect()
     gc.freeze()
+    guard, guard_remark = (idle_sender_guard() if node.cpu_scheduling == 'batch'
+                           else (None, ''))
     # Claims the gyro subscriptions and the timers before any executor spins.
-    loop = node.gyro_loop()
+    loop = node.gyro_loop([] if guard is None else [_guard_timer(node, guard)])
     executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)
     rest = _ExecutorThread(executor, node, loop)
     try:
         rest.thread.start()
-        _apply_cpu_scheduling(node)
+        _apply_cpu_scheduling(node, guard, guard_remark)
         loop.run()
     finally:
         rest.stop()
@@ -125,16 +130,30 @@ def spin(node: AttitudePropagatorNode) -> None:
         raise rest.failures[0]
 
 
-def _apply_cpu_scheduling(node: AttitudePropagatorNode) -> None:
-    """Give every thread of the process the node's ``cpu_scheduling`` policy; log it."""
-    outcome = apply_cpu_scheduling(node.cpu_scheduling)
+def _guard_timer(node: AttitudePropagatorNode, guard: SenderGuard) -> Timer:
+    """A steady-clock timer in the gyro loop's group running ``guard`` every
+    :data:`GUARD_PERIOD` seconds; a sender it moves is logged as a warning."""
+    def check() -> None:
+        for line in guard.check():
+            node.get_logger().warning(line)
+    return node.create_timer(GUARD_PERIOD, check, node.loop_group,
+                             clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+
+def _apply_cpu_scheduling(node: AttitudePropagatorNode, guard: SenderGuard | None,
+                          guard_remark: str) -> None:
+    """Give every thread of the process the node's ``cpu_scheduling`` policy (the senders
+    ``guard`` watches: SCHED_IDLE); log it."""
+    outcome = apply_cpu_scheduling(node.cpu_scheduling,
+                                   idle_threads=() if guard is None else list(guard.watched))
     logger = node.get_logger()
     if outcome.refused:
         logger.warning(
             f'cpu_scheduling {node.cpu_scheduling!r} refused by the system '
             f'({outcome.refused}); the other threads keep their policy')
-    logger.info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} threads changed; '
-                'serving')
+    remark = f'; {guard_remark}' if guard_remark else ''
+    logger.info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} threads changed'
+                f'{remark}; serving')
 
 
 def main(args: list[str] | None = None) -> int:

@@ -25,6 +25,7 @@ from rigid_body_attitude.ros.middleware import (
     apply_cpu_scheduling, check_cpu_scheduling, FASTDDS_PROFILE_VARIABLES, PROFILE_SETTINGS,
     packaged_fastdds_profile, PUBLICATION_MODE_VARIABLE, use_asynchronous_publication,
     use_packaged_fastdds_profile)
+from rigid_body_attitude.ros.sender_threads import can_leave_idle_policy, sender_thread_ids
 
 FASTDDS_NAMESPACE = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
 
@@ -294,7 +295,11 @@ def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(processes, m
     processes.append(process)
     lines = read_until(process, logged)
     policies = _thread_policies(process.pid)
+    senders = sender_thread_ids(Path(f'/proc/{process.pid}/task'))
     assert len(policies) >= 5  # Python, the executor thread and Fast DDS's threads
+    assert len(senders) == 2  # asynchronous publication: discovery's and the writers'
+    assert {policies.pop(str(thread_id)) for thread_id in senders} == {
+        os.SCHED_IDLE if policy == os.SCHED_BATCH and can_leave_idle_policy() else policy}
     assert set(policies.values()) == {policy}, policies
     code, stderr = stop_with_sigint(process)
     stderr = ''.join(lines) + stderr
