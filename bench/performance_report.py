@@ -119,6 +119,26 @@ runs stalled (263 and 334 ms); with 30 ms 0 of 24 (maximum 9.4 ms); the profile 
 alone, 4 of 8. The sweeps above are with the profile on both ends."""
 
 
+#: What caused the node's multi-millisecond latency tails at 10-20 kHz (issue 13, item 5).
+TAILS_NOTE = """\
+**The millisecond tails at 10–20 kHz: Fast DDS's sender spinning under `SCHED_BATCH`.**
+After the stalls were gone the node still lost to the fast relay at 15 kHz in 4 of 10 sweeps
+(session 5): episodes of 100–300 ms at 2–5 ms latency. `perf sched` caught the cause
+(`bench/NOTES.md`, section 11): the asynchronous sender thread `dds.asyn.0.1` ran up to
+3.9 ms without a break, going round `FlowControllerImpl::run` because another thread held
+the writer's mutex; that thread (the node's event thread, which the sender had woken) sat
+runnable on the same CPU, and under `SCHED_BATCH` a woken thread never preempts the running
+one, so only the 4 ms scheduler tick ended the spin. With the sender threads on `SCHED_IDLE`
+any thread woken on their CPU preempts them: in 8 interleaved 15 kHz runs that node's p99 was
+0.65–1.74 ms against the fast relay's 1.46–4.55 ms (ahead in 8 of 8; the all-`SCHED_BATCH`
+node 0.81–4.14 ms, ahead in 6 of 8). An idle-policy thread starves when other threads keep
+the CPUs busy (two CPU-bound processes: p99 64–909 ms at 1–5 kHz), so the node reads its
+senders' run-queue waits every 0.1 s and moves a starved one to `SCHED_BATCH`
+(`rigid_body_attitude/ros/sender_threads.py`); a process that could not undo `SCHED_IDLE`
+(no `CAP_SYS_NICE`, `RLIMIT_NICE` below 20) keeps them on `SCHED_BATCH`. The sweeps above
+are with idle senders."""
+
+
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).
 DYNAMICS_NOTE = """\
 **What the dynamics figures depend on.** With the fast core (plain-float effects, the generated
@@ -404,6 +424,7 @@ def render(results_dir: Path, png_name: str) -> str:
     lines += [LIMITS, '']
     lines += _node_sections.sweeps_section(_sweeps(results_dir))
     lines += STALLS_NOTE.splitlines() + ['']
+    lines += TAILS_NOTE.splitlines() + ['']
     lines += _node_sections.mixed_soak_section(_load(results_dir / 'soak_mixed.json'))
     lines += _node_sections.dynamics_cpu_section(_load(results_dir / 'node_dynamics_cpu.json'))
     lines += DYNAMICS_NOTE.splitlines() + ['']
