@@ -41,7 +41,7 @@ SENDER_THREAD_PREFIX = 'dds.asyn.'
 GUARD_PERIOD = 0.1
 
 #: A sender is starved when, over one period, it waited on a run queue longer than this on
-#: average per run ... (at 15 kHz without other load: at most 0.04 ms; with two CPU-bound
+#: average per run ... (at 1–20 kHz without other load: at most 0.084 ms; with two CPU-bound
 #: processes beside the node: a median of 4–12 ms; ``bench/NOTES.md``, section 11)
 STARVED_MEAN_DELAY_NS = 1_000_000
 
@@ -105,7 +105,11 @@ def can_leave_idle_policy() -> bool:
 
 
 class SenderGuard:
-    """Watches sender threads on ``SCHED_IDLE``; moves a starved one to ``SCHED_BATCH``."""
+    """Watches sender threads on ``SCHED_IDLE``; moves a starved one to ``SCHED_BATCH``.
+
+    A starved thread that is not on ``SCHED_IDLE`` (its policy was not the node's to set) is
+    left as it is and no longer watched.
+    """
 
     def __init__(self, thread_ids: list[int], task_folder: Path = _TASKS) -> None:
         """Watch ``thread_ids`` (already on ``SCHED_IDLE``, or about to be)."""
@@ -126,7 +130,8 @@ class SenderGuard:
             if before is None or not _starved(before, now):
                 continue
             del self.watched[thread_id]
-            lines.append(self._promote(thread_id, before, now))
+            if _policy(thread_id) == os.SCHED_IDLE:  # else not ours to move (or gone)
+                lines.append(self._promote(thread_id, before, now))
         return lines
 
     def _promote(self, thread_id: int, before: SchedStat, now: SchedStat) -> str:
@@ -141,6 +146,14 @@ class SenderGuard:
         return (f'Fast DDS sender thread {thread_id} starved by other load ({waited_ms:.0f} ms '
                 f'waiting for a CPU in {runs} runs over {GUARD_PERIOD:g} s): moved from '
                 f'SCHED_IDLE to SCHED_BATCH')
+
+
+def _policy(thread_id: int) -> int | None:
+    """A thread's scheduling policy, or None when it is gone."""
+    try:
+        return os.sched_getscheduler(thread_id)
+    except OSError:
+        return None
 
 
 def _starved(before: SchedStat, now: SchedStat) -> bool:

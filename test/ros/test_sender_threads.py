@@ -16,6 +16,7 @@ import subprocess
 import sys
 import threading
 import time
+from typing import Iterator
 
 import pytest
 from geometry_msgs.msg import PoseStamped
@@ -70,66 +71,84 @@ def test_sender_threads_are_found_by_name(tmp_path):
     assert sender_thread_ids(tmp_path) == [11, 13]
 
 
+@pytest.fixture
+def idle_thread() -> Iterator[int]:
+    """The native id of a thread on SCHED_IDLE (its own policy only: nothing reaches the
+    test run), alive until the test ends."""
+    ready, release = threading.Event(), threading.Event()
+    ids: list[int] = []
+
+    def body() -> None:
+        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+        ids.append(threading.get_native_id())
+        ready.set()
+        release.wait()
+
+    thread = threading.Thread(target=body)
+    thread.start()
+    ready.wait()
+    yield ids[0]
+    release.set()
+    thread.join()
+
+
+def _moved_line(thread_id: int, waited_ns: int, runs: int) -> str:
+    return (f'Fast DDS sender thread {thread_id} starved by other load '
+            f'({waited_ns * 1e-6:.0f} ms waiting for a CPU in {runs} runs over '
+            f'{GUARD_PERIOD:g} s): moved from SCHED_IDLE to SCHED_BATCH')
+
+
 @pytest.mark.parametrize('waited_ns, runs, starved', [
     (STARVED_TOTAL_DELAY_NS, 10, False),  # 2 ms a run, but not more than the total in all
     (STARVED_TOTAL_DELAY_NS + 1, 21, False),  # more in all, but under 1 ms a run: just busy
     (STARVED_TOTAL_DELAY_NS + 1, 20, True),
     (90_000_000, 0, True),  # never ran at all
 ])
-def test_the_starvation_rule(tmp_path, waited_ns, runs, starved):
-    _thread(tmp_path, NO_SUCH_THREAD, stat=(1_000, 5_000, 7))
-    guard = SenderGuard([NO_SUCH_THREAD], tmp_path)
-    assert guard.check() == []  # the first reading is the baseline
-    _thread(tmp_path, NO_SUCH_THREAD, stat=(2_000, 5_000 + waited_ns, 7 + runs))
-    lines = guard.check()
-    if starved:  # the kernel has no such thread to move: reported, and no longer watched
-        assert len(lines) == 1
-        assert lines[0].startswith(f'Fast DDS sender thread {NO_SUCH_THREAD} starved '
-                                   f'({waited_ns * 1e-6:.0f} ms waiting for a CPU in {runs} '
-                                   f'runs) and could not leave SCHED_IDLE: ')
-        assert guard.watched == {} and guard.promoted == []
-    else:
-        assert lines == []
-        assert guard.watched == {NO_SUCH_THREAD: SchedStat(2_000, 5_000 + waited_ns, 7 + runs)}
+def test_the_starvation_rule(tmp_path, idle_thread, waited_ns, runs, starved):
     assert STARVED_MEAN_DELAY_NS == 1_000_000
+    _thread(tmp_path, idle_thread, stat=(1_000, 5_000, 7))
+    guard = SenderGuard([idle_thread], tmp_path)
+    assert guard.check() == []  # the first reading is the baseline
+    _thread(tmp_path, idle_thread, stat=(2_000, 5_000 + waited_ns, 7 + runs))
+    lines = guard.check()
+    if not starved:
+        assert lines == []
+        assert guard.watched == {idle_thread: SchedStat(2_000, 5_000 + waited_ns, 7 + runs)}
+        assert os.sched_getscheduler(idle_thread) == os.SCHED_IDLE
+    elif _may_leave_idle():
+        assert lines == [_moved_line(idle_thread, waited_ns, runs)]
+        assert os.sched_getscheduler(idle_thread) == os.SCHED_BATCH
+        assert guard.watched == {} and guard.promoted == [idle_thread]
+    else:
+        assert len(lines) == 1
+        assert lines[0].startswith(f'Fast DDS sender thread {idle_thread} starved ('
+                                   f'{waited_ns * 1e-6:.0f} ms waiting for a CPU in {runs} '
+                                   f'runs) and could not leave SCHED_IDLE: ')
+        assert os.sched_getscheduler(idle_thread) == os.SCHED_IDLE
+        assert guard.watched == {} and guard.promoted == []
 
 
-def test_a_starved_thread_goes_to_batch_once_and_an_ended_one_is_forgotten(tmp_path):
-    ready, release = threading.Event(), threading.Event()
-    ids: list[int] = []
-
-    def idle() -> None:  # this thread only: the policy must not reach the test run
-        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
-        ids.append(threading.get_native_id())
-        ready.set()
-        release.wait()
-
-    thread = threading.Thread(target=idle)
-    thread.start()
-    try:
-        ready.wait()
-        thread_id = ids[0]
+def test_a_starved_thread_is_moved_once_others_are_left_alone_or_forgotten(tmp_path,
+                                                                           idle_thread):
+    normal = threading.get_native_id()  # this thread: not on SCHED_IDLE, not ours to move
+    for thread_id in (idle_thread, normal):
         _thread(tmp_path, thread_id, stat=(0, 0, 0))
-        _thread(tmp_path, NO_SUCH_THREAD)  # no schedstat: ended
-        guard = SenderGuard([thread_id, NO_SUCH_THREAD], tmp_path)
-        assert guard.check() == []
-        assert list(guard.watched) == [thread_id]
+    _thread(tmp_path, NO_SUCH_THREAD)  # no schedstat: ended
+    guard = SenderGuard([idle_thread, normal, NO_SUCH_THREAD], tmp_path)
+    assert guard.check() == []
+    assert list(guard.watched) == [idle_thread, normal]
+    for thread_id in (idle_thread, normal):
         _thread(tmp_path, thread_id, stat=(1_000_000, 80_000_000, 4))
-        lines = guard.check()
-        if _may_leave_idle():
-            assert lines == [f'Fast DDS sender thread {thread_id} starved by other load (80 ms '
-                             f'waiting for a CPU in 4 runs over {GUARD_PERIOD:g} s): moved from '
-                             f'SCHED_IDLE to SCHED_BATCH']
-            assert os.sched_getscheduler(thread_id) == os.SCHED_BATCH
-            assert guard.promoted == [thread_id]
-        else:
-            assert len(lines) == 1 and 'could not leave SCHED_IDLE' in lines[0]
-            assert os.sched_getscheduler(thread_id) == os.SCHED_IDLE
-        _thread(tmp_path, thread_id, stat=(2_000_000, 900_000_000, 5))
-        assert guard.check() == [] and guard.watched == {}  # moved once, never again
-    finally:
-        release.set()
-        thread.join()
+    lines = guard.check()
+    assert os.sched_getscheduler(normal) == os.SCHED_OTHER
+    assert guard.watched == {}
+    if _may_leave_idle():
+        assert lines == [_moved_line(idle_thread, 80_000_000, 4)]
+        assert guard.promoted == [idle_thread]
+    else:
+        assert len(lines) == 1 and 'could not leave SCHED_IDLE' in lines[0]
+    _thread(tmp_path, idle_thread, stat=(2_000_000, 900_000_000, 5))
+    assert guard.check() == []  # moved once, never again
 
 
 def test_the_guard_of_a_process_and_its_remark(tmp_path):
