@@ -80,9 +80,11 @@ FASTDDS_WORKING_DIRECTORY_PROFILES = ('DEFAULT_FASTRTPS_PROFILES.xml',
                                       'DEFAULT_FASTDDS_PROFILES.xml')
 
 #: Values of the ``cpu_scheduling`` parameter: the policy threads on SCHED_OTHER move to
-#: (None = leave every thread's policy as it started).
+#: (None = leave every thread's policy as it started). ``batch`` puts Fast DDS's sender threads
+#: on SCHED_IDLE under a guard (:func:`~.serve.spin`), ``all_batch`` leaves them on SCHED_BATCH.
 CPU_SCHEDULING: dict[str, int | None] = {
     'batch': getattr(os, 'SCHED_BATCH', None),
+    'all_batch': getattr(os, 'SCHED_BATCH', None),
     'default': None,
 }
 
@@ -155,7 +157,7 @@ def check_cpu_scheduling(value: str) -> str:
                 f'{", ".join(repr(name) for name in CPU_SCHEDULING)}, got {value!r}')
     if value != 'default' and CPU_SCHEDULING[value] is None:
         return (f'Expected parameter `cpu_scheduling` to be \'default\' on this system '
-                f'(no SCHED_{value.upper()}), got {value!r}')
+                f'(no SCHED_BATCH), got {value!r}')
     return ''
 
 

@@ -148,8 +148,9 @@ PARAMETERS: tuple[Parameter, ...] = (
               's: integration step of dynamics scenes (0 = the scene\'s)', 0.0, 10.0),
     Parameter('cpu_scheduling', str, 'batch',
               'policy of the node\'s threads: batch (SCHED_BATCH, no wake-up preemption; Fast '
-              'DDS\'s sender threads SCHED_IDLE until starved) or default (as started)',
-              choices=('batch', 'default'), node_only=True),
+              'DDS\'s sender threads SCHED_IDLE until starved), all_batch (senders too) or '
+              'default (as started)',
+              choices=('batch', 'all_batch', 'default'), node_only=True),
 )
 
 _BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}

@@ -154,8 +154,8 @@ def test_a_default_profile_file_in_the_working_directory_wins(tmp_path):
 
 @pytest.mark.parametrize('value', ['fifo', 'BATCH', ''])
 def test_an_unknown_cpu_scheduling_value_is_named_in_the_error(value):
-    expected = (f"Expected parameter `cpu_scheduling` to be one of 'batch', 'default', "
-                f'got {value!r}')
+    expected = (f"Expected parameter `cpu_scheduling` to be one of 'batch', 'all_batch', "
+                f"'default', got {value!r}")
     assert check_cpu_scheduling(value) == expected
     with pytest.raises(InputError) as raised:
         apply_cpu_scheduling(value)
@@ -283,12 +283,15 @@ def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
     assert expected in stderr
 
 
-@pytest.mark.parametrize('arguments, policy, logged', [
-    ((), os.SCHED_BATCH, "cpu_scheduling 'batch': "),
-    (('-p', 'cpu_scheduling:=default'), os.SCHED_OTHER, "cpu_scheduling 'default': 0 threads"),
+@pytest.mark.parametrize('arguments, policy, idle_senders, logged', [
+    ((), os.SCHED_BATCH, True, "cpu_scheduling 'batch': "),
+    (('-p', 'cpu_scheduling:=all_batch'), os.SCHED_BATCH, False,
+     "cpu_scheduling 'all_batch': "),
+    (('-p', 'cpu_scheduling:=default'), os.SCHED_OTHER, False,
+     "cpu_scheduling 'default': 0 threads"),
 ])
-def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(processes, monkeypatch,
-                                                                    arguments, policy, logged):
+def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(
+        processes, monkeypatch, arguments, policy, idle_senders, logged):
     for variable in FASTDDS_PROFILE_VARIABLES:  # set by an in-process main() of another test
         monkeypatch.delenv(variable, raising=False)
     process = start('--ros-args', '-p', 'scene:=strapdown', *arguments)
@@ -299,7 +302,7 @@ def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(processes, m
     assert len(policies) >= 5  # Python, the executor thread and Fast DDS's threads
     assert len(senders) == 2  # asynchronous publication: discovery's and the writers'
     assert {policies.pop(str(thread_id)) for thread_id in senders} == {
-        os.SCHED_IDLE if policy == os.SCHED_BATCH and can_leave_idle_policy() else policy}
+        os.SCHED_IDLE if idle_senders and can_leave_idle_policy() else policy}
     assert set(policies.values()) == {policy}, policies
     code, stderr = stop_with_sigint(process)
     stderr = ''.join(lines) + stderr
@@ -315,5 +318,5 @@ def test_a_bad_cpu_scheduling_gives_one_error_line_and_exit_2(processes):
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 2
     assert stderr.strip().splitlines()[-1] == (
-        "error: Expected parameter `cpu_scheduling` to be one of 'batch', 'default', "
-        "got 'fifo'")
+        "error: Expected parameter `cpu_scheduling` to be one of 'batch', 'all_batch', "
+        "'default', got 'fifo'")

@@ -30,7 +30,8 @@ def test_names_are_unique_and_replay_defaults_leave_out_node_only_ones():
     ('scene', ' ', '`scene` to be a non-empty name'),
     ('scene', 'x' * 5000, '`scene` to be at most 4096 characters, got 5000'),
     ('use_header_stamps', 1.0, '`use_header_stamps` to be a boolean (true or false), got 1.0'),
-    ('cpu_scheduling', 'fifo', "`cpu_scheduling` to be one of 'batch', 'default', got 'fifo'"),
+    ('cpu_scheduling', 'fifo',
+     "`cpu_scheduling` to be one of 'batch', 'all_batch', 'default', got 'fifo'"),
     ('body_frame', 'world', '`world_frame` and `body_frame` to differ, both are \'world\''),
 ])
 def test_check_values_names_the_parameter_and_the_bad_value(name, value, expected):
