@@ -7,17 +7,22 @@ publishing, the event thread's heartbeat or NACK-suppression timer, a listener h
 acknowledgement), its loop tries again at once instead of sleeping (``FlowControllerImpl::run``:
 ``try_lock``, ``break``, round again). Under ``SCHED_BATCH`` no thread woken on its CPU
 preempts it, so it can spin until the scheduler tick (4 ms on this project's machine) while
-the holder of the mutex, and any other thread queued behind it, waits: ``perf sched`` showed
-the sender running 1–3.9 ms without a break in every 15 kHz run, the node's event thread
-runnable on the same CPU for 3.5 ms and the other CPU idle. Those were the node's
-intermittent multi-millisecond latency tails at 10–20 kHz (``bench/NOTES.md``, section 11).
+the holder of the mutex, and any other thread queued behind it, waits: in a 15 kHz run
+``perf sched`` showed the sender running 1.0–3.9 ms without a break six times in 4 s, once
+with the node's event thread runnable on the same CPU for 3.5 ms and the other CPU idle.
+Those were the node's intermittent multi-millisecond latency tails at 10–20 kHz
+(``bench/NOTES.md``, section 11).
 
 Under ``SCHED_IDLE`` any other thread woken on its CPU preempts the sender at once, so a spin
 ends as soon as the mutex's holder can run. The price: an idle thread gets only a sliver of a
 CPU that other threads keep busy (with two CPU-bound processes on this 2-core machine, a
 sender at idle priority fell behind by 20–270 ms at 1–5 kHz). The :class:`SenderGuard` therefore
 looks at each sender's scheduling delay every :data:`GUARD_PERIOD` seconds and moves a starved
-one to ``SCHED_BATCH`` for good. Leaving ``SCHED_IDLE`` needs ``CAP_SYS_NICE`` or an
+one to ``SCHED_BATCH`` for good. It does not see short bursts of other load (waits of tens
+of ms in a few runs among hundreds leave the mean per run low), during which an idle sender
+is the last thread to run: with two processes each busy 30 ms in every 330 ms, p99 at 2 kHz
+was 10.7–20.1 ms against 8.1–9.0 ms with the senders on ``SCHED_BATCH``
+(``cpu_scheduling: all_batch``). Leaving ``SCHED_IDLE`` needs ``CAP_SYS_NICE`` or an
 ``RLIMIT_NICE`` of at least 20 (``ulimit -e``); a process without it keeps its senders on
 ``SCHED_BATCH`` (:func:`can_leave_idle_policy`). The delays come from
 ``/proc/self/task/<tid>/schedstat`` (time on the CPU, time waiting on a run queue, runs).
