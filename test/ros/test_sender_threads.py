@@ -182,8 +182,9 @@ def _cpu_hogs(count: int) -> list[subprocess.Popen]:
 
 
 def test_the_installed_node_moves_its_starved_sender_to_batch(ros, request, processes):
-    """Three CPU-bound processes on the machine while the node publishes a pose per gyro
-    sample: a sender at idle priority gets next to no CPU, and the guard moves it."""
+    """One CPU-bound process per CPU the test may use, and one more, while the node publishes
+    a pose per gyro sample: a sender at idle priority gets next to no CPU, and the guard moves
+    it."""
     namespace = unique_namespace(request)
     process = start('--ros-args', '-p', 'scene:=strapdown', '-r', f'__ns:={namespace}')
     processes.append(process)
@@ -200,7 +201,7 @@ def test_the_installed_node_moves_its_starved_sender_to_batch(ros, request, proc
     imu_publisher = harness.publisher(Imu, 'imu')
     poses = harness.record(PoseStamped, 'pose')
     harness.wait_for_connections(30.0)
-    hogs = _cpu_hogs(3)
+    hogs = _cpu_hogs(len(os.sched_getaffinity(0)) + 1)
     processes.extend(hogs)
     base_ns, sent = 1_700_000_000 * 10**9, 0
     deadline = time.monotonic() + 20.0
