@@ -59,7 +59,8 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.paths import config_folders
 
 __all__ = ['CPU_SCHEDULING', 'FASTDDS_PROFILE_VARIABLES', 'PROFILE_SETTINGS',
-           'PUBLICATION_MODE_VARIABLE', 'SchedulingOutcome', 'apply_cpu_scheduling',
+           'PUBLICATION_MODE_VARIABLE', 'SchedulingChoice', 'SchedulingOutcome',
+           'apply_cpu_scheduling',
            'check_cpu_scheduling', 'packaged_fastdds_profile', 'use_asynchronous_publication',
            'use_packaged_fastdds_profile']
 
@@ -79,13 +80,22 @@ PUBLICATION_MODE_VARIABLE = 'RMW_FASTRTPS_PUBLICATION_MODE'
 FASTDDS_WORKING_DIRECTORY_PROFILES = ('DEFAULT_FASTRTPS_PROFILES.xml',
                                       'DEFAULT_FASTDDS_PROFILES.xml')
 
-#: Values of the ``cpu_scheduling`` parameter: the policy threads on SCHED_OTHER move to
-#: (None = leave every thread's policy as it started). ``batch`` puts Fast DDS's sender threads
-#: on SCHED_IDLE under a guard (:func:`~.serve.spin`), ``all_batch`` leaves them on SCHED_BATCH.
-CPU_SCHEDULING: dict[str, int | None] = {
-    'batch': getattr(os, 'SCHED_BATCH', None),
-    'all_batch': getattr(os, 'SCHED_BATCH', None),
-    'default': None,
+
+class SchedulingChoice(NamedTuple):
+    """What a ``cpu_scheduling`` value asks for."""
+
+    #: The policy threads on SCHED_OTHER move to (None = every thread as it started).
+    policy: int | None
+    #: Fast DDS's sender threads go to SCHED_IDLE instead, under a guard
+    #: (:mod:`~rigid_body_attitude.ros.sender_threads`).
+    idle_senders: bool = False
+
+
+#: Values of the ``cpu_scheduling`` parameter.
+CPU_SCHEDULING: dict[str, SchedulingChoice] = {
+    'batch': SchedulingChoice(getattr(os, 'SCHED_BATCH', None), idle_senders=True),
+    'all_batch': SchedulingChoice(getattr(os, 'SCHED_BATCH', None)),
+    'default': SchedulingChoice(None),
 }
 
 
@@ -155,7 +165,7 @@ def check_cpu_scheduling(value: str) -> str:
     if value not in CPU_SCHEDULING:
         return (f'Expected parameter `cpu_scheduling` to be one of '
                 f'{", ".join(repr(name) for name in CPU_SCHEDULING)}, got {value!r}')
-    if value != 'default' and CPU_SCHEDULING[value] is None:
+    if value != 'default' and CPU_SCHEDULING[value].policy is None:
         return (f'Expected parameter `cpu_scheduling` to be \'default\' on this system '
                 f'(no SCHED_BATCH), got {value!r}')
     return ''
@@ -182,7 +192,7 @@ def apply_cpu_scheduling(value: str, task_folder: Path = Path('/proc/self/task')
     problem = check_cpu_scheduling(value)
     if problem:
         raise InputError(problem)
-    policy = CPU_SCHEDULING[value]
+    policy = CPU_SCHEDULING[value].policy
     if policy is None or not task_folder.is_dir():
         return SchedulingOutcome(0)
     changed = 0

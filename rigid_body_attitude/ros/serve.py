@@ -25,7 +25,8 @@ from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
 from rigid_body_attitude.ros.middleware import (
-    apply_cpu_scheduling, use_asynchronous_publication, use_packaged_fastdds_profile)
+    apply_cpu_scheduling, CPU_SCHEDULING, use_asynchronous_publication,
+    use_packaged_fastdds_profile)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import RCLError
 from rigid_body_attitude.ros.sender_threads import GUARD_PERIOD, idle_sender_guard, SenderGuard
@@ -111,8 +112,8 @@ def spin(node: AttitudePropagatorNode) -> None:
     """
     gc.collect()
     gc.freeze()
-    guard, guard_remark = (idle_sender_guard() if node.cpu_scheduling == 'batch'
-                           else (None, ''))
+    guard, guard_remark = (idle_sender_guard()
+                           if CPU_SCHEDULING[node.cpu_scheduling].idle_senders else (None, ''))
     # Claims the gyro subscriptions and the timers before any executor spins.
     loop = node.gyro_loop([] if guard is None else [_guard_timer(node, guard)])
     executor = SingleThreadedExecutor(context=node.context)

@@ -248,16 +248,6 @@ def test_a_users_publication_mode_is_never_overridden(environ, reason):
     assert note == f'publication mode left alone: {reason}'
 
 
-def _thread_names(pid: int) -> list[str]:
-    names = []
-    for task in Path(f'/proc/{pid}/task').iterdir():
-        try:
-            names.append((task / 'comm').read_text().strip())
-        except FileNotFoundError:  # the thread ended meanwhile
-            continue
-    return names
-
-
 @pytest.mark.parametrize('mode, asynchronous_threads', [
     ('', 2),  # the node's default: discovery's own and the writers' asynchronous thread
     ('SYNCHRONOUS', 1),  # discovery's only
@@ -273,11 +263,11 @@ def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
     process = start('--ros-args', '-p', 'scene:=strapdown')
     processes.append(process)
     lines = read_until(process, 'serving')
-    names = _thread_names(process.pid)
+    senders = sender_thread_ids(Path(f'/proc/{process.pid}/task'))
     code, stderr = stop_with_sigint(process)
     stderr = ''.join(lines) + stderr
     assert code == 0, stderr
-    assert sum(name.startswith('dds.asyn.') for name in names) == asynchronous_threads, names
+    assert len(senders) == asynchronous_threads, senders
     expected = (f"publication mode left alone: {PUBLICATION_MODE_VARIABLE} is '{mode}'" if mode
                 else 'asynchronous publication (RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS)')
     assert expected in stderr
