@@ -87,14 +87,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     rules = parse_policies(args.policies)
     from rigid_body_attitude.ros import serve
 
-    def scheduling(node, guard, guard_remark) -> None:  # replaces the cpu_scheduling rule
+    def scheduling(node, guard_remark) -> None:  # replaces the cpu_scheduling rule
         node.get_logger().info('policies: ' + ' '.join(apply(rules)) + '; serving')
         if args.sender_waits is not None:
             threading.Thread(target=watch_senders, args=(args.sender_waits,),
                              daemon=True).start()
 
     serve._apply_cpu_scheduling = scheduling
-    serve.idle_sender_guard = lambda: (None, '')  # no guard: the policies are the rules
+    serve.sender_guard = lambda *args: (None, '')  # no guard: the policies are the rules
     return serve.main([sys.argv[0]] + ros_args)
 
 

@@ -227,7 +227,8 @@ def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> 
     """Stop the subscriber; count the poses of the window received in time, and latencies.
 
     A pose counts if its stamp lies in the publisher's measured window and it arrived at most
-    ``drain`` seconds after the last publish.
+    ``drain`` seconds after the last publish. ``latency_max_at_s``: when the slowest counted
+    pose was stamped, in seconds after the window's first stamp.
     """
     import numpy as np
     subscriber.stop(signal.SIGTERM, grace=10.0)
@@ -240,9 +241,11 @@ def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> 
 
     def percentile(q: float) -> Optional[float]:
         return float(np.percentile(latency_ms, q)) if received else None
+    worst_at_s = (float(stamps[counted][np.argmax(latency_ms)] - end['first_stamp_ns']) * 1e-9
+                  if received else None)
     return {'sent': end['sent'], 'received': received, 'lost': end['sent'] - received,
             'latency_p50_ms': percentile(50), 'latency_p99_ms': percentile(99),
-            'latency_max_ms': percentile(100)}
+            'latency_max_ms': percentile(100), 'latency_max_at_s': worst_at_s}
 
 
 def measure(session: Session, target_argv: List[str], rate: float,

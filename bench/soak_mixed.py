@@ -38,8 +38,8 @@ sys.path.insert(0, str(BENCH))
 from _common import busy_ticks, cpu_ticks, rss_kib  # noqa: E402
 import _report  # noqa: E402
 from node_throughput import (add_endpoint_profile_argument, CLOCK_TICKS,  # noqa: E402
-                             delivery, display, NODE_ARGS, ProcessCrashed, Session,
-                             start_processes)
+                             delivery, display, endpoint_environment, NODE_ARGS,
+                             ProcessCrashed, REPO, Session, start_processes)
 
 
 def default_node() -> List[str]:
@@ -85,8 +85,10 @@ def run(argv: List[str], args: argparse.Namespace) -> dict:
             processes = start_processes(session, argv, args.gyro_rate, seconds, 0.0, args)
             target, publisher = processes['target'], processes['publisher']
             mixed = session.start('mixed', [sys.executable, str(BENCH / '_mixed_traffic.py'),
-                                            '--rate', str(args.mixed_rate)], json_stdout=True)
+                                            '--rate', str(args.mixed_rate)], json_stdout=True,
+                                  extra_env=endpoint_environment(args.mixed_profile))
             mixed.wait_event('matched', args.match_timeout, watch=[target])
+            mixed_matched_ns = time.time_ns()
             publisher.wait_event('start', args.match_timeout + 5, watch=[target])
             pid = target.popen.pid
             ticks0, machine0, wall0 = cpu_ticks(pid), busy_ticks(), time.monotonic()
@@ -110,6 +112,8 @@ def run(argv: List[str], args: argparse.Namespace) -> dict:
         'growth_kib_per_minute': growth_rate_kib_per_minute(after_first),
         'rss_max_kib': max(s['rss_kib'] for s in after_first),
         'publisher_hz': end['achieved_hz'], **counts, 'mixed': mixed_counts,
+        'mixed_profile': args.mixed_profile,
+        'mixed_matched_at_s': (mixed_matched_ns - end['first_stamp_ns']) * 1e-9,
         'cpu_percent': 100.0 * (ticks1 - ticks0) / CLOCK_TICKS / window,
         'machine_busy_cores': (machine1 - machine0) / CLOCK_TICKS / window,
         'problems': problems, 'machine': _report.machine_description(),
@@ -127,7 +131,8 @@ def summary(result: dict) -> str:
         f'gyro: sent {result["sent"]}, received {result["received"]}, lost {result["lost"]} '
         f'(publisher {result["publisher_hz"]:.1f} Hz); latency p50 '
         f'{result["latency_p50_ms"]:.2f} ms, p99 {result["latency_p99_ms"]:.2f} ms, max '
-        f'{result["latency_max_ms"]:.1f} ms',
+        f'{result["latency_max_ms"]:.1f} ms at {result["latency_max_at_s"]:.2f} s (mixed '
+        f'traffic matched at {result["mixed_matched_at_s"]:.2f} s)',
         f'mixed: {mixed["ticks"]} ticks; set_pose {mixed["set_pose"]}, parameter replies '
         f'{mixed["parameter_replies"]} (refused {mixed["parameters_refused"]}), reset '
         f'replies {mixed["reset_replies"]} (failed {mixed["resets_failed"]})',
@@ -153,6 +158,10 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         default=int(os.environ.get('ROS_DOMAIN_ID', '71')))
     parser.add_argument('--match-timeout', type=float, default=30.0)
     add_endpoint_profile_argument(parser)
+    parser.add_argument('--mixed-profile', default=str(REPO / 'config' / 'fastdds.xml'),
+                        help='Fast DDS profile of the mixed-traffic process (default the '
+                        'package\'s, like the publisher and subscriber; "none" = Fast DDS '
+                        'defaults: see bench/NOTES.md section 12)')
     parser.add_argument('--results', type=Path,
                         default=BENCH / 'results' / 'node' / 'soak_mixed.json')
     args = parser.parse_args(argv)

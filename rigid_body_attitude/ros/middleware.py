@@ -38,10 +38,10 @@ And for the scheduler:
   wake-up: they run when the CPU is free or the current thread's slice ends. Only threads on
   the default policy are changed; real-time (FIFO/RR) and idle threads are left alone.
   On a busy CPU a batch thread can wait up to one scheduler slice (a few ms) before it runs;
-  ``cpu_scheduling: default`` keeps the usual policy. Fast DDS's asynchronous sender threads
-  go to SCHED_IDLE instead, watched for starvation, where the process may undo that
-  (:mod:`~rigid_body_attitude.ros.sender_threads`: under SCHED_BATCH they busy-wait on a
-  writer's mutex for up to a scheduler tick).
+  ``cpu_scheduling: default`` keeps the usual policy. With ``batch`` Fast DDS's asynchronous
+  sender threads move to SCHED_IDLE while the gyro rate is above ``idle_senders_above_hz``,
+  where the process may undo that (:mod:`~rigid_body_attitude.ros.sender_threads`: under
+  SCHED_BATCH they busy-wait on a writer's mutex for up to a scheduler tick).
 
 Measured on this project's machine at 1 kHz (``bench/fast_relay.py``): Fast DDS defaults 12.5 %
 of a core; with the NACK suppression 9.8–10.3 %; with it and SCHED_BATCH 8.8–9.2 %, p99
@@ -50,7 +50,7 @@ latency unchanged (0.31 ms).
 
 from __future__ import annotations
 
-from collections.abc import Collection, MutableMapping
+from collections.abc import MutableMapping
 import os
 from pathlib import Path
 from typing import NamedTuple
@@ -86,7 +86,7 @@ class SchedulingChoice(NamedTuple):
 
     #: The policy threads on SCHED_OTHER move to (None = every thread as it started).
     policy: int | None
-    #: Fast DDS's sender threads go to SCHED_IDLE instead, under a guard
+    #: Fast DDS's sender threads go to SCHED_IDLE while the gyro rate is high, under a guard
     #: (:mod:`~rigid_body_attitude.ros.sender_threads`).
     idle_senders: bool = False
 
@@ -180,10 +180,9 @@ class SchedulingOutcome(NamedTuple):
     refused: str = ''
 
 
-def apply_cpu_scheduling(value: str, task_folder: Path = Path('/proc/self/task'),
-                         idle_threads: Collection[int] = ()) -> SchedulingOutcome:
-    """Move this process's threads on SCHED_OTHER to the policy named by ``value``, those in
-    ``idle_threads`` to SCHED_IDLE instead (:mod:`~rigid_body_attitude.ros.sender_threads`).
+def apply_cpu_scheduling(value: str, task_folder: Path = Path('/proc/self/task')
+                         ) -> SchedulingOutcome:
+    """Move this process's threads on SCHED_OTHER to the policy named by ``value``.
 
     Threads created later by one of them inherit the policy. A refusal by the system is
     returned, not raised (the node then runs as started); a value
@@ -201,8 +200,7 @@ def apply_cpu_scheduling(value: str, task_folder: Path = Path('/proc/self/task')
         try:
             if os.sched_getscheduler(thread_id) != os.SCHED_OTHER:
                 continue
-            os.sched_setscheduler(thread_id, os.SCHED_IDLE if thread_id in idle_threads
-                                  else policy, os.sched_param(0))
+            os.sched_setscheduler(thread_id, policy, os.sched_param(0))
         except ProcessLookupError:  # the thread ended meanwhile
             continue
         except OSError as err:

@@ -1,4 +1,5 @@
-"""Fast DDS's asynchronous sender threads at idle priority, and the guard that lifts a starved one.
+"""Fast DDS's asynchronous sender threads: ``SCHED_IDLE`` while the gyro rate is high, else
+``SCHED_BATCH``; the guard that chooses, and lifts a starved sender.
 
 With asynchronous publication (:func:`~rigid_body_attitude.ros.middleware.\
 use_asynchronous_publication`) a Fast DDS 2.14 thread named ``dds.asyn.*`` sends what the
@@ -10,40 +11,54 @@ preempts it, so it can spin until the scheduler tick (4 ms on this project's mac
 the holder of the mutex, and any other thread queued behind it, waits: in a 15 kHz run
 ``perf sched`` showed the sender running 1.0–3.9 ms without a break six times in 4 s, once
 with the node's event thread runnable on the same CPU for 3.5 ms and the other CPU idle.
-Those were the node's intermittent multi-millisecond latency tails at 10–20 kHz
+Those were the node's intermittent multi-millisecond latency tails at 15–20 kHz
 (``bench/NOTES.md``, section 11).
 
 Under ``SCHED_IDLE`` any other thread woken on its CPU preempts the sender at once, so a spin
 ends as soon as the mutex's holder can run. The price: an idle thread gets only a sliver of a
-CPU that other threads keep busy (with two CPU-bound processes on this 2-core machine, a
-sender at idle priority fell behind by 20–270 ms at 1–5 kHz). The :class:`SenderGuard` therefore
-looks at each sender's scheduling delay every :data:`GUARD_PERIOD` seconds and moves a starved
-one to ``SCHED_BATCH`` for good. It does not see short bursts of other load (waits of tens
-of ms in a few runs among hundreds leave the mean per run low), during which an idle sender
-is the last thread to run: with two processes each busy 30 ms in every 330 ms, p99 at 2 kHz
-was 10.7–20.1 ms against 8.1–9.0 ms with the senders on ``SCHED_BATCH``
-(``cpu_scheduling: all_batch``). Leaving ``SCHED_IDLE`` needs ``CAP_SYS_NICE`` or an
-``RLIMIT_NICE`` of at least 20 (``ulimit -e``); a process without it keeps its senders on
-``SCHED_BATCH`` (:func:`can_leave_idle_policy`). The delays come from
-``/proc/self/task/<tid>/schedstat`` (time on the CPU, time waiting on a run queue, runs).
+CPU that other threads keep busy. With two CPU-bound processes on this 2-core machine a
+sender at idle priority fell behind by 20–270 ms at 1–5 kHz, and with two processes each busy
+30 ms in every 330 ms p99 at 2 kHz was 10.7–20.1 ms against 8.1–9.0 ms on ``SCHED_BATCH``.
+Below 10 kHz the spin did not matter (with the senders on ``SCHED_BATCH``, p99 ≤ 1 ms up to
+5 kHz and ahead of the fast relay at 10 kHz in ten sweeps of ``bench/NOTES.md``, section 10).
+So the :class:`SenderGuard` looks at the gyro loop's message count every :data:`GUARD_PERIOD`
+seconds: the senders go to ``SCHED_IDLE`` when the rate over the last half second reaches the
+node's ``idle_senders_above_hz`` and back to ``SCHED_BATCH`` when it falls below
+:data:`BATCH_BELOW_FRACTION` of it. While they are idle it also reads each sender's
+``/proc/self/task/<tid>/schedstat`` (time on the CPU, time waiting on a run queue, runs) and
+puts them on ``SCHED_BATCH`` for good once one is starved. It does not see short bursts of
+other load (waits of tens of ms in a few runs among hundreds leave the mean per run low).
+Leaving ``SCHED_IDLE`` needs ``CAP_SYS_NICE`` or an ``RLIMIT_NICE`` of at least 20
+(``ulimit -e``); a process without it keeps its senders on ``SCHED_BATCH``
+(:func:`can_leave_idle_policy`).
 """
 
 from __future__ import annotations
 
+from collections import deque
+from collections.abc import Callable
 import os
 import threading
 from pathlib import Path
 from typing import NamedTuple
 
-__all__ = ['GUARD_PERIOD', 'SENDER_THREAD_PREFIX', 'STARVED_MEAN_DELAY_NS',
-           'STARVED_TOTAL_DELAY_NS', 'SchedStat', 'SenderGuard', 'can_leave_idle_policy',
-           'idle_sender_guard', 'read_schedstat', 'sender_thread_ids']
+__all__ = ['BATCH_BELOW_FRACTION', 'GUARD_PERIOD', 'GuardNote', 'RATE_WINDOW_PERIODS',
+           'SENDER_THREAD_PREFIX', 'STARVED_MEAN_DELAY_NS', 'STARVED_TOTAL_DELAY_NS',
+           'SchedStat', 'SenderGuard', 'can_leave_idle_policy', 'sender_guard',
+           'read_schedstat', 'sender_thread_ids']
 
 #: Name prefix of Fast DDS 2.14's asynchronous sender threads.
 SENDER_THREAD_PREFIX = 'dds.asyn.'
 
-#: Seconds between two looks at the senders' scheduling delays.
+#: Seconds between two looks at the gyro rate (and, while idle, the senders' delays).
 GUARD_PERIOD = 0.1
+
+#: Looks over which the gyro rate is taken (half a second).
+RATE_WINDOW_PERIODS = 5
+
+#: Idle senders go back to ``SCHED_BATCH`` below this fraction of ``idle_senders_above_hz``
+#: (so that a rate near the threshold does not move them back and forth).
+BATCH_BELOW_FRACTION = 2.0 / 3.0
 
 #: A sender is starved when, over one period, it waited on a run queue longer than this on
 #: average per run ... (at 1–20 kHz without other load: at most 0.084 ms; with two CPU-bound
@@ -109,48 +124,102 @@ def can_leave_idle_policy() -> bool:
     return allowed == [True]
 
 
-class SenderGuard:
-    """Watches sender threads on ``SCHED_IDLE``; moves a starved one to ``SCHED_BATCH``.
+class GuardNote(NamedTuple):
+    """A line for the node's log: a policy change (info) or a starved sender (warning)."""
 
-    A starved thread that is not on ``SCHED_IDLE`` (its policy was not the node's to set) is
-    left as it is and no longer watched.
+    warning: bool
+    text: str
+
+
+class SenderGuard:
+    """Chooses the senders' policy from the gyro rate; lifts them for good when starved.
+
+    The senders start on ``SCHED_BATCH``. A sender whose policy is not the one the guard
+    last gave it (changed by someone else, or gone) is left alone and no longer watched.
     """
 
-    def __init__(self, thread_ids: list[int], task_folder: Path = _TASKS) -> None:
-        """Watch ``thread_ids`` (already on ``SCHED_IDLE``, or about to be)."""
+    def __init__(self, thread_ids: list[int], message_count: Callable[[], int],
+                 idle_above_hz: float, task_folder: Path = _TASKS) -> None:
+        """Watch ``thread_ids`` (on ``SCHED_BATCH``); ``message_count()`` is the number of
+        gyro messages handled so far; idle from ``idle_above_hz`` on."""
+        self.thread_ids = list(thread_ids)
+        self.message_count = message_count
+        self.idle_above_hz = idle_above_hz
         self.task_folder = task_folder
-        self.watched: dict[int, SchedStat | None] = dict.fromkeys(thread_ids)
-        #: Threads moved to ``SCHED_BATCH`` so far.
-        self.promoted: list[int] = []
+        self.counts: deque[int] = deque(maxlen=RATE_WINDOW_PERIODS + 1)
+        #: The senders are on ``SCHED_IDLE``.
+        self.idle = False
+        #: A sender starved: the senders stay on ``SCHED_BATCH`` for good.
+        self.starved = False
+        self.delays: dict[int, SchedStat | None] = {}
 
-    def check(self) -> list[str]:
-        """Look at every watched thread once; a line for the log per thread moved."""
-        lines = []
-        for thread_id, before in list(self.watched.items()):
+    def rate(self) -> float | None:
+        """Gyro messages per second over the last :data:`RATE_WINDOW_PERIODS` looks (None
+        before that many)."""
+        if len(self.counts) <= RATE_WINDOW_PERIODS:
+            return None
+        return (self.counts[-1] - self.counts[0]) / (RATE_WINDOW_PERIODS * GUARD_PERIOD)
+
+    def check(self) -> list[GuardNote]:
+        """One look (every :data:`GUARD_PERIOD` s); a note per change made."""
+        self.counts.append(self.message_count())
+        rate = self.rate()
+        if self.starved or rate is None or not self.thread_ids:
+            return []
+        if not self.idle:
+            if rate < self.idle_above_hz:
+                return []
+            return self._move(os.SCHED_BATCH, os.SCHED_IDLE, False, (
+                f'gyro input at {rate:.0f} Hz (idle_senders_above_hz '
+                f'{self.idle_above_hz:g}): Fast DDS sender threads'))
+        starved = self._starved_sender()
+        if starved:
+            self.starved = True
+            return self._move(os.SCHED_IDLE, os.SCHED_BATCH, True, starved)
+        if rate < BATCH_BELOW_FRACTION * self.idle_above_hz:
+            return self._move(os.SCHED_IDLE, os.SCHED_BATCH, False, (
+                f'gyro input at {rate:.0f} Hz (below {BATCH_BELOW_FRACTION:.3g} of '
+                f'idle_senders_above_hz {self.idle_above_hz:g}): Fast DDS sender threads'))
+        return []
+
+    def _starved_sender(self) -> str:
+        """The reason the first starved sender is starved ('' when none is)."""
+        for thread_id in self.thread_ids:
             now = read_schedstat(self.task_folder / str(thread_id) / 'schedstat')
-            if now is None:  # the thread ended
-                del self.watched[thread_id]
-                continue
-            self.watched[thread_id] = now
-            if before is None or not _starved(before, now):
-                continue
-            del self.watched[thread_id]
-            if _policy(thread_id) == os.SCHED_IDLE:  # else not ours to move (or gone)
-                lines.append(self._promote(thread_id, before, now))
-        return lines
+            before = self.delays.get(thread_id)
+            self.delays[thread_id] = now
+            if before is not None and now is not None and _starved(before, now):
+                return (f'Fast DDS sender thread {thread_id} starved by other load '
+                        f'({(now.wait_ns - before.wait_ns) * 1e-6:.0f} ms waiting for a CPU in '
+                        f'{now.runs - before.runs} runs over {GUARD_PERIOD:g} s): '
+                        f'Fast DDS sender threads')
+        return ''
 
-    def _promote(self, thread_id: int, before: SchedStat, now: SchedStat) -> str:
-        waited_ms = (now.wait_ns - before.wait_ns) * 1e-6
-        runs = now.runs - before.runs
-        try:
-            os.sched_setscheduler(thread_id, os.SCHED_BATCH, os.sched_param(0))
-        except OSError as err:
-            return (f'Fast DDS sender thread {thread_id} starved ({waited_ms:.0f} ms waiting for '
-                    f'a CPU in {runs} runs) and could not leave SCHED_IDLE: {err}')
-        self.promoted.append(thread_id)
-        return (f'Fast DDS sender thread {thread_id} starved by other load ({waited_ms:.0f} ms '
-                f'waiting for a CPU in {runs} runs over {GUARD_PERIOD:g} s): moved from '
-                f'SCHED_IDLE to SCHED_BATCH')
+    def _move(self, old: int, new: int, warning: bool, reason: str) -> list[GuardNote]:
+        """Move the senders on ``old`` to ``new``; forget those on neither (not ours) and
+        those the system refuses to move."""
+        moved, kept, refused = [], [], ''
+        for thread_id in self.thread_ids:
+            policy = _policy(thread_id)
+            if policy == old:
+                try:
+                    os.sched_setscheduler(thread_id, new, os.sched_param(0))
+                except OSError as err:
+                    refused = f' ({thread_id} refused: {err})'
+                    continue
+                moved.append(thread_id)
+            elif policy == new:
+                kept.append(thread_id)
+        self.thread_ids = moved + kept
+        self.idle = new == os.SCHED_IDLE and bool(moved)
+        self.delays = {}
+        if not moved and not refused:
+            return []
+        return [GuardNote(warning or bool(refused),
+                          f'{reason} {moved} moved to {_POLICY_NAMES[new]}{refused}')]
+
+
+_POLICY_NAMES = {os.SCHED_IDLE: 'SCHED_IDLE', os.SCHED_BATCH: 'SCHED_BATCH'}
 
 
 def _policy(thread_id: int) -> int | None:
@@ -168,9 +237,10 @@ def _starved(before: SchedStat, now: SchedStat) -> bool:
     return waited > STARVED_TOTAL_DELAY_NS and waited > STARVED_MEAN_DELAY_NS * runs
 
 
-def idle_sender_guard(task_folder: Path = _TASKS) -> tuple[SenderGuard | None, str]:
-    """A guard over this process's sender threads when they may go to ``SCHED_IDLE``, and a
-    remark for the log (``''`` when there are none: synchronous publication)."""
+def sender_guard(message_count: Callable[[], int], idle_above_hz: float,
+                 task_folder: Path = _TASKS) -> tuple[SenderGuard | None, str]:
+    """A guard over this process's sender threads when they may go to ``SCHED_IDLE`` and
+    back, and a remark for the log (``''`` when there are none: synchronous publication)."""
     thread_ids = sender_thread_ids(task_folder)
     if not thread_ids:
         return None, ''
@@ -181,5 +251,6 @@ def idle_sender_guard(task_folder: Path = _TASKS) -> tuple[SenderGuard | None, s
     if not can_leave_idle_policy():
         return None, ('Fast DDS sender threads kept on SCHED_BATCH (leaving SCHED_IDLE needs '
                       'CAP_SYS_NICE or RLIMIT_NICE >= 20)')
-    return SenderGuard(thread_ids, task_folder), (
-        f'Fast DDS sender threads {thread_ids} on SCHED_IDLE, moved to SCHED_BATCH if starved')
+    return SenderGuard(thread_ids, message_count, idle_above_hz, task_folder), (
+        f'Fast DDS sender threads {thread_ids} on SCHED_IDLE while gyro input is above '
+        f'{idle_above_hz:g} Hz, else on SCHED_BATCH')

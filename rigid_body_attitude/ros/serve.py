@@ -29,7 +29,7 @@ from rigid_body_attitude.ros.middleware import (
     use_packaged_fastdds_profile)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import RCLError
-from rigid_body_attitude.ros.sender_threads import GUARD_PERIOD, idle_sender_guard, SenderGuard
+from rigid_body_attitude.ros.sender_threads import GUARD_PERIOD, sender_guard, SenderGuard
 
 __all__ = ['main', 'spin']
 
@@ -112,8 +112,14 @@ def spin(node: AttitudePropagatorNode) -> None:
     """
     gc.collect()
     gc.freeze()
-    guard, guard_remark = (idle_sender_guard()
-                           if CPU_SCHEDULING[node.cpu_scheduling].idle_senders else (None, ''))
+    loop: GyroLoop | None = None
+
+    def gyro_messages() -> int:
+        return 0 if loop is None else loop.handled
+    guard, guard_remark = (
+        sender_guard(gyro_messages, node.idle_senders_above_hz)
+        if CPU_SCHEDULING[node.cpu_scheduling].idle_senders and not node.is_dynamics
+        else (None, ''))
     # Claims the gyro subscriptions and the timers before any executor spins.
     loop = node.gyro_loop([] if guard is None else [_guard_timer(node, guard)])
     executor = SingleThreadedExecutor(context=node.context)
@@ -121,7 +127,7 @@ def spin(node: AttitudePropagatorNode) -> None:
     rest = _ExecutorThread(executor, node, loop)
     try:
         rest.thread.start()
-        _apply_cpu_scheduling(node, guard, guard_remark)
+        _apply_cpu_scheduling(node, guard_remark)
         loop.run()
     finally:
         rest.stop()
@@ -133,20 +139,21 @@ def spin(node: AttitudePropagatorNode) -> None:
 
 def _guard_timer(node: AttitudePropagatorNode, guard: SenderGuard) -> Timer:
     """A steady-clock timer in the gyro loop's group running ``guard`` every
-    :data:`GUARD_PERIOD` seconds; a sender it moves is logged as a warning."""
+    :data:`GUARD_PERIOD` seconds; the senders it moves are logged (a starved one as a
+    warning)."""
     def check() -> None:
-        for line in guard.check():
-            node.get_logger().warning(line)
+        for note in guard.check():  # one call site per severity, as rclpy's logger wants
+            if note.warning:
+                node.get_logger().warning(note.text)
+            else:
+                node.get_logger().info(note.text)
     return node.create_timer(GUARD_PERIOD, check, node.loop_group,
                              clock=Clock(clock_type=ClockType.STEADY_TIME))
 
 
-def _apply_cpu_scheduling(node: AttitudePropagatorNode, guard: SenderGuard | None,
-                          guard_remark: str) -> None:
-    """Give every thread of the process the node's ``cpu_scheduling`` policy (the senders
-    ``guard`` watches: SCHED_IDLE); log it."""
-    outcome = apply_cpu_scheduling(node.cpu_scheduling,
-                                   idle_threads=() if guard is None else list(guard.watched))
+def _apply_cpu_scheduling(node: AttitudePropagatorNode, guard_remark: str) -> None:
+    """Give every thread of the process the node's ``cpu_scheduling`` policy; log it."""
+    outcome = apply_cpu_scheduling(node.cpu_scheduling)
     logger = node.get_logger()
     if outcome.refused:
         logger.warning(

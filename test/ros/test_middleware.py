@@ -273,7 +273,7 @@ def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
     assert expected in stderr
 
 
-@pytest.mark.parametrize('arguments, policy, idle_senders, logged', [
+@pytest.mark.parametrize('arguments, policy, guarded, logged', [
     ((), os.SCHED_BATCH, True, "cpu_scheduling 'batch': "),
     (('-p', 'cpu_scheduling:=all_batch'), os.SCHED_BATCH, False,
      "cpu_scheduling 'all_batch': "),
@@ -281,7 +281,9 @@ def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
      "cpu_scheduling 'default': 0 threads"),
 ])
 def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(
-        processes, monkeypatch, arguments, policy, idle_senders, logged):
+        processes, monkeypatch, arguments, policy, guarded, logged):
+    """Every thread, the senders too, starts on the policy; with ``batch`` the start-up line
+    says when the senders go to SCHED_IDLE (``test_sender_threads`` moves them)."""
     for variable in FASTDDS_PROFILE_VARIABLES:  # set by an in-process main() of another test
         monkeypatch.delenv(variable, raising=False)
     process = start('--ros-args', '-p', 'scene:=strapdown', *arguments)
@@ -291,9 +293,14 @@ def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(
     senders = sender_thread_ids(Path(f'/proc/{process.pid}/task'))
     assert len(policies) >= 5  # Python, the executor thread and Fast DDS's threads
     assert len(senders) == 2  # asynchronous publication: discovery's and the writers'
-    assert {policies.pop(str(thread_id)) for thread_id in senders} == {
-        os.SCHED_IDLE if idle_senders and can_leave_idle_policy() else policy}
     assert set(policies.values()) == {policy}, policies
+    if not guarded:
+        assert 'Fast DDS sender threads' not in lines[-1]
+    elif can_leave_idle_policy():
+        assert (f'Fast DDS sender threads {senders} on SCHED_IDLE while gyro input is above '
+                f'12000 Hz, else on SCHED_BATCH; serving') in lines[-1]
+    else:
+        assert 'Fast DDS sender threads kept on SCHED_BATCH (leaving SCHED_IDLE' in lines[-1]
     code, stderr = stop_with_sigint(process)
     stderr = ''.join(lines) + stderr
     assert code == 0, stderr
