@@ -129,13 +129,24 @@ def mixed_soak_section(soak: Optional[dict]) -> List[str]:
         f'RSS each minute (MiB): {samples}.',
         f'- gyro samples: sent {soak["sent"]}, poses received {soak["received"]}, lost '
         f'{soak["lost"]}; latency p50 {_fmt(soak["latency_p50_ms"])} ms, p99 '
-        f'{_fmt(soak["latency_p99_ms"])} ms, max {_fmt(soak["latency_max_ms"], 1)} ms.',
+        f'{_fmt(soak["latency_p99_ms"])} ms, max {_fmt(soak["latency_max_ms"], 1)} ms'
+        + _worst_when(soak) + '.',
         f'- mixed ticks {mixed["ticks"]}: parameter replies {mixed["parameter_replies"]} '
         f'(refused {mixed["parameters_refused"]}), reset replies {mixed["reset_replies"]} '
         f'(failed {mixed["resets_failed"]}); the last few requests were in flight at the end.',
         f'- node CPU {soak["cpu_percent"]:.1f} % of a core; the whole machine was '
         f'{soak["machine_busy_cores"]:.2f} cores busy (all processes, other engineers\' '
         'included).', '']
+
+
+def _worst_when(soak: dict) -> str:
+    """When the soak's worst latency happened, and the mixed process's Fast DDS profile
+    (results written before these were recorded have neither)."""
+    if soak.get('latency_max_at_s') is None:
+        return ''
+    profile = soak.get('mixed_profile', '')
+    return (f' ({soak["latency_max_at_s"]:.1f} s into the soak; the mixed-traffic process on '
+            f'{"Fast DDS defaults" if profile == "none" else "the package profile"})')
 
 
 def dynamics_cpu_section(result: Optional[dict]) -> List[str]:

@@ -115,8 +115,8 @@ def main() -> int:
     probe = Probe(args.out, args.gap_ms, args.native)
     original = node_module.AttitudePropagatorNode.gyro_loop
 
-    def gyro_loop(self: Any) -> Any:
-        probe.loop = original(self)
+    def gyro_loop(self: Any, extra_timers: Any = ()) -> Any:
+        probe.loop = original(self, extra_timers)
         return probe.loop
 
     node_module.AttitudePropagatorNode.gyro_loop = gyro_loop  # type: ignore[method-assign]

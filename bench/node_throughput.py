@@ -152,7 +152,7 @@ def default_targets() -> Dict[str, List[str]]:
     targets = {}
     if shutil.which('propagation_node'):
         targets['node'] = ['propagation_node'] + NODE_ARGS
-    elif (REPO / 'rigid_body_attitude' / 'node.py').exists():
+    elif (REPO / 'rigid_body_attitude' / 'ros' / 'serve.py').exists():
         targets['node'] = [python, '-m', 'rigid_body_attitude.ros.serve'] + NODE_ARGS
     targets['relay'] = [python, str(BENCH / 'relay.py')]
     targets['fast_relay'] = [python, str(BENCH / 'fast_relay.py')]

@@ -132,11 +132,17 @@ one, so only the 4 ms scheduler tick ended the spin. With the sender threads on 
 any thread woken on their CPU preempts them: in 8 interleaved 15 kHz runs that node's p99 was
 0.65–1.74 ms against the fast relay's 1.46–4.55 ms (ahead in 8 of 8; the all-`SCHED_BATCH`
 node 0.81–4.14 ms, ahead in 6 of 8). An idle-policy thread starves when other threads keep
-the CPUs busy (two CPU-bound processes: p99 64–909 ms at 1–5 kHz), so the node reads its
-senders' run-queue waits every 0.1 s and moves a starved one to `SCHED_BATCH`
-(`rigid_body_attitude/ros/sender_threads.py`); a process that could not undo `SCHED_IDLE`
+the CPUs busy (two CPU-bound processes: p99 64–909 ms at 1–5 kHz) and is the last to run
+when other processes fill both CPUs for a moment (both busy 30 ms out of every 330 ms: p99
+12.3–21.4 ms at 2 kHz against 7.4–8.9 ms with the senders on `SCHED_BATCH`, section 12),
+while the spin it cures only cost the lead at 15–20 kHz. So the senders run under
+`SCHED_IDLE` only while gyro input comes at `idle_senders_above_hz` (12 kHz) or more, and go
+back to `SCHED_BATCH` below two thirds of it; while they are idle the node reads their
+run-queue waits every 0.1 s and puts them on `SCHED_BATCH` for good when one starves
+(`rigid_body_attitude/ros/sender_threads.py`). A process that could not undo `SCHED_IDLE`
 (no `CAP_SYS_NICE`, `RLIMIT_NICE` below 20) keeps them on `SCHED_BATCH`. The sweeps above
-are with idle senders."""
+are with that rule: idle senders at 15 and 20 kHz (from 0.36–0.48 s after the first sample,
+before the 0.5 s warm-up ended), `SCHED_BATCH` below."""
 
 
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).

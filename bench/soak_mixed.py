@@ -111,7 +111,8 @@ def run(argv: List[str], args: argparse.Namespace) -> dict:
         'growth_kib': last['rss_kib'] - first['rss_kib'],
         'growth_kib_per_minute': growth_rate_kib_per_minute(after_first),
         'rss_max_kib': max(s['rss_kib'] for s in after_first),
-        'publisher_hz': end['achieved_hz'], **counts, 'mixed': mixed_counts,
+        'publisher_hz': end['achieved_hz'], 'publisher_max_lag_ms': end['max_lag_ms'],
+        **counts, 'mixed': mixed_counts,
         'mixed_profile': args.mixed_profile,
         'mixed_matched_at_s': (mixed_matched_ns - end['first_stamp_ns']) * 1e-9,
         'cpu_percent': 100.0 * (ticks1 - ticks0) / CLOCK_TICKS / window,
@@ -129,7 +130,8 @@ def summary(result: dict) -> str:
         f'{result["rss_end_kib"]} KiB ({result["growth_kib"]:+d} KiB; slope '
         f'{result["growth_kib_per_minute"]:+.1f} KiB/min; max {result["rss_max_kib"]} KiB)',
         f'gyro: sent {result["sent"]}, received {result["received"]}, lost {result["lost"]} '
-        f'(publisher {result["publisher_hz"]:.1f} Hz); latency p50 '
+        f'(publisher {result["publisher_hz"]:.1f} Hz, at most '
+        f'{result["publisher_max_lag_ms"]:.1f} ms late); latency p50 '
         f'{result["latency_p50_ms"]:.2f} ms, p99 {result["latency_p99_ms"]:.2f} ms, max '
         f'{result["latency_max_ms"]:.1f} ms at {result["latency_max_at_s"]:.2f} s (mixed '
         f'traffic matched at {result["mixed_matched_at_s"]:.2f} s)',
