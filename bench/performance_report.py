@@ -157,18 +157,17 @@ tick, subscribed or not), the body-frame velocity is rotated with plain floats i
 `numpy.cross` calls, and the node clock is read through its handle without a `Time` object
 (session 4 measured 2.8–4.8 % unsubscribed and 3.2–5.8 % subscribed for these scenes, with the
 main thread at 2.2–4.0 %). Per thread in this run (`bench/results/node/node_dynamics_cpu.json`):
-the main thread 1.5–2.3 % unsubscribed and 1.9–2.4 % subscribed, the two shared-memory listeners
-of the package's Fast DDS profile (they wake every 10 ms, "Latency in repeated sweeps") 0.4–0.8
-%, and with subscribers the asynchronous sender thread (`dds.asyn.0.1`, "Configuration" above)
-0.3–0.5 % and the event thread 0.5–0.6 %. Session 5 measured 1.5–2.1 % unsubscribed and
-2.2–3.2 % subscribed with every thread on `SCHED_BATCH`; in a rerun of two scenes right after
-this run (`bench/results/node/sender_idle/dynamics_*.json`), `cpu_scheduling:=all_batch`
-(senders on `SCHED_BATCH`, no sender guard) against the default (idle senders, the guard's
-10 Hz timer) gave 1.9 / 2.5 against 1.9 / 3.3 % (`torque_free_box`, unsubscribed /
-subscribed) and 2.2 / 3.2 against 2.3 / 3.8 % (`gyrostat`):
-idle senders cost 0.6–0.8 points with every output subscribed, the guard nothing measurable
-unsubscribed. Subscribed windows are noisier than unsubscribed ones: the subscriber process
-shares the two cores."""
+the main thread 0.7–2.8 % unsubscribed and 1.1–2.6 % subscribed, each of the two shared-memory
+listeners of the package's Fast DDS profile (they wake every 10 ms, "Latency in repeated
+sweeps") 0.1–0.5 %, and with subscribers the asynchronous sender thread (`dds.asyn.0.1`,
+"Configuration" above) 0.3–0.5 % and the event thread 0.1–0.3 %. Since session 7 a dynamics
+scene keeps its sender threads on `SCHED_BATCH` and runs no sender guard (section 12 of
+`bench/NOTES.md`): session 6, with idle senders and the guard's 10 Hz timer, measured 2.2–2.9 %
+unsubscribed and 3.4–4.2 % subscribed. `torque_free_box` is the one row over a target here
+(3.6 % unsubscribed, with 0.16 cores of other load in its window); two reruns of it right after
+(`bench/results/node/rate_senders/dynamics_rerun_*.json`) gave 2.3 / 2.5 % and 1.5 / 2.0 %
+(unsubscribed / subscribed). Subscribed windows are noisier than unsubscribed ones: the
+subscriber process shares the two cores."""
 
 
 def _load(path: Path) -> Optional[dict]:
