@@ -16,7 +16,6 @@ Example::
 """
 
 import argparse
-import json
 import os
 from pathlib import Path
 import re
@@ -33,8 +32,8 @@ sys.path.insert(0, str(BENCH))
 
 import _report  # noqa: E402
 from node_throughput import (delivery, display, endpoint_environment,  # noqa: E402
-                             ProcessCrashed, Session, start_processes)
-from soak_mixed import default_node  # noqa: E402
+                             Session, start_processes)
+from soak_mixed import default_node, run_and_save  # noqa: E402
 
 AFTER_START_S = 3.0
 
@@ -183,18 +182,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
 
 def main(argv: Optional[List[str]] = None) -> int:
     """Run, save and print the results."""
-    args = parse_args(argv)
-    try:
-        result = run(shlex.split(args.node_cmd), args)
-    except ProcessCrashed as err:
-        print(f'error: {err}', file=sys.stderr)
-        return 1
-    args.results.parent.mkdir(parents=True, exist_ok=True)
-    args.results.write_text(json.dumps(result, indent=1))
-    print(summary(result))
-    for problem in result['problems']:
-        print(f'error: {problem}', file=sys.stderr)
-    return 1 if result['problems'] else 0
+    return run_and_save(run, summary, parse_args(argv))
 
 
 if __name__ == '__main__':

@@ -30,7 +30,7 @@ import shlex
 import sys
 import tempfile
 import time
-from typing import Dict, List, Optional
+from typing import Callable, Dict, List, Optional
 
 BENCH = Path(__file__).resolve().parent
 sys.path.insert(0, str(BENCH))
@@ -174,9 +174,15 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
 
 def main(argv: Optional[List[str]] = None) -> int:
     """Run the soak, save and print the results."""
-    args = parse_args(argv)
+    return run_and_save(run, summary, parse_args(argv))
+
+
+def run_and_save(run_node: Callable[[List[str], argparse.Namespace], dict],
+                 describe: Callable[[dict], str], args: argparse.Namespace) -> int:
+    """``run_node(node command, args)``; its results to ``args.results``, ``describe``'s
+    lines to stdout, problems to stderr; the exit code (also for ``peer_first_contact.py``)."""
     try:
-        result = run(shlex.split(args.node_cmd), args)
+        result = run_node(shlex.split(args.node_cmd), args)
     except ProcessCrashed as err:
         print(f'error: {err}', file=sys.stderr)
         return 1
