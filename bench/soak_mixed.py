@@ -188,7 +188,7 @@ def run_and_save(run_node: Callable[[List[str], argparse.Namespace], dict],
         return 1
     args.results.parent.mkdir(parents=True, exist_ok=True)
     args.results.write_text(json.dumps(result, indent=1))
-    print(summary(result))
+    print(describe(result))
     for problem in result['problems']:
         print(f'error: {problem}', file=sys.stderr)
     return 1 if result['problems'] else 0
