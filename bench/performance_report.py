@@ -141,7 +141,7 @@ back to `SCHED_BATCH` below two thirds of it; while they are idle the node reads
 run-queue waits every 0.1 s and puts them on `SCHED_BATCH` for good when one starves
 (`rigid_body_attitude/ros/sender_threads.py`). A process that could not undo `SCHED_IDLE`
 (no `CAP_SYS_NICE`, `RLIMIT_NICE` below 20) keeps them on `SCHED_BATCH`. The sweeps above
-are with that rule: idle senders at 15 and 20 kHz (from 0.34–0.48 s after the first sample,
+are with that rule: idle senders at 15 and 20 kHz (from 0.34–0.49 s after the first sample,
 before the 0.5 s warm-up ended), `SCHED_BATCH` below."""
 
 
