@@ -295,3 +295,21 @@ def test_the_installed_node_idles_its_senders_at_high_rates_and_lifts_them_when_
                      r'for a CPU in \d+ runs over 0\.1 s\): Fast DDS sender threads \[[\d, ]+\] '
                      r'moved to SCHED_BATCH', stderr), stderr
     assert len(poses) > 0
+
+
+def test_a_dynamics_scene_keeps_its_senders_on_batch_without_a_guard(processes):
+    """No gyro input: no guard runs, even with ``idle_senders_above_hz`` 0 (a guard would
+    move the senders to SCHED_IDLE once it has a rate, 0.5 s after start), and the start-up
+    line has no remark about the senders."""
+    process = start('--ros-args', '-p', 'scene:=torque_free_box',
+                    '-p', 'idle_senders_above_hz:=0.0')
+    processes.append(process)
+    lines = read_until(process, 'serving')
+    assert re.search(r"cpu_scheduling 'batch': \d+ threads changed; serving$",
+                     lines[-1].rstrip()), lines[-1]
+    time.sleep(1.5)
+    senders = _sender_policies(process.pid)
+    assert len(senders) == 2 and set(senders.values()) == {os.SCHED_BATCH}, senders
+    code, stderr = stop_with_sigint(process)
+    assert code == 0, stderr
+    assert 'Fast DDS sender thread' not in stderr
