@@ -198,10 +198,14 @@ def endpoint_environment(profile: str) -> Dict[str, str]:
     return {variable: profile for variable in FASTDDS_PROFILE_VARIABLES}
 
 
+#: The package's Fast DDS profile, the default of every bench process that talks to the node.
+PACKAGE_PROFILE = str(REPO / 'config' / 'fastdds.xml')
+
+
 def add_endpoint_profile_argument(parser: argparse.ArgumentParser) -> None:
     """``--endpoint-profile`` (:func:`endpoint_environment`), for every script that starts the
     bench's publisher and subscriber with :func:`start_processes`."""
-    parser.add_argument('--endpoint-profile', default=str(REPO / 'config' / 'fastdds.xml'),
+    parser.add_argument('--endpoint-profile', default=PACKAGE_PROFILE,
                         help='Fast DDS profile of the bench publisher and subscriber (default '
                         'the package\'s; "none" = Fast DDS defaults); targets keep their own')
 
@@ -236,12 +240,13 @@ def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> 
     stamps, received_at = data[:data.size // 2], data[data.size // 2:]
     counted = ((stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
                & (received_at <= end['last_stamp_ns'] + int(drain * 1e9)))
-    latency_ms = (received_at - stamps)[counted] * 1e-6
-    received = int(np.unique(stamps[counted]).size)
+    counted_stamps = stamps[counted]
+    latency_ms = (received_at[counted] - counted_stamps) * 1e-6
+    received = int(np.unique(counted_stamps).size)
 
     def percentile(q: float) -> Optional[float]:
         return float(np.percentile(latency_ms, q)) if received else None
-    worst_at_s = (float(stamps[counted][np.argmax(latency_ms)] - end['first_stamp_ns']) * 1e-9
+    worst_at_s = (float(counted_stamps[np.argmax(latency_ms)] - end['first_stamp_ns']) * 1e-9
                   if received else None)
     return {'sent': end['sent'], 'received': received, 'lost': end['sent'] - received,
             'latency_p50_ms': percentile(50), 'latency_p99_ms': percentile(99),

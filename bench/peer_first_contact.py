@@ -31,8 +31,9 @@ BENCH = Path(__file__).resolve().parent
 sys.path.insert(0, str(BENCH))
 
 import _report  # noqa: E402
-from node_throughput import (delivery, display, endpoint_environment,  # noqa: E402
-                             Session, start_processes)
+from _common import thread_ticks  # noqa: E402
+from node_throughput import (add_endpoint_profile_argument, delivery,  # noqa: E402
+                             display, endpoint_environment, Session, start_processes)
 from soak_mixed import default_node, run_and_save  # noqa: E402
 
 AFTER_START_S = 3.0
@@ -82,10 +83,11 @@ def start_perf_trace(pid: int, out: Path) -> subprocess.Popen:
 
 
 def long_sleeps(out: Path, names: Dict[int, str]) -> List[str]:
-    """The lines of a ``perf trace`` output, each with its thread's name."""
+    """The lines of a ``perf trace`` output (``... name/tid clock_nanosleep(...)``), each
+    with its thread's name."""
     lines = []
     for line in out.read_text(errors='replace').splitlines():
-        match = re.search(r'\b(\d+)\s+\S*nanosleep', line) or re.search(r'/(\d+) ', line)
+        match = re.search(r'/(\d+) ', line)
         thread = int(match.group(1)) if match else -1
         lines.append(f'{names.get(thread, "?")}: {line.strip()}')
     return lines
@@ -93,13 +95,7 @@ def long_sleeps(out: Path, names: Dict[int, str]) -> List[str]:
 
 def thread_names(pid: int) -> Dict[int, str]:
     """Thread id → name, for process ``pid``."""
-    names = {}
-    for entry in Path(f'/proc/{pid}/task').iterdir():
-        try:
-            names[int(entry.name)] = (entry / 'comm').read_text().strip()
-        except OSError:
-            continue
-    return names
+    return {thread: name for thread, (name, _) in thread_ticks(pid).items()}
 
 
 def run(argv: List[str], args: argparse.Namespace) -> dict:
@@ -166,8 +162,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--pause', type=float, default=0.5)
     parser.add_argument('--peer-profile', default='none',
                         help='Fast DDS profile of the peers ("none" = Fast DDS defaults)')
-    parser.add_argument('--endpoint-profile',
-                        default=str(BENCH.parent / 'config' / 'fastdds.xml'))
+    add_endpoint_profile_argument(parser)
     parser.add_argument('--gyro-rate', type=float, default=1000.0)
     parser.add_argument('--mixed-rate', type=float, default=100.0)
     parser.add_argument('--node-cmd', default=shlex.join(default_node()))

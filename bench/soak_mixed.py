@@ -39,7 +39,7 @@ from _common import busy_ticks, cpu_ticks, rss_kib  # noqa: E402
 import _report  # noqa: E402
 from node_throughput import (add_endpoint_profile_argument, CLOCK_TICKS,  # noqa: E402
                              delivery, display, endpoint_environment, NODE_ARGS,
-                             ProcessCrashed, REPO, Session, start_processes)
+                             PACKAGE_PROFILE, ProcessCrashed, Session, start_processes)
 
 
 def default_node() -> List[str]:
@@ -160,7 +160,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         default=int(os.environ.get('ROS_DOMAIN_ID', '71')))
     parser.add_argument('--match-timeout', type=float, default=30.0)
     add_endpoint_profile_argument(parser)
-    parser.add_argument('--mixed-profile', default=str(REPO / 'config' / 'fastdds.xml'),
+    parser.add_argument('--mixed-profile', default=PACKAGE_PROFILE,
                         help='Fast DDS profile of the mixed-traffic process (default the '
                         'package\'s, like the publisher and subscriber; "none" = Fast DDS '
                         'defaults: see bench/NOTES.md section 12)')
