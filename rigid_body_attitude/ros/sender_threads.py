@@ -211,7 +211,7 @@ class SenderGuard:
             elif policy == new:
                 kept.append(thread_id)
         self.thread_ids = moved + kept
-        self.idle = new == os.SCHED_IDLE and bool(moved)
+        self.idle = new == os.SCHED_IDLE and bool(self.thread_ids)
         self.delays = {}
         if not moved and not refused:
             return []

@@ -112,7 +112,7 @@ def spin(node: AttitudePropagatorNode) -> None:
     """
     gc.collect()
     gc.freeze()
-    loop: GyroLoop | None = None
+    loop: GyroLoop | None = None  # built with the guard's timer, so read through a closure
 
     def gyro_messages() -> int:
         return 0 if loop is None else loop.handled
