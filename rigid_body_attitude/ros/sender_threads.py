@@ -18,7 +18,8 @@ Under ``SCHED_IDLE`` any other thread woken on its CPU preempts the sender at on
 ends as soon as the mutex's holder can run. The price: an idle thread gets only a sliver of a
 CPU that other threads keep busy. With two CPU-bound processes on this 2-core machine a
 sender at idle priority fell behind by 20–270 ms at 1–5 kHz, and with two processes each busy
-30 ms in every 330 ms p99 at 2 kHz was 10.7–20.1 ms against 8.1–9.0 ms on ``SCHED_BATCH``.
+30 ms in every 330 ms, at the same moments (``bench/cpu_bursts.py``), p99 at 2 kHz was
+12.3–21.4 ms against 7.4–8.9 ms on ``SCHED_BATCH``.
 Below 10 kHz the spin did not matter (with the senders on ``SCHED_BATCH``, p99 ≤ 1 ms up to
 5 kHz and ahead of the fast relay at 10 kHz in ten sweeps of ``bench/NOTES.md``, section 10).
 So the :class:`SenderGuard` looks at the gyro loop's message count every :data:`GUARD_PERIOD`
