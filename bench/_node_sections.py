@@ -39,7 +39,9 @@ def sweeps_section(sweeps: List[dict], target: str = 'node',
              f'{len(sweeps)} sweeps of `bench/node_throughput.py` in a row (fresh processes '
              'per row, 4 s windows). Per rate: p99 / maximum latency (ms), lost, CPU (% of a '
              f'core) of the node with its default parameters and of the fast relay in the same '
-             f'sweep, and the other load on the machine (cores; other engineers\' jobs). '
+             f'sweep; the CPU of the bench\'s own publisher and subscriber in the node\'s row '
+             f'and in the relay\'s (the same work in both: how fast the machine was in each '
+             f'window); and the other load on the machine (cores; other engineers\' jobs). '
              f'Target: node p99 ≤ {TARGET_P99_MS:g} ms at every rate up to '
              f'{TARGET_P99_UP_TO_HZ:.0f} Hz, and above that no worse than the fast relay\'s; '
              'zero loss to 20 kHz; 1 kHz CPU no worse than the fast relay\'s.', '']
@@ -48,8 +50,8 @@ def sweeps_section(sweeps: List[dict], target: str = 'node',
         lines += [f'**Sweep {number}** (load average at start '
                   f'{sweep["machine"]["load_average_at_start"]})', '',
                   '| rate (Hz) | node p99 / max | node lost | node CPU | relay p99 / max | '
-                  'relay lost | relay CPU | other load | verdict |',
-                  '|---:|---:|---:|---:|---:|---:|---:|---:|---|']
+                  'relay lost | relay CPU | bench pub + sub CPU | other load | verdict |',
+                  '|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|']
         for rate in sorted(node):
             mine, theirs = node[rate], relay.get(rate, {})
             lines.append(
@@ -57,10 +59,18 @@ def sweeps_section(sweeps: List[dict], target: str = 'node',
                 f'{_fmt(mine["latency_max_ms"], 1)} | {mine["lost"]} | '
                 f'{mine["cpu_percent"]:.1f} | {_fmt(theirs.get("latency_p99_ms"))} / '
                 f'{_fmt(theirs.get("latency_max_ms"), 1)} | {theirs.get("lost", "–")} | '
-                f'{_fmt(theirs.get("cpu_percent"), 1)} | {mine["other_load_cores"]:.2f} | '
+                f'{_fmt(theirs.get("cpu_percent"), 1)} | {_bench_cpu(mine)} / '
+                f'{_bench_cpu(theirs)} | {mine["other_load_cores"]:.2f} | '
                 f'{_latency_verdict(rate, mine, theirs)} |')
         lines.append('')
     return lines + _sweeps_summary(sweeps, target, yardstick)
+
+
+def _bench_cpu(row: dict) -> str:
+    """The bench publisher's and subscriber's CPU in one row (% of a core), or '–'."""
+    if 'publisher_cpu_percent' not in row:
+        return '–'
+    return f'{row["publisher_cpu_percent"] + row["subscriber_cpu_percent"]:.1f}'
 
 
 #: A row whose maximum latency exceeds this has a stall (the Fast DDS listener's 333 ms one

@@ -232,7 +232,9 @@ def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> 
 
     A pose counts if its stamp lies in the publisher's measured window and it arrived at most
     ``drain`` seconds after the last publish. ``latency_max_at_s``: when the slowest counted
-    pose was stamped, in seconds after the window's first stamp.
+    pose was stamped, in seconds after the window's first stamp; ``receive_gap_max_ms``: the
+    longest time without a counted pose arriving (the node sent nothing, or nothing got
+    through).
     """
     import numpy as np
     subscriber.stop(signal.SIGTERM, grace=10.0)
@@ -248,9 +250,12 @@ def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> 
         return float(np.percentile(latency_ms, q)) if received else None
     worst_at_s = (float(counted_stamps[np.argmax(latency_ms)] - end['first_stamp_ns']) * 1e-9
                   if received else None)
+    arrivals = np.sort(received_at[counted])
+    gap_ms = float(np.diff(arrivals).max() * 1e-6) if arrivals.size > 1 else None
     return {'sent': end['sent'], 'received': received, 'lost': end['sent'] - received,
             'latency_p50_ms': percentile(50), 'latency_p99_ms': percentile(99),
-            'latency_max_ms': percentile(100), 'latency_max_at_s': worst_at_s}
+            'latency_max_ms': percentile(100), 'latency_max_at_s': worst_at_s,
+            'receive_gap_max_ms': gap_ms}
 
 
 def measure(session: Session, target_argv: List[str], rate: float,
@@ -378,7 +383,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                              '(default %(default)s)')
     parser.add_argument('--targets', default=None,
                         help='comma-separated built-in targets: node, relay, fast_relay '
-                             '(default: all available)')
+                             '(default: all available; "none": only the --target ones)')
     parser.add_argument('--target', action='append', default=[], metavar='LABEL=COMMAND',
                         help='an extra target command line (repeatable)')
     parser.add_argument('--node-cmd', default=None,
@@ -413,7 +418,8 @@ def select_targets(args: argparse.Namespace) -> Dict[str, List[str]]:
     available = default_targets()
     if args.node_cmd:
         available['node'] = shlex.split(args.node_cmd)
-    names = args.targets.split(',') if args.targets else list(available)
+    names = ([] if args.targets == 'none' else args.targets.split(',') if args.targets
+             else list(available))
     missing = [name for name in names if name not in available]
     if missing:
         raise SystemExit(f'error: targets {missing} not available; have {list(available)}')

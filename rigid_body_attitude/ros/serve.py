@@ -29,7 +29,7 @@ from rigid_body_attitude.ros.middleware import (
     use_packaged_fastdds_profile)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import RCLError
-from rigid_body_attitude.ros.sender_threads import sender_guard, SenderGuard
+from rigid_body_attitude.ros.sender_threads import GUARD_PERIOD, sender_guard, SenderGuard
 
 __all__ = ['main', 'spin']
 
@@ -139,22 +139,16 @@ def spin(node: AttitudePropagatorNode) -> None:
 
 def _guard_timer(node: AttitudePropagatorNode, guard: SenderGuard) -> Timer:
     """A steady-clock timer in the gyro loop's group running ``guard`` every
-    :attr:`SenderGuard.period` seconds; the senders it moves are logged (a refused move as a
+    :data:`GUARD_PERIOD` seconds; the senders it moves are logged (a starved one as a
     warning)."""
-    timer: Timer | None = None  # the callback needs the timer it belongs to
-
     def check() -> None:
         for note in guard.check():  # one call site per severity, as rclpy's logger wants
             if note.warning:
                 node.get_logger().warning(note.text)
             else:
                 node.get_logger().info(note.text)
-        period_ns = round(guard.period * 1e9)
-        if timer is not None and timer.timer_period_ns != period_ns:
-            timer.timer_period_ns = period_ns
-    timer = node.create_timer(guard.period, check, node.loop_group,
-                              clock=Clock(clock_type=ClockType.STEADY_TIME))
-    return timer
+    return node.create_timer(GUARD_PERIOD, check, node.loop_group,
+                             clock=Clock(clock_type=ClockType.STEADY_TIME))
 
 
 def _apply_cpu_scheduling(node: AttitudePropagatorNode, guard_remark: str) -> None:

@@ -3,8 +3,8 @@
 
 What idle priority buys is measured, not tested (``bench/NOTES.md``, sections 11 and 12).
 Here: the privilege probe, the ``schedstat`` reader, the rate rule with its hysteresis, the
-contention rule and its holds, threads that are not the guard's, and the installed node moving
-its senders with the gyro rate and under CPU-bound load.
+starvation rule, threads that are not the guard's, and the installed node moving its senders
+with the gyro rate and under CPU-bound load.
 """
 
 from __future__ import annotations
@@ -26,9 +26,9 @@ from sensor_msgs.msg import Imu
 from test_node_subprocess import read_until, start, stop_with_sigint
 
 from rigid_body_attitude.ros.sender_threads import (
-    can_leave_idle_policy, contended, CONTENDED_MEAN_WAIT_NS, CONTENDED_WAIT_FRACTION,
-    FIRST_HOLD, GUARD_PERIOD, GuardNote, IDLE_LOOK_PERIOD, MAX_HOLD, RATE_WINDOW,
-    read_schedstat, sender_guard, SenderGuard, sender_thread_ids, SchedStat)
+    can_leave_idle_policy, GUARD_PERIOD, GuardNote, RATE_WINDOW_PERIODS, read_schedstat,
+    sender_guard, SenderGuard, sender_thread_ids, STARVED_MEAN_DELAY_NS,
+    STARVED_TOTAL_DELAY_NS)
 
 CAP_SYS_NICE = 23
 NO_SUCH_THREAD = 2**22 + 12345  # above pid_max
@@ -94,76 +94,55 @@ def batch_thread() -> Iterator[int]:
     thread.join()
 
 
-class Feed:
-    """Fake time and gyro message count for a guard: each look advances both by the guard's
-    period, the count at ``rate`` messages a second."""
+class GyroCount:
+    """A gyro message count the test advances: ``rate`` messages a second per look."""
 
     def __init__(self) -> None:
-        self.now = 0.0
-        self.count = 0.0
+        self.count = 0
+        self.rate = 0.0
 
-    def monotonic(self) -> float:
-        return self.now
-
-    def message_count(self) -> int:
-        return round(self.count)
+    def __call__(self) -> int:
+        self.count += round(self.rate * GUARD_PERIOD)
+        return self.count
 
 
-def _guard(thread_ids: list[int], feed: Feed, folder: Path) -> SenderGuard:
-    """A guard over ``thread_ids``, idle from 1 kHz on, on ``feed``'s time and count."""
-    return SenderGuard(thread_ids, feed.message_count, 1000.0, folder, feed.monotonic)
+def _looks(guard: SenderGuard, count: GyroCount, rate: float, looks: int) -> list[GuardNote]:
+    """``looks`` checks of ``guard`` at ``rate``; their notes."""
+    count.rate = rate
+    return [note for _ in range(looks) for note in guard.check()]
 
 
-def _looks(guard: SenderGuard, feed: Feed, rate: float, looks: int) -> list[GuardNote]:
-    """``looks`` checks of ``guard`` at ``rate``, each one period after the last; their
-    notes."""
-    notes = []
-    for _ in range(looks):
-        feed.now += guard.period
-        feed.count += rate * guard.period
-        notes += guard.check()
-    return notes
-
-
-LOOKS_PER_WINDOW = round(RATE_WINDOW / GUARD_PERIOD)
-HIGH_RATE = 1200.0  # over the guards' threshold of 1 kHz
-
-
-def _idle_guard(folder: Path, thread_id: int) -> tuple[SenderGuard, Feed]:
+def _idle_guard(folder: Path, thread_id: int) -> tuple[SenderGuard, GyroCount]:
     """A guard over ``thread_id`` that has just put it on SCHED_IDLE (threshold 1 kHz)."""
-    feed = Feed()
-    guard = _guard([thread_id], feed, folder)
-    assert _looks(guard, feed, HIGH_RATE, LOOKS_PER_WINDOW + 1) == [GuardNote(False, (
-        f'gyro input at 1200 Hz (idle_senders_above_hz 1000): Fast DDS sender threads '
+    count = GyroCount()
+    guard = SenderGuard([thread_id], count, 1000.0, folder)
+    assert _looks(guard, count, 1000.0, RATE_WINDOW_PERIODS + 1) == [GuardNote(False, (
+        f'gyro input at 1000 Hz (idle_senders_above_hz 1000): Fast DDS sender threads '
         f'[{thread_id}] moved to SCHED_IDLE'))]
     assert guard.idle and os.sched_getscheduler(thread_id) == os.SCHED_IDLE
-    assert guard.period == IDLE_LOOK_PERIOD
-    return guard, feed
+    return guard, count
 
 
 def test_the_senders_follow_the_gyro_rate_with_hysteresis(tmp_path, batch_thread):
-    _thread(tmp_path, batch_thread, stat=(1_000, 5_000, 7))  # never waits
-    feed = Feed()
-    guard = _guard([batch_thread], feed, tmp_path)
-    assert guard.rate() is None and guard.period == GUARD_PERIOD
-    # No rate before the looks span a whole window, then below the threshold: nothing moves.
-    assert _looks(guard, feed, 990.0, LOOKS_PER_WINDOW) == []
+    _thread(tmp_path, batch_thread, stat=(1_000, 5_000, 7))  # never starved
+    count = GyroCount()
+    guard = SenderGuard([batch_thread], count, 1000.0, tmp_path)
+    # No rate before a whole window, then below the threshold: nothing moves.
+    assert _looks(guard, count, 990.0, RATE_WINDOW_PERIODS) == []
     assert guard.rate() is None
-    assert _looks(guard, feed, 990.0, 1) == []
+    assert _looks(guard, count, 990.0, 1) == []
     assert guard.rate() == pytest.approx(990.0)
     assert os.sched_getscheduler(batch_thread) == os.SCHED_BATCH
-    guard, feed = _idle_guard(tmp_path, batch_thread)
-    assert _looks(guard, feed, 700.0, 50) == []  # above 2/3 of the threshold: stays idle
+    guard, count = _idle_guard(tmp_path, batch_thread)
+    assert _looks(guard, count, 670.0, 30) == []  # above 2/3 of the threshold: stays idle
     assert os.sched_getscheduler(batch_thread) == os.SCHED_IDLE
-    # The window at the second look: 0.46 s at 700 Hz and 0.04 s at 250 Hz, 664 Hz.
-    notes = _looks(guard, feed, 250.0, 2)
-    reason = ('gyro input at 664 Hz (below 0.667 of idle_senders_above_hz 1000): Fast DDS '
+    notes = _looks(guard, count, 600.0, RATE_WINDOW_PERIODS)  # 656 Hz at the first look
+    reason = ('gyro input at 656 Hz (below 0.667 of idle_senders_above_hz 1000): Fast DDS '
               'sender threads')
     if _may_leave_idle():
         assert notes == [GuardNote(False, f'{reason} [{batch_thread}] moved to SCHED_BATCH')]
         assert os.sched_getscheduler(batch_thread) == os.SCHED_BATCH and not guard.idle
-        assert guard.period == GUARD_PERIOD
-        assert len(_looks(guard, feed, HIGH_RATE, LOOKS_PER_WINDOW)) == 1  # idle again
+        assert len(_looks(guard, count, 1000.0, RATE_WINDOW_PERIODS)) == 1  # idle again
     else:  # refused: said once, as a warning; the thread is no longer the guard's
         assert len(notes) == 1 and notes[0].warning
         assert notes[0].text.startswith(f'{reason} [] moved to SCHED_BATCH ({batch_thread} '
@@ -171,62 +150,42 @@ def test_the_senders_follow_the_gyro_rate_with_hysteresis(tmp_path, batch_thread
         assert guard.thread_ids == [] and not guard.idle
 
 
-LOOK_NS = round(IDLE_LOOK_PERIOD * 1e9)
-
-
-@pytest.mark.parametrize('waited_ns, runs, is_contended', [
-    (CONTENDED_WAIT_FRACTION * LOOK_NS, 10, False),  # 1.5 ms a run, but not over 3/4 the time
-    (CONTENDED_WAIT_FRACTION * LOOK_NS + 1, 101, False),  # most of the time, in short waits
-    (CONTENDED_WAIT_FRACTION * LOOK_NS + 1, 100, True),
-    (LOOK_NS, 0, True),  # never ran at all
+@pytest.mark.parametrize('waited_ns, runs, starved', [
+    (STARVED_TOTAL_DELAY_NS, 10, False),  # 2 ms a run, but not more than the total in all
+    (STARVED_TOTAL_DELAY_NS + 1, 21, False),  # more in all, but under 1 ms a run: just busy
+    (STARVED_TOTAL_DELAY_NS + 1, 20, True),
+    (90_000_000, 0, True),  # never ran at all
 ])
-def test_the_contention_rule(waited_ns, runs, is_contended):
-    assert CONTENDED_MEAN_WAIT_NS == 150_000 and CONTENDED_WAIT_FRACTION == 0.75
-    before = SchedStat(1_000, 5_000, 7)
-    after = SchedStat(2_000, 5_000 + round(waited_ns), 7 + runs)
-    assert contended(before, after, IDLE_LOOK_PERIOD) is is_contended
-
-
-def _contend(folder: Path, thread_id: int, guard: SenderGuard, feed: Feed) -> list[GuardNote]:
-    """Two looks at 1.2 kHz: a baseline reading of the sender, then one with 20 ms waited in
-    10 runs since."""
-    _thread(folder, thread_id, stat=(1_000, 5_000, 7))
-    assert _looks(guard, feed, HIGH_RATE, 1) == []
-    _thread(folder, thread_id, stat=(2_000, 5_000 + 20_000_000, 17))
-    return _looks(guard, feed, HIGH_RATE, 1)
-
-
-def test_contention_holds_the_senders_on_batch_for_doubling_holds(tmp_path, batch_thread):
-    if not _may_leave_idle():
-        return  # the guard would never exist (sender_guard): nothing to hold
-    guard, feed = _idle_guard(tmp_path, batch_thread)
-    expected = FIRST_HOLD
-    for _ in range(8):  # 1, 2, 4 ... then MAX_HOLD: each contention comes right after a hold
-        notes = _contend(tmp_path, batch_thread, guard, feed)
-        assert notes == [GuardNote(False, (
-            f'other load contends for the CPUs (sender {batch_thread} waited 20.0 ms for a '
-            f'CPU in 10 runs over 20 ms): for {expected:g} s, Fast DDS sender threads '
-            f'[{batch_thread}] moved to SCHED_BATCH'))]
-        assert os.sched_getscheduler(batch_thread) == os.SCHED_BATCH and not guard.idle
-        looks = round(expected / GUARD_PERIOD)
-        assert _looks(guard, feed, HIGH_RATE, looks - 1) == []  # held, though the rate is high
-        notes = _looks(guard, feed, HIGH_RATE, 2)  # the hold ends at one of these (float sums)
-        assert len(notes) == 1 and notes[0].text.endswith('moved to SCHED_IDLE') and guard.idle
-        expected = min(2 * expected, MAX_HOLD)
-    assert expected == MAX_HOLD
-    # A whole MAX_HOLD without contention: the next hold is the first one again.
+def test_the_starvation_rule(tmp_path, batch_thread, waited_ns, runs, starved):
+    assert STARVED_MEAN_DELAY_NS == 1_000_000
     _thread(tmp_path, batch_thread, stat=(1_000, 5_000, 7))
-    assert _looks(guard, feed, HIGH_RATE, round(MAX_HOLD / IDLE_LOOK_PERIOD)) == []
-    notes = _contend(tmp_path, batch_thread, guard, feed)
-    assert len(notes) == 1 and f'for {FIRST_HOLD:g} s' in notes[0].text
+    guard, count = _idle_guard(tmp_path, batch_thread)
+    assert guard.check() == []  # the first reading while idle is the baseline
+    _thread(tmp_path, batch_thread, stat=(2_000, 5_000 + waited_ns, 7 + runs))
+    notes = guard.check()
+    if not starved:
+        assert notes == [] and guard.idle
+        assert os.sched_getscheduler(batch_thread) == os.SCHED_IDLE
+        return
+    reason = (f'Fast DDS sender thread {batch_thread} starved by other load '
+              f'({waited_ns * 1e-6:.0f} ms waiting for a CPU in {runs} runs over '
+              f'{GUARD_PERIOD:g} s): Fast DDS sender threads')
+    assert len(notes) == 1 and notes[0].warning and notes[0].text.startswith(reason)
+    assert guard.starved and not guard.idle
+    if _may_leave_idle():
+        assert notes[0].text == f'{reason} [{batch_thread}] moved to SCHED_BATCH'
+        assert os.sched_getscheduler(batch_thread) == os.SCHED_BATCH
+    else:
+        assert 'refused' in notes[0].text
+    assert _looks(guard, count, 5000.0, 30) == []  # for good: never idle again
 
 
 def test_threads_whose_policy_changed_elsewhere_or_that_ended_are_forgotten(
         tmp_path, batch_thread):
     normal = threading.get_native_id()  # this thread: on SCHED_OTHER, not ours to move
-    feed = Feed()
-    guard = _guard([batch_thread, normal, NO_SUCH_THREAD], feed, tmp_path)
-    notes = _looks(guard, feed, 2000.0, LOOKS_PER_WINDOW + 1)
+    count = GyroCount()
+    guard = SenderGuard([batch_thread, normal, NO_SUCH_THREAD], count, 1000.0, tmp_path)
+    notes = _looks(guard, count, 2000.0, RATE_WINDOW_PERIODS + 1)
     assert [note.text for note in notes] == [
         f'gyro input at 2000 Hz (idle_senders_above_hz 1000): Fast DDS sender threads '
         f'[{batch_thread}] moved to SCHED_IDLE']
@@ -236,13 +195,13 @@ def test_threads_whose_policy_changed_elsewhere_or_that_ended_are_forgotten(
         return
     os.sched_setscheduler(batch_thread, os.SCHED_OTHER, os.sched_param(0))
     # Someone else changed it: left alone, forgotten, no more notes.
-    assert _looks(guard, feed, 0.0, round(RATE_WINDOW / IDLE_LOOK_PERIOD) + 1) == []
+    assert _looks(guard, count, 0.0, 2 * RATE_WINDOW_PERIODS) == []
     assert guard.thread_ids == [] and not guard.idle
     assert os.sched_getscheduler(batch_thread) == os.SCHED_OTHER
 
 
 def test_the_guard_of_a_process_and_its_remark(tmp_path):
-    count = Feed().message_count
+    count = GyroCount()
     assert sender_guard(count, 12000.0, tmp_path) == (None, '')  # synchronous: no senders
     _thread(tmp_path, 21, 'dds.asyn.0.0')
     _thread(tmp_path, 22, 'dds.asyn.0.1', stat=(1, 2, 3))
@@ -289,12 +248,12 @@ def _publish_until(harness: Harness, publisher, sent: int, done, timeout: float 
     return sent
 
 
-def test_the_installed_node_idles_its_senders_at_high_rates_and_lifts_them_under_load(
+def test_the_installed_node_idles_its_senders_at_high_rates_and_lifts_them_when_starved(
         ros, request, processes):
     """With ``idle_senders_above_hz`` 100: the senders go to SCHED_IDLE while gyro messages
     come at over 100 Hz, back to SCHED_BATCH when they stop, to SCHED_IDLE again, and to
-    SCHED_BATCH for a first hold beside one CPU-bound process per CPU the test may use, and
-    one more (a sender at idle priority then waits for a CPU nearly all the time)."""
+    SCHED_BATCH for good beside one CPU-bound process per CPU the test may use, and one more
+    (a sender at idle priority then gets next to no CPU)."""
     namespace = unique_namespace(request)
     process = start('--ros-args', '-p', 'scene:=strapdown', '-p', 'idle_senders_above_hz:=100.0',
                     '-r', f'__ns:={namespace}')
@@ -332,9 +291,9 @@ def test_the_installed_node_idles_its_senders_at_high_rates_and_lifts_them_under
     assert os.SCHED_BATCH in policies.values(), (policies, stderr)
     moves = re.findall(r'moved to (SCHED_\w+)', stderr)
     assert moves == ['SCHED_IDLE', 'SCHED_BATCH', 'SCHED_IDLE', 'SCHED_BATCH'], stderr
-    assert re.search(r'INFO.*other load contends for the CPUs \(sender \d+ waited [\d.]+ ms for '
-                     r'a CPU in \d+ runs over \d+ ms\): for 1 s, Fast DDS sender threads '
-                     r'\[[\d, ]+\] moved to SCHED_BATCH', stderr), stderr
+    assert re.search(r'WARN.*Fast DDS sender thread \d+ starved by other load \(\d+ ms waiting '
+                     r'for a CPU in \d+ runs over 0\.1 s\): Fast DDS sender threads \[[\d, ]+\] '
+                     r'moved to SCHED_BATCH', stderr), stderr
     assert len(poses) > 0
 
 
