@@ -40,8 +40,9 @@ def sweeps_section(sweeps: List[dict], target: str = 'node',
              'per row, 4 s windows). Per rate: p99 / maximum latency (ms), lost, CPU (% of a '
              f'core) of the node with its default parameters and of the fast relay in the same '
              f'sweep; the CPU of the bench\'s own publisher and subscriber in the node\'s row '
-             f'and in the relay\'s (the same work in both: how fast the machine was in each '
-             f'window); and the other load on the machine (cores; other engineers\' jobs). '
+             f'and in the relay\'s (the same messages in both, though each also answers its '
+             f'peer\'s acknowledgements); and the other load on the machine (cores; other '
+             f'engineers\' jobs). '
              f'Target: node p99 ≤ {TARGET_P99_MS:g} ms at every rate up to '
              f'{TARGET_P99_UP_TO_HZ:.0f} Hz, and above that no worse than the fast relay\'s; '
              'zero loss to 20 kHz; 1 kHz CPU no worse than the fast relay\'s.', '']
