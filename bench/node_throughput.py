@@ -242,16 +242,15 @@ def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> 
     stamps, received_at = data[:data.size // 2], data[data.size // 2:]
     counted = ((stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
                & (received_at <= end['last_stamp_ns'] + int(drain * 1e9)))
-    counted_stamps = stamps[counted]
-    latency_ms = (received_at[counted] - counted_stamps) * 1e-6
+    counted_stamps, arrivals = stamps[counted], received_at[counted]
+    latency_ms = (arrivals - counted_stamps) * 1e-6
     received = int(np.unique(counted_stamps).size)
 
     def percentile(q: float) -> Optional[float]:
         return float(np.percentile(latency_ms, q)) if received else None
     worst_at_s = (float(counted_stamps[np.argmax(latency_ms)] - end['first_stamp_ns']) * 1e-9
                   if received else None)
-    arrivals = np.sort(received_at[counted])
-    gap_ms = float(np.diff(arrivals).max() * 1e-6) if arrivals.size > 1 else None
+    gap_ms = float(np.diff(np.sort(arrivals)).max() * 1e-6) if arrivals.size > 1 else None
     return {'sent': end['sent'], 'received': received, 'lost': end['sent'] - received,
             'latency_p50_ms': percentile(50), 'latency_p99_ms': percentile(99),
             'latency_max_ms': percentile(100), 'latency_max_at_s': worst_at_s,
@@ -418,8 +417,10 @@ def select_targets(args: argparse.Namespace) -> Dict[str, List[str]]:
     available = default_targets()
     if args.node_cmd:
         available['node'] = shlex.split(args.node_cmd)
-    names = ([] if args.targets == 'none' else args.targets.split(',') if args.targets
-             else list(available))
+    if args.targets == 'none':
+        names = []
+    else:
+        names = args.targets.split(',') if args.targets else list(available)
     missing = [name for name in names if name not in available]
     if missing:
         raise SystemExit(f'error: targets {missing} not available; have {list(available)}')

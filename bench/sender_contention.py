@@ -33,6 +33,8 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
+from rigid_body_attitude.ros.sender_threads import read_schedstat, sender_thread_ids
+
 BENCH = Path(__file__).resolve().parent
 DEFAULT_TARGET = (f'{sys.executable} {BENCH / "node_thread_policies.py"} '
                   f'--policies dds.asyn=idle,*=batch --ros-args -p scene:=strapdown')
@@ -54,18 +56,6 @@ def _target_pid(marker: bytes) -> Optional[int]:
     return newest
 
 
-def _senders(pid: int) -> List[str]:
-    """Thread ids of ``pid``'s Fast DDS sender threads."""
-    found = []
-    for thread_id in os.listdir(f'/proc/{pid}/task'):
-        try:
-            if Path(f'/proc/{pid}/task/{thread_id}/comm').read_text().startswith('dds.asyn'):
-                found.append(thread_id)
-        except OSError:
-            continue
-    return found
-
-
 def sample(marker: bytes, period_s: float, stop: threading.Event, rows: Dict[int, list]) -> None:
     """Thread body: every ``period_s``, (wall ns, then per sender: run ns, wait ns, runs,
     policy) of the newest target process, into ``rows[pid]``."""
@@ -78,17 +68,21 @@ def sample(marker: bytes, period_s: float, stop: threading.Event, rows: Dict[int
                 pid, senders = found, []
         if pid is not None and not senders:
             try:
-                senders = sorted(_senders(pid))
-            except OSError:
+                senders = sender_thread_ids(Path(f'/proc/{pid}/task'))
+            except OSError:  # the process ended meanwhile
                 pid = None
-        row: list = [time.time_ns()]
-        try:
-            for thread_id in senders:
-                fields = Path(f'/proc/{pid}/task/{thread_id}/schedstat').read_text().split()
-                row += [int(value) for value in fields] + [os.sched_getscheduler(int(thread_id))]
-        except (OSError, ValueError):
-            row = []
-        if pid is not None and len(row) > 1:
+        row: Optional[list] = [time.time_ns()] if senders else None
+        for thread_id in senders:
+            reading = read_schedstat(Path(f'/proc/{pid}/task/{thread_id}/schedstat'))
+            try:
+                policy = os.sched_getscheduler(thread_id)
+            except OSError:
+                reading = None
+            if reading is None or row is None:
+                row = None
+                break
+            row += [*reading, policy]
+        if pid is not None and row is not None:
             rows.setdefault(pid, []).append(row)
         time.sleep(period_s)
 
