@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import os
 import struct
-from typing import Dict, Optional, Tuple
+from typing import Dict, Optional, Set, Tuple
 
 #: Topic names every benchmark process uses (relative, so ``--ros-args -r`` remaps them).
 IMU_TOPIC = 'imu'
@@ -114,6 +114,20 @@ def cpu_ticks(pid: int) -> int:
     return int(fields[11]) + int(fields[12])  # fields 14 and 15 of proc(5)
 
 
+def cpu_seconds(pid: int) -> float:
+    """Return the run time (s) of every live thread of ``pid`` summed, from
+    /proc/<pid>/task/*/schedstat: nanoseconds, where /proc/<pid>/stat has 10 ms ticks (a 4 s
+    window's CPU in steps of 0.25 % of a core). A thread that ended is no longer counted."""
+    total_ns = 0
+    for task in os.listdir(f'/proc/{pid}/task'):
+        try:
+            with open(f'/proc/{pid}/task/{task}/schedstat') as schedstat:
+                total_ns += int(schedstat.read().split()[0])
+        except FileNotFoundError:
+            continue  # the thread ended meanwhile
+    return total_ns * 1e-9
+
+
 def thread_ticks(pid: int) -> Dict[int, Tuple[str, int]]:
     """Return {tid: (thread name, utime + stime ticks)} for every thread of ``pid``."""
     threads = {}
@@ -145,11 +159,40 @@ def cpu_by_thread_name(before: Dict[int, Tuple[str, int]], after: Dict[int, Tupl
 
 
 def busy_ticks() -> int:
-    """Return the machine's non-idle clock ticks summed over all cores (/proc/stat)."""
+    """Return the machine's non-idle clock ticks summed over all cores (/proc/stat).
+
+    Tick-sampled: on this project's VM its fields summed to 83–143 ticks per half second on
+    2 cores of 100 Hz ticks (``bench/NOTES.md`` section 14), so :func:`other_load_ticks` is
+    the better measure of other load."""
     with open('/proc/stat') as stat:
         user, nice, system, _idle, _iowait, irq, softirq, steal = map(
             int, stat.readline().split()[1:9])
     return user + nice + system + irq + softirq + steal  # guest time is inside user
+
+
+def process_ticks() -> Dict[int, int]:
+    """Return {pid: utime + stime + cutime + cstime} of every process now (/proc/<pid>/stat).
+
+    A process's own times are its threads' scheduler run times (exact, not tick samples);
+    cutime + cstime add the children it reaped."""
+    ticks = {}
+    for entry in os.listdir('/proc'):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f'/proc/{entry}/stat') as stat:
+                fields = stat.read().rsplit(')', 1)[1].split()
+        except (FileNotFoundError, ProcessLookupError):
+            continue  # ended meanwhile
+        ticks[int(entry)] = sum(int(field) for field in fields[11:15])  # fields 14-17
+    return ticks
+
+
+def other_load_ticks(before: Dict[int, int], after: Dict[int, int], ours: Set[int]) -> int:
+    """Clock ticks used between two :func:`process_ticks` snapshots by processes not in
+    ``ours`` (a process that started and ended in between is missed unless a survivor reaped
+    it)."""
+    return sum(ticks - before.get(pid, 0) for pid, ticks in after.items() if pid not in ours)
 
 
 def rss_kib(pid: int) -> int:

@@ -37,12 +37,12 @@ def sweeps_section(sweeps: List[dict], target: str = 'node',
         return []
     lines = ['## Latency in repeated sweeps', '',
              f'{len(sweeps)} sweeps of `bench/node_throughput.py` in a row (fresh processes '
-             'per row, 4 s windows). Per rate: p99 / maximum latency (ms), lost, CPU (% of a '
+             f'per window; {_windows_text(sweeps)}). Per rate: p99 / maximum latency (ms), lost, '
+             'CPU (% of a '
              f'core) of the node with its default parameters and of the fast relay in the same '
              f'sweep; the CPU of the bench\'s own publisher and subscriber in the node\'s row '
              f'and in the relay\'s (the same messages in both, though each also answers its '
-             f'peer\'s acknowledgements); and the other load on the machine (cores; other '
-             f'engineers\' jobs). '
+             f'peer\'s acknowledgements); and the other load on the machine (cores). '
              f'Target: node p99 ≤ {TARGET_P99_MS:g} ms at every rate up to '
              f'{TARGET_P99_UP_TO_HZ:.0f} Hz, and above that no worse than the fast relay\'s; '
              'zero loss to 20 kHz; 1 kHz CPU no worse than the fast relay\'s.', '']
@@ -51,8 +51,9 @@ def sweeps_section(sweeps: List[dict], target: str = 'node',
         lines += [f'**Sweep {number}** (load average at start '
                   f'{sweep["machine"]["load_average_at_start"]})', '',
                   '| rate (Hz) | node p99 / max | node lost | node CPU | relay p99 / max | '
-                  'relay lost | relay CPU | bench pub + sub CPU | other load | verdict |',
-                  '|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|']
+                  'relay lost | relay CPU | bench pub + sub CPU | other load | verdict | '
+                  'node / relay p99 per window |',
+                  '|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|']
         for rate in sorted(node):
             mine, theirs = node[rate], relay.get(rate, {})
             lines.append(
@@ -62,9 +63,27 @@ def sweeps_section(sweeps: List[dict], target: str = 'node',
                 f'{_fmt(theirs.get("latency_max_ms"), 1)} | {theirs.get("lost", "–")} | '
                 f'{_fmt(theirs.get("cpu_percent"), 1)} | {_bench_cpu(mine)} / '
                 f'{_bench_cpu(theirs)} | {mine["other_load_cores"]:.2f} | '
-                f'{_latency_verdict(rate, mine, theirs)} |')
+                f'{_latency_verdict(rate, mine, theirs)} | {_window_p99(mine)} / '
+                f'{_window_p99(theirs)} |')
         lines.append('')
     return lines + _sweeps_summary(sweeps, target, yardstick)
+
+
+def _windows_text(sweeps: List[dict]) -> str:
+    """How long the windows were and how many a row pools, over all ``sweeps``."""
+    kinds = sorted({(sweep['duration_s'], sweep.get('repeats', 1)) for sweep in sweeps})
+    return '; '.join(
+        f'{duration:g} s windows' if repeats == 1 else
+        f'{repeats} interleaved {duration:g} s windows per row, latency percentiles over all '
+        f'their poses, the median window\'s CPU' for duration, repeats in kinds)
+
+
+def _window_p99(row: dict) -> str:
+    """Each window's p99 (ms) of a pooled row, or '–' for a single window."""
+    windows = row.get('windows')
+    if not windows:
+        return '–'
+    return ' '.join(_fmt(window['latency_p99_ms']) for window in windows)
 
 
 def _bench_cpu(row: dict) -> str:

@@ -249,8 +249,9 @@ def render(throughput: Optional[dict], soak: Optional[dict], png_name: str) -> s
             f'Each row: fresh processes (target, `pose` subscriber, `imu` publisher; RELIABLE, '
             f'KEEP_LAST {throughput["depth"]}), {throughput["warmup_s"]} s warm-up, '
             f'{throughput["duration_s"]} s measured. *Lost* = published in the window but not '
-            f'received within {throughput["drain_s"]} s after the last publish. CPU = utime + '
-            'stime of the target process over the window. Latency = receive wall time − pose '
+            f'received within {throughput["drain_s"]} s after the last publish. CPU = '
+            f'{_cpu_clock(throughput)} of the target process over the window. '
+            f'{_windows(throughput)}Latency = receive wall time − pose '
             'stamp (the publish wall time). "(short)" marks a publisher that fell more than '
             f'{100 * (1 - PUBLISHER_SHORTFALL):.0f} % short of the asked rate.', '']
         lines += _summary(throughput['targets']) + ['']
@@ -264,6 +265,22 @@ def render(throughput: Optional[dict], soak: Optional[dict], png_name: str) -> s
     if soak is not None:
         lines += _soak_section(soak)
     return '\n'.join(lines)
+
+
+def _cpu_clock(throughput: dict) -> str:
+    """How the results measured CPU: schedstat run times (ns) or /proc ticks (older runs)."""
+    if throughput.get('cpu_clock') == 'schedstat_ns':
+        return 'run time of all threads (ns, /proc/<pid>/task/*/schedstat)'
+    return 'utime + stime (10 ms ticks, /proc/<pid>/stat)'
+
+
+def _windows(throughput: dict) -> str:
+    """What a row is made of when ``--repeats`` gave several windows per row."""
+    repeats = throughput.get('repeats', 1)
+    if repeats == 1:
+        return ''
+    return (f'Each row pools {repeats} such windows, the targets interleaved: latency '
+            'percentiles over all their poses, the median window\'s CPU. ')
 
 
 def _load(path: Path) -> Optional[dict]:

@@ -11,11 +11,17 @@ background load on the shared machine hits them alike. Per run it reports:
   achieved rate (a publisher that cannot keep up invalidates the row; it is flagged);
 * received / lost: poses whose stamp lies in the window, received within ``--drain`` seconds
   after the last publish; anything later or never counts as lost;
-* CPU: the target's utime + stime over the window (/proc/<pid>/stat, all threads), in % of one
-  core;
+* CPU: the target's run time over the window (all threads, /proc/<pid>/task/*/schedstat, in
+  ns), in % of one core;
 * latency p50 / p99: receive wall time minus pose stamp (= the gyro stamp = publish wall time);
-* other load: the machine's busy cores minus the three processes (approximate), since the
-  machine is shared.
+* other load: the CPU of every other process over the window (their scheduler run times from
+  /proc/<pid>/stat; /proc/stat's tick samples are unreliable on this VM), since the machine is
+  shared.
+
+``--repeats N`` measures each rate in N windows per target, the targets interleaved (their order
+rotated every window, so that none always runs first after the previous rate); a row then pools
+the windows: latency percentiles over all their poses, the median window's CPU, each window's
+row kept under ``windows`` (:func:`pooled_row`).
 
 ``--soak`` instead runs one target at 1 kHz for ``--soak-minutes`` and reports its RSS
 (/proc/<pid>/status VmRSS) every minute, plus sent / received / lost over the whole soak.
@@ -30,6 +36,7 @@ Examples::
 
     python bench/node_throughput.py                      # all targets, default rates
     python bench/node_throughput.py --targets relay,fast_relay --rates 1000,5000 --duration 3
+    python bench/node_throughput.py --targets node,fast_relay --repeats 3
     python bench/node_throughput.py --target fast3='python bench/fast_relay.py --outputs \
 pose,orientation,imu_data'
     python bench/node_throughput.py --soak --targets node
@@ -48,15 +55,18 @@ import sys
 import tempfile
 import threading
 import time
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple, TYPE_CHECKING
 
 BENCH = Path(__file__).resolve().parent
 REPO = BENCH.parent
 sys.path.insert(0, str(BENCH))
 
-from _common import (busy_ticks, cpu_by_thread_name, cpu_ticks, QUEUE_DEPTH,  # noqa: E402
-                     ros_env, rss_kib, thread_ticks)
+from _common import (cpu_by_thread_name, cpu_seconds, other_load_ticks,  # noqa: E402
+                     process_ticks, QUEUE_DEPTH, ros_env, rss_kib, thread_ticks)
 import _report  # noqa: E402
+
+if TYPE_CHECKING:
+    import numpy as np
 
 DEFAULT_RATES = [200, 500, 1000, 2000, 5000, 10000, 15000, 20000]
 NODE_ARGS = ['--ros-args', '-p', 'scene:=strapdown']
@@ -227,14 +237,12 @@ def start_processes(session: Session, target_argv: List[str], rate: float, durat
     return {'target': target, 'publisher': publisher, 'subscriber': subscriber}
 
 
-def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> dict:
-    """Stop the subscriber; count the poses of the window received in time, and latencies.
+def counted_poses(session: Session, subscriber: Process, end: dict,
+                  drain: float) -> Tuple['np.ndarray', 'np.ndarray']:
+    """Stop the subscriber; return the stamps and receive times (ns) of the poses that count.
 
     A pose counts if its stamp lies in the publisher's measured window and it arrived at most
-    ``drain`` seconds after the last publish. ``latency_max_at_s``: when the slowest counted
-    pose was stamped, in seconds after the window's first stamp; ``receive_gap_max_ms``: the
-    longest time without a counted pose arriving (the node sent nothing, or nothing got
-    through).
+    ``drain`` seconds after the last publish.
     """
     import numpy as np
     subscriber.stop(signal.SIGTERM, grace=10.0)
@@ -242,19 +250,36 @@ def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> 
     stamps, received_at = data[:data.size // 2], data[data.size // 2:]
     counted = ((stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
                & (received_at <= end['last_stamp_ns'] + int(drain * 1e9)))
-    counted_stamps, arrivals = stamps[counted], received_at[counted]
-    latency_ms = (arrivals - counted_stamps) * 1e-6
-    received = int(np.unique(counted_stamps).size)
+    return stamps[counted], received_at[counted]
+
+
+def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', end: dict) -> dict:
+    """Counts and latencies of the counted poses (:func:`counted_poses`).
+
+    ``latency_max_at_s``: when the slowest counted pose was stamped, in seconds after the
+    window's first stamp; ``receive_gap_max_ms``: the longest time without a counted pose
+    arriving (the node sent nothing, or nothing got through).
+    """
+    import numpy as np
+    latency_ms = (arrivals - stamps) * 1e-6
+    received = int(np.unique(stamps).size)
 
     def percentile(q: float) -> Optional[float]:
         return float(np.percentile(latency_ms, q)) if received else None
-    worst_at_s = (float(counted_stamps[np.argmax(latency_ms)] - end['first_stamp_ns']) * 1e-9
+    worst_at_s = (float(stamps[np.argmax(latency_ms)] - end['first_stamp_ns']) * 1e-9
                   if received else None)
     gap_ms = float(np.diff(np.sort(arrivals)).max() * 1e-6) if arrivals.size > 1 else None
     return {'sent': end['sent'], 'received': received, 'lost': end['sent'] - received,
             'latency_p50_ms': percentile(50), 'latency_p99_ms': percentile(99),
             'latency_max_ms': percentile(100), 'latency_max_at_s': worst_at_s,
             'receive_gap_max_ms': gap_ms}
+
+
+def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> dict:
+    """Stop the subscriber; count the poses of the window received in time, and latencies
+    (:func:`counted_poses`, :func:`delivery_summary`)."""
+    stamps, arrivals = counted_poses(session, subscriber, end, drain)
+    return delivery_summary(stamps, arrivals, end)
 
 
 def measure(session: Session, target_argv: List[str], rate: float,
@@ -265,22 +290,22 @@ def measure(session: Session, target_argv: List[str], rate: float,
     pids = {name: process.popen.pid for name, process in processes.items()}
     publisher.wait_event('start', args.match_timeout + args.warmup + 5, watch=[target])
     threads0 = thread_ticks(pids['target'])
-    ticks0 = {name: cpu_ticks(pid) for name, pid in pids.items()}
-    machine0, wall0 = busy_ticks(), time.monotonic()
+    seconds0 = {name: cpu_seconds(pid) for name, pid in pids.items()}
+    machine0, wall0 = process_ticks(), time.monotonic()
     end = publisher.wait_event('end', 2 * args.duration + 10, watch=[target])
-    ticks1 = {name: cpu_ticks(pid) for name, pid in pids.items()}
-    machine1, window_s = busy_ticks(), time.monotonic() - wall0
+    seconds1 = {name: cpu_seconds(pid) for name, pid in pids.items()}
+    machine1, window_s = process_ticks(), time.monotonic() - wall0
     threads1 = thread_ticks(pids['target'])
     rss = rss_kib(target.popen.pid)
     time.sleep(args.drain)
     target.check_alive()
-    cpu = {name: 100.0 * (ticks1[name] - ticks0[name]) / CLOCK_TICKS / window_s
-           for name in pids}
-    ours = sum(ticks1.values()) - sum(ticks0.values())
-    # Tick-sampled /proc/stat can undercount against per-process times: clamp at zero.
-    other_cores = max(0.0, (machine1 - machine0 - ours) / CLOCK_TICKS / window_s)
+    cpu = {name: 100.0 * (seconds1[name] - seconds0[name]) / window_s for name in pids}
+    ours = set(pids.values()) | {os.getpid()}
+    other_cores = other_load_ticks(machine0, machine1, ours) / CLOCK_TICKS / window_s
+    stamps, arrivals = counted_poses(session, processes['subscriber'], end, args.drain)
     return {
-        'rate_hz': rate, **delivery(session, processes['subscriber'], end, args.drain),
+        'rate_hz': rate, **delivery_summary(stamps, arrivals, end),
+        '_latency_ms': (arrivals - stamps) * 1e-6,
         'publisher_hz': end['achieved_hz'], 'publisher_max_lag_ms': end['max_lag_ms'],
         'cpu_percent': cpu['target'], 'publisher_cpu_percent': cpu['publisher'],
         'subscriber_cpu_percent': cpu['subscriber'], 'other_load_cores': other_cores,
@@ -307,32 +332,98 @@ def keep_traces(args: argparse.Namespace, workdir: Path, name: str) -> None:
 
 
 def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> dict:
-    """Measure every target at every rate; return the results document."""
+    """Measure every target at every rate in ``--repeats`` interleaved windows; return the
+    results document (one pooled row per target and rate, :func:`pooled_row`)."""
     results = {'machine': _report.machine_description(), 'duration_s': args.duration,
                'warmup_s': args.warmup, 'drain_s': args.drain, 'depth': args.depth,
+               'repeats': args.repeats, 'cpu_clock': 'schedstat_ns',
                'invocation': display([sys.executable] + sys.argv),
                'targets': {label: {'command': display(argv), 'rows': []}
                            for label, argv in targets.items()}}
     problems = results['problems'] = []
+    labels = list(targets)
     for rate in args.rates:
-        for label, argv in targets.items():
-            with tempfile.TemporaryDirectory(prefix='bench_') as tmp:
-                session = Session(args.domain_id, args.depth, Path(tmp))
-                row = None
-                try:
-                    row = measure(session, argv, rate, args)
-                except ProcessCrashed as err:
-                    problems.append(f'{label} at {rate:.0f} Hz: {err}')
-                finally:
-                    problems.extend(f'{label} at {rate:.0f} Hz: {problem}'
-                                    for problem in session.close())
-                    keep_traces(args, Path(tmp), f'{label}_{rate:.0f}')
-            if row is not None:
-                results['targets'][label]['rows'].append(row)
-                print(_report.row_line(label, row), flush=True)
+        windows: Dict[str, List[dict]] = {label: [] for label in labels}
+        for window in range(args.repeats):
+            shift = window % len(labels) if labels else 0
+            for label in labels[shift:] + labels[:shift]:  # no target always goes first
+                suffix = f'_w{window + 1}' if args.repeats > 1 else ''
+                row = run_window(targets[label], rate, args, problems,
+                                 f'{label}_{rate:.0f}{suffix}')
+                if row is not None:
+                    windows[label].append(row)
+                    print(_report.row_line(label + suffix, row), flush=True)
+        for label in labels:
+            if windows[label]:
+                pooled = pooled_row(windows[label])
+                results['targets'][label]['rows'].append(pooled)
+                if args.repeats > 1:
+                    print(_report.row_line(f'{label} pooled', pooled), flush=True)
     for problem in problems:
         print(f'error: {problem}', file=sys.stderr)
     return results
+
+
+def run_window(argv: List[str], rate: float, args: argparse.Namespace, problems: List[str],
+               name: str) -> Optional[dict]:
+    """One window of one target at one rate in fresh processes (:func:`measure`); a crash
+    or a process that had to be killed goes to ``problems`` as ``name: ...``."""
+    with tempfile.TemporaryDirectory(prefix='bench_') as tmp:
+        session = Session(args.domain_id, args.depth, Path(tmp))
+        row = None
+        try:
+            row = measure(session, argv, rate, args)
+        except ProcessCrashed as err:
+            problems.append(f'{name}: {err}')
+        finally:
+            problems.extend(f'{name}: {problem}' for problem in session.close())
+            keep_traces(args, Path(tmp), name)
+    return row
+
+
+def pooled_row(windows: List[dict]) -> dict:
+    """One row from the windows of one target at one rate.
+
+    Counts are summed; latency percentiles are those of all counted poses of all windows
+    together (``latency_max_window``: the window, from 1, with the slowest pose); CPU figures
+    are the median window's (with an even count the mean of the two middle ones), the thread
+    breakdown that of the window with the median target CPU; the publisher's rate is the lowest
+    window's, its lag, the receive gap, the other load and the RSS the highest. Each window's
+    own row is kept under ``windows``. A single window is returned as it is.
+    """
+    import numpy as np
+    latencies = [window.pop('_latency_ms') for window in windows]
+    if len(windows) == 1:
+        return windows[0]
+    pooled_ms = np.concatenate(latencies)
+
+    def percentile(q: float) -> Optional[float]:
+        return float(np.percentile(pooled_ms, q)) if pooled_ms.size else None
+
+    def median(key: str) -> float:
+        return float(np.median([window[key] for window in windows]))
+
+    def highest(key: str) -> Optional[float]:
+        values = [window[key] for window in windows if window[key] is not None]
+        return max(values) if values else None
+    by_cpu = sorted(range(len(windows)), key=lambda index: windows[index]['cpu_percent'])
+    slowest = max(range(len(windows)), key=lambda index: windows[index]['latency_max_ms'] or -1.0)
+    return {
+        'rate_hz': windows[0]['rate_hz'],
+        **{key: sum(window[key] for window in windows) for key in ('sent', 'received', 'lost')},
+        'latency_p50_ms': percentile(50), 'latency_p99_ms': percentile(99),
+        'latency_max_ms': percentile(100),
+        'latency_max_at_s': windows[slowest]['latency_max_at_s'],
+        'latency_max_window': slowest + 1,
+        'receive_gap_max_ms': highest('receive_gap_max_ms'),
+        'publisher_hz': min(window['publisher_hz'] for window in windows),
+        'publisher_max_lag_ms': highest('publisher_max_lag_ms'),
+        **{key: median(key) for key in ('cpu_percent', 'publisher_cpu_percent',
+                                        'subscriber_cpu_percent')},
+        'other_load_cores': highest('other_load_cores'), 'rss_kib': highest('rss_kib'),
+        'cpu_by_thread': windows[by_cpu[(len(windows) - 1) // 2]]['cpu_by_thread'],
+        'windows': windows,
+    }
 
 
 def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
@@ -375,6 +466,9 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         help='comma-separated rates in Hz (default %(default)s)')
     parser.add_argument('--duration', type=float, default=4.0,
                         help='measured seconds per rate (default %(default)s)')
+    parser.add_argument('--repeats', type=int, default=1,
+                        help='windows per target and rate, interleaved (target order rotated '
+                             'each window); rows pool them (default %(default)s)')
     parser.add_argument('--warmup', type=float, default=0.5,
                         help='unmeasured seconds of publishing first (default %(default)s)')
     parser.add_argument('--drain', type=float, default=1.0,
@@ -405,6 +499,8 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         help='keep each run\'s poses.bin and target log in DIR')
     parser.add_argument('--report', type=Path, default=BENCH / 'results' / 'throughput.md')
     args = parser.parse_args(argv)
+    if args.repeats < 1:
+        parser.error(f'expected --repeats >= 1, got {args.repeats}')
     if args.soak_minutes < 2:
         parser.error(f'expected --soak-minutes >= 2 (RSS at 1 min vs the end), '
                      f'got {args.soak_minutes}')
