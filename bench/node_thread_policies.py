@@ -15,6 +15,11 @@ Examples (as ``bench/node_throughput.py`` targets)::
         --ros-args -p scene:=strapdown"
     ... --policies main=other,dds.shm=other,*=batch   # loop and receive threads preempt
     ... --policies dds.asyn=batch,*=other             # only the senders on SCHED_BATCH
+    ... --policies *=batch --slices dds.asyn=100      # senders with a 0.1 ms slice (EEVDF)
+
+``--slices prefix=µs,...`` also gives the matching threads a custom time slice (Linux 6.12+:
+``sched_setattr``'s ``sched_runtime`` for fair-class threads, 100–100 000 µs), their policy
+unchanged.
 """
 
 import argparse
@@ -38,6 +43,36 @@ def parse_policies(text: str) -> List[Tuple[str, int]]:
             raise SystemExit(f'error: expected prefix=batch|other|idle, got {item!r}')
         rules.append((prefix, POLICIES[name]))
     return rules
+
+
+def parse_slices(text: str) -> List[Tuple[str, int]]:
+    """``prefix=µs,...`` → [(prefix, µs)]."""
+    rules = []
+    for item in filter(None, text.split(',')):
+        prefix, _, value = item.partition('=')
+        if not prefix or not value.isdigit():
+            raise SystemExit(f'error: expected prefix=microseconds, got {item!r}')
+        rules.append((prefix, int(value)))
+    return rules
+
+
+def apply_slices(rules: List[Tuple[str, int]]) -> List[str]:
+    """Give every thread the slice of its first matching rule."""
+    from rigid_body_attitude.ros.time_slices import set_slice
+    applied = []
+    for entry in sorted(TASKS.iterdir()):
+        thread_id = int(entry.name)
+        try:
+            name = (entry / 'comm').read_text().strip()
+        except OSError:
+            continue
+        key = 'main' if thread_id == os.getpid() else name
+        for prefix, slice_us in rules:
+            if prefix == '*' or key.startswith(prefix):
+                set_slice(thread_id, slice_us * 1000)
+                applied.append(f'{key}:{slice_us}us')
+                break
+    return applied
 
 
 def apply(rules: List[Tuple[str, int]]) -> List[str]:
@@ -82,13 +117,16 @@ def main(argv: Optional[List[str]] = None) -> int:
     """Run the node with the given per-thread policies until SIGINT."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--policies', required=True, help='prefix=batch|other|idle,...')
+    parser.add_argument('--slices', default='', help='prefix=microseconds,...')
     parser.add_argument('--sender-waits', type=Path, default=None, metavar='FILE')
     args, ros_args = parser.parse_known_args(argv)
     rules = parse_policies(args.policies)
+    slices = parse_slices(args.slices)
     from rigid_body_attitude.ros import serve
 
-    def scheduling(node, guard_remark) -> None:  # replaces the cpu_scheduling rule
-        node.get_logger().info('policies: ' + ' '.join(apply(rules)) + '; serving')
+    def scheduling(node, guard_remark, short_slices) -> None:  # replaces cpu_scheduling
+        node.get_logger().info('policies: ' + ' '.join(apply(rules) + apply_slices(slices))
+                               + '; serving')
         if args.sender_waits is not None:
             threading.Thread(target=watch_senders, args=(args.sender_waits,),
                              daemon=True).start()

@@ -38,10 +38,11 @@ And for the scheduler:
   wake-up: they run when the CPU is free or the current thread's slice ends. Only threads on
   the default policy are changed; real-time (FIFO/RR) and idle threads are left alone.
   On a busy CPU a batch thread can wait up to one scheduler slice (a few ms) before it runs;
-  ``cpu_scheduling: default`` keeps the usual policy. With ``batch`` Fast DDS's asynchronous
-  sender threads move to SCHED_IDLE while the gyro rate is above ``idle_senders_above_hz``,
-  where the process may undo that (:mod:`~rigid_body_attitude.ros.sender_threads`: under
-  SCHED_BATCH they busy-wait on a writer's mutex for up to a scheduler tick).
+  ``cpu_scheduling: default`` keeps the usual policy. Under SCHED_BATCH Fast DDS's
+  asynchronous sender threads can busy-wait on a writer's mutex for up to a scheduler tick, so
+  with ``batch`` they get the kernel's shortest time slice (:mod:`~.time_slices`, Linux 6.12
+  and later), or, with ``idle_senders_above_hz`` set, move to SCHED_IDLE while the gyro rate
+  is above it, where the process may undo that (:mod:`~.sender_threads`).
 
 Measured on this project's machine at 1 kHz (``bench/fast_relay.py``): Fast DDS defaults 12.5 %
 of a core; with the NACK suppression 9.8–10.3 %; with it and SCHED_BATCH 8.8–9.2 %, p99
@@ -86,14 +87,15 @@ class SchedulingChoice(NamedTuple):
 
     #: The policy threads on SCHED_OTHER move to (None = every thread as it started).
     policy: int | None
-    #: Fast DDS's sender threads go to SCHED_IDLE while the gyro rate is high, under a guard
-    #: (:mod:`~rigid_body_attitude.ros.sender_threads`).
-    idle_senders: bool = False
+    #: Fast DDS's sender threads get short time slices (:mod:`~.time_slices`), or go to
+    #: SCHED_IDLE while the gyro rate is above ``idle_senders_above_hz`` under a guard
+    #: (:mod:`~.sender_threads`).
+    sender_rule: bool = False
 
 
 #: Values of the ``cpu_scheduling`` parameter.
 CPU_SCHEDULING: dict[str, SchedulingChoice] = {
-    'batch': SchedulingChoice(getattr(os, 'SCHED_BATCH', None), idle_senders=True),
+    'batch': SchedulingChoice(getattr(os, 'SCHED_BATCH', None), sender_rule=True),
     'all_batch': SchedulingChoice(getattr(os, 'SCHED_BATCH', None)),
     'default': SchedulingChoice(None),
 }

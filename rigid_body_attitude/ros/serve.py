@@ -12,6 +12,7 @@ sets Fast DDS and the scheduler up for kHz rates (:mod:`rigid_body_attitude.ros.
 from __future__ import annotations
 
 import gc
+import platform
 import sys
 import threading
 
@@ -29,7 +30,10 @@ from rigid_body_attitude.ros.middleware import (
     use_packaged_fastdds_profile)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import RCLError
-from rigid_body_attitude.ros.sender_threads import GUARD_PERIOD, sender_guard, SenderGuard
+from rigid_body_attitude.ros.sender_threads import (
+    GUARD_PERIOD, sender_guard, sender_thread_ids, SenderGuard)
+from rigid_body_attitude.ros.time_slices import (
+    kernel_takes_slices, SENDER_SLICE_NS, shorten_slices)
 
 __all__ = ['main', 'spin']
 
@@ -116,10 +120,12 @@ def spin(node: AttitudePropagatorNode) -> None:
 
     def gyro_messages() -> int:
         return 0 if loop is None else loop.handled
+    sender_rule = CPU_SCHEDULING[node.cpu_scheduling].sender_rule
+    idle_rule = sender_rule and node.idle_senders_above_hz > 0.0
     guard, guard_remark = (
         sender_guard(gyro_messages, node.idle_senders_above_hz)
-        if CPU_SCHEDULING[node.cpu_scheduling].idle_senders and not node.is_dynamics
-        else (None, ''))
+        if idle_rule and not node.is_dynamics else (None, ''))
+    short_slices = sender_rule and not idle_rule
     # Claims the gyro subscriptions and the timers before any executor spins.
     loop = node.gyro_loop([] if guard is None else [_guard_timer(node, guard)])
     executor = SingleThreadedExecutor(context=node.context)
@@ -127,7 +133,7 @@ def spin(node: AttitudePropagatorNode) -> None:
     rest = _ExecutorThread(executor, node, loop)
     try:
         rest.thread.start()
-        _apply_cpu_scheduling(node, guard_remark)
+        _apply_cpu_scheduling(node, guard_remark, short_slices)
         loop.run()
     finally:
         rest.stop()
@@ -151,17 +157,35 @@ def _guard_timer(node: AttitudePropagatorNode, guard: SenderGuard) -> Timer:
                              clock=Clock(clock_type=ClockType.STEADY_TIME))
 
 
-def _apply_cpu_scheduling(node: AttitudePropagatorNode, guard_remark: str) -> None:
-    """Give every thread of the process the node's ``cpu_scheduling`` policy; log it."""
+def _apply_cpu_scheduling(node: AttitudePropagatorNode, guard_remark: str,
+                          short_slices: bool) -> None:
+    """Give every thread of the process the node's ``cpu_scheduling`` policy, and with
+    ``short_slices`` the sender threads short time slices; log it."""
     outcome = apply_cpu_scheduling(node.cpu_scheduling)
     logger = node.get_logger()
     if outcome.refused:
         logger.warning(
             f'cpu_scheduling {node.cpu_scheduling!r} refused by the system '
             f'({outcome.refused}); the other threads keep their policy')
+    if short_slices:
+        guard_remark = _short_sender_slices()
     remark = f'; {guard_remark}' if guard_remark else ''
     logger.info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} threads changed'
                 f'{remark}; serving')
+
+
+def _short_sender_slices() -> str:
+    """Give the sender threads :data:`~.time_slices.SENDER_SLICE_NS` slices; the remark for
+    the start-up line (``''`` with synchronous publication: no senders)."""
+    thread_ids = sender_thread_ids()
+    if not thread_ids:
+        return ''
+    if not kernel_takes_slices():
+        return (f'Fast DDS sender threads on SCHED_BATCH (this kernel, {platform.release()}, '
+                f'has no custom time slices; see idle_senders_above_hz)')
+    shortened = shorten_slices(thread_ids)
+    return (f'Fast DDS sender threads {shortened} on SCHED_BATCH with '
+            f'{SENDER_SLICE_NS / 1e6:g} ms time slices')
 
 
 def main(args: list[str] | None = None) -> int:

@@ -148,13 +148,14 @@ PARAMETERS: tuple[Parameter, ...] = (
               's: integration step of dynamics scenes (0 = the scene\'s)', 0.0, 10.0),
     Parameter('cpu_scheduling', str, 'batch',
               'policy of the node\'s threads: batch (SCHED_BATCH, no wake-up preemption; Fast '
-              'DDS\'s sender threads SCHED_IDLE above idle_senders_above_hz), all_batch '
-              '(senders always batch) or default (as started)',
+              'DDS\'s sender threads with 0.1 ms time slices, Linux 6.12+, or SCHED_IDLE above '
+              'idle_senders_above_hz), all_batch (senders plain batch) or default (as started)',
               choices=('batch', 'all_batch', 'default'), node_only=True),
-    Parameter('idle_senders_above_hz', float, 12000.0,
+    Parameter('idle_senders_above_hz', float, 0.0,
               'Hz: gyro input rate (over 0.5 s) from which cpu_scheduling batch puts Fast DDS\'s '
-              'sender threads on SCHED_IDLE; back on SCHED_BATCH below 2/3 of it, or for good '
-              'if starved', 0.0, 1.0e9, node_only=True),
+              'sender threads on SCHED_IDLE instead of giving them short time slices; back on '
+              'SCHED_BATCH below 2/3 of it, or for good if starved (0 = never)', 0.0, 1.0e9,
+              node_only=True),
 )
 
 _BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}

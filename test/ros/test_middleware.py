@@ -26,6 +26,8 @@ from rigid_body_attitude.ros.middleware import (
     packaged_fastdds_profile, PUBLICATION_MODE_VARIABLE, use_asynchronous_publication,
     use_packaged_fastdds_profile)
 from rigid_body_attitude.ros.sender_threads import can_leave_idle_policy, sender_thread_ids
+from rigid_body_attitude.ros.time_slices import (
+    kernel_takes_slices, SENDER_SLICE_NS, time_slice_ns)
 
 FASTDDS_NAMESPACE = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
 
@@ -274,7 +276,9 @@ def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
 
 
 @pytest.mark.parametrize('arguments, policy, guarded, logged', [
-    ((), os.SCHED_BATCH, True, "cpu_scheduling 'batch': "),
+    ((), os.SCHED_BATCH, 'slices', "cpu_scheduling 'batch': "),
+    (('-p', 'idle_senders_above_hz:=12000.0'), os.SCHED_BATCH, 'idle',
+     "cpu_scheduling 'batch': "),
     (('-p', 'cpu_scheduling:=all_batch'), os.SCHED_BATCH, False,
      "cpu_scheduling 'all_batch': "),
     (('-p', 'cpu_scheduling:=default'), os.SCHED_OTHER, False,
@@ -282,8 +286,10 @@ def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
 ])
 def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(
         processes, monkeypatch, arguments, policy, guarded, logged):
-    """Every thread, the senders too, starts on the policy; with ``batch`` the start-up line
-    says when the senders go to SCHED_IDLE (``test_sender_threads`` moves them)."""
+    """Every thread, the senders too, starts on the policy; with ``batch`` the senders get
+    0.1 ms time slices where the kernel has them (Linux 6.12+), or with
+    ``idle_senders_above_hz`` the start-up line says when they go to SCHED_IDLE
+    (``test_sender_threads`` moves them); nothing else gets a custom slice."""
     for variable in FASTDDS_PROFILE_VARIABLES:  # set by an in-process main() of another test
         monkeypatch.delenv(variable, raising=False)
     process = start('--ros-args', '-p', 'scene:=strapdown', *arguments)
@@ -294,8 +300,17 @@ def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(
     assert len(policies) >= 5  # Python, the executor thread and Fast DDS's threads
     assert len(senders) == 2  # asynchronous publication: discovery's and the writers'
     assert set(policies.values()) == {policy}, policies
+    slices = {int(thread_id): time_slice_ns(int(thread_id)) for thread_id in policies}
+    shortened = guarded == 'slices' and kernel_takes_slices()
+    assert {thread_id for thread_id, value in slices.items() if value == SENDER_SLICE_NS} == (
+        set(senders) if shortened else set())
     if not guarded:
         assert 'Fast DDS sender threads' not in lines[-1]
+    elif guarded == 'slices' and shortened:
+        assert (f'Fast DDS sender threads {senders} on SCHED_BATCH with 0.1 ms time slices; '
+                f'serving') in lines[-1]
+    elif guarded == 'slices':
+        assert 'has no custom time slices; see idle_senders_above_hz); serving' in lines[-1]
     elif can_leave_idle_policy():
         assert (f'Fast DDS sender threads {senders} on SCHED_IDLE while gyro input is above '
                 f'12000 Hz, else on SCHED_BATCH; serving') in lines[-1]
