@@ -121,33 +121,41 @@ alone, 4 of 8. The sweeps above are with the profile on both ends."""
 
 #: What caused the node's multi-millisecond latency tails at 10-20 kHz (issue 13, item 5).
 TAILS_NOTE = """\
-**The millisecond tails at 10–20 kHz: Fast DDS's sender spinning under `SCHED_BATCH`.**
-After the stalls were gone the node still lost to the fast relay at 15 kHz in 4 of 10 sweeps
-(session 5): episodes of 100–300 ms at 2–5 ms latency. `perf sched` caught the cause
-(`bench/NOTES.md`, section 11): the asynchronous sender thread `dds.asyn.0.1` ran up to
-3.9 ms without a break, going round `FlowControllerImpl::run` because another thread held
-the writer's mutex; that thread (the node's event thread, which the sender had woken) sat
-runnable on the same CPU, and under `SCHED_BATCH` a woken thread never preempts the running
-one, so only the 4 ms scheduler tick ended the spin. With the sender threads on `SCHED_IDLE`
-any thread woken on their CPU preempts them: in 8 interleaved 15 kHz runs that node's p99 was
-0.65–1.74 ms against the fast relay's 1.46–4.55 ms (ahead in 8 of 8; the all-`SCHED_BATCH`
-node 0.81–4.14 ms, ahead in 6 of 8). An idle-policy thread starves when other threads keep
-the CPUs busy (two CPU-bound processes: p99 64–909 ms at 1–5 kHz) and is the last to run
-when other processes fill both CPUs for a moment (both busy 30 ms out of every 330 ms: p99
-12.3–21.4 ms at 2 kHz against 7.4–8.9 ms with the senders on `SCHED_BATCH`, section 12),
-while the spin it cures only cost the lead at 15–20 kHz. So the senders run under
-`SCHED_IDLE` only while gyro input comes at `idle_senders_above_hz` (12 kHz) or more, and go
-back to `SCHED_BATCH` below two thirds of it; while they are idle the node reads their
-run-queue waits every 0.1 s and puts them on `SCHED_BATCH` for good when one starves
-(`rigid_body_attitude/ros/sender_threads.py`). A process that could not undo `SCHED_IDLE`
-(no `CAP_SYS_NICE`, `RLIMIT_NICE` below 20) keeps them on `SCHED_BATCH`. The sweeps above
-are with that rule: idle senders at 15 and 20 kHz (from 0.34–0.49 s after the first sample,
-before the 0.5 s warm-up ended), `SCHED_BATCH` below. Beside one process busy 100 ms in every
-second (`bench/NOTES.md`, section 13) no pose of the node arrived for up to 31 ms at a time;
-over eight rounds at 15–20 kHz the node's p99 was 2.3–55.3 ms, `all_batch`'s 2.2–34.6 ms and
-the fast relay's 2.3–12.1 ms. A rule that moved idle senders to `SCHED_BATCH` while other load
-contends for the CPUs was built, measured (medians within 1 ms of the node's, maxima over 30 s
-up to 65 ms against 24 ms) and reverted."""
+**The millisecond tails at 5–20 kHz: Fast DDS's sender spinning under `SCHED_BATCH`.** After
+the stalls were gone the node still lost to the fast relay at 15 kHz in 4 of 10 sweeps (session
+5): episodes of 100–300 ms at 2–5 ms latency. `perf sched` caught the cause (`bench/NOTES.md`,
+section 11): the asynchronous sender thread `dds.asyn.0.1` ran up to 3.9 ms without a break,
+going round `FlowControllerImpl::run` because another thread held the writer's mutex; that
+thread (the node's event thread, which the sender had woken) sat runnable on the same CPU, and
+under `SCHED_BATCH` a woken thread never preempts the running one, so only the 4 ms scheduler
+tick ended the spin. With the sender threads on `SCHED_IDLE` any thread woken on their CPU
+preempts them: in 8 interleaved 15 kHz runs that node's p99 was 0.65–1.74 ms against the fast
+relay's 1.46–4.55 ms (ahead in 8 of 8; the all-`SCHED_BATCH` node 0.81–4.14 ms, ahead in 6 of
+8). An idle-policy thread starves when other threads keep the CPUs busy (two CPU-bound
+processes: p99 64–909 ms at 1–5 kHz) and is the last to run when other processes fill both CPUs
+for a moment (both busy 30 ms out of every 330 ms: p99 12.3–21.4 ms at 2 kHz against 7.4–8.9 ms
+with the senders on `SCHED_BATCH`, section 12), while the spin it cures only cost the lead at
+15–20 kHz. So the senders run under `SCHED_IDLE` only while gyro input comes at
+`idle_senders_above_hz` (12 kHz) or more, and go back to `SCHED_BATCH` below two thirds of it;
+while they are idle the node reads their run-queue waits every 0.1 s and puts them on
+`SCHED_BATCH` for good when one starves (`rigid_body_attitude/ros/sender_threads.py`). A
+process that could not undo `SCHED_IDLE` (no `CAP_SYS_NICE`, `RLIMIT_NICE` below 20) keeps them
+on `SCHED_BATCH`. The sweeps of session 8 were with that rule: idle senders at 15 and 20 kHz
+(from 0.34–0.49 s after the first sample, before the 0.5 s warm-up ended), `SCHED_BATCH` below.
+Beside one process busy 100 ms in every second (`bench/NOTES.md`, section 13) no pose of the
+node arrived for up to 31 ms at a time; over eight rounds at 15–20 kHz the node's p99 was
+2.3–55.3 ms, `all_batch`'s 2.2–34.6 ms and the fast relay's 2.3–12.1 ms. A rule that moved idle
+senders to `SCHED_BATCH` while other load contends for the CPUs was built, measured (medians
+within 1 ms of the node's, maxima over 30 s up to 65 ms against 24 ms) and reverted. Session 9
+found the spin at 5 kHz too (one window with p99 4.61 ms) and ended it another way
+(`bench/NOTES.md`, section 14): since Linux 6.12 a thread can have its own time slice, and the
+senders now get the shortest, 0.1 ms, and stay on `SCHED_BATCH` at every rate. A spinning
+sender spends that slice within 0.1 ms, so the mutex's holder runs as soon as it is woken onto
+that CPU. In two rounds of three interleaved windows that node had pooled p99 0.27–0.45 ms up
+to 15 kHz and 0.57 / 1.13 ms at 20 kHz, against the fast relay's 0.23–1.02 and 1.62 / 1.66 ms;
+beside one process busy 100 ms in every second its p99 at 15 / 20 kHz was 3.27 / 3.08 ms, the
+relay's 4.80 / 3.72 ms. `idle_senders_above_hz` (default 0, never) brings the idle rule back,
+for kernels without custom slices. The sweeps above are with the slices."""
 
 
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).

@@ -1,5 +1,8 @@
 """Fast DDS's asynchronous sender threads: ``SCHED_IDLE`` while the gyro rate is high, else
-``SCHED_BATCH``; the guard that chooses, and lifts a starved sender.
+``SCHED_BATCH``; the guard that chooses, and lifts a starved sender. Opt-in since the node gives
+the senders short time slices instead (:mod:`~.time_slices`, ``bench/NOTES.md`` section 14):
+this rule runs when ``idle_senders_above_hz`` is set, and is the remedy for kernels before
+Linux 6.12, which have no custom slices.
 
 With asynchronous publication (:func:`~rigid_body_attitude.ros.middleware.\
 use_asynchronous_publication`) a Fast DDS 2.14 thread named ``dds.asyn.*`` sends what the
@@ -22,9 +25,9 @@ sender at idle priority fell behind by 20–270 ms at 1–5 kHz, and with two pr
 12.3–21.4 ms against 7.4–8.9 ms on ``SCHED_BATCH``.
 Below 10 kHz the spin did not matter (with the senders on ``SCHED_BATCH``, p99 ≤ 1 ms up to
 5 kHz and ahead of the fast relay at 10 kHz in ten sweeps of ``bench/NOTES.md``, section 10).
-So the :class:`SenderGuard` looks at the gyro loop's message count every :data:`GUARD_PERIOD`
-seconds: the senders go to ``SCHED_IDLE`` when the rate over the last half second reaches the
-node's ``idle_senders_above_hz`` and back to ``SCHED_BATCH`` when it falls below
+So the :class:`SenderGuard` (when ``idle_senders_above_hz`` is above 0) looks at the gyro
+loop's message count every :data:`GUARD_PERIOD` seconds: the senders go to ``SCHED_IDLE`` when
+the rate over the last half second reaches the node's ``idle_senders_above_hz`` and back to ``SCHED_BATCH`` when it falls below
 :data:`BATCH_BELOW_FRACTION` of it. While they are idle it also reads each sender's
 ``/proc/self/task/<tid>/schedstat`` (time on the CPU, time waiting on a run queue, runs) and
 puts them on ``SCHED_BATCH`` for good once one is starved. It does not see short bursts of
