@@ -121,7 +121,25 @@ def _sweeps_summary(sweeps: List[dict], target: str, yardstick: str) -> List[str
             f'{met} of {len(pairs)} rows; rows with a maximum latency over {STALL_MS:g} ms: '
             f'node {stalls([mine for _, mine, _ in pairs])}, fast relay {stalls(relay_rows)}. '
             f'Largest node maximum up to {TARGET_P99_UP_TO_HZ:.0f} Hz: {largest(low)} ms; '
-            f'above: {largest(high)} ms.', '']
+            f'above: {largest(high)} ms.{_single_windows(pairs)}', '']
+
+
+def _single_windows(pairs: List[tuple]) -> str:
+    """How the node's single windows of pooled rows fared against the target: up to
+    :data:`TARGET_P99_UP_TO_HZ`, p99 over :data:`TARGET_P99_MS`; above, p99 over the fast
+    relay's pooled row ('' when no row pools windows)."""
+    low = [window['latency_p99_ms'] for rate, mine, _ in pairs if rate <= TARGET_P99_UP_TO_HZ
+           for window in mine.get('windows', [])]
+    high = [(window['latency_p99_ms'], theirs.get('latency_p99_ms'))
+            for rate, mine, theirs in pairs if rate > TARGET_P99_UP_TO_HZ
+            for window in mine.get('windows', [])]
+    if not low and not high:
+        return ''
+    over = sum(p99 is None or p99 > TARGET_P99_MS for p99 in low)
+    behind = sum(mine is None or (theirs is not None and mine > theirs) for mine, theirs in high)
+    return (f' Single windows of the node: p99 over {TARGET_P99_MS:g} ms in {over} of '
+            f'{len(low)} up to {TARGET_P99_UP_TO_HZ:.0f} Hz; above, over the fast relay\'s '
+            f'pooled p99 in {behind} of {len(high)}.')
 
 
 def _latency_verdict(rate: float, node: dict, relay: dict) -> str:
