@@ -27,13 +27,13 @@ Below 10 kHz the spin did not matter (with the senders on ``SCHED_BATCH``, p99 â
 5 kHz and ahead of the fast relay at 10 kHz in ten sweeps of ``bench/NOTES.md``, section 10).
 So the :class:`SenderGuard` (when ``idle_senders_above_hz`` is above 0) looks at the gyro
 loop's message count every :data:`GUARD_PERIOD` seconds: the senders go to ``SCHED_IDLE`` when
-the rate over the last half second reaches the node's ``idle_senders_above_hz`` and back to ``SCHED_BATCH`` when it falls below
-:data:`BATCH_BELOW_FRACTION` of it. While they are idle it also reads each sender's
-``/proc/self/task/<tid>/schedstat`` (time on the CPU, time waiting on a run queue, runs) and
-puts them on ``SCHED_BATCH`` for good once one is starved. It does not see short bursts of
-other load (waits of tens of ms in a few runs among hundreds leave the mean per run low).
-Leaving ``SCHED_IDLE`` needs ``CAP_SYS_NICE`` or an ``RLIMIT_NICE`` of at least 20
-(``ulimit -e``); a process without it keeps its senders on ``SCHED_BATCH``
+the rate over the last half second reaches the node's ``idle_senders_above_hz`` and back to
+``SCHED_BATCH`` when it falls below :data:`BATCH_BELOW_FRACTION` of it. While they are idle it
+also reads each sender's ``/proc/self/task/<tid>/schedstat`` (time on the CPU, time waiting on
+a run queue, runs) and puts them on ``SCHED_BATCH`` for good once one is starved. It does not
+see short bursts of other load (waits of tens of ms in a few runs among hundreds leave the mean
+per run low). Leaving ``SCHED_IDLE`` needs ``CAP_SYS_NICE`` or an ``RLIMIT_NICE`` of at least
+20 (``ulimit -e``); a process without it keeps its senders on ``SCHED_BATCH``
 (:func:`can_leave_idle_policy`).
 """
 
