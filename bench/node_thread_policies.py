@@ -28,7 +28,7 @@ from pathlib import Path
 import sys
 import threading
 import time
-from typing import List, Optional, Tuple
+from typing import Iterator, List, Optional, Tuple
 
 POLICIES = {'batch': os.SCHED_BATCH, 'other': os.SCHED_OTHER, 'idle': os.SCHED_IDLE}
 TASKS = Path('/proc/self/task')
@@ -56,10 +56,9 @@ def parse_slices(text: str) -> List[Tuple[str, int]]:
     return rules
 
 
-def apply_slices(rules: List[Tuple[str, int]]) -> List[str]:
-    """Give every thread the slice of its first matching rule."""
-    from rigid_body_attitude.ros.time_slices import set_slice
-    applied = []
+def first_matches(rules: List[Tuple[str, int]]) -> Iterator[Tuple[int, str, int]]:
+    """(thread id, key, value) of every thread of this process with a matching rule, the
+    first match's value (``main`` = the gyro loop's thread, ``*`` = any thread)."""
     for entry in sorted(TASKS.iterdir()):
         thread_id = int(entry.name)
         try:
@@ -67,29 +66,28 @@ def apply_slices(rules: List[Tuple[str, int]]) -> List[str]:
         except OSError:
             continue
         key = 'main' if thread_id == os.getpid() else name
-        for prefix, slice_us in rules:
-            if prefix == '*' or key.startswith(prefix):
-                set_slice(thread_id, slice_us * 1000)
-                applied.append(f'{key}:{slice_us}us')
-                break
+        value = next((value for prefix, value in rules
+                      if prefix == '*' or key.startswith(prefix)), None)
+        if value is not None:
+            yield thread_id, key, value
+
+
+def apply_slices(rules: List[Tuple[str, int]]) -> List[str]:
+    """Give every thread the slice of its first matching rule."""
+    from rigid_body_attitude.ros.time_slices import set_slice
+    applied = []
+    for thread_id, key, slice_us in first_matches(rules):
+        set_slice(thread_id, slice_us * 1000)
+        applied.append(f'{key}:{slice_us}us')
     return applied
 
 
 def apply(rules: List[Tuple[str, int]]) -> List[str]:
     """Give every thread of this process the policy of its first matching rule."""
     applied = []
-    for entry in sorted(TASKS.iterdir()):
-        thread_id = int(entry.name)
-        try:
-            name = (entry / 'comm').read_text().strip()
-        except OSError:
-            continue
-        key = 'main' if thread_id == os.getpid() else name
-        for prefix, policy in rules:
-            if prefix == '*' or key.startswith(prefix):
-                os.sched_setscheduler(thread_id, policy, os.sched_param(0))
-                applied.append(f'{key}:{policy}')
-                break
+    for thread_id, key, policy in first_matches(rules):
+        os.sched_setscheduler(thread_id, policy, os.sched_param(0))
+        applied.append(f'{key}:{policy}')
     return applied
 
 
@@ -124,7 +122,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     slices = parse_slices(args.slices)
     from rigid_body_attitude.ros import serve
 
-    def scheduling(node, guard_remark, short_slices) -> None:  # replaces cpu_scheduling
+    def scheduling(node, sender_remark) -> None:  # replaces the cpu_scheduling rule
         node.get_logger().info('policies: ' + ' '.join(apply(rules) + apply_slices(slices))
                                + '; serving')
         if args.sender_waits is not None:
@@ -132,7 +130,7 @@ def main(argv: Optional[List[str]] = None) -> int:
                              daemon=True).start()
 
     serve._apply_cpu_scheduling = scheduling
-    serve.sender_guard = lambda *args: (None, '')  # no guard: the policies are the rules
+    serve._sender_rule = lambda *args: (None, '')  # no sender rule: the policies are the rules
     return serve.main([sys.argv[0]] + ros_args)
 
 

@@ -11,6 +11,7 @@ sets Fast DDS and the scheduler up for kHz rates (:mod:`rigid_body_attitude.ros.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 import gc
 import platform
 import sys
@@ -120,12 +121,7 @@ def spin(node: AttitudePropagatorNode) -> None:
 
     def gyro_messages() -> int:
         return 0 if loop is None else loop.handled
-    sender_rule = CPU_SCHEDULING[node.cpu_scheduling].sender_rule
-    idle_rule = sender_rule and node.idle_senders_above_hz > 0.0
-    guard, guard_remark = (
-        sender_guard(gyro_messages, node.idle_senders_above_hz)
-        if idle_rule and not node.is_dynamics else (None, ''))
-    short_slices = sender_rule and not idle_rule
+    guard, sender_remark = _sender_rule(node, gyro_messages)
     # Claims the gyro subscriptions and the timers before any executor spins.
     loop = node.gyro_loop([] if guard is None else [_guard_timer(node, guard)])
     executor = SingleThreadedExecutor(context=node.context)
@@ -133,7 +129,7 @@ def spin(node: AttitudePropagatorNode) -> None:
     rest = _ExecutorThread(executor, node, loop)
     try:
         rest.thread.start()
-        _apply_cpu_scheduling(node, guard_remark, short_slices)
+        _apply_cpu_scheduling(node, sender_remark)
         loop.run()
     finally:
         rest.stop()
@@ -157,19 +153,30 @@ def _guard_timer(node: AttitudePropagatorNode, guard: SenderGuard) -> Timer:
                              clock=Clock(clock_type=ClockType.STEADY_TIME))
 
 
-def _apply_cpu_scheduling(node: AttitudePropagatorNode, guard_remark: str,
-                          short_slices: bool) -> None:
-    """Give every thread of the process the node's ``cpu_scheduling`` policy, and with
-    ``short_slices`` the sender threads short time slices; log it."""
+def _sender_rule(node: AttitudePropagatorNode,
+                 gyro_messages: Callable[[], int]) -> tuple[SenderGuard | None, str]:
+    """What ``cpu_scheduling`` ``batch`` does with Fast DDS's sender threads, and the remark
+    for the start-up line: short time slices, given now (``sched_setscheduler`` keeps them);
+    or, with ``idle_senders_above_hz`` set, a guard for the idle rule (gyro scenes only)."""
+    if not CPU_SCHEDULING[node.cpu_scheduling].sender_rule:
+        return None, ''
+    if node.idle_senders_above_hz <= 0.0:
+        return None, _short_sender_slices()
+    if node.is_dynamics:
+        return None, ''
+    return sender_guard(gyro_messages, node.idle_senders_above_hz)
+
+
+def _apply_cpu_scheduling(node: AttitudePropagatorNode, sender_remark: str) -> None:
+    """Give every thread of the process the node's ``cpu_scheduling`` policy; log it with
+    ``sender_remark``."""
     outcome = apply_cpu_scheduling(node.cpu_scheduling)
     logger = node.get_logger()
     if outcome.refused:
         logger.warning(
             f'cpu_scheduling {node.cpu_scheduling!r} refused by the system '
             f'({outcome.refused}); the other threads keep their policy')
-    if short_slices:
-        guard_remark = _short_sender_slices()
-    remark = f'; {guard_remark}' if guard_remark else ''
+    remark = f'; {sender_remark}' if sender_remark else ''
     logger.info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} threads changed'
                 f'{remark}; serving')
 

@@ -96,7 +96,7 @@ def shorten_slices(thread_ids: list[int], slice_ns: int = SENDER_SLICE_NS) -> li
     for thread_id in thread_ids:
         try:
             set_slice(thread_id, slice_ns)
-        except (OSError, ProcessLookupError):
+        except OSError:  # ProcessLookupError: ended meanwhile
             continue
         shortened.append(thread_id)
     return shortened
