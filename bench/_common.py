@@ -107,13 +107,6 @@ def imu_gyro(buffer: bytes) -> Optional[Tuple[float, float, float]]:
     return _VEC3.unpack_from(buffer, _body_start(length) + _BODY_OFFSET_IMU_GYRO)
 
 
-def cpu_ticks(pid: int) -> int:
-    """Return utime + stime (clock ticks) of process ``pid``, all its threads included."""
-    with open(f'/proc/{pid}/stat') as stat:
-        fields = stat.read().rsplit(')', 1)[1].split()
-    return int(fields[11]) + int(fields[12])  # fields 14 and 15 of proc(5)
-
-
 def cpu_seconds(pid: int) -> float:
     """Return the run time (s) of every live thread of ``pid`` summed, from
     /proc/<pid>/task/*/schedstat: nanoseconds, where /proc/<pid>/stat has 10 ms ticks (a 4 s
@@ -128,46 +121,35 @@ def cpu_seconds(pid: int) -> float:
     return total_ns * 1e-9
 
 
-def thread_ticks(pid: int) -> Dict[int, Tuple[str, int]]:
-    """Return {tid: (thread name, utime + stime ticks)} for every thread of ``pid``."""
+def thread_run_ns(pid: int) -> Dict[int, Tuple[str, int]]:
+    """Return {tid: (thread name, run time in ns)} for every thread of ``pid``
+    (/proc/<pid>/task/<tid>/comm and schedstat)."""
     threads = {}
     for task in os.listdir(f'/proc/{pid}/task'):
         try:
-            with open(f'/proc/{pid}/task/{task}/stat') as stat:
-                text = stat.read()
-        except FileNotFoundError:
+            with open(f'/proc/{pid}/task/{task}/comm') as comm:
+                name = comm.read().rstrip('\n')
+            with open(f'/proc/{pid}/task/{task}/schedstat') as schedstat:
+                run_ns = int(schedstat.read().split()[0])
+        except (FileNotFoundError, ProcessLookupError):
             continue  # the thread ended meanwhile
-        name = text[text.index('(') + 1:text.rindex(')')]
-        fields = text.rsplit(')', 1)[1].split()
-        threads[int(task)] = (name, int(fields[11]) + int(fields[12]))
+        threads[int(task)] = (name, run_ns)
     return threads
 
 
 def cpu_by_thread_name(before: Dict[int, Tuple[str, int]], after: Dict[int, Tuple[str, int]],
-                       seconds: float, ticks_per_second: int) -> Dict[str, float]:
-    """Return % of one core per thread name between two :func:`thread_ticks` snapshots.
+                       seconds: float) -> Dict[str, float]:
+    """Return % of one core per thread name between two :func:`thread_run_ns` snapshots.
 
     Threads with the same name (several ``python`` threads) are summed; names with a Fast DDS
     port or index suffix (``dds.shm.7413``) are kept whole.
     """
     percent: Dict[str, float] = {}
-    for tid, (name, ticks) in after.items():
-        delta = ticks - before.get(tid, (name, 0))[1]
+    for tid, (name, run_ns) in after.items():
+        delta = run_ns - before.get(tid, (name, 0))[1]
         if delta > 0:
-            percent[name] = percent.get(name, 0.0) + 100.0 * delta / ticks_per_second / seconds
+            percent[name] = percent.get(name, 0.0) + 100.0 * delta * 1e-9 / seconds
     return dict(sorted(percent.items(), key=lambda item: -item[1]))
-
-
-def busy_ticks() -> int:
-    """Return the machine's non-idle clock ticks summed over all cores (/proc/stat).
-
-    Tick-sampled: on this project's VM its fields summed to 83–143 ticks per half second on
-    2 cores of 100 Hz ticks (``bench/NOTES.md`` section 14), so :func:`other_load_ticks` is
-    the better measure of other load."""
-    with open('/proc/stat') as stat:
-        user, nice, system, _idle, _iowait, irq, softirq, steal = map(
-            int, stat.readline().split()[1:9])
-    return user + nice + system + irq + softirq + steal  # guest time is inside user
 
 
 def process_ticks() -> Dict[int, int]:

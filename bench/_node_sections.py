@@ -182,9 +182,17 @@ def mixed_soak_section(soak: Optional[dict]) -> List[str]:
         f'- mixed ticks {mixed["ticks"]}: parameter replies {mixed["parameter_replies"]} '
         f'(refused {mixed["parameters_refused"]}), reset replies {mixed["reset_replies"]} '
         f'(failed {mixed["resets_failed"]}); the last few requests were in flight at the end.',
-        f'- node CPU {soak["cpu_percent"]:.1f} % of a core; the whole machine was '
-        f'{soak["machine_busy_cores"]:.2f} cores busy (all processes, other engineers\' '
-        'included).', '']
+        f'- node CPU {soak["cpu_percent"]:.1f} % of a core; ' + _soak_load(soak), '']
+
+
+def _soak_load(soak: dict) -> str:
+    """The machine's other load during the soak: other processes' run times (results since
+    session 10), or /proc/stat's busy cores (older results; it does not add up on this VM)."""
+    if 'other_load_cores' in soak:
+        return (f'the other processes (not the node and its peers) used '
+                f'{soak["other_load_cores"]:.2f} cores.')
+    return (f'the whole machine was {soak["machine_busy_cores"]:.2f} cores busy by /proc/stat '
+            '(all processes, other engineers\' included).')
 
 
 def _worst_when(soak: dict) -> str:

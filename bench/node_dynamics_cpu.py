@@ -3,7 +3,8 @@
 For each shipped scene with ``rate_source: dynamics`` it starts, as a user would,
 ``propagation_node --ros-args -p scene:=NAME`` (default parameters otherwise: 50 Hz ticks),
 waits until it serves, lets it warm up (``--warmup``), then measures the process's CPU
-(utime + stime of all threads, /proc/<pid>/stat) over ``--duration`` seconds twice:
+(the run time of all its threads in ns, /proc/<pid>/task/*/schedstat) over ``--duration``
+seconds twice:
 
 1. with nobody subscribed to any output;
 2. with ``bench/_output_subscriber.py`` subscribed to every output of the node
@@ -15,9 +16,10 @@ It also times the scene's propagator alone in this process (advancing to the sam
 tick times, no ROS): the node's CPU minus that is the node's own per-tick cost.
 
 Targets (issue 13, item 2): at most 3 % of one core unsubscribed, 5 % subscribed. The
-machine is shared: the other load (busy cores minus the node's and the subscriber's) is
-reported per row. Results go to ``bench/results/node/node_dynamics_cpu.json``;
-``bench/performance_report.py`` puts them in ``docs/performance.md``.
+machine is shared: the other load (the run time of every process but the node, the
+subscriber and this script) is reported per row. Results go to
+``bench/results/node/node_dynamics_cpu.json``; ``bench/performance_report.py`` puts them in
+``docs/performance.md``.
 
 Example::
 
@@ -39,7 +41,8 @@ from typing import Dict, List, Optional
 BENCH = Path(__file__).resolve().parent
 sys.path.insert(0, str(BENCH))
 
-from _common import busy_ticks, cpu_ticks, cpu_by_thread_name, thread_ticks  # noqa: E402
+from _common import (cpu_by_thread_name, cpu_seconds, other_load_ticks,  # noqa: E402
+                     process_ticks, thread_run_ns)
 import _report  # noqa: E402
 from node_throughput import CLOCK_TICKS, display, ProcessCrashed, Session  # noqa: E402
 
@@ -95,20 +98,22 @@ def wait_serving(process, timeout: float) -> None:
 
 
 def cpu_window(pids: Dict[str, int], seconds: float) -> Dict[str, object]:
-    """CPU (% of one core) of each pid, per thread of the node, and the other load."""
-    ticks0 = {name: cpu_ticks(pid) for name, pid in pids.items()}
-    threads0 = thread_ticks(pids['node'])
-    machine0, wall0 = busy_ticks(), time.monotonic()
+    """CPU (% of one core) of each pid and per thread of the node (scheduler run times in ns,
+    /proc/<pid>/task/*/schedstat), and the other load: every other process's run time
+    (:func:`_common.other_load_ticks`; /proc/stat's tick samples do not add up on this VM)."""
+    seconds0 = {name: cpu_seconds(pid) for name, pid in pids.items()}
+    threads0 = thread_run_ns(pids['node'])
+    machine0, wall0 = process_ticks(), time.monotonic()
     time.sleep(seconds)
-    ticks1 = {name: cpu_ticks(pid) for name, pid in pids.items()}
-    threads1 = thread_ticks(pids['node'])
-    window = time.monotonic() - wall0
-    ours = sum(ticks1.values()) - sum(ticks0.values())
+    seconds1 = {name: cpu_seconds(pid) for name, pid in pids.items()}
+    threads1 = thread_run_ns(pids['node'])
+    machine1, window = process_ticks(), time.monotonic() - wall0
+    ours = set(pids.values()) | {os.getpid()}
     return {
-        **{f'{name}_cpu_percent': 100.0 * (ticks1[name] - ticks0[name]) / CLOCK_TICKS / window
+        **{f'{name}_cpu_percent': 100.0 * (seconds1[name] - seconds0[name]) / window
            for name in pids},
-        'node_cpu_by_thread': cpu_by_thread_name(threads0, threads1, window, CLOCK_TICKS),
-        'other_load_cores': max(0.0, (busy_ticks() - machine0 - ours) / CLOCK_TICKS / window),
+        'node_cpu_by_thread': cpu_by_thread_name(threads0, threads1, window),
+        'other_load_cores': other_load_ticks(machine0, machine1, ours) / CLOCK_TICKS / window,
         'window_s': window,
     }
 

@@ -62,8 +62,9 @@ REPO = BENCH.parent
 sys.path.insert(0, str(BENCH))
 
 from _common import (cpu_by_thread_name, cpu_seconds, other_load_ticks,  # noqa: E402
-                     process_ticks, QUEUE_DEPTH, ros_env, rss_kib, thread_ticks)
+                     process_ticks, QUEUE_DEPTH, ros_env, rss_kib, thread_run_ns)
 import _report  # noqa: E402
+from _thread_sampler import ThreadSampler  # noqa: E402
 
 if TYPE_CHECKING:
     import numpy as np
@@ -289,15 +290,18 @@ def measure(session: Session, target_argv: List[str], rate: float,
     publisher, target = processes['publisher'], processes['target']
     pids = {name: process.popen.pid for name, process in processes.items()}
     publisher.wait_event('start', args.match_timeout + args.warmup + 5, watch=[target])
-    threads0 = thread_ticks(pids['target'])
+    sampler = ThreadSampler(pids, args.sample_threads).start() if args.sample_threads else None
+    threads0 = thread_run_ns(pids['target'])
     seconds0 = {name: cpu_seconds(pid) for name, pid in pids.items()}
     machine0, wall0 = process_ticks(), time.monotonic()
     end = publisher.wait_event('end', 2 * args.duration + 10, watch=[target])
     seconds1 = {name: cpu_seconds(pid) for name, pid in pids.items()}
     machine1, window_s = process_ticks(), time.monotonic() - wall0
-    threads1 = thread_ticks(pids['target'])
+    threads1 = thread_run_ns(pids['target'])
     rss = rss_kib(target.popen.pid)
     time.sleep(args.drain)
+    if sampler is not None:
+        sampler.stop(session.workdir / 'threads.npz')
     target.check_alive()
     cpu = {name: 100.0 * (seconds1[name] - seconds0[name]) / window_s for name in pids}
     ours = set(pids.values()) | {os.getpid()}
@@ -310,7 +314,7 @@ def measure(session: Session, target_argv: List[str], rate: float,
         'cpu_percent': cpu['target'], 'publisher_cpu_percent': cpu['publisher'],
         'subscriber_cpu_percent': cpu['subscriber'], 'other_load_cores': other_cores,
         'rss_kib': rss,
-        'cpu_by_thread': cpu_by_thread_name(threads0, threads1, window_s, CLOCK_TICKS),
+        'cpu_by_thread': cpu_by_thread_name(threads0, threads1, window_s),
     }
 
 
@@ -321,12 +325,14 @@ def display(argv: List[str]) -> str:
 
 
 def keep_traces(args: argparse.Namespace, workdir: Path, name: str) -> None:
-    """With ``--keep-traces DIR``: copy the run's poses (stamps, receive times) and the
-    target's log there as ``NAME.poses.bin`` / ``NAME.target.log``."""
+    """With ``--keep-traces DIR``: copy the run's poses (stamps, receive times), the
+    target's log and the thread samples (``--sample-threads``) there as ``NAME.poses.bin``,
+    ``NAME.target.log`` and ``NAME.threads.npz``."""
     if args.keep_traces is None:
         return
     args.keep_traces.mkdir(parents=True, exist_ok=True)
-    for source, suffix in (('poses.bin', 'poses.bin'), ('target.log', 'target.log')):
+    for source, suffix in (('poses.bin', 'poses.bin'), ('target.log', 'target.log'),
+                           ('threads.npz', 'threads.npz')):
         if (workdir / source).exists():
             shutil.copyfile(workdir / source, args.keep_traces / f'{name}.{suffix}')
 
@@ -497,6 +503,10 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     add_endpoint_profile_argument(parser)
     parser.add_argument('--keep-traces', type=Path, default=None, metavar='DIR',
                         help='keep each run\'s poses.bin and target log in DIR')
+    parser.add_argument('--sample-threads', type=float, default=0.0, metavar='MS',
+                        help='sample every thread\'s run and wait time of the target, '
+                             'publisher and subscriber every MS ms (bench/_thread_sampler.py; '
+                             'kept with --keep-traces; default 0 = off)')
     parser.add_argument('--report', type=Path, default=BENCH / 'results' / 'throughput.md')
     args = parser.parse_args(argv)
     if args.repeats < 1:

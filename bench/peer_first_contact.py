@@ -31,7 +31,7 @@ BENCH = Path(__file__).resolve().parent
 sys.path.insert(0, str(BENCH))
 
 import _report  # noqa: E402
-from _common import thread_ticks  # noqa: E402
+from _common import thread_run_ns  # noqa: E402
 from node_throughput import (add_endpoint_profile_argument, delivery,  # noqa: E402
                              display, endpoint_environment, Session, start_processes)
 from soak_mixed import default_node, run_and_save  # noqa: E402
@@ -95,7 +95,7 @@ def long_sleeps(out: Path, names: Dict[int, str]) -> List[str]:
 
 def thread_names(pid: int) -> Dict[int, str]:
     """Thread id → name, for process ``pid``."""
-    return {thread: name for thread, (name, _) in thread_ticks(pid).items()}
+    return {thread: name for thread, (name, _) in thread_run_ns(pid).items()}
 
 
 def run(argv: List[str], args: argparse.Namespace) -> dict:

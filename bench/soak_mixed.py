@@ -11,7 +11,8 @@ to change it), a ``pose`` subscriber (``bench/_subscriber.py``), an ``imu`` publ
   minutes), and the growth rate over that span (least squares, KiB per minute);
 * gyro samples sent in the window and poses received within ``--drain`` s (lost = the
   difference), the mixed ticks sent and the replies received;
-* the node's CPU over the whole soak and the machine's other load.
+* the node's CPU over the whole soak (its threads' run times in ns) and the other load: the
+  run time of every process but the node, its peers and this script.
 
 Results go to ``bench/results/node/soak_mixed.json`` (``bench/performance_report.py`` puts them in
 ``docs/performance.md``). Exit code 0 unless a process crashed or hung on SIGINT.
@@ -35,7 +36,7 @@ from typing import Callable, Dict, List, Optional
 BENCH = Path(__file__).resolve().parent
 sys.path.insert(0, str(BENCH))
 
-from _common import busy_ticks, cpu_ticks, rss_kib  # noqa: E402
+from _common import cpu_seconds, other_load_ticks, process_ticks, rss_kib  # noqa: E402
 import _report  # noqa: E402
 from node_throughput import (add_endpoint_profile_argument, CLOCK_TICKS,  # noqa: E402
                              delivery, display, endpoint_environment, NODE_ARGS,
@@ -91,10 +92,11 @@ def run(argv: List[str], args: argparse.Namespace) -> dict:
             mixed_matched_ns = time.time_ns()
             publisher.wait_event('start', args.match_timeout + 5, watch=[target])
             pid = target.popen.pid
-            ticks0, machine0, wall0 = cpu_ticks(pid), busy_ticks(), time.monotonic()
+            seconds0, machine0, wall0 = cpu_seconds(pid), process_ticks(), time.monotonic()
             samples = sample_rss(target, pid, seconds, args.sample_every)
             end = publisher.wait_event('end', 60.0, watch=[target])
-            ticks1, machine1 = cpu_ticks(pid), busy_ticks()
+            seconds1, machine1 = cpu_seconds(pid), process_ticks()
+            ours = {pid, os.getpid()} | {process.popen.pid for process in session.processes}
             window = time.monotonic() - wall0
             mixed.popen.send_signal(2)
             mixed_counts = mixed.wait_event('counts', 10.0)
@@ -115,8 +117,8 @@ def run(argv: List[str], args: argparse.Namespace) -> dict:
         **counts, 'mixed': mixed_counts,
         'mixed_profile': args.mixed_profile,
         'mixed_matched_at_s': (mixed_matched_ns - end['first_stamp_ns']) * 1e-9,
-        'cpu_percent': 100.0 * (ticks1 - ticks0) / CLOCK_TICKS / window,
-        'machine_busy_cores': (machine1 - machine0) / CLOCK_TICKS / window,
+        'cpu_percent': 100.0 * (seconds1 - seconds0) / window,
+        'other_load_cores': other_load_ticks(machine0, machine1, ours) / CLOCK_TICKS / window,
         'problems': problems, 'machine': _report.machine_description(),
         'invocation': display([sys.executable] + sys.argv),
     }
@@ -138,8 +140,8 @@ def summary(result: dict) -> str:
         f'mixed: {mixed["ticks"]} ticks; set_pose {mixed["set_pose"]}, parameter replies '
         f'{mixed["parameter_replies"]} (refused {mixed["parameters_refused"]}), reset '
         f'replies {mixed["reset_replies"]} (failed {mixed["resets_failed"]})',
-        f'node CPU {result["cpu_percent"]:.1f} % of a core; machine busy '
-        f'{result["machine_busy_cores"]:.2f} cores (all processes)',
+        f'node CPU {result["cpu_percent"]:.1f} % of a core; other processes '
+        f'{result["other_load_cores"]:.2f} cores',
     ])
 
 

@@ -1,0 +1,89 @@
+"""Benchmark helper: every thread's run and wait time, sampled through a window.
+
+``node_throughput.py --sample-threads MS`` starts a :class:`ThreadSampler` on the target, the
+publisher and the subscriber for each measured window. Every ``MS`` milliseconds it reads each
+thread's ``/proc/<pid>/task/<tid>/schedstat`` (run time and run-queue wait time in ns, kept
+open and re-read with ``pread``: about 2 µs a file) and notes its own wake-up time, so its own
+lateness is a probe of the whole machine (a sampler several ms late while the bench publisher
+is late too is a stall of the machine, not of the target). At the end it writes
+``threads.npz``: ``t_ns`` (CLOCK_REALTIME, the clock of the pose stamps), ``run_ns`` and
+``wait_ns`` (samples × threads, cumulative), and each thread's ``process`` and ``name``.
+``bench/episodes.py`` reads these beside the poses to explain a window's slow spells.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+import threading
+import time
+from typing import Dict, List, Tuple
+
+import numpy as np
+
+#: Samples kept at most (a 4 s window at 5 ms needs 800).
+MAX_SAMPLES = 20000
+
+
+def _open_threads(pids: Dict[str, int]) -> List[Tuple[str, str, int]]:
+    """(process label, thread name, open schedstat fd) of every thread of ``pids`` now."""
+    threads = []
+    for label, pid in pids.items():
+        for task in sorted(os.listdir(f'/proc/{pid}/task'), key=int):
+            try:
+                with open(f'/proc/{pid}/task/{task}/comm') as comm:
+                    name = comm.read().rstrip('\n')
+                fd = os.open(f'/proc/{pid}/task/{task}/schedstat', os.O_RDONLY)
+            except (FileNotFoundError, ProcessLookupError):
+                continue  # ended meanwhile
+            threads.append((label, name, fd))
+    return threads
+
+
+class ThreadSampler:
+    """Samples run and wait times of every thread of some processes on a thread of its own."""
+
+    def __init__(self, pids: Dict[str, int], period_ms: float) -> None:
+        """Sample the threads ``pids`` have now (label -> pid) every ``period_ms``."""
+        self.period_ns = int(period_ms * 1e6)
+        self.threads = _open_threads(pids)
+        self.t_ns = np.zeros(MAX_SAMPLES, dtype=np.int64)
+        self.run_ns = np.zeros((MAX_SAMPLES, len(self.threads)), dtype=np.int64)
+        self.wait_ns = np.zeros_like(self.run_ns)
+        self.count = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name='thread_sampler', daemon=True)
+
+    def start(self) -> 'ThreadSampler':
+        """Begin sampling."""
+        self._thread.start()
+        return self
+
+    def _run(self) -> None:
+        fds = [fd for _, _, fd in self.threads]
+        next_ns = time.monotonic_ns()
+        while not self._stop.is_set() and self.count < MAX_SAMPLES:
+            row = self.count
+            self.t_ns[row] = time.time_ns()
+            for column, fd in enumerate(fds):
+                try:
+                    fields = os.pread(fd, 64, 0).split()
+                except OSError:  # the thread ended: its times stay where they were
+                    fields = [self.run_ns[row - 1, column], self.wait_ns[row - 1, column]]
+                self.run_ns[row, column], self.wait_ns[row, column] = int(fields[0]), \
+                    int(fields[1])
+            self.count += 1
+            next_ns += self.period_ns
+            time.sleep(max(0.0, (next_ns - time.monotonic_ns()) * 1e-9))
+
+    def stop(self, out: Path) -> None:
+        """Stop sampling, close the files and write ``out`` (``threads.npz``)."""
+        self._stop.set()
+        self._thread.join()
+        for _, _, fd in self.threads:
+            os.close(fd)
+        rows = self.count
+        np.savez_compressed(out, t_ns=self.t_ns[:rows], run_ns=self.run_ns[:rows],
+                            wait_ns=self.wait_ns[:rows], period_ns=self.period_ns,
+                            process=np.array([label for label, _, _ in self.threads]),
+                            name=np.array([name for _, name, _ in self.threads]))
