@@ -67,6 +67,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         for worker in workers:
             worker.terminate()
     signal.signal(signal.SIGTERM, stop)
+    # Set explicitly: a shell that backgrounds a job without job control starts it with
+    # SIGINT ignored, and Python then installs no KeyboardInterrupt handler of its own.
+    signal.signal(signal.SIGINT, stop)
     try:
         for worker in workers:
             worker.join()
