@@ -15,9 +15,12 @@ a spell it prints the spells with the most slow poses, each with:
   sample to last publish; poses stamped before the sampler started are left out). A
   thread that waits far more than usual did not get a CPU; one that runs far more spins.
 
+``--table`` prints one row per spell instead (:func:`table_row`).
+
 Example::
 
     python bench/episodes.py /tmp/traces --over 1 --windows 'node_15000*'
+    python bench/episodes.py /tmp/traces --table --min-slow 20 --windows 'node_*'
 """
 
 from __future__ import annotations
@@ -75,6 +78,10 @@ def describe_window(name: str, poses: Path, samples: Optional[Path], rate_hz: fl
         latency_ms[spell[0]:spell[1] + 1] > args.over)))
     lines = [f'{name}: {len(found)} spells over {args.over:g} ms']
     origin = int(threads['t_ns'][0]) if threads is not None else int(stamps[0])
+    if args.table:
+        return [table_row(name, stamps, latency_ms, spell, origin, args.over, threads)
+                for spell in found if threads is not None and np.count_nonzero(
+                    latency_ms[spell[0]:spell[1] + 1] > args.over) >= args.min_slow]
     for first, last in found[:args.top]:
         lines.extend(describe_spell(stamps, latency_ms, (first, last), origin, rate_hz,
                                     args.over, threads))
@@ -117,6 +124,42 @@ def describe_spell(stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int,
     return lines
 
 
+TABLE_HEAD = ('| window | at (s) | ms | slow | worst (ms) | pub. late | sampler late | '
+              'main run | main wait | sender run | all run |')
+
+
+def table_row(name: str, stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int, int],
+              origin: int, over_ms: float, threads: np.lib.npyio.NpzFile) -> str:
+    """One spell as a table row (``--table``): thread figures in % of a core, the spell's
+    then the window's; ``main`` is the target's first thread, ``sender`` its ``dds.asyn``
+    threads, ``all`` every sampled thread of the three processes."""
+    first, last = spell
+    start_ns = int(stamps[first])
+    end_ns = int(stamps[last]) + int(latency_ms[last] * 1e6)
+    t_ns = threads['t_ns']
+    period_ns = int(threads['period_ns'])
+    inside = t_ns[(t_ns >= start_ns) & (t_ns <= end_ns)]
+    sampler_late = (np.diff(inside).max() - period_ns) * 1e-6 if inside.size > 1 else 0.0
+    gaps_ms = np.diff(stamps[max(0, first - 1):last + 1]) * 1e-6
+    nominal_ms = float(np.median(np.diff(stamps))) * 1e-6
+    publisher_late = gaps_ms.max() - nominal_ms if gaps_ms.size else 0.0
+    target = np.flatnonzero(threads['process'] == 'target')
+    senders = [column for column in target if str(threads['name'][column]).startswith('dds.asyn')]
+    window = (int(t_ns[0]), int(stamps[-1]))
+
+    def figures(key: str, columns: List[int]) -> str:
+        spell_value = percent_between(t_ns, threads[key], start_ns, end_ns)[columns].sum()
+        whole_value = percent_between(t_ns, threads[key], *window)[columns].sum()
+        return f'{spell_value:.0f} ({whole_value:.0f})'
+    every = list(range(threads['name'].size))
+    slow = int(np.count_nonzero(latency_ms[first:last + 1] > over_ms))
+    return (f'| {name} | {(start_ns - origin) * 1e-9:.2f} | {(end_ns - start_ns) * 1e-6:.0f} | '
+            f'{slow} | {latency_ms[first:last + 1].max():.1f} | {publisher_late:.1f} | '
+            f'{sampler_late:.1f} | {figures("run_ns", [target[0]])} | '
+            f'{figures("wait_ns", [target[0]])} | '
+            f'{figures("run_ns", senders) if senders else "-"} | {figures("run_ns", every)} |')
+
+
 def rate_of(name: str) -> float:
     """The rate in a window's name (``node_15000_w2`` -> 15000)."""
     for word in name.split('_'):
@@ -134,7 +177,12 @@ def main(argv: Optional[List[str]] = None) -> int:
                         help='slow poses at most this far apart (ms) are one spell')
     parser.add_argument('--top', type=int, default=3, help='spells shown per window')
     parser.add_argument('--windows', default='*', help='glob over window names')
+    parser.add_argument('--table', action='store_true',
+                        help='one table row per spell with at least --min-slow slow poses')
+    parser.add_argument('--min-slow', type=int, default=20)
     args = parser.parse_args(argv)
+    if args.table:
+        print(TABLE_HEAD + '\n' + '|---' * TABLE_HEAD.count(' | ') + '|---|')
     names = sorted(path.name[:-len('.poses.bin')] for path in args.traces.glob('*.poses.bin'))
     if not names:
         print(f'error: no *.poses.bin in {args.traces}', file=sys.stderr)
