@@ -155,32 +155,41 @@ that CPU. In two rounds of three interleaved windows that node had pooled p99 0.
 to 15 kHz and 0.57 / 1.13 ms at 20 kHz, against the fast relay's 0.23–1.02 and 1.62 / 1.66 ms;
 beside one process busy 100 ms in every second its p99 at 15 / 20 kHz was 3.27 / 3.08 ms, the
 relay's 4.80 / 3.72 ms. `idle_senders_above_hz` (default 0, never) brings the idle rule back,
-for kernels without custom slices. The sweeps above are with the slices."""
+for kernels without custom slices. The sweeps above are with the slices, and with every
+thread of the three processes sampled every 5 ms (`--sample-threads 5`). Over ten such sweeps
+(sessions 9 and 10) item 5 was met in full in 3: every window had zero loss, the node's pooled
+p99 up to 5 kHz was over 1 ms in 2 of 50 rows, it was ahead of the fast relay at 10–20 kHz in
+26 of 30 and its 1 kHz CPU was below the relay's in 9 of 10. The samples show what the
+remaining slow spells are made of (`bench/NOTES.md`, section 15). In 78 of the node's 243
+spells at 10–20 kHz its gyro loop thread was runnable and waited for a CPU more than twice as
+much as in its window (and by over 5 points of a core). In 78 the sampled threads together got 10 points of a core less than in
+their window, so the CPUs did work none of them was charged for. Letting the loop thread
+preempt (`SCHED_OTHER`, with or without a 0.1 ms slice) gained nothing: pooled p99 0.56–1.72 ms
+at 10–20 kHz against 0.56–1.01 ms for the node as shipped, in the same run."""
 
 
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).
 DYNAMICS_NOTE = """\
 **What the dynamics figures depend on.** With the fast core (plain-float effects, the generated
 RK4 kernel, `casimir8` for `heavy_top`: "Dynamics scenes and effects" above) the propagator
-alone is 0.0–0.7 % of a core per scene in this run; the rest is the node's own share. Session 5
+alone is 0.1–0.7 % of a core per scene in this run; the rest is the node's own share. Session 5
 made the outputs cheap: `orientation`, `pose`, `twist`, `energy` and `angular_momentum` are
 written as CDR bytes with the header packed once and published only to matched subscriptions,
 like the gyro outputs (before, five message objects were filled and converted by rclpy every
 tick, subscribed or not), the body-frame velocity is rotated with plain floats instead of two
 `numpy.cross` calls, and the node clock is read through its handle without a `Time` object
 (session 4 measured 2.8–4.8 % unsubscribed and 3.2–5.8 % subscribed for these scenes, with the
-main thread at 2.2–4.0 %). Per thread in this run (`bench/results/node/node_dynamics_cpu.json`):
-the main thread 0.7–2.8 % unsubscribed and 1.1–2.6 % subscribed, each of the two shared-memory
-listeners of the package's Fast DDS profile (they wake every 10 ms, "Latency in repeated
-sweeps") 0.1–0.5 %, and with subscribers the asynchronous sender thread (`dds.asyn.0.1`,
-"Configuration" above) 0.3–0.5 % and the event thread 0.1–0.3 %. Since session 7 a dynamics
-scene keeps its sender threads on `SCHED_BATCH` and runs no sender guard (section 12 of
-`bench/NOTES.md`): session 6, with idle senders and the guard's 10 Hz timer, measured 2.2–2.9 %
-unsubscribed and 3.4–4.2 % subscribed. `torque_free_box` is the one row over a target here
-(3.6 % unsubscribed, with 0.16 cores of other load in its window); two reruns of it right after
-(`bench/results/node/rate_senders/dynamics_rerun_*.json`) gave 2.3 / 2.5 % and 1.5 / 2.0 %
-(unsubscribed / subscribed). Subscribed windows are noisier than unsubscribed ones: the
-subscriber process shares the two cores."""
+main thread at 2.2–4.0 %). Per thread in this run (`bench/results/node/node_dynamics_cpu.json`,
+run times in ns from `/proc/<pid>/task/*/schedstat` since session 10; earlier runs counted
+10 ms ticks): the main thread 0.8–1.4 % unsubscribed and 0.8–1.5 % subscribed, each of the
+two shared-memory listeners of the package's Fast DDS profile (they wake every 10 ms, "Latency
+in repeated sweeps") 0.2–0.3 %, and with subscribers the asynchronous sender thread
+(`dds.asyn.0.1`, "Configuration" above) 0.2 % and the event thread 0.1–0.2 %. The sender
+threads of a dynamics scene are on `SCHED_BATCH` with 0.1 ms time slices like those of a gyro
+scene (session 9) and no sender guard runs: session 6, with idle senders and the guard's 10 Hz
+timer, measured 2.2–2.9 % unsubscribed and 3.4–4.2 % subscribed. The other load is every other
+process's run time over the window; it was at most 0.02 cores in this run. Subscribed windows
+are noisier than unsubscribed ones: the subscriber process shares the two cores."""
 
 
 def _load(path: Path) -> Optional[dict]:
