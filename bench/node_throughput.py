@@ -14,6 +14,8 @@ background load on the shared machine hits them alike. Per run it reports:
 * CPU: the target's run time over the window (all threads, /proc/<pid>/task/*/schedstat, in
   ns), in % of one core;
 * latency p50 / p99: receive wall time minus pose stamp (= the gyro stamp = publish wall time);
+  also p99 and maximum up to the subscriber's Fast DDS reader (``reader_latency_*``: the
+  time its receive thread got the pose, before the subscriber's own Python thread woke);
 * other load: the CPU of every other process over the window (their scheduler run times from
   /proc/<pid>/stat; /proc/stat's tick samples are unreliable on this VM), since the machine is
   shared.
@@ -227,7 +229,8 @@ def start_processes(session: Session, target_argv: List[str], rate: float, durat
     python = sys.executable
     endpoint_env = endpoint_environment(args.endpoint_profile)
     subscriber = session.start('subscriber', [
-        python, str(BENCH / '_subscriber.py'), '--out', str(session.workdir / 'poses.bin')],
+        python, str(BENCH / '_subscriber.py'), '--out', str(session.workdir / 'poses.bin'),
+        '--reader-out', str(session.workdir / 'reader_times.bin')],
         json_stdout=True, extra_env=endpoint_env)
     target = session.start('target', target_argv)
     subscriber.wait_event('matched', args.match_timeout, watch=[target])
@@ -249,9 +252,27 @@ def counted_poses(session: Session, subscriber: Process, end: dict,
     subscriber.stop(signal.SIGTERM, grace=10.0)
     data = np.fromfile(session.workdir / 'poses.bin', dtype='<i8')
     stamps, received_at = data[:data.size // 2], data[data.size // 2:]
-    counted = ((stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
-               & (received_at <= end['last_stamp_ns'] + int(drain * 1e9)))
+    counted = _counted(stamps, received_at, end, drain)
     return stamps[counted], received_at[counted]
+
+
+def _counted(stamps: 'np.ndarray', received_at: 'np.ndarray', end: dict,
+             drain: float) -> 'np.ndarray':
+    """Which poses count (:func:`counted_poses`)."""
+    return ((stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
+            & (received_at <= end['last_stamp_ns'] + int(drain * 1e9)))
+
+
+def reader_latency_ms(workdir: Path, end: dict, drain: float) -> 'np.ndarray':
+    """Latency (ms) of the counted poses up to the subscriber's Fast DDS reader: its receive
+    time (``_subscriber.py --reader-out``) minus the stamp, without the subscriber's own
+    wake-up delay (after :func:`counted_poses` stopped the subscriber)."""
+    import numpy as np
+    data = np.fromfile(workdir / 'poses.bin', dtype='<i8')
+    stamps, received_at = data[:data.size // 2], data[data.size // 2:]
+    reader_at = np.fromfile(workdir / 'reader_times.bin', dtype='<i8')
+    counted = _counted(stamps, received_at, end, drain)
+    return (reader_at[counted] - stamps[counted]) * 1e-6
 
 
 def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', end: dict) -> dict:
@@ -307,15 +328,27 @@ def measure(session: Session, target_argv: List[str], rate: float,
     ours = set(pids.values()) | {os.getpid()}
     other_cores = other_load_ticks(machine0, machine1, ours) / CLOCK_TICKS / window_s
     stamps, arrivals = counted_poses(session, processes['subscriber'], end, args.drain)
+    reader_ms = reader_latency_ms(session.workdir, end, args.drain)
     return {
         'rate_hz': rate, **delivery_summary(stamps, arrivals, end),
-        '_latency_ms': (arrivals - stamps) * 1e-6,
+        **reader_percentiles(reader_ms),
+        '_latency_ms': (arrivals - stamps) * 1e-6, '_reader_latency_ms': reader_ms,
         'publisher_hz': end['achieved_hz'], 'publisher_max_lag_ms': end['max_lag_ms'],
         'cpu_percent': cpu['target'], 'publisher_cpu_percent': cpu['publisher'],
         'subscriber_cpu_percent': cpu['subscriber'], 'other_load_cores': other_cores,
         'rss_kib': rss,
         'cpu_by_thread': cpu_by_thread_name(threads0, threads1, window_s),
     }
+
+
+def reader_percentiles(reader_ms: 'np.ndarray') -> dict:
+    """p99 and maximum of the latencies up to the subscriber's reader (:func:`reader_latency_ms`):
+    ``reader_latency_p99_ms``, ``reader_latency_max_ms``."""
+    import numpy as np
+    if not reader_ms.size:
+        return {'reader_latency_p99_ms': None, 'reader_latency_max_ms': None}
+    return {'reader_latency_p99_ms': float(np.percentile(reader_ms, 99)),
+            'reader_latency_max_ms': float(reader_ms.max())}
 
 
 def display(argv: List[str]) -> str:
@@ -326,13 +359,15 @@ def display(argv: List[str]) -> str:
 
 def keep_traces(args: argparse.Namespace, workdir: Path, name: str) -> None:
     """With ``--keep-traces DIR``: copy the run's poses (stamps, receive times), the
-    target's log and the thread samples (``--sample-threads``) there as ``NAME.poses.bin``,
-    ``NAME.target.log`` and ``NAME.threads.npz``."""
+    target's log, the thread samples (``--sample-threads``) and the reader's receive times
+    there as ``NAME.poses.bin``, ``NAME.target.log``, ``NAME.threads.npz`` and
+    ``NAME.reader_times.bin``."""
     if args.keep_traces is None:
         return
     args.keep_traces.mkdir(parents=True, exist_ok=True)
     for source, suffix in (('poses.bin', 'poses.bin'), ('target.log', 'target.log'),
-                           ('threads.npz', 'threads.npz')):
+                           ('threads.npz', 'threads.npz'),
+                           ('reader_times.bin', 'reader_times.bin')):
         if (workdir / source).exists():
             shutil.copyfile(workdir / source, args.keep_traces / f'{name}.{suffix}')
 
@@ -399,6 +434,7 @@ def pooled_row(windows: List[dict]) -> dict:
     """
     import numpy as np
     latencies = [window.pop('_latency_ms') for window in windows]
+    reader_latencies = [window.pop('_reader_latency_ms') for window in windows]
     if len(windows) == 1:
         return windows[0]
     pooled_ms = np.concatenate(latencies)
@@ -419,6 +455,7 @@ def pooled_row(windows: List[dict]) -> dict:
         **{key: sum(window[key] for window in windows) for key in ('sent', 'received', 'lost')},
         'latency_p50_ms': percentile(50), 'latency_p99_ms': percentile(99),
         'latency_max_ms': percentile(100),
+        **reader_percentiles(np.concatenate(reader_latencies)),
         'latency_max_at_s': windows[slowest]['latency_max_at_s'],
         'latency_max_window': slowest + 1,
         'receive_gap_max_ms': highest('receive_gap_max_ms'),

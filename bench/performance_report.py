@@ -162,8 +162,9 @@ p99 up to 5 kHz was over 1 ms in 2 of 50 rows, it was ahead of the fast relay at
 26 of 30 and its 1 kHz CPU was below the relay's in 9 of 10. The samples show what the
 remaining slow spells are made of (`bench/NOTES.md`, section 15). In 78 of the node's 243
 spells at 10–20 kHz its gyro loop thread was runnable and waited for a CPU more than twice as
-much as in its window (and by over 5 points of a core). In 78 the sampled threads together got 10 points of a core less than in
-their window, so the CPUs did work none of them was charged for. Letting the loop thread
+much as in its window (and by over 5 points of a core). In 78 the sampled threads together
+got 10 points of a core less than in their window, so the CPUs did work none of them was
+charged for. Letting the loop thread
 preempt (`SCHED_OTHER`, with or without a 0.1 ms slice) gained nothing: pooled p99 0.56–1.72 ms
 at 10–20 kHz against 0.56–1.01 ms for the node as shipped, in the same run."""
 
