@@ -6,8 +6,8 @@ slower than ``--over`` ms whose stamps lie at most ``--join`` ms apart. For each
 a spell it prints the spells with the most slow poses, each with:
 
 * its start (s after the first thread sample), length, slow poses and worst latency;
-* the publisher's largest gap between two consecutive stamps in it, minus the nominal period
-  (the bench publisher was that late: it stamps at publish time);
+* the publisher's largest gap between two consecutive stamps in it, minus the window's median
+  gap (the bench publisher was that late: it stamps at publish time);
 * the sampler's largest lateness in it (``_thread_sampler.py``): another process of the
   bench, so a late sampler beside a late publisher is the whole machine stalled;
 * for every thread that ran at least 1 % of a core in the window: its run time and its
@@ -29,7 +29,7 @@ import argparse
 from fnmatch import fnmatch
 from pathlib import Path
 import sys
-from typing import List, Optional, Tuple
+from typing import List, NamedTuple, Optional, Tuple
 
 import numpy as np
 
@@ -59,7 +59,54 @@ def percent_between(times_ns: np.ndarray, cumulative_ns: np.ndarray, start_ns: i
     return 100.0 * (cumulative_ns[last] - cumulative_ns[first]) / span
 
 
-def describe_window(name: str, poses: Path, samples: Optional[Path], rate_hz: float,
+class SpellFigures(NamedTuple):
+    """What one spell measured (:func:`measure_spell`); thread figures in % of a core per
+    sampled thread, over the spell and over the window."""
+
+    start_ns: int
+    last_stamp_ns: int
+    end_ns: int  # the last slow pose's arrival
+    poses: int
+    slow: int
+    worst_ms: float
+    publisher_late_ms: float
+    sampler_late_ms: Optional[float]
+    run_spell: Optional[np.ndarray]
+    wait_spell: Optional[np.ndarray]
+    run_window: Optional[np.ndarray]
+    wait_window: Optional[np.ndarray]
+
+
+def measure_spell(stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int, int],
+                  over_ms: float, threads: Optional[np.lib.npyio.NpzFile]) -> SpellFigures:
+    """The figures of one spell: the publisher's lateness is its largest stamp gap in the
+    spell minus the window's median gap; the window runs from the first thread sample to the
+    last publish."""
+    first, last = spell
+    start_ns, last_stamp_ns = int(stamps[first]), int(stamps[last])
+    end_ns = last_stamp_ns + int(latency_ms[last] * 1e6)
+    gaps_ms = np.diff(stamps[max(0, first - 1):last + 1]) * 1e-6
+    nominal_ms = float(np.median(np.diff(stamps))) * 1e-6
+    spell_ms = latency_ms[first:last + 1]
+    common = (start_ns, last_stamp_ns, end_ns, last - first + 1,
+              int(np.count_nonzero(spell_ms > over_ms)), float(spell_ms.max()),
+              gaps_ms.max() - nominal_ms if gaps_ms.size else 0.0)
+    if threads is None:
+        return SpellFigures(*common, None, None, None, None, None)
+    t_ns = threads['t_ns']
+    inside = t_ns[(t_ns >= start_ns) & (t_ns <= end_ns)]
+    sampler_late = ((np.diff(inside).max() - int(threads['period_ns'])) * 1e-6
+                    if inside.size > 1 else 0.0)
+    window = (int(t_ns[0]), int(stamps[-1]))
+    return SpellFigures(
+        *common, sampler_late,
+        percent_between(t_ns, threads['run_ns'], start_ns, end_ns),
+        percent_between(t_ns, threads['wait_ns'], start_ns, end_ns),
+        percent_between(t_ns, threads['run_ns'], *window),
+        percent_between(t_ns, threads['wait_ns'], *window))
+
+
+def describe_window(name: str, poses: Path, samples: Optional[Path],
                     args: argparse.Namespace) -> List[str]:
     """The lines for one window (none when it has no spell)."""
     data = np.fromfile(poses, dtype='<i8')
@@ -71,50 +118,33 @@ def describe_window(name: str, poses: Path, samples: Optional[Path], rate_hz: fl
         inside = (stamps >= threads['t_ns'][0]) & (stamps <= threads['t_ns'][-1])
         stamps, arrivals = stamps[inside], arrivals[inside]
     latency_ms = (arrivals - stamps) * 1e-6
-    found = spells(stamps, latency_ms, args.over, args.join)
-    if not found:
+    measured = [measure_spell(stamps, latency_ms, spell, args.over, threads)
+                for spell in spells(stamps, latency_ms, args.over, args.join)]
+    if not measured:
         return []
-    found.sort(key=lambda spell: -int(np.count_nonzero(
-        latency_ms[spell[0]:spell[1] + 1] > args.over)))
-    lines = [f'{name}: {len(found)} spells over {args.over:g} ms']
+    measured.sort(key=lambda figures: -figures.slow)
     origin = int(threads['t_ns'][0]) if threads is not None else int(stamps[0])
     if args.table:
-        return [table_row(name, stamps, latency_ms, spell, origin, args.over, threads)
-                for spell in found if threads is not None and np.count_nonzero(
-                    latency_ms[spell[0]:spell[1] + 1] > args.over) >= args.min_slow]
-    for first, last in found[:args.top]:
-        lines.extend(describe_spell(stamps, latency_ms, (first, last), origin, rate_hz,
-                                    args.over, threads))
+        return [table_row(name, figures, origin, threads) for figures in measured
+                if threads is not None and figures.slow >= args.min_slow]
+    lines = [f'{name}: {len(measured)} spells over {args.over:g} ms']
+    for figures in measured[:args.top]:
+        lines.extend(describe_spell(figures, origin, threads))
     return lines
 
 
-def describe_spell(stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int, int],
-                   origin: int, rate_hz: float, over_ms: float,
+def describe_spell(figures: SpellFigures, origin: int,
                    threads: Optional[np.lib.npyio.NpzFile]) -> List[str]:
     """The lines for one spell (:func:`describe_window`)."""
-    first, last = spell
-    start_ns, end_ns = int(stamps[first]), int(stamps[last])
-    gaps_ms = np.diff(stamps[max(0, first - 1):last + 1]) * 1e-6
-    publisher_late = (gaps_ms.max() - 1e3 / rate_hz) if gaps_ms.size else 0.0
-    slow = int(np.count_nonzero(latency_ms[first:last + 1] > over_ms))
-    head = (f'  at {(start_ns - origin) * 1e-9:6.3f} s, {(end_ns - start_ns) * 1e-6:7.1f} ms, '
-            f'{last - first + 1} poses ({slow} slow), worst '
-            f'{latency_ms[first:last + 1].max():.2f} ms; publisher late '
-            f'{publisher_late:.1f} ms')
+    head = (f'  at {(figures.start_ns - origin) * 1e-9:6.3f} s, '
+            f'{(figures.last_stamp_ns - figures.start_ns) * 1e-6:7.1f} ms, {figures.poses} '
+            f'poses ({figures.slow} slow), worst {figures.worst_ms:.2f} ms; publisher late '
+            f'{figures.publisher_late_ms:.1f} ms')
     if threads is None:
         return [head]
-    t_ns = threads['t_ns']
-    inside = (t_ns >= start_ns) & (t_ns <= end_ns + int(latency_ms[last] * 1e6))
-    period_ms = float(threads['period_ns']) * 1e-6
-    intervals = np.diff(t_ns[inside]) * 1e-6
-    late = intervals.max() - period_ms if intervals.size else 0.0
-    lines = [head + f'; sampler late {late:.1f} ms']
-    spell_end = end_ns + int(latency_ms[last] * 1e6)
-    run_spell = percent_between(t_ns, threads['run_ns'], start_ns, spell_end)
-    wait_spell = percent_between(t_ns, threads['wait_ns'], start_ns, spell_end)
-    window = (int(t_ns[0]), int(stamps[-1]))  # from the first sample to the last publish
-    run_all = percent_between(t_ns, threads['run_ns'], *window)
-    wait_all = percent_between(t_ns, threads['wait_ns'], *window)
+    lines = [head + f'; sampler late {figures.sampler_late_ms:.1f} ms']
+    run_spell, wait_spell = figures.run_spell, figures.wait_spell
+    run_all, wait_all = figures.run_window, figures.wait_window
     for column in np.argsort(-run_all):
         if run_all[column] < 1.0 and run_spell[column] < 5.0:
             continue
@@ -128,44 +158,24 @@ TABLE_HEAD = ('| window | at (s) | ms | slow | worst (ms) | pub. late | sampler 
               'main run | main wait | sender run | all run |')
 
 
-def table_row(name: str, stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int, int],
-              origin: int, over_ms: float, threads: np.lib.npyio.NpzFile) -> str:
+def table_row(name: str, figures: SpellFigures, origin: int,
+              threads: np.lib.npyio.NpzFile) -> str:
     """One spell as a table row (``--table``): thread figures in % of a core, the spell's
     then the window's; ``main`` is the target's first thread, ``sender`` its ``dds.asyn``
     threads, ``all`` every sampled thread of the three processes."""
-    first, last = spell
-    start_ns = int(stamps[first])
-    end_ns = int(stamps[last]) + int(latency_ms[last] * 1e6)
-    t_ns = threads['t_ns']
-    period_ns = int(threads['period_ns'])
-    inside = t_ns[(t_ns >= start_ns) & (t_ns <= end_ns)]
-    sampler_late = (np.diff(inside).max() - period_ns) * 1e-6 if inside.size > 1 else 0.0
-    gaps_ms = np.diff(stamps[max(0, first - 1):last + 1]) * 1e-6
-    nominal_ms = float(np.median(np.diff(stamps))) * 1e-6
-    publisher_late = gaps_ms.max() - nominal_ms if gaps_ms.size else 0.0
     target = np.flatnonzero(threads['process'] == 'target')
     senders = [column for column in target if str(threads['name'][column]).startswith('dds.asyn')]
-    window = (int(t_ns[0]), int(stamps[-1]))
 
-    def figures(key: str, columns: List[int]) -> str:
-        spell_value = percent_between(t_ns, threads[key], start_ns, end_ns)[columns].sum()
-        whole_value = percent_between(t_ns, threads[key], *window)[columns].sum()
-        return f'{spell_value:.0f} ({whole_value:.0f})'
+    def both(spell: np.ndarray, window: np.ndarray, columns: List[int]) -> str:
+        return f'{spell[columns].sum():.0f} ({window[columns].sum():.0f})'
+    run = (figures.run_spell, figures.run_window)
     every = list(range(threads['name'].size))
-    slow = int(np.count_nonzero(latency_ms[first:last + 1] > over_ms))
-    return (f'| {name} | {(start_ns - origin) * 1e-9:.2f} | {(end_ns - start_ns) * 1e-6:.0f} | '
-            f'{slow} | {latency_ms[first:last + 1].max():.1f} | {publisher_late:.1f} | '
-            f'{sampler_late:.1f} | {figures("run_ns", [target[0]])} | '
-            f'{figures("wait_ns", [target[0]])} | '
-            f'{figures("run_ns", senders) if senders else "-"} | {figures("run_ns", every)} |')
-
-
-def rate_of(name: str) -> float:
-    """The rate in a window's name (``node_15000_w2`` -> 15000)."""
-    for word in name.split('_'):
-        if word.isdigit():
-            return float(word)
-    raise SystemExit(f'error: no rate in the window name {name!r}')
+    return (f'| {name} | {(figures.start_ns - origin) * 1e-9:.2f} | '
+            f'{(figures.end_ns - figures.start_ns) * 1e-6:.0f} | {figures.slow} | '
+            f'{figures.worst_ms:.1f} | {figures.publisher_late_ms:.1f} | '
+            f'{figures.sampler_late_ms:.1f} | {both(*run, [target[0]])} | '
+            f'{both(figures.wait_spell, figures.wait_window, [target[0]])} | '
+            f'{both(*run, senders) if senders else "-"} | {both(*run, every)} |')
 
 
 def main(argv: Optional[List[str]] = None) -> int:
@@ -190,8 +200,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     for name in names:
         if fnmatch(name, args.windows):
             for line in describe_window(name, args.traces / f'{name}.poses.bin',
-                                        args.traces / f'{name}.threads.npz', rate_of(name),
-                                        args):
+                                        args.traces / f'{name}.threads.npz', args):
                 print(line)
     return 0
 
