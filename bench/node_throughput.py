@@ -241,9 +241,11 @@ def start_processes(session: Session, target_argv: List[str], rate: float, durat
     return {'target': target, 'publisher': publisher, 'subscriber': subscriber}
 
 
-def counted_poses(session: Session, subscriber: Process, end: dict,
-                  drain: float) -> Tuple['np.ndarray', 'np.ndarray']:
-    """Stop the subscriber; return the stamps and receive times (ns) of the poses that count.
+def counted_poses(session: Session, subscriber: Process, end: dict, drain: float
+                  ) -> Tuple['np.ndarray', 'np.ndarray', 'np.ndarray']:
+    """Stop the subscriber; return the stamps, receive times and reader receive times (ns)
+    of the poses that count (the last from ``_subscriber.py --reader-out``: when the
+    subscriber's Fast DDS reader got the pose, before its own Python thread woke).
 
     A pose counts if its stamp lies in the publisher's measured window and it arrived at most
     ``drain`` seconds after the last publish.
@@ -252,27 +254,10 @@ def counted_poses(session: Session, subscriber: Process, end: dict,
     subscriber.stop(signal.SIGTERM, grace=10.0)
     data = np.fromfile(session.workdir / 'poses.bin', dtype='<i8')
     stamps, received_at = data[:data.size // 2], data[data.size // 2:]
-    counted = _counted(stamps, received_at, end, drain)
-    return stamps[counted], received_at[counted]
-
-
-def _counted(stamps: 'np.ndarray', received_at: 'np.ndarray', end: dict,
-             drain: float) -> 'np.ndarray':
-    """Which poses count (:func:`counted_poses`)."""
-    return ((stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
-            & (received_at <= end['last_stamp_ns'] + int(drain * 1e9)))
-
-
-def reader_latency_ms(workdir: Path, end: dict, drain: float) -> 'np.ndarray':
-    """Latency (ms) of the counted poses up to the subscriber's Fast DDS reader: its receive
-    time (``_subscriber.py --reader-out``) minus the stamp, without the subscriber's own
-    wake-up delay (after :func:`counted_poses` stopped the subscriber)."""
-    import numpy as np
-    data = np.fromfile(workdir / 'poses.bin', dtype='<i8')
-    stamps, received_at = data[:data.size // 2], data[data.size // 2:]
-    reader_at = np.fromfile(workdir / 'reader_times.bin', dtype='<i8')
-    counted = _counted(stamps, received_at, end, drain)
-    return (reader_at[counted] - stamps[counted]) * 1e-6
+    reader_at = np.fromfile(session.workdir / 'reader_times.bin', dtype='<i8')
+    counted = ((stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
+               & (received_at <= end['last_stamp_ns'] + int(drain * 1e9)))
+    return stamps[counted], received_at[counted], reader_at[counted]
 
 
 def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', end: dict) -> dict:
@@ -300,7 +285,7 @@ def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', end: dict) ->
 def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> dict:
     """Stop the subscriber; count the poses of the window received in time, and latencies
     (:func:`counted_poses`, :func:`delivery_summary`)."""
-    stamps, arrivals = counted_poses(session, subscriber, end, drain)
+    stamps, arrivals, _ = counted_poses(session, subscriber, end, drain)
     return delivery_summary(stamps, arrivals, end)
 
 
@@ -327,8 +312,9 @@ def measure(session: Session, target_argv: List[str], rate: float,
     cpu = {name: 100.0 * (seconds1[name] - seconds0[name]) / window_s for name in pids}
     ours = set(pids.values()) | {os.getpid()}
     other_cores = other_load_ticks(machine0, machine1, ours) / CLOCK_TICKS / window_s
-    stamps, arrivals = counted_poses(session, processes['subscriber'], end, args.drain)
-    reader_ms = reader_latency_ms(session.workdir, end, args.drain)
+    stamps, arrivals, reader_at = counted_poses(session, processes['subscriber'], end,
+                                                args.drain)
+    reader_ms = (reader_at - stamps) * 1e-6
     return {
         'rate_hz': rate, **delivery_summary(stamps, arrivals, end),
         **reader_percentiles(reader_ms),
@@ -342,7 +328,7 @@ def measure(session: Session, target_argv: List[str], rate: float,
 
 
 def reader_percentiles(reader_ms: 'np.ndarray') -> dict:
-    """p99 and maximum of the latencies up to the subscriber's reader (:func:`reader_latency_ms`):
+    """p99 and maximum of the latencies up to the subscriber's reader (:func:`counted_poses`):
     ``reader_latency_p99_ms``, ``reader_latency_max_ms``."""
     import numpy as np
     if not reader_ms.size:
@@ -365,11 +351,9 @@ def keep_traces(args: argparse.Namespace, workdir: Path, name: str) -> None:
     if args.keep_traces is None:
         return
     args.keep_traces.mkdir(parents=True, exist_ok=True)
-    for source, suffix in (('poses.bin', 'poses.bin'), ('target.log', 'target.log'),
-                           ('threads.npz', 'threads.npz'),
-                           ('reader_times.bin', 'reader_times.bin')):
-        if (workdir / source).exists():
-            shutil.copyfile(workdir / source, args.keep_traces / f'{name}.{suffix}')
+    for kept in ('poses.bin', 'target.log', 'threads.npz', 'reader_times.bin'):
+        if (workdir / kept).exists():
+            shutil.copyfile(workdir / kept, args.keep_traces / f'{name}.{kept}')
 
 
 def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> dict:
@@ -539,7 +523,8 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--results-dir', type=Path, default=BENCH / 'results')
     add_endpoint_profile_argument(parser)
     parser.add_argument('--keep-traces', type=Path, default=None, metavar='DIR',
-                        help='keep each run\'s poses.bin and target log in DIR')
+                        help='keep each run\'s poses, reader times, target log and thread '
+                             'samples in DIR')
     parser.add_argument('--sample-threads', type=float, default=0.0, metavar='MS',
                         help='sample every thread\'s run and wait time of the target, '
                              'publisher and subscriber every MS ms (bench/_thread_sampler.py; '
