@@ -37,12 +37,12 @@ def sweeps_section(sweeps: List[dict], target: str = 'node',
         return []
     lines = ['## Latency in repeated sweeps', '',
              f'{len(sweeps)} sweeps of `bench/node_throughput.py` in a row (fresh processes '
-             f'per window; {_windows_text(sweeps)}). Per rate: p99 / maximum latency (ms), lost, '
-             'CPU (% of a '
-             f'core) of the node with its default parameters and of the fast relay in the same '
-             f'sweep; the CPU of the bench\'s own publisher and subscriber in the node\'s row '
-             f'and in the relay\'s (the same messages in both, though each also answers its '
-             f'peer\'s acknowledgements); and the other load on the machine (cores). '
+             f'per window; {_windows_text(sweeps)}). Per rate: p99 / maximum latency (ms), '
+             'lost, CPU (% of a core) of the node with its default parameters and of the '
+             'fast relay in the same sweep; the CPU of the bench\'s own publisher and '
+             'subscriber in the node\'s row and in the relay\'s (the same messages in both, '
+             'though each also answers its peer\'s acknowledgements); and the other load on '
+             'the machine (cores). '
              f'Target: node p99 ≤ {TARGET_P99_MS:g} ms at every rate up to '
              f'{TARGET_P99_UP_TO_HZ:.0f} Hz, and above that no worse than the fast relay\'s; '
              'zero loss to 20 kHz; 1 kHz CPU no worse than the fast relay\'s.', '']

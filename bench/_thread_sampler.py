@@ -21,6 +21,8 @@ from typing import Dict, List, Tuple
 
 import numpy as np
 
+from _common import thread_run_ns
+
 #: Samples kept at most (a 4 s window at 5 ms needs 800).
 MAX_SAMPLES = 20000
 
@@ -29,10 +31,8 @@ def _open_threads(pids: Dict[str, int]) -> List[Tuple[str, str, int]]:
     """(process label, thread name, open schedstat fd) of every thread of ``pids`` now."""
     threads = []
     for label, pid in pids.items():
-        for task in sorted(os.listdir(f'/proc/{pid}/task'), key=int):
+        for task, (name, _) in sorted(thread_run_ns(pid).items()):
             try:
-                with open(f'/proc/{pid}/task/{task}/comm') as comm:
-                    name = comm.read().rstrip('\n')
                 fd = os.open(f'/proc/{pid}/task/{task}/schedstat', os.O_RDONLY)
             except (FileNotFoundError, ProcessLookupError):
                 continue  # ended meanwhile
@@ -67,11 +67,10 @@ class ThreadSampler:
             self.t_ns[row] = time.time_ns()
             for column, fd in enumerate(fds):
                 try:
-                    fields = os.pread(fd, 64, 0).split()
+                    run, wait = os.pread(fd, 64, 0).split()[:2]
                 except OSError:  # the thread ended: its times stay where they were
-                    fields = [self.run_ns[row - 1, column], self.wait_ns[row - 1, column]]
-                self.run_ns[row, column], self.wait_ns[row, column] = int(fields[0]), \
-                    int(fields[1])
+                    run, wait = self.run_ns[row - 1, column], self.wait_ns[row - 1, column]
+                self.run_ns[row, column], self.wait_ns[row, column] = int(run), int(wait)
             self.count += 1
             next_ns += self.period_ns
             time.sleep(max(0.0, (next_ns - time.monotonic_ns()) * 1e-9))

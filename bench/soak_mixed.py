@@ -96,7 +96,7 @@ def run(argv: List[str], args: argparse.Namespace) -> dict:
             samples = sample_rss(target, pid, seconds, args.sample_every)
             end = publisher.wait_event('end', 60.0, watch=[target])
             seconds1, machine1 = cpu_seconds(pid), process_ticks()
-            ours = {pid, os.getpid()} | {process.popen.pid for process in session.processes}
+            ours = {os.getpid()} | {process.popen.pid for process in session.processes}
             window = time.monotonic() - wall0
             mixed.popen.send_signal(2)
             mixed_counts = mixed.wait_event('counts', 10.0)
