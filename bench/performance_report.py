@@ -160,16 +160,15 @@ thread of the three processes sampled every 5 ms (`--sample-threads 5`). Over fi
 sweeps (session 9's five, these five and five more in `bench/results/node/sweeps_reader`) item
 5 was met in full in 7: every window had zero loss, the node's pooled p99 up to 5 kHz was over
 1 ms in 2 of 75 rows, it was ahead of the fast relay at 10–20 kHz in 40 of 45 and its 1 kHz CPU
-was below the relay's in 14 of 15. The samples show what the
-remaining slow spells are made of (`bench/NOTES.md`, section 15). In 78 of the node's 243
-spells at 10–20 kHz its gyro loop thread was runnable and waited for a CPU more than twice as
-much as in its window (and by over 5 points of a core). In 78 the sampled threads together
-got 10 points of a core less than in their window, so the CPUs did work none of them was
-charged for. Letting the loop thread
-preempt (`SCHED_OTHER`, with or without a 0.1 ms slice) gained nothing: pooled p99 0.56–1.72 ms
-at 10–20 kHz against 0.56–1.01 ms for the node as shipped, in the same run. Nor is it the
-bench's measuring end: measured up to the subscriber's Fast DDS reader, before its own thread
-wakes, the node's pooled p99s were 0.03–0.15 ms lower and no verdict changed."""
+was below the relay's in 14 of 15. The samples show what the remaining slow spells are made of
+(`bench/NOTES.md`, section 15). In 78 of the node's 243 spells at 10–20 kHz its gyro loop thread
+was runnable and waited for a CPU more than twice as much as in its window (and by over 5 points
+of a core). In 78 the sampled threads together got 10 points of a core less than in their
+window, so the CPUs did work none of them was charged for. Letting the loop thread preempt
+(`SCHED_OTHER`, with or without a 0.1 ms slice) gained nothing: pooled p99 0.56–1.72 ms at 10–20
+kHz against 0.56–1.01 ms for the node as shipped, in the same run. Nor is it the bench's
+measuring end: measured up to the subscriber's Fast DDS reader, before its own thread wakes, the
+node's pooled p99s were 0.03–0.15 ms lower and no verdict changed."""
 
 
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).
