@@ -13,7 +13,14 @@ a spell it prints the spells with the most slow poses, each with:
 * for every thread that ran at least 1 % of a core in the window: its run time and its
   run-queue wait in % of a core over the spell, beside the same over the window (first
   sample to last publish; poses stamped before the sampler started are left out). A
-  thread that waits far more than usual did not get a CPU; one that runs far more spins.
+  thread that waits far more than usual did not get a CPU; one that runs far more spins;
+* when the samples have them (``cpu_ns``), the CPUs' idle time in % of a core (both CPUs
+  together; from cpuidle's µs counters when sampled, else from ``/proc/stat``'s 10 ms ticks,
+  too coarse for spells under about 50 ms), the busy time no sampled thread was charged for
+  (the CPUs' busy time minus every sampled thread's run time: other processes, the kernel's
+  threads, interrupts) and the steal time in ms over the spell, the first two also over the
+  window: time stolen by the hypervisor is time the guest's threads could not run, whatever
+  their priorities.
 
 ``--table`` prints one row per spell instead (:func:`table_row`).
 
@@ -29,7 +36,7 @@ import argparse
 from fnmatch import fnmatch
 from pathlib import Path
 import sys
-from typing import List, NamedTuple, Optional, Tuple
+from typing import Dict, List, NamedTuple, Optional, Tuple
 
 import numpy as np
 
@@ -75,6 +82,29 @@ class SpellFigures(NamedTuple):
     wait_spell: Optional[np.ndarray]
     run_window: Optional[np.ndarray]
     wait_window: Optional[np.ndarray]
+    cpu_spell: Optional[Dict[str, float]]  # idle, unsampled (% of a core), steal (ms)
+    cpu_window: Optional[Dict[str, float]]
+
+
+def cpu_figures(threads: np.lib.npyio.NpzFile, start_ns: int,
+                end_ns: int) -> Optional[Dict[str, float]]:
+    """Idle and unsampled busy time (% of a core) and steal (ms) of all CPUs together
+    between the samples bracketing ``start_ns`` .. ``end_ns``; None for samples without
+    ``cpu_ns``."""
+    if 'cpu_ns' not in threads.files:
+        return None
+    t_ns, fields = threads['t_ns'], list(threads['cpu_fields'])
+    totals = threads['cpu_ns'].sum(axis=1)  # samples × fields
+    cpus = threads['cpu_ns'].shape[1]
+    idle_ns = (threads['cpuidle_ns'].sum(axis=1) if 'cpuidle_ns' in threads.files
+               else totals[:, fields.index('idle')])
+    idle = float(percent_between(t_ns, idle_ns, start_ns, end_ns))
+    ran = float(percent_between(t_ns, threads['run_ns'], start_ns, end_ns).sum())
+    steal_ns = totals[:, fields.index('steal')]
+    first = max(0, int(np.searchsorted(t_ns, start_ns, side='right')) - 1)
+    last = min(t_ns.size - 1, max(first + 1, int(np.searchsorted(t_ns, end_ns, side='left'))))
+    return {'idle': idle, 'unsampled': 100.0 * cpus - idle - ran,
+            'steal': float(steal_ns[last] - steal_ns[first]) * 1e-6}
 
 
 def measure_spell(stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int, int],
@@ -92,7 +122,7 @@ def measure_spell(stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int, 
               int(np.count_nonzero(spell_ms > over_ms)), float(spell_ms.max()),
               gaps_ms.max() - nominal_ms if gaps_ms.size else 0.0)
     if threads is None:
-        return SpellFigures(*common, None, None, None, None, None)
+        return SpellFigures(*common, None, None, None, None, None, None, None)
     t_ns = threads['t_ns']
     inside = t_ns[(t_ns >= start_ns) & (t_ns <= end_ns)]
     sampler_late = ((np.diff(inside).max() - int(threads['period_ns'])) * 1e-6
@@ -103,7 +133,8 @@ def measure_spell(stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int, 
         percent_between(t_ns, threads['run_ns'], start_ns, end_ns),
         percent_between(t_ns, threads['wait_ns'], start_ns, end_ns),
         percent_between(t_ns, threads['run_ns'], *window),
-        percent_between(t_ns, threads['wait_ns'], *window))
+        percent_between(t_ns, threads['wait_ns'], *window),
+        cpu_figures(threads, start_ns, end_ns), cpu_figures(threads, *window))
 
 
 def describe_window(name: str, poses: Path, samples: Optional[Path],
@@ -143,6 +174,12 @@ def describe_spell(figures: SpellFigures, origin: int,
     if threads is None:
         return [head]
     lines = [head + f'; sampler late {figures.sampler_late_ms:.1f} ms']
+    if figures.cpu_spell is not None and figures.cpu_window is not None:
+        spell, window = figures.cpu_spell, figures.cpu_window
+        lines.append(f'    CPUs idle {spell["idle"]:5.1f} % (window {window["idle"]:5.1f}), '
+                     f'busy unsampled {spell["unsampled"]:5.1f} % (window '
+                     f'{window["unsampled"]:5.1f}), steal {spell["steal"]:.0f} ms (window '
+                     f'{window["steal"]:.0f})')
     run_spell, wait_spell = figures.run_spell, figures.wait_spell
     run_all, wait_all = figures.run_window, figures.wait_window
     for column in np.argsort(-run_all):
@@ -155,7 +192,7 @@ def describe_spell(figures: SpellFigures, origin: int,
 
 
 TABLE_HEAD = ('| window | at (s) | ms | slow | worst (ms) | pub. late | sampler late | '
-              'main run | main wait | sender run | all run |')
+              'main run | main wait | sender run | all run | idle | unsampled | steal (ms) |')
 
 
 def table_row(name: str, figures: SpellFigures, origin: int,
@@ -175,7 +212,18 @@ def table_row(name: str, figures: SpellFigures, origin: int,
             f'{figures.worst_ms:.1f} | {figures.publisher_late_ms:.1f} | '
             f'{figures.sampler_late_ms:.1f} | {both(*run, [target[0]])} | '
             f'{both(figures.wait_spell, figures.wait_window, [target[0]])} | '
-            f'{both(*run, senders) if senders else "-"} | {both(*run, every)} |')
+            f'{both(*run, senders) if senders else "-"} | {both(*run, every)} | '
+            f'{_cpu_cells(figures)} |')
+
+
+def _cpu_cells(figures: SpellFigures) -> str:
+    """The idle and unsampled busy (spell and window, % of a core) and steal (ms) cells of a
+    table row."""
+    spell, window = figures.cpu_spell, figures.cpu_window
+    if spell is None or window is None:
+        return '- | - | -'
+    return (f'{spell["idle"]:.0f} ({window["idle"]:.0f}) | {spell["unsampled"]:.0f} '
+            f'({window["unsampled"]:.0f}) | {spell["steal"]:.0f}')
 
 
 def main(argv: Optional[List[str]] = None) -> int:

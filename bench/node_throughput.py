@@ -260,15 +260,18 @@ def counted_poses(session: Session, subscriber: Process, end: dict, drain: float
     return stamps[counted], received_at[counted], reader_at[counted]
 
 
-def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', end: dict) -> dict:
-    """Counts and latencies of the counted poses (:func:`counted_poses`).
+def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', end: dict,
+                     latency_ms: Optional['np.ndarray'] = None) -> dict:
+    """Counts and latencies of the counted poses (:func:`counted_poses`); ``latency_ms``:
+    their latencies when the caller has them already.
 
     ``latency_max_at_s``: when the slowest counted pose was stamped, in seconds after the
     window's first stamp; ``receive_gap_max_ms``: the longest time without a counted pose
     arriving (the node sent nothing, or nothing got through).
     """
     import numpy as np
-    latency_ms = (arrivals - stamps) * 1e-6
+    if latency_ms is None:
+        latency_ms = (arrivals - stamps) * 1e-6
     received = int(np.unique(stamps).size)
 
     def percentile(q: float) -> Optional[float]:
@@ -314,11 +317,11 @@ def measure(session: Session, target_argv: List[str], rate: float,
     other_cores = other_load_ticks(machine0, machine1, ours) / CLOCK_TICKS / window_s
     stamps, arrivals, reader_at = counted_poses(session, processes['subscriber'], end,
                                                 args.drain)
-    reader_ms = (reader_at - stamps) * 1e-6
+    latency_ms, reader_ms = (arrivals - stamps) * 1e-6, (reader_at - stamps) * 1e-6
     return {
-        'rate_hz': rate, **delivery_summary(stamps, arrivals, end),
+        'rate_hz': rate, **delivery_summary(stamps, arrivals, end, latency_ms),
         **reader_percentiles(reader_ms),
-        '_latency_ms': (arrivals - stamps) * 1e-6, '_reader_latency_ms': reader_ms,
+        '_latency_ms': latency_ms, '_reader_latency_ms': reader_ms,
         'publisher_hz': end['achieved_hz'], 'publisher_max_lag_ms': end['max_lag_ms'],
         'cpu_percent': cpu['target'], 'publisher_cpu_percent': cpu['publisher'],
         'subscriber_cpu_percent': cpu['subscriber'], 'other_load_cores': other_cores,

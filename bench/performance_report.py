@@ -156,15 +156,18 @@ to 15 kHz and 0.57 / 1.13 ms at 20 kHz, against the fast relay's 0.23–1.02 and
 beside one process busy 100 ms in every second its p99 at 15 / 20 kHz was 3.27 / 3.08 ms, the
 relay's 4.80 / 3.72 ms. `idle_senders_above_hz` (default 0, never) brings the idle rule back,
 for kernels without custom slices. The sweeps above are with the slices, and with every
-thread of the three processes sampled every 5 ms (`--sample-threads 5`). Over fifteen such
-sweeps (session 9's five, these five and five more in `bench/results/node/sweeps_reader`) item
-5 was met in full in 7: every window had zero loss, the node's pooled p99 up to 5 kHz was over
-1 ms in 2 of 75 rows, it was ahead of the fast relay at 10–20 kHz in 40 of 45 and its 1 kHz CPU
-was below the relay's in 14 of 15. The samples show what the remaining slow spells are made of
-(`bench/NOTES.md`, section 15). In 78 of the node's 243 spells at 10–20 kHz its gyro loop thread
-was runnable and waited for a CPU more than twice as much as in its window (and by over 5 points
-of a core). In 78 the sampled threads together got 10 points of a core less than in their
-window, so the CPUs did work none of them was charged for. Letting the loop thread preempt
+thread of the three processes and every CPU's idle and steal time sampled every 5 ms
+(`--sample-threads 5`). They met item 5 in all five: zero loss, no node window over 1 ms up to
+5 kHz, ahead of the fast relay at 10–20 kHz in every row, the 1 kHz CPU below the relay's in
+every sweep. The same code met it in 7 of the fifteen sweeps before them (session 9's five in
+`bench/results/node/slices/sweeps`, session 10's ten in `sweeps_sampled` and `sweeps_reader`:
+the node's pooled p99 up to 5 kHz over 1 ms in 2 of 75 rows, behind the relay at 10–20 kHz in 5
+of 45, its 1 kHz CPU above the relay's in 1 of 15), so 12 of twenty. The samples show what the
+remaining slow spells are made of (`bench/NOTES.md`, sections 15 and 16): the guest accounted
+no steal time to any of them (30–40 ms per sweep of 240 s, none in a node spell); in
+some the gyro loop thread waits for a CPU, in some the CPUs do work no sampled thread is
+charged for, and in the largest ones of this set the sender thread spins as in session 6 while
+the loop waits on its CPU and the other CPU is partly idle. Letting the loop thread preempt
 (`SCHED_OTHER`, with or without a 0.1 ms slice) gained nothing: pooled p99 0.56–1.72 ms at 10–20
 kHz against 0.56–1.01 ms for the node as shipped, in the same run. Nor is it the bench's
 measuring end: measured up to the subscriber's Fast DDS reader, before its own thread wakes, the

@@ -18,6 +18,7 @@ it keeps ``SCHED_BATCH``'s fewer context switches. Older kernels ignore the fiel
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 import platform
 import threading
@@ -42,13 +43,18 @@ class _SchedAttr(ctypes.Structure):
                 ('sched_util_min', ctypes.c_uint32), ('sched_util_max', ctypes.c_uint32)]
 
 
+@functools.cache
+def _libc() -> ctypes.CDLL:
+    """The C library the process has loaded, with ``errno`` kept per call."""
+    return ctypes.CDLL(None, use_errno=True)
+
+
 def _syscall(index: int, *arguments: object) -> None:
     """Call sched_setattr (``index`` 0) or sched_getattr (1); OSError on failure."""
     numbers = _SYSCALLS.get(platform.machine())
     if numbers is None:
         raise OSError(f'no sched_setattr number for machine {platform.machine()!r}')
-    libc = ctypes.CDLL(None, use_errno=True)
-    if libc.syscall(numbers[index], *arguments) != 0:
+    if _libc().syscall(numbers[index], *arguments) != 0:
         error = ctypes.get_errno()
         raise OSError(error, os.strerror(error))
 
