@@ -111,14 +111,7 @@ def cpu_seconds(pid: int) -> float:
     """Return the run time (s) of every live thread of ``pid`` summed, from
     /proc/<pid>/task/*/schedstat: nanoseconds, where /proc/<pid>/stat has 10 ms ticks (a 4 s
     window's CPU in steps of 0.25 % of a core). A thread that ended is no longer counted."""
-    total_ns = 0
-    for task in os.listdir(f'/proc/{pid}/task'):
-        try:
-            with open(f'/proc/{pid}/task/{task}/schedstat') as schedstat:
-                total_ns += int(schedstat.read().split()[0])
-        except FileNotFoundError:
-            continue  # the thread ended meanwhile
-    return total_ns * 1e-9
+    return sum(run_ns for _, run_ns in thread_run_ns(pid).values()) * 1e-9
 
 
 def thread_run_ns(pid: int) -> Dict[int, Tuple[str, int]]:

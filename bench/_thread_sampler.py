@@ -42,16 +42,11 @@ TICK_NS = 1_000_000_000 // os.sysconf('SC_CLK_TCK')
 
 def _open_cpuidle(cpus: int) -> List[List[int]]:
     """Per CPU, open fds of its idle states' ``time`` files (none without cpuidle)."""
-    fds = []
-    for cpu in range(cpus):
-        states = sorted(Path(f'/sys/devices/system/cpu/cpu{cpu}/cpuidle').glob('state*/time'))
-        if not states:
-            for opened in fds:
-                for fd in opened:
-                    os.close(fd)
-            return []
-        fds.append([os.open(state, os.O_RDONLY) for state in states])
-    return fds
+    states = [sorted(Path(f'/sys/devices/system/cpu/cpu{cpu}/cpuidle').glob('state*/time'))
+              for cpu in range(cpus)]
+    if not all(states):
+        return []
+    return [[os.open(state, os.O_RDONLY) for state in cpu_states] for cpu_states in states]
 
 
 def cpu_times_ns(text: bytes) -> List[List[int]]:

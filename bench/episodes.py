@@ -54,14 +54,21 @@ def spells(stamps: np.ndarray, latency_ms: np.ndarray, over_ms: float,
     return list(zip(firsts.tolist(), lasts.tolist()))
 
 
-def percent_between(times_ns: np.ndarray, cumulative_ns: np.ndarray, start_ns: int,
-                    end_ns: int) -> np.ndarray:
-    """% of one core each column of ``cumulative_ns`` grew by between the samples
-    bracketing ``start_ns`` .. ``end_ns``."""
+def bracket(times_ns: np.ndarray, start_ns: int, end_ns: int) -> Tuple[int, int]:
+    """Indices of the samples bracketing ``start_ns`` .. ``end_ns`` (at least one apart when
+    there are two samples)."""
     first = max(0, int(np.searchsorted(times_ns, start_ns, side='right')) - 1)
     last = min(times_ns.size - 1, int(np.searchsorted(times_ns, end_ns, side='left')))
     if last <= first:
         last = min(times_ns.size - 1, first + 1)
+    return first, last
+
+
+def percent_between(times_ns: np.ndarray, cumulative_ns: np.ndarray, start_ns: int,
+                    end_ns: int) -> np.ndarray:
+    """% of one core each column of ``cumulative_ns`` grew by between the samples
+    bracketing ``start_ns`` .. ``end_ns``."""
+    first, last = bracket(times_ns, start_ns, end_ns)
     span = max(1, int(times_ns[last] - times_ns[first]))
     return 100.0 * (cumulative_ns[last] - cumulative_ns[first]) / span
 
@@ -86,10 +93,11 @@ class SpellFigures(NamedTuple):
     cpu_window: Optional[Dict[str, float]]
 
 
-def cpu_figures(threads: np.lib.npyio.NpzFile, start_ns: int,
-                end_ns: int) -> Optional[Dict[str, float]]:
+def cpu_figures(threads: np.lib.npyio.NpzFile, start_ns: int, end_ns: int,
+                ran: np.ndarray) -> Optional[Dict[str, float]]:
     """Idle and unsampled busy time (% of a core) and steal (ms) of all CPUs together
-    between the samples bracketing ``start_ns`` .. ``end_ns``; None for samples without
+    between the samples bracketing ``start_ns`` .. ``end_ns``, where the sampled threads
+    ran ``ran`` (% of a core each, :func:`percent_between`); None for samples without
     ``cpu_ns``."""
     if 'cpu_ns' not in threads.files:
         return None
@@ -99,11 +107,9 @@ def cpu_figures(threads: np.lib.npyio.NpzFile, start_ns: int,
     idle_ns = (threads['cpuidle_ns'].sum(axis=1) if 'cpuidle_ns' in threads.files
                else totals[:, fields.index('idle')])
     idle = float(percent_between(t_ns, idle_ns, start_ns, end_ns))
-    ran = float(percent_between(t_ns, threads['run_ns'], start_ns, end_ns).sum())
     steal_ns = totals[:, fields.index('steal')]
-    first = max(0, int(np.searchsorted(t_ns, start_ns, side='right')) - 1)
-    last = min(t_ns.size - 1, max(first + 1, int(np.searchsorted(t_ns, end_ns, side='left'))))
-    return {'idle': idle, 'unsampled': 100.0 * cpus - idle - ran,
+    first, last = bracket(t_ns, start_ns, end_ns)
+    return {'idle': idle, 'unsampled': 100.0 * cpus - idle - float(ran.sum()),
             'steal': float(steal_ns[last] - steal_ns[first]) * 1e-6}
 
 
@@ -128,13 +134,14 @@ def measure_spell(stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int, 
     sampler_late = ((np.diff(inside).max() - int(threads['period_ns'])) * 1e-6
                     if inside.size > 1 else 0.0)
     window = (int(t_ns[0]), int(stamps[-1]))
+    run_spell = percent_between(t_ns, threads['run_ns'], start_ns, end_ns)
+    run_window = percent_between(t_ns, threads['run_ns'], *window)
     return SpellFigures(
-        *common, sampler_late,
-        percent_between(t_ns, threads['run_ns'], start_ns, end_ns),
-        percent_between(t_ns, threads['wait_ns'], start_ns, end_ns),
-        percent_between(t_ns, threads['run_ns'], *window),
+        *common, sampler_late, run_spell,
+        percent_between(t_ns, threads['wait_ns'], start_ns, end_ns), run_window,
         percent_between(t_ns, threads['wait_ns'], *window),
-        cpu_figures(threads, start_ns, end_ns), cpu_figures(threads, *window))
+        cpu_figures(threads, start_ns, end_ns, run_spell),
+        cpu_figures(threads, *window, run_window))
 
 
 def describe_window(name: str, poses: Path, samples: Optional[Path],

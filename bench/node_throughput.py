@@ -530,8 +530,9 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                              'samples in DIR')
     parser.add_argument('--sample-threads', type=float, default=0.0, metavar='MS',
                         help='sample every thread\'s run and wait time of the target, '
-                             'publisher and subscriber every MS ms (bench/_thread_sampler.py; '
-                             'kept with --keep-traces; default 0 = off)')
+                             'publisher and subscriber, and every CPU\'s idle and steal time, '
+                             'every MS ms (bench/_thread_sampler.py; kept with --keep-traces; '
+                             'default 0 = off)')
     parser.add_argument('--report', type=Path, default=BENCH / 'results' / 'throughput.md')
     args = parser.parse_args(argv)
     if args.repeats < 1:
