@@ -99,6 +99,7 @@ class AttitudePropagatorNode(Node):
                                      values['torque_timeout'])
         self.cpu_scheduling: str = values['cpu_scheduling']
         self.idle_senders_above_hz: float = values['idle_senders_above_hz']
+        self.separate_cpus_above_hz: float = values['separate_cpus_above_hz']
         self.publish_rate: float = values['publish_rate']
         self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro')
         self.outputs.hardware_id = self.scene.name

@@ -46,10 +46,10 @@ import threading
 from pathlib import Path
 from typing import NamedTuple
 
-__all__ = ['BATCH_BELOW_FRACTION', 'GUARD_PERIOD', 'GuardNote', 'RATE_WINDOW_PERIODS',
-           'SENDER_THREAD_PREFIX', 'STARVED_MEAN_DELAY_NS', 'STARVED_TOTAL_DELAY_NS',
-           'SchedStat', 'SenderGuard', 'can_leave_idle_policy', 'sender_guard',
-           'read_schedstat', 'sender_thread_ids']
+__all__ = ['BATCH_BELOW_FRACTION', 'GUARD_PERIOD', 'GuardNote', 'GyroRate',
+           'RATE_WINDOW_PERIODS', 'SENDER_THREAD_PREFIX', 'STARVED_MEAN_DELAY_NS',
+           'STARVED_TOTAL_DELAY_NS', 'SchedStat', 'SenderGuard', 'TASKS', 'can_leave_idle_policy',
+           'sender_guard', 'read_schedstat', 'sender_thread_ids']
 
 #: Name prefix of Fast DDS 2.14's asynchronous sender threads.
 SENDER_THREAD_PREFIX = 'dds.asyn.'
@@ -72,7 +72,8 @@ STARVED_MEAN_DELAY_NS = 1_000_000
 #: ... and longer than this in all (one late run alone is not starvation).
 STARVED_TOTAL_DELAY_NS = 20_000_000
 
-_TASKS = Path('/proc/self/task')
+#: This process's threads.
+TASKS = Path('/proc/self/task')
 
 
 class SchedStat(NamedTuple):
@@ -92,7 +93,7 @@ def read_schedstat(path: Path) -> SchedStat | None:
     return SchedStat(run_ns, wait_ns, runs)
 
 
-def sender_thread_ids(task_folder: Path = _TASKS) -> list[int]:
+def sender_thread_ids(task_folder: Path = TASKS) -> list[int]:
     """Ids of this process's threads named :data:`SENDER_THREAD_PREFIX` ``*``."""
     ids = []
     for entry in sorted(task_folder.iterdir()):
@@ -128,6 +129,24 @@ def can_leave_idle_policy() -> bool:
     return allowed == [True]
 
 
+class GyroRate:
+    """The gyro input rate, from the gyro loop's message count looked at every
+    :data:`GUARD_PERIOD` seconds."""
+
+    def __init__(self, message_count: Callable[[], int]) -> None:
+        """``message_count()`` is the number of gyro messages handled so far."""
+        self.message_count = message_count
+        self.counts: deque[int] = deque(maxlen=RATE_WINDOW_PERIODS + 1)
+
+    def look(self) -> float | None:
+        """Take the count; messages per second over the last :data:`RATE_WINDOW_PERIODS`
+        looks (None before that many)."""
+        self.counts.append(self.message_count())
+        if len(self.counts) <= RATE_WINDOW_PERIODS:
+            return None
+        return (self.counts[-1] - self.counts[0]) / (RATE_WINDOW_PERIODS * GUARD_PERIOD)
+
+
 class GuardNote(NamedTuple):
     """A line for the node's log: a policy change (info) or a starved sender (warning)."""
 
@@ -143,31 +162,22 @@ class SenderGuard:
     """
 
     def __init__(self, thread_ids: list[int], message_count: Callable[[], int],
-                 idle_above_hz: float, task_folder: Path = _TASKS) -> None:
+                 idle_above_hz: float, task_folder: Path = TASKS) -> None:
         """Watch ``thread_ids`` (on ``SCHED_BATCH``); ``message_count()`` is the number of
         gyro messages handled so far; idle from ``idle_above_hz`` on."""
         self.thread_ids = list(thread_ids)
-        self.message_count = message_count
+        self.gyro_rate = GyroRate(message_count)
         self.idle_above_hz = idle_above_hz
         self.task_folder = task_folder
-        self.counts: deque[int] = deque(maxlen=RATE_WINDOW_PERIODS + 1)
         #: The senders are on ``SCHED_IDLE``.
         self.idle = False
         #: A sender starved: the senders stay on ``SCHED_BATCH`` for good.
         self.starved = False
         self.delays: dict[int, SchedStat | None] = {}
 
-    def rate(self) -> float | None:
-        """Gyro messages per second over the last :data:`RATE_WINDOW_PERIODS` looks (None
-        before that many)."""
-        if len(self.counts) <= RATE_WINDOW_PERIODS:
-            return None
-        return (self.counts[-1] - self.counts[0]) / (RATE_WINDOW_PERIODS * GUARD_PERIOD)
-
     def check(self) -> list[GuardNote]:
         """One look (every :data:`GUARD_PERIOD` s); a note per change made."""
-        self.counts.append(self.message_count())
-        rate = self.rate()
+        rate = self.gyro_rate.look()
         if self.starved or rate is None or not self.thread_ids:
             return []
         if not self.idle:
@@ -242,7 +252,7 @@ def _starved(before: SchedStat, now: SchedStat) -> bool:
 
 
 def sender_guard(message_count: Callable[[], int], idle_above_hz: float,
-                 task_folder: Path = _TASKS) -> tuple[SenderGuard | None, str]:
+                 task_folder: Path = TASKS) -> tuple[SenderGuard | None, str]:
     """A guard over this process's sender threads when they may go to ``SCHED_IDLE`` and
     back, and a remark for the log (``''`` when there are none: synchronous publication)."""
     thread_ids = sender_thread_ids(task_folder)

@@ -25,6 +25,7 @@ from rclpy.timer import Timer
 
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
+from rigid_body_attitude.ros.cpu_split import cpu_split, CpuSplit
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
 from rigid_body_attitude.ros.middleware import (
     apply_cpu_scheduling, CPU_SCHEDULING, use_asynchronous_publication,
@@ -32,7 +33,7 @@ from rigid_body_attitude.ros.middleware import (
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import RCLError
 from rigid_body_attitude.ros.sender_threads import (
-    GUARD_PERIOD, sender_guard, sender_thread_ids, SenderGuard)
+    GUARD_PERIOD, GuardNote, sender_guard, sender_thread_ids, SenderGuard)
 from rigid_body_attitude.ros.time_slices import (
     kernel_takes_slices, SENDER_SLICE_NS, shorten_slices)
 
@@ -122,14 +123,16 @@ def spin(node: AttitudePropagatorNode) -> None:
     def gyro_messages() -> int:
         return 0 if loop is None else loop.handled
     guard, sender_remark = _sender_rule(node, gyro_messages)
+    split, split_remark = _split_rule(node, gyro_messages)
+    guards = [rule.check for rule in (guard, split) if rule is not None]
     # Claims the gyro subscriptions and the timers before any executor spins.
-    loop = node.gyro_loop([] if guard is None else [_guard_timer(node, guard)])
+    loop = node.gyro_loop([_guard_timer(node, check) for check in guards])
     executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)
     rest = _ExecutorThread(executor, node, loop)
     try:
         rest.thread.start()
-        _apply_cpu_scheduling(node, sender_remark)
+        _apply_cpu_scheduling(node, '; '.join(filter(None, (sender_remark, split_remark))))
         loop.run()
     finally:
         rest.stop()
@@ -139,12 +142,11 @@ def spin(node: AttitudePropagatorNode) -> None:
         raise rest.failures[0]
 
 
-def _guard_timer(node: AttitudePropagatorNode, guard: SenderGuard) -> Timer:
-    """A steady-clock timer in the gyro loop's group running ``guard`` every
-    :data:`GUARD_PERIOD` seconds; the senders it moves are logged (a starved one as a
-    warning)."""
+def _guard_timer(node: AttitudePropagatorNode, guard: Callable[[], list[GuardNote]]) -> Timer:
+    """A steady-clock timer in the gyro loop's group calling ``guard`` every
+    :data:`GUARD_PERIOD` seconds; the moves it notes are logged (warnings as warnings)."""
     def check() -> None:
-        for note in guard.check():  # one call site per severity, as rclpy's logger wants
+        for note in guard():  # one call site per severity, as rclpy's logger wants
             if note.warning:
                 node.get_logger().warning(note.text)
             else:
@@ -165,6 +167,17 @@ def _sender_rule(node: AttitudePropagatorNode,
     if node.is_dynamics:
         return None, ''
     return sender_guard(gyro_messages, node.idle_senders_above_hz)
+
+
+def _split_rule(node: AttitudePropagatorNode,
+                gyro_messages: Callable[[], int]) -> tuple[CpuSplit | None, str]:
+    """With ``cpu_scheduling`` ``batch`` and ``separate_cpus_above_hz`` set, in a gyro scene:
+    the rule keeping the gyro loop (this thread) and the sender threads on different CPUs
+    while the gyro rate is high (:mod:`~.cpu_split`), and the remark for the start-up line."""
+    if (not CPU_SCHEDULING[node.cpu_scheduling].sender_rule
+            or node.separate_cpus_above_hz <= 0.0 or node.is_dynamics):
+        return None, ''
+    return cpu_split(threading.get_native_id(), gyro_messages, node.separate_cpus_above_hz)
 
 
 def _apply_cpu_scheduling(node: AttitudePropagatorNode, sender_remark: str) -> None:
