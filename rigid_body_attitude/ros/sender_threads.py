@@ -139,9 +139,13 @@ class GyroRate:
         self.counts: deque[int] = deque(maxlen=RATE_WINDOW_PERIODS + 1)
 
     def look(self) -> float | None:
-        """Take the count; messages per second over the last :data:`RATE_WINDOW_PERIODS`
-        looks (None before that many)."""
+        """Take the count; the :meth:`rate` with it."""
         self.counts.append(self.message_count())
+        return self.rate()
+
+    def rate(self) -> float | None:
+        """Gyro messages per second over the last :data:`RATE_WINDOW_PERIODS` looks (None
+        before that many)."""
         if len(self.counts) <= RATE_WINDOW_PERIODS:
             return None
         return (self.counts[-1] - self.counts[0]) / (RATE_WINDOW_PERIODS * GUARD_PERIOD)

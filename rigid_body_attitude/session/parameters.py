@@ -156,7 +156,7 @@ PARAMETERS: tuple[Parameter, ...] = (
               'sender threads on SCHED_IDLE instead of giving them short time slices; back on '
               'SCHED_BATCH below 2/3 of it, or for good if starved (0 = never)', 0.0, 1.0e9,
               node_only=True),
-    Parameter('separate_cpus_above_hz', float, 8000.0,
+    Parameter('separate_cpus_above_hz', float, 12000.0,
               'Hz: gyro input rate (over 0.5 s) from which cpu_scheduling batch keeps the gyro '
               'loop thread on one CPU and Fast DDS\'s sender threads on the others; every '
               'thread back on every CPU below 2/3 of it (0 = never)', 0.0, 1.0e9,

@@ -10,6 +10,7 @@ node.
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 import subprocess
 import sys
@@ -306,15 +307,19 @@ def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(
         set(senders) if shortened else set())
     if not guarded:
         assert 'Fast DDS sender threads' not in lines[-1]
-    elif guarded == 'slices' and shortened:
+    else:  # and the split of the gyro loop from the senders (test_cpu_split)
+        assert re.search(r'; gyro loop on CPU \d+ and Fast DDS sender threads on CPUs? '
+                         r'[\d,-]+ while gyro input is above 12000 Hz; serving$',
+                         lines[-1].rstrip()), lines[-1]
+    if guarded == 'slices' and shortened:
         assert (f'Fast DDS sender threads {senders} on SCHED_BATCH with 0.1 ms time slices; '
-                f'serving') in lines[-1]
+                f'gyro loop') in lines[-1]
     elif guarded == 'slices':
-        assert 'has no custom time slices; see idle_senders_above_hz); serving' in lines[-1]
-    elif can_leave_idle_policy():
+        assert 'has no custom time slices; see idle_senders_above_hz); gyro loop' in lines[-1]
+    elif guarded and can_leave_idle_policy():
         assert (f'Fast DDS sender threads {senders} on SCHED_IDLE while gyro input is above '
-                f'12000 Hz, else on SCHED_BATCH; serving') in lines[-1]
-    else:
+                f'12000 Hz, else on SCHED_BATCH; gyro loop') in lines[-1]
+    elif guarded:
         assert 'Fast DDS sender threads kept on SCHED_BATCH (leaving SCHED_IDLE' in lines[-1]
     code, stderr = stop_with_sigint(process)
     stderr = ''.join(lines) + stderr

@@ -129,9 +129,9 @@ def test_the_senders_follow_the_gyro_rate_with_hysteresis(tmp_path, batch_thread
     guard = SenderGuard([batch_thread], count, 1000.0, tmp_path)
     # No rate before a whole window, then below the threshold: nothing moves.
     assert _looks(guard, count, 990.0, RATE_WINDOW_PERIODS) == []
-    assert guard.rate() is None
+    assert guard.gyro_rate.rate() is None
     assert _looks(guard, count, 990.0, 1) == []
-    assert guard.rate() == pytest.approx(990.0)
+    assert guard.gyro_rate.rate() == pytest.approx(990.0)
     assert os.sched_getscheduler(batch_thread) == os.SCHED_BATCH
     guard, count = _idle_guard(tmp_path, batch_thread)
     assert _looks(guard, count, 670.0, 30) == []  # above 2/3 of the threshold: stays idle
