@@ -155,23 +155,27 @@ that CPU. In two rounds of three interleaved windows that node had pooled p99 0.
 to 15 kHz and 0.57 / 1.13 ms at 20 kHz, against the fast relay's 0.23–1.02 and 1.62 / 1.66 ms;
 beside one process busy 100 ms in every second its p99 at 15 / 20 kHz was 3.27 / 3.08 ms, the
 relay's 4.80 / 3.72 ms. `idle_senders_above_hz` (default 0, never) brings the idle rule back,
-for kernels without custom slices. The sweeps above are with the slices, and with every
-thread of the three processes and every CPU's idle and steal time sampled every 5 ms
-(`--sample-threads 5`). They met item 5 in all five: zero loss, no node window over 1 ms up to
-5 kHz, ahead of the fast relay at 10–20 kHz in every row, the 1 kHz CPU below the relay's in
-every sweep. The same code met it in 7 of the fifteen sweeps before them (session 9's five in
-`bench/results/node/slices/sweeps`, session 10's ten in `sweeps_sampled` and `sweeps_reader`:
-the node's pooled p99 up to 5 kHz over 1 ms in 2 of 75 rows, behind the relay at 10–20 kHz in 5
-of 45, its 1 kHz CPU above the relay's in 1 of 15), so 12 of twenty. The samples show what the
-remaining slow spells are made of (`bench/NOTES.md`, sections 15 and 16): the guest accounted
-no steal time to any of them (30–40 ms per sweep of 240 s, none in a node spell); in
-some the gyro loop thread waits for a CPU, in some the CPUs do work no sampled thread is
-charged for, and in the largest ones of this set the sender thread spins as in session 6 while
-the loop waits on its CPU and the other CPU is partly idle. Letting the loop thread preempt
-(`SCHED_OTHER`, with or without a 0.1 ms slice) gained nothing: pooled p99 0.56–1.72 ms at 10–20
-kHz against 0.56–1.01 ms for the node as shipped, in the same run. Nor is it the bench's
-measuring end: measured up to the subscriber's Fast DDS reader, before its own thread wakes, the
-node's pooled p99s were 0.03–0.15 ms lower and no verdict changed."""
+for kernels without custom slices. Session 11's sweeps, with the slices (`bench/NOTES.md`,
+section 16; `bench/results/node/sweeps_steal`), met item 5 in all five, and the same code 7 of
+the fifteen before them (`slices/sweeps`, `sweeps_sampled`, `sweeps_reader`), so 12 of twenty:
+in the remaining slow spells the gyro loop thread waited for a CPU, the CPUs did work no
+sampled thread was charged for (no steal time: 30–40 ms per sweep of 240 s, none in a node
+spell), or, in the largest, the sender spun on one CPU while the loop waited for that CPU and
+the other was partly idle. Session 12 keeps them apart (`bench/NOTES.md`, section 17): while
+gyro input is at `separate_cpus_above_hz` (12 kHz) or more, the loop thread runs on one CPU and
+the sender threads on the others (`rigid_body_attitude/ros/cpu_split.py`). Over 16 interleaved
+windows a rate against the node without it, the median window p99 at 20 kHz was 0.82 against
+1.11 ms (windows over 1 ms: 6 against 10), for 80.7 against 72.4 % of a core; at 15 kHz even
+(0.58 / 0.57 ms), at 10 kHz no better (0.50 / 0.47 ms), hence 12 kHz. The sweeps above are of
+that node, with every thread of the three processes and every CPU's idle and steal time
+sampled every 5 ms (`--sample-threads 5`). They met item 5 in all five: zero loss, the node's
+pooled p99 at most 0.56 ms up to 5 kHz and below the fast relay's at 10–20 kHz in every row
+(0.68–1.17 ms at 20 kHz), its 1 kHz CPU below the relay's in every sweep. The sender's spin is
+gone from the spells at 15–20 kHz (1 of the node's 159 spells of 20 slow poses or more there);
+the largest left are the pinned loop waiting for its CPU. Letting the loop thread preempt
+(`SCHED_OTHER`, with or without a 0.1 ms slice) gained nothing (session 10). Nor is it the
+bench's measuring end: measured up to the subscriber's Fast DDS reader, before its own thread
+wakes, the node's pooled p99s were 0.03–0.15 ms lower and no verdict changed."""
 
 
 #: What limits the dynamics scenes' node CPU (issue 13, item 2).

@@ -42,7 +42,9 @@ And for the scheduler:
   asynchronous sender threads can busy-wait on a writer's mutex for up to a scheduler tick, so
   with ``batch`` they get the kernel's shortest time slice (:mod:`~.time_slices`, Linux 6.12
   and later), or, with ``idle_senders_above_hz`` set, move to SCHED_IDLE while the gyro rate
-  is above it, where the process may undo that (:mod:`~.sender_threads`).
+  is above it, where the process may undo that (:mod:`~.sender_threads`). Above
+  ``separate_cpus_above_hz`` of gyro input they also run on other CPUs than the gyro loop
+  (:mod:`~.cpu_split`).
 
 Measured on this project's machine at 1 kHz (``bench/fast_relay.py``): Fast DDS defaults 12.5 %
 of a core; with the NACK suppression 9.8–10.3 %; with it and SCHED_BATCH 8.8–9.2 %, p99
