@@ -54,6 +54,16 @@ def spells(stamps: np.ndarray, latency_ms: np.ndarray, over_ms: float,
     return list(zip(firsts.tolist(), lasts.tolist()))
 
 
+#: A window's ``threads.npz`` (``bench/_thread_sampler.py``), every array read once.
+Samples = Dict[str, np.ndarray]
+
+
+def load_samples(path: Path) -> Samples:
+    """The arrays of ``path`` (an ``NpzFile`` decompresses an array on every access)."""
+    with np.load(path) as archive:
+        return {key: archive[key] for key in archive.files}
+
+
 def bracket(times_ns: np.ndarray, start_ns: int, end_ns: int) -> Tuple[int, int]:
     """Indices of the samples bracketing ``start_ns`` .. ``end_ns`` (at least one apart when
     there are two samples)."""
@@ -93,18 +103,18 @@ class SpellFigures(NamedTuple):
     cpu_window: Optional[Dict[str, float]]
 
 
-def cpu_figures(threads: np.lib.npyio.NpzFile, start_ns: int, end_ns: int,
+def cpu_figures(threads: Samples, start_ns: int, end_ns: int,
                 ran: np.ndarray) -> Optional[Dict[str, float]]:
     """Idle and unsampled busy time (% of a core) and steal (ms) of all CPUs together
     between the samples bracketing ``start_ns`` .. ``end_ns``, where the sampled threads
     ran ``ran`` (% of a core each, :func:`percent_between`); None for samples without
     ``cpu_ns``."""
-    if 'cpu_ns' not in threads.files:
+    if 'cpu_ns' not in threads:
         return None
     t_ns, fields = threads['t_ns'], list(threads['cpu_fields'])
     totals = threads['cpu_ns'].sum(axis=1)  # samples × fields
     cpus = threads['cpu_ns'].shape[1]
-    idle_ns = (threads['cpuidle_ns'].sum(axis=1) if 'cpuidle_ns' in threads.files
+    idle_ns = (threads['cpuidle_ns'].sum(axis=1) if 'cpuidle_ns' in threads
                else totals[:, fields.index('idle')])
     idle = float(percent_between(t_ns, idle_ns, start_ns, end_ns))
     steal_ns = totals[:, fields.index('steal')]
@@ -114,7 +124,7 @@ def cpu_figures(threads: np.lib.npyio.NpzFile, start_ns: int, end_ns: int,
 
 
 def measure_spell(stamps: np.ndarray, latency_ms: np.ndarray, spell: Tuple[int, int],
-                  over_ms: float, threads: Optional[np.lib.npyio.NpzFile]) -> SpellFigures:
+                  over_ms: float, threads: Optional[Samples]) -> SpellFigures:
     """The figures of one spell: the publisher's lateness is its largest stamp gap in the
     spell minus the window's median gap; the window runs from the first thread sample to the
     last publish."""
@@ -151,7 +161,7 @@ def describe_window(name: str, poses: Path, samples: Optional[Path],
     stamps, arrivals = data[:data.size // 2], data[data.size // 2:]
     order = np.argsort(stamps, kind='stable')
     stamps, arrivals = stamps[order], arrivals[order]
-    threads = np.load(samples) if samples is not None and samples.exists() else None
+    threads = load_samples(samples) if samples is not None and samples.exists() else None
     if threads is not None:  # the sampled span: the measured window and the drain
         inside = (stamps >= threads['t_ns'][0]) & (stamps <= threads['t_ns'][-1])
         stamps, arrivals = stamps[inside], arrivals[inside]
@@ -172,7 +182,7 @@ def describe_window(name: str, poses: Path, samples: Optional[Path],
 
 
 def describe_spell(figures: SpellFigures, origin: int,
-                   threads: Optional[np.lib.npyio.NpzFile]) -> List[str]:
+                   threads: Optional[Samples]) -> List[str]:
     """The lines for one spell (:func:`describe_window`)."""
     head = (f'  at {(figures.start_ns - origin) * 1e-9:6.3f} s, '
             f'{(figures.last_stamp_ns - figures.start_ns) * 1e-6:7.1f} ms, {figures.poses} '
@@ -203,7 +213,7 @@ TABLE_HEAD = ('| window | at (s) | ms | slow | worst (ms) | pub. late | sampler 
 
 
 def table_row(name: str, figures: SpellFigures, origin: int,
-              threads: np.lib.npyio.NpzFile) -> str:
+              threads: Samples) -> str:
     """One spell as a table row (``--table``): thread figures in % of a core, the spell's
     then the window's; ``main`` is the target's first thread, ``sender`` its ``dds.asyn``
     threads, ``all`` every sampled thread of the three processes."""

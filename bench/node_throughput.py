@@ -260,18 +260,16 @@ def counted_poses(session: Session, subscriber: Process, end: dict, drain: float
     return stamps[counted], received_at[counted], reader_at[counted]
 
 
-def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', end: dict,
-                     latency_ms: Optional['np.ndarray'] = None) -> dict:
-    """Counts and latencies of the counted poses (:func:`counted_poses`); ``latency_ms``:
-    their latencies when the caller has them already.
+def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', latency_ms: 'np.ndarray',
+                     end: dict) -> dict:
+    """Counts and latencies (``latency_ms``, :func:`latencies_ms`) of the counted poses
+    (:func:`counted_poses`).
 
     ``latency_max_at_s``: when the slowest counted pose was stamped, in seconds after the
     window's first stamp; ``receive_gap_max_ms``: the longest time without a counted pose
     arriving (the node sent nothing, or nothing got through).
     """
     import numpy as np
-    if latency_ms is None:
-        latency_ms = (arrivals - stamps) * 1e-6
     received = int(np.unique(stamps).size)
 
     def percentile(q: float) -> Optional[float]:
@@ -285,11 +283,16 @@ def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', end: dict,
             'receive_gap_max_ms': gap_ms}
 
 
+def latencies_ms(stamps: 'np.ndarray', times: 'np.ndarray') -> 'np.ndarray':
+    """Milliseconds from each pose's stamp to ``times`` (its arrival, or its reader's)."""
+    return (times - stamps) * 1e-6
+
+
 def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> dict:
     """Stop the subscriber; count the poses of the window received in time, and latencies
     (:func:`counted_poses`, :func:`delivery_summary`)."""
     stamps, arrivals, _ = counted_poses(session, subscriber, end, drain)
-    return delivery_summary(stamps, arrivals, end)
+    return delivery_summary(stamps, arrivals, latencies_ms(stamps, arrivals), end)
 
 
 def measure(session: Session, target_argv: List[str], rate: float,
@@ -317,9 +320,9 @@ def measure(session: Session, target_argv: List[str], rate: float,
     other_cores = other_load_ticks(machine0, machine1, ours) / CLOCK_TICKS / window_s
     stamps, arrivals, reader_at = counted_poses(session, processes['subscriber'], end,
                                                 args.drain)
-    latency_ms, reader_ms = (arrivals - stamps) * 1e-6, (reader_at - stamps) * 1e-6
+    latency_ms, reader_ms = latencies_ms(stamps, arrivals), latencies_ms(stamps, reader_at)
     return {
-        'rate_hz': rate, **delivery_summary(stamps, arrivals, end, latency_ms),
+        'rate_hz': rate, **delivery_summary(stamps, arrivals, latency_ms, end),
         **reader_percentiles(reader_ms),
         '_latency_ms': latency_ms, '_reader_latency_ms': reader_ms,
         'publisher_hz': end['achieved_hz'], 'publisher_max_lag_ms': end['max_lag_ms'],

@@ -132,7 +132,7 @@ def spin(node: AttitudePropagatorNode) -> None:
     rest = _ExecutorThread(executor, node, loop)
     try:
         rest.thread.start()
-        _apply_cpu_scheduling(node, '; '.join(filter(None, (sender_remark, split_remark))))
+        _apply_cpu_scheduling(node, (sender_remark, split_remark))
         loop.run()
     finally:
         rest.stop()
@@ -180,16 +180,16 @@ def _split_rule(node: AttitudePropagatorNode,
     return cpu_split(threading.get_native_id(), gyro_messages, node.separate_cpus_above_hz)
 
 
-def _apply_cpu_scheduling(node: AttitudePropagatorNode, sender_remark: str) -> None:
+def _apply_cpu_scheduling(node: AttitudePropagatorNode, remarks: tuple[str, ...]) -> None:
     """Give every thread of the process the node's ``cpu_scheduling`` policy; log it with
-    ``sender_remark``."""
+    the ``remarks`` that are not empty (the sender rules')."""
     outcome = apply_cpu_scheduling(node.cpu_scheduling)
     logger = node.get_logger()
     if outcome.refused:
         logger.warning(
             f'cpu_scheduling {node.cpu_scheduling!r} refused by the system '
             f'({outcome.refused}); the other threads keep their policy')
-    remark = f'; {sender_remark}' if sender_remark else ''
+    remark = ''.join(f'; {text}' for text in remarks if text)
     logger.info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} threads changed'
                 f'{remark}; serving')
 
