@@ -4,7 +4,7 @@ Everything here is used by the helper processes (publisher, subscriber, relays) 
 driver, ``bench/node_throughput.py``. The CDR helpers encode and decode the few fields the
 benchmark needs straight from the serialized bytes, so the measuring processes never build
 Python message objects on their hot path (building an ``Imu`` costs ~7 µs, deserializing one
-~20 µs; see ``bench/NOTES.md``).
+~20 µs).
 
 CDR (XCDR1, little endian) layouts used here, offsets counted from the start of the buffer,
 which begins with the 4-byte encapsulation header ``00 01 00 00``:
@@ -28,7 +28,8 @@ from typing import Dict, Optional, Set, Tuple
 IMU_TOPIC = 'imu'
 POSE_TOPIC = 'pose'
 
-#: History depth for the benchmark QoS (RELIABLE, KEEP_LAST): a deep queue, as the issue asks.
+#: History depth for the benchmark QoS (RELIABLE, KEEP_LAST): a deep queue, so nothing is lost
+#: to the queue itself.
 #: ``node_throughput.py --depth`` sets it for every helper process through this variable.
 QUEUE_DEPTH = int(os.environ.get('BENCH_QUEUE_DEPTH', '10000'))
 
@@ -79,12 +80,6 @@ def imu_cdr(omega_body: Tuple[float, float, float], frame_id: str = 'imu') -> by
     orientation_covariance = struct.pack('<9d', -1.0, *([0.0] * 8))
     body = (orientation + orientation_covariance + _VEC3.pack(*omega_body)
             + bytes(9 * 8) + _VEC3.pack(0.0, 0.0, 0.0) + bytes(9 * 8))
-    return bytearray(header_cdr(frame_id) + body)
-
-
-def pose_cdr(frame_id: str = 'world') -> bytearray:
-    """Return a serialized ``geometry_msgs/PoseStamped`` with zero stamp, identity pose."""
-    body = struct.pack('<7d', 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
     return bytearray(header_cdr(frame_id) + body)
 
 
@@ -146,7 +141,7 @@ def cpu_by_thread_name(before: Dict[int, Tuple[str, int]], after: Dict[int, Tupl
 
 
 def process_ticks() -> Dict[int, int]:
-    """Return {pid: utime + stime + cutime + cstime} of every process now (/proc/<pid>/stat).
+    """Return {pid: utime + stime + cutime + cstime} of every process at the call (/proc/<pid>/stat).
 
     A process's own times are its threads' scheduler run times (exact, not tick samples);
     cutime + cstime add the children it reaped."""

@@ -9,16 +9,12 @@ copies the gyro stamp into the pose, so ``receive - stamp`` is the end-to-end la
 
 Prints ``{"event": "matched"}`` once a publisher of ``pose`` is matched. On SIGTERM or SIGINT
 it writes ``--out``: two little-endian int64 arrays of equal length, the stamps then the
-receive times (ns), and exits. With ``--reader-out`` it also writes there, one per pose, the
-time Fast DDS's reader received it (the message info's ``received_timestamp``, same clock):
-set by the subscriber's receive thread before this process's Python thread wakes, so
-``reader time - stamp`` leaves out this process's own wake-up delay.
+receive times (ns), and exits.
 """
 
 import argparse
 from array import array
 import json
-import os
 import signal
 import sys
 import time
@@ -37,43 +33,32 @@ def _request_stop(signum, frame) -> None:
     _stop_requested = True
 
 
-def _record(subscription, context, stamps: array, receive_times: array,
-            reader_times: array) -> None:
-    """Take every pose until a stop is requested, appending stamps, receive times and the
-    reader's receive times."""
+def _record(subscription, context, stamps: array, receive_times: array) -> None:
+    """Take every pose until a stop is requested, appending stamps and receive times."""
     take = subscription.handle.take_message
     handle = subscription.handle
     wall_ns = time.time_ns
     wait_set = _rclpy.WaitSet(1, 0, 0, 0, 0, 0, context.handle)
     matched = False
-    wakes = array('q') if os.environ.get('BENCH_WAKE_LOG') else None
     while not _stop_requested:
         wait_set.clear_entities()
         wait_set.add_subscription(handle)
         wait_set.wait(50_000_000)
-        if wakes is not None:
-            wakes.append(wall_ns())
         taken = take(PoseStamped, True)
         while taken is not None:
             receive_times.append(wall_ns())
             stamps.append(stamp_ns(taken[0]))
-            reader_times.append(taken[1]['received_timestamp'])
             taken = take(PoseStamped, True)
         if not matched and handle.get_publisher_count() > 0:
             matched = True
             print(json.dumps({'event': 'matched'}), flush=True)
     wait_set.destroy_when_not_in_use()
-    if wakes is not None:
-        with open(os.environ['BENCH_WAKE_LOG'] + str(os.getpid()), 'wb') as out:
-            wakes.tofile(out)
 
 
 def main() -> int:
     """Record poses until SIGTERM/SIGINT, then write them to ``--out``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--out', required=True, help='file for the recorded arrays')
-    parser.add_argument('--reader-out', default=None,
-                        help='file for the reader\'s receive times (ns), one per pose')
     args, ros_args = parser.parse_known_args()
     signal.signal(signal.SIGTERM, _request_stop)
     signal.signal(signal.SIGINT, _request_stop)
@@ -81,16 +66,13 @@ def main() -> int:
     node = rclpy.create_node('bench_pose_subscriber')
     subscription = node.create_subscription(PoseStamped, POSE_TOPIC, lambda message: None,
                                             reliable_qos(), raw=True)
-    stamps, receive_times, reader_times = array('q'), array('q'), array('q')
+    stamps, receive_times = array('q'), array('q')
     try:
-        _record(subscription, node.context, stamps, receive_times, reader_times)
+        _record(subscription, node.context, stamps, receive_times)
     finally:
         with open(args.out, 'wb') as out:
             stamps.tofile(out)
             receive_times.tofile(out)
-        if args.reader_out:
-            with open(args.reader_out, 'wb') as out:
-                reader_times.tofile(out)
         node.destroy_node()
         rclpy.try_shutdown()
     return 0

@@ -3,8 +3,8 @@
 **Torque-free** (``TorqueFreeBatch``):
 A Monte-Carlo dispersion (per-body inertia tensors with random principal axes, random
 attitudes and rates) of ``--bodies`` bodies (default 10⁵) is advanced ``--steps`` RK4 steps of
-1 ms per repetition; the best of ``--repeats`` repetitions gives body-steps per second (the
-issue asks for ≥ 10⁷ at N = 10⁵). The same run checks ``--check`` bodies, spread over the
+1 ms per repetition; the best of ``--repeats`` repetitions gives body-steps per second
+(target ≥ 10⁷ at N = 10⁵). The same run checks ``--check`` bodies, spread over the
 batch, against the single-body ``rk4`` integrator (``test/core/test_batch.py`` does the same on a
 small dispersion): every component within 1e-12, or exit 1. ``--bodies`` takes a list, so the
 scaling with N shows too.
@@ -13,7 +13,7 @@ scaling with N shows too.
 viscous damping, 1 ms RK4 steps, each body with its own attitude, rate and damping
 coefficients; once with the scene's (diagonal) inertia for every body and once with a
 dispersed full inertia tensor per body (its products read nine entries per body instead of
-three numbers shared by every body). The issue asks for ≥ 3·10⁶ body-steps/s at N = 10⁵.
+three numbers shared by every body). Target: ≥ 3·10⁶ body-steps/s at N = 10⁵.
 ``--check`` bodies are compared with the single-body ``DynamicsPropagator`` of the same scene
 and parameters (every component within 1e-12, or exit 1).
 

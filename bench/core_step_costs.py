@@ -53,7 +53,7 @@ from rigid_body_attitude.core.integrators import (  # noqa: E402
     dynamics_integrator, strapdown_method)
 from rigid_body_attitude.core.integrators.base import SimpleBodyModel  # noqa: E402
 
-#: The issue's targets [µs per step] and the required speed-up over every baseline.
+#: Targets [µs per step] and the required speed-up over every baseline.
 TARGET_STRAPDOWN_US = 3.0
 TARGET_RK4_US = 20.0
 TARGET_SPEEDUP = 10.0

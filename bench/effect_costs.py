@@ -3,8 +3,8 @@ no, one and three effects, in one run.
 
 * **Per evaluation** [µs]: the plain-float method the integrators call (``torque``, ``rotor``,
   ``force``; ``corrected_rate`` for the gyro corrections, which take arrays) against the same
-  effect through its array API (``torque_body`` etc.: a NumPy round trip per call, what every
-  evaluation cost before issue 13). ``timeit``, best of ``--repeats``.
+  effect through its array API (``torque_body`` etc.: a NumPy round trip per call).
+  ``timeit``, best of ``--repeats``.
 * **Per step** [µs]: ``DynamicsPropagator.advance_to`` over ``--steps`` steps of 1 ms (in
   calls of 20 steps, a 50 Hz tick) on a 1/2/3 kg m² body at 1 rad/s, for every integrator that
   takes torques, with no effect, with gravity gradient, and with gravity gradient, viscous

@@ -1,35 +1,19 @@
-"""Prototype fast relay: the job of ``bench/relay.py`` done the fastest ways rclpy 7.1 allows.
+"""Fast relay: the job of ``bench/relay.py`` done the fastest way rclpy 7.1 allows.
 
 ``imu`` (sensor_msgs/Imu) in, ``pose`` (geometry_msgs/PoseStamped, stamp = the gyro stamp) out,
 plus optional extra outputs (``orientation`` as geometry_msgs/QuaternionStamped, ``imu_data``
-as sensor_msgs/Imu with the orientation filled in) to price each extra publisher. ``--mode``
-picks the technique:
+as sensor_msgs/Imu with the orientation filled in) to price each extra publisher. No physics:
+it is the yardstick of the middleware's own cost, and the node's gyro path works the same way.
 
-``waitset`` (default, the recipe in ``bench/NOTES.md``)
-    The gyro subscription is ``raw=True`` and sits in a callback group no executor runs. The
-    main thread waits on it with one reused ``_rclpy.WaitSet`` and, per wake-up, takes *every*
-    queued message (``subscription.handle.take_message(Imu, True)`` until None), decodes the
-    CDR bytes with ``struct`` and publishes pre-laid-out CDR bytes (``publisher.publish(bytes)``
-    is public API). A ``SingleThreadedExecutor`` in a daemon thread serves everything else the
-    node has (parameter services, timers); it sleeps in ``rcl_wait`` and costs nothing per
-    gyro message.
-``waitset-one``
-    The same loop taking one message per wake-up (isolates the gain of draining).
-``waitset-obj``
-    The same loop taking and publishing Python message objects (isolates the serialization
-    cost from the executor cost).
-``ste-raw``
-    ``SingleThreadedExecutor`` with a ``raw=True`` subscription and bytes publishing.
-``ste-drain``
-    ``SingleThreadedExecutor``; the raw callback handles its message and then drains the rest of
-    the queue with ``take_message`` (public API only).
-``events`` / ``events-raw`` / ``events-drain``
-    ``rclpy.experimental.EventsExecutor`` (C++ executor, new in 7.1) with message objects /
-    raw bytes / raw bytes and the draining callback of ``ste-drain``, spun with
-    ``spin_once(timeout_sec=1.0)`` (its ``spin()`` busy-loops here).
+The gyro subscription is ``raw=True`` and sits in a callback group no executor runs. The main
+thread waits on it with one reused ``_rclpy.WaitSet`` and, per wake-up, takes *every* queued
+message (``subscription.handle.take_message(Imu, True)`` until None), decodes the CDR bytes
+with ``struct`` and publishes pre-laid-out CDR bytes (``publisher.publish(bytes)`` is public
+API). A ``SingleThreadedExecutor`` in a daemon thread serves everything else the node has
+(parameter services); it sleeps in ``rcl_wait`` and costs nothing per gyro message.
 
-Usage: ``python bench/fast_relay.py [--mode M] [--outputs pose,orientation,imu_data]
-[--best-effort-input] [--ros-args ...]``. Findings and numbers: ``bench/NOTES.md``.
+Usage: ``python bench/fast_relay.py [--outputs pose,orientation,imu_data]
+[--best-effort-input] [--ros-args ...]``; ``bench/node_throughput.py`` measures it.
 """
 
 import argparse
@@ -50,8 +34,6 @@ from rclpy.qos import ReliabilityPolicy
 from rclpy.signals import SignalHandlerGuardCondition
 from sensor_msgs.msg import Imu
 
-MODES = ('waitset', 'waitset-one', 'waitset-obj', 'ste-raw', 'ste-drain', 'events',
-         'events-raw', 'events-drain')
 OUTPUTS = ('pose', 'orientation', 'imu_data')
 
 _QUATERNION = struct.Struct('<4d')
@@ -118,95 +100,36 @@ class RawOutputs:
                 publish(bytes(buffer))
 
 
-class ObjectOutputs:
-    """The same outputs built as Python message objects."""
-
-    def __init__(self, node: Node, outputs: List[str]) -> None:
-        """Create one publisher per requested output."""
-        self.pose = self.orientation = self.imu_data = None
-        if 'pose' in outputs:
-            self.pose = node.create_publisher(PoseStamped, POSE_TOPIC, reliable_qos())
-        if 'orientation' in outputs:
-            self.orientation = node.create_publisher(QuaternionStamped, 'orientation',
-                                                     reliable_qos())
-        if 'imu_data' in outputs:
-            self.imu_data = node.create_publisher(Imu, 'imu_data', reliable_qos())
-
-    def publish(self, imu: Imu, quaternion_xyzw) -> None:
-        """Publish every output for one input message, stamped with the input's stamp."""
-        x, y, z, w = quaternion_xyzw
-        if self.pose is not None:
-            pose = PoseStamped()
-            pose.header.stamp = imu.header.stamp
-            pose.header.frame_id = 'world'
-            q = pose.pose.orientation
-            q.x, q.y, q.z, q.w = x, y, z, w
-            self.pose.publish(pose)
-        if self.orientation is not None:
-            stamped = QuaternionStamped()
-            stamped.header.stamp = imu.header.stamp
-            stamped.header.frame_id = 'world'
-            q = stamped.quaternion
-            q.x, q.y, q.z, q.w = x, y, z, w
-            self.orientation.publish(stamped)
-        if self.imu_data is not None:
-            q = imu.orientation
-            q.x, q.y, q.z, q.w = x, y, z, w
-            self.imu_data.publish(imu)
-
-
 class FastRelay(Node):
     """The relay node: publishers, and the gyro subscription with its per-message callback.
 
     The callback is the one place a gyro message is handled, whichever loop takes it.
     """
 
-    def __init__(self, outputs: List[str], raw: bool, own_loop: bool,
-                 best_effort_input: bool = False) -> None:
-        """Create the outputs and the ``imu`` subscription (left to our loop if ``own_loop``).
+    def __init__(self, outputs: List[str], best_effort_input: bool = False) -> None:
+        """Create the outputs and the ``imu`` subscription (left to :func:`spin_draining`).
 
         The subscription is RELIABLE unless ``best_effort_input`` (which also accepts
         best-effort publishers, but lets the middleware drop samples it cannot deliver).
         """
         super().__init__('bench_fast_relay')
         self.omega_body = (0.0, 0.0, 0.0)
-        if raw:
-            self.outputs = RawOutputs(self, outputs)
-            callback = self.imu_raw_callback
-        else:
-            self.outputs = ObjectOutputs(self, outputs)
-            callback = self.imu_callback
+        self.outputs = RawOutputs(self, outputs)
         input_qos = reliable_qos()
         if best_effort_input:
             input_qos.reliability = ReliabilityPolicy.BEST_EFFORT
         self.imu_subscription = self.create_subscription(
-            Imu, IMU_TOPIC, callback, input_qos, raw=raw,
-            callback_group=NeverExecuted() if own_loop else None)
+            Imu, IMU_TOPIC, self.imu_raw_callback, input_qos, raw=True,
+            callback_group=NeverExecuted())
 
     def imu_raw_callback(self, imu_cdr: bytes) -> None:
         """Decode the gyro rate from the CDR bytes and publish the outputs."""
         self.omega_body = imu_gyro(imu_cdr)
         self.outputs.publish(imu_cdr, _IDENTITY_XYZW)
 
-    def imu_callback(self, imu: Imu) -> None:
-        """Read the gyro rate from the message object and publish the outputs."""
-        omega = imu.angular_velocity
-        self.omega_body = (omega.x, omega.y, omega.z)
-        self.outputs.publish(imu, _IDENTITY_XYZW)
 
-    def imu_drain_callback(self, imu_cdr: bytes) -> None:
-        """Handle this message, then every other message already queued (``ste-drain``)."""
-        take = self.imu_subscription.handle.take_message
-        while imu_cdr is not None:
-            self.imu_raw_callback(imu_cdr)
-            taken = take(Imu, True)
-            imu_cdr = taken[0] if taken is not None else None
-
-
-def spin_draining(node: Node, subscription, callback: Callable, drain: bool = True) -> None:
+def spin_draining(node: Node, subscription, callback: Callable) -> None:
     """Wait on ``subscription``; after each wake-up take and handle every queued message.
-
-    With ``drain`` false only one message is taken per wake-up (for comparison).
 
     One wait set (the subscription, the SIGINT guard condition and a guard condition triggered
     on context shutdown) is built once and reused; ``rcl_wait`` releases the GIL. Returns when
@@ -229,7 +152,7 @@ def spin_draining(node: Node, subscription, callback: Callable, drain: bool = Tr
             taken = take(msg_type, raw)
             while taken is not None:
                 callback(taken[0])
-                taken = take(msg_type, raw) if drain else None
+                taken = take(msg_type, raw)
     finally:
         wait_set.destroy_when_not_in_use()
         sigint_guard.destroy()
@@ -244,34 +167,15 @@ def serve_others(executor) -> None:
         pass
 
 
-def run(mode: str, outputs: List[str], best_effort_input: bool) -> None:
-    """Build the relay for ``mode`` and spin it until shutdown."""
-    raw = mode in ('waitset', 'waitset-one', 'ste-raw', 'ste-drain', 'events-raw',
-                   'events-drain')
-    own_loop = mode.startswith('waitset')
-    node = FastRelay(outputs, raw, own_loop, best_effort_input)
-    if mode in ('ste-drain', 'events-drain'):
-        node.imu_subscription.callback = node.imu_drain_callback
-    if mode.startswith('events'):
-        from rclpy.experimental import EventsExecutor
-        executor = EventsExecutor()
-    else:
-        executor = SingleThreadedExecutor()
+def run(outputs: List[str], best_effort_input: bool) -> None:
+    """Build the relay and serve it until shutdown."""
+    node = FastRelay(outputs, best_effort_input)
+    executor = SingleThreadedExecutor()
     executor.add_node(node)
     others = threading.Thread(target=serve_others, args=(executor,), daemon=True)
     try:
-        if own_loop:
-            # Everything but the gyro subscription (parameter services, timers) is served here.
-            others.start()
-            spin_draining(node, node.imu_subscription, node.imu_subscription.callback,
-                          drain=mode != 'waitset-one')
-        elif mode.startswith('events'):
-            # EventsExecutor.spin() (and spin_once() without a timeout) busy-loops in rclpy
-            # 7.1.6 here, runs no callback and ignores SIGINT; a finite timeout works.
-            while rclpy.ok():
-                executor.spin_once(timeout_sec=1.0)
-        else:
-            executor.spin()
+        others.start()  # everything but the gyro subscription (parameter services)
+        spin_draining(node, node.imu_subscription, node.imu_subscription.callback)
     finally:
         executor.shutdown()
         if others.is_alive():
@@ -280,9 +184,8 @@ def run(mode: str, outputs: List[str], best_effort_input: bool) -> None:
 
 
 def main() -> int:
-    """Parse ``--mode`` and ``--outputs`` and run the relay until SIGINT."""
+    """Parse ``--outputs`` and run the relay until SIGINT."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--mode', choices=MODES, default='waitset')
     parser.add_argument('--outputs', default='pose',
                         help=f'comma-separated subset of {",".join(OUTPUTS)}')
     parser.add_argument('--best-effort-input', action='store_true',
@@ -294,7 +197,7 @@ def main() -> int:
         parser.error(f'unknown outputs {unknown}; expected a subset of {list(OUTPUTS)}')
     rclpy.init(args=[sys.argv[0]] + ros_args)
     try:
-        run(args.mode, outputs, args.best_effort_input)
+        run(outputs, args.best_effort_input)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RuntimeError:

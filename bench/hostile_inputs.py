@@ -5,7 +5,7 @@ real rclpy publishers in this process) or given to it at start (scene files, par
 For each class the report says how many cases were tried and whether the node survived,
 counted every case in ``/diagnostics`` under the expected reason, kept every output finite, and
 ended with exactly the state the good inputs alone give. ``docs/robustness.md`` quotes the
-table this writes (``bench/results/hostile.md``)::
+table this prints (or writes to ``--out``)::
 
     .venv/bin/python bench/hostile_inputs.py            # about a minute
     .venv/bin/python bench/hostile_inputs.py --domain 91 --out /tmp/hostile.md
@@ -340,7 +340,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--domain', type=int, default=91)
     parser.add_argument('--seed', type=int, default=7)
-    parser.add_argument('--out', type=Path, default=REPO_ROOT / 'bench/results/hostile.md')
+    parser.add_argument('--out', type=Path, default=None,
+                        help='write the table here instead of printing it')
     args = parser.parse_args(argv)
     results = []
     for name, attacks, reason in gyro_classes(args.seed):
@@ -355,19 +356,22 @@ def main(argv: list[str] | None = None) -> int:
             print(f'{result.name}: {result.cases} cases: {result.outcome}', flush=True)
             results.append(result)
     write_report(results, args.out, args.seed)
-    print(f'wrote {args.out}')
     return 0 if all(not r.outcome.startswith('FAILED') for r in results) else 1
 
 
-def write_report(results: list[Result], path: Path, seed: int) -> None:
+def write_report(results: list[Result], path: Path | None, seed: int) -> None:
+    """Print the table of ``results``, or write it to ``path``."""
     lines = ['| attack class | cases | counted as | result |', '|---|---|---|---|']
     lines += [f'| {r.name} | {r.cases} | {", ".join(f"`{x}`" for x in r.reason.split("|"))} '
               f'| {r.outcome} |' for r in results]
     total = sum(r.cases for r in results)
     lines += ['', f'{total} cases in {sum(r.seconds for r in results):.0f} s '
                   f'(`bench/hostile_inputs.py --seed {seed}`).']
-    path.parent.mkdir(parents=True, exist_ok=True)
+    if path is None:
+        print('\n'.join(lines))
+        return
     path.write_text('\n'.join(lines) + '\n')
+    print(f'wrote {path}')
 
 
 if __name__ == '__main__':

@@ -1,7 +1,7 @@
 """Node throughput benchmark: loss, CPU and latency of a gyro -> pose node versus rate.
 
 For every rate and every target (the node, the bare ``SingleThreadedExecutor`` relay
-``bench/relay.py`` as the anchor, the prototype ``bench/fast_relay.py``) it starts three fresh
+``bench/relay.py`` as the anchor, the fast relay ``bench/fast_relay.py``) it starts three fresh
 processes exactly as a user would: the target executable, a subscriber of ``pose``
 (``bench/_subscriber.py``) and a publisher of ``sensor_msgs/Imu`` on ``imu``
 (``bench/_publisher.py``, RELIABLE, KEEP_LAST ``--depth``). Targets alternate within each rate so
@@ -14,8 +14,6 @@ background load on the shared machine hits them alike. Per run it reports:
 * CPU: the target's run time over the window (all threads, /proc/<pid>/task/*/schedstat, in
   ns), in % of one core;
 * latency p50 / p99: receive wall time minus pose stamp (= the gyro stamp = publish wall time);
-  also p99 and maximum up to the subscriber's Fast DDS reader (``reader_latency_*``: the
-  time its receive thread got the pose, before the subscriber's own Python thread woke);
 * other load: the CPU of every other process over the window (their scheduler run times from
   /proc/<pid>/stat; /proc/stat's tick samples are unreliable on this VM), since the machine is
   shared.
@@ -25,14 +23,10 @@ rotated every window, so that none always runs first after the previous rate); a
 the windows: latency percentiles over all their poses, the median window's CPU, each window's
 row kept under ``windows`` (:func:`pooled_row`).
 
-``--soak`` instead runs one target at 1 kHz for ``--soak-minutes`` and reports its RSS
-(/proc/<pid>/status VmRSS) every minute, plus sent / received / lost over the whole soak.
-
-Results go to ``bench/results/*.json`` and a throughput report (``--report``, by default
-``bench/results/throughput.md``); ``bench/performance_report.py`` composes
-``docs/performance.md`` and its plot from the node's results, the core step costs and the
-batch figures. Exit code 0 unless a process crashed, could not be
-started, or ignored SIGINT (measured losses are results, not errors).
+The results document goes to ``--json`` when given, and a Markdown summary (tables, thread
+breakdown at 1 kHz, plot beside it as PNG) to ``--report`` (default: stdout, no plot). Exit
+code 0 unless a process crashed, could not be started, or ignored SIGINT (measured losses
+are results, not errors).
 
 Examples::
 
@@ -41,7 +35,7 @@ Examples::
     python bench/node_throughput.py --targets node,fast_relay --repeats 3
     python bench/node_throughput.py --target fast3='python bench/fast_relay.py --outputs \
 pose,orientation,imu_data'
-    python bench/node_throughput.py --soak --targets node
+    python bench/node_throughput.py --report /tmp/throughput.md --json /tmp/throughput.json
 """
 
 import argparse
@@ -66,7 +60,6 @@ sys.path.insert(0, str(BENCH))
 from _common import (cpu_by_thread_name, cpu_seconds, other_load_ticks,  # noqa: E402
                      process_ticks, QUEUE_DEPTH, ros_env, rss_kib, thread_run_ns)
 import _report  # noqa: E402
-from _thread_sampler import ThreadSampler  # noqa: E402
 
 if TYPE_CHECKING:
     import numpy as np
@@ -202,9 +195,8 @@ class Session:
 
 def endpoint_environment(profile: str) -> Dict[str, str]:
     """The Fast DDS profile of the bench's own publisher and subscriber: the package's
-    ``config/fastdds.xml`` by default, as the README tells users to give the processes that
-    talk to the node (its shared-memory setting protects the receiving process from Fast DDS's
-    333 ms listener stall, ``bench/NOTES.md`` section 9); ``none`` = Fast DDS's defaults."""
+    ``config/fastdds.xml`` by default, as ``docs/tuning.md`` tells users to give the processes
+    that talk to the node; ``none`` = Fast DDS's defaults."""
     if profile == 'none':
         return {}
     from rigid_body_attitude.ros.middleware import FASTDDS_PROFILE_VARIABLES
@@ -229,8 +221,7 @@ def start_processes(session: Session, target_argv: List[str], rate: float, durat
     python = sys.executable
     endpoint_env = endpoint_environment(args.endpoint_profile)
     subscriber = session.start('subscriber', [
-        python, str(BENCH / '_subscriber.py'), '--out', str(session.workdir / 'poses.bin'),
-        '--reader-out', str(session.workdir / 'reader_times.bin')],
+        python, str(BENCH / '_subscriber.py'), '--out', str(session.workdir / 'poses.bin')],
         json_stdout=True, extra_env=endpoint_env)
     target = session.start('target', target_argv)
     subscriber.wait_event('matched', args.match_timeout, watch=[target])
@@ -242,10 +233,8 @@ def start_processes(session: Session, target_argv: List[str], rate: float, durat
 
 
 def counted_poses(session: Session, subscriber: Process, end: dict, drain: float
-                  ) -> Tuple['np.ndarray', 'np.ndarray', 'np.ndarray']:
-    """Stop the subscriber; return the stamps, receive times and reader receive times (ns)
-    of the poses that count (the last from ``_subscriber.py --reader-out``: when the
-    subscriber's Fast DDS reader got the pose, before its own Python thread woke).
+                  ) -> Tuple['np.ndarray', 'np.ndarray']:
+    """Stop the subscriber; return the stamps and receive times (ns) of the poses that count.
 
     A pose counts if its stamp lies in the publisher's measured window and it arrived at most
     ``drain`` seconds after the last publish.
@@ -254,10 +243,9 @@ def counted_poses(session: Session, subscriber: Process, end: dict, drain: float
     subscriber.stop(signal.SIGTERM, grace=10.0)
     data = np.fromfile(session.workdir / 'poses.bin', dtype='<i8')
     stamps, received_at = data[:data.size // 2], data[data.size // 2:]
-    reader_at = np.fromfile(session.workdir / 'reader_times.bin', dtype='<i8')
     counted = ((stamps >= end['first_stamp_ns']) & (stamps <= end['last_stamp_ns'])
                & (received_at <= end['last_stamp_ns'] + int(drain * 1e9)))
-    return stamps[counted], received_at[counted], reader_at[counted]
+    return stamps[counted], received_at[counted]
 
 
 def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', latency_ms: 'np.ndarray',
@@ -284,15 +272,8 @@ def delivery_summary(stamps: 'np.ndarray', arrivals: 'np.ndarray', latency_ms: '
 
 
 def latencies_ms(stamps: 'np.ndarray', times: 'np.ndarray') -> 'np.ndarray':
-    """Milliseconds from each pose's stamp to ``times`` (its arrival, or its reader's)."""
+    """Milliseconds from each pose's stamp to its arrival."""
     return (times - stamps) * 1e-6
-
-
-def delivery(session: Session, subscriber: Process, end: dict, drain: float) -> dict:
-    """Stop the subscriber; count the poses of the window received in time, and latencies
-    (:func:`counted_poses`, :func:`delivery_summary`)."""
-    stamps, arrivals, _ = counted_poses(session, subscriber, end, drain)
-    return delivery_summary(stamps, arrivals, latencies_ms(stamps, arrivals), end)
 
 
 def measure(session: Session, target_argv: List[str], rate: float,
@@ -302,7 +283,6 @@ def measure(session: Session, target_argv: List[str], rate: float,
     publisher, target = processes['publisher'], processes['target']
     pids = {name: process.popen.pid for name, process in processes.items()}
     publisher.wait_event('start', args.match_timeout + args.warmup + 5, watch=[target])
-    sampler = ThreadSampler(pids, args.sample_threads).start() if args.sample_threads else None
     threads0 = thread_run_ns(pids['target'])
     seconds0 = {name: cpu_seconds(pid) for name, pid in pids.items()}
     machine0, wall0 = process_ticks(), time.monotonic()
@@ -312,19 +292,15 @@ def measure(session: Session, target_argv: List[str], rate: float,
     threads1 = thread_run_ns(pids['target'])
     rss = rss_kib(target.popen.pid)
     time.sleep(args.drain)
-    if sampler is not None:
-        sampler.stop(session.workdir / 'threads.npz')
     target.check_alive()
     cpu = {name: 100.0 * (seconds1[name] - seconds0[name]) / window_s for name in pids}
     ours = set(pids.values()) | {os.getpid()}
     other_cores = other_load_ticks(machine0, machine1, ours) / CLOCK_TICKS / window_s
-    stamps, arrivals, reader_at = counted_poses(session, processes['subscriber'], end,
-                                                args.drain)
-    latency_ms, reader_ms = latencies_ms(stamps, arrivals), latencies_ms(stamps, reader_at)
+    stamps, arrivals = counted_poses(session, processes['subscriber'], end, args.drain)
+    latency_ms = latencies_ms(stamps, arrivals)
     return {
         'rate_hz': rate, **delivery_summary(stamps, arrivals, latency_ms, end),
-        **reader_percentiles(reader_ms),
-        '_latency_ms': latency_ms, '_reader_latency_ms': reader_ms,
+        '_latency_ms': latency_ms,
         'publisher_hz': end['achieved_hz'], 'publisher_max_lag_ms': end['max_lag_ms'],
         'cpu_percent': cpu['target'], 'publisher_cpu_percent': cpu['publisher'],
         'subscriber_cpu_percent': cpu['subscriber'], 'other_load_cores': other_cores,
@@ -333,33 +309,10 @@ def measure(session: Session, target_argv: List[str], rate: float,
     }
 
 
-def reader_percentiles(reader_ms: 'np.ndarray') -> dict:
-    """p99 and maximum of the latencies up to the subscriber's reader (:func:`counted_poses`):
-    ``reader_latency_p99_ms``, ``reader_latency_max_ms``."""
-    import numpy as np
-    if not reader_ms.size:
-        return {'reader_latency_p99_ms': None, 'reader_latency_max_ms': None}
-    return {'reader_latency_p99_ms': float(np.percentile(reader_ms, 99)),
-            'reader_latency_max_ms': float(reader_ms.max())}
-
-
 def display(argv: List[str]) -> str:
     """Return ``argv`` as a command line with this interpreter as ``python``, paths relative."""
     words = ['python' if word == sys.executable else word for word in argv]
     return shlex.join(words).replace(f'{REPO}/', '')
-
-
-def keep_traces(args: argparse.Namespace, workdir: Path, name: str) -> None:
-    """With ``--keep-traces DIR``: copy the run's poses (stamps, receive times), the
-    target's log, the thread samples (``--sample-threads``) and the reader's receive times
-    there as ``NAME.poses.bin``, ``NAME.target.log``, ``NAME.threads.npz`` and
-    ``NAME.reader_times.bin``."""
-    if args.keep_traces is None:
-        return
-    args.keep_traces.mkdir(parents=True, exist_ok=True)
-    for kept in ('poses.bin', 'target.log', 'threads.npz', 'reader_times.bin'):
-        if (workdir / kept).exists():
-            shutil.copyfile(workdir / kept, args.keep_traces / f'{name}.{kept}')
 
 
 def run_throughput(targets: Dict[str, List[str]], args: argparse.Namespace) -> dict:
@@ -408,7 +361,6 @@ def run_window(argv: List[str], rate: float, args: argparse.Namespace, problems:
             problems.append(f'{name}: {err}')
         finally:
             problems.extend(f'{name}: {problem}' for problem in session.close())
-            keep_traces(args, Path(tmp), name)
     return row
 
 
@@ -424,7 +376,6 @@ def pooled_row(windows: List[dict]) -> dict:
     """
     import numpy as np
     latencies = [window.pop('_latency_ms') for window in windows]
-    reader_latencies = [window.pop('_reader_latency_ms') for window in windows]
     if len(windows) == 1:
         return windows[0]
     pooled_ms = np.concatenate(latencies)
@@ -445,7 +396,6 @@ def pooled_row(windows: List[dict]) -> dict:
         **{key: sum(window[key] for window in windows) for key in ('sent', 'received', 'lost')},
         'latency_p50_ms': percentile(50), 'latency_p99_ms': percentile(99),
         'latency_max_ms': percentile(100),
-        **reader_percentiles(np.concatenate(reader_latencies)),
         'latency_max_at_s': windows[slowest]['latency_max_at_s'],
         'latency_max_window': slowest + 1,
         'receive_gap_max_ms': highest('receive_gap_max_ms'),
@@ -457,39 +407,6 @@ def pooled_row(windows: List[dict]) -> dict:
         'cpu_by_thread': windows[by_cpu[(len(windows) - 1) // 2]]['cpu_by_thread'],
         'windows': windows,
     }
-
-
-def run_soak(label: str, argv: List[str], args: argparse.Namespace) -> dict:
-    """Run ``argv`` at ``--soak-rate`` for ``--soak-minutes``; sample its RSS every minute."""
-    minutes = args.soak_minutes
-    samples = []
-    with tempfile.TemporaryDirectory(prefix='bench_soak_') as tmp:
-        session = Session(args.domain_id, args.depth, Path(tmp))
-        try:
-            processes = start_processes(session, argv, args.soak_rate, minutes * 60.0, 0.0,
-                                        args)
-            target = processes['target']
-            processes['publisher'].wait_event('start', args.match_timeout + 5,
-                                              watch=[target])
-            started = time.monotonic()
-            for minute in range(1, minutes + 1):
-                time.sleep(max(0.0, started + 60.0 * minute - time.monotonic()))
-                target.check_alive()
-                samples.append({'minute': minute, 'rss_kib': rss_kib(target.popen.pid)})
-                print(f'soak {label}: minute {minute} RSS {samples[-1]["rss_kib"]} KiB',
-                      flush=True)
-            end = processes['publisher'].wait_event('end', 60.0, watch=[target])
-            time.sleep(args.drain)
-            counts = delivery(session, processes['subscriber'], end, args.drain)
-        finally:
-            problems = session.close()
-    for problem in problems:
-        print(f'error: {problem}', file=sys.stderr)
-    growth = samples[-1]['rss_kib'] - samples[0]['rss_kib']
-    return {'label': label, 'command': display(argv), 'rate_hz': args.soak_rate,
-            'minutes': minutes, 'samples': samples, 'growth_kib': growth, 'problems': problems,
-            'publisher_hz': end['achieved_hz'], **counts,
-            'machine': _report.machine_description()}
 
 
 def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
@@ -522,27 +439,15 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     parser.add_argument('--domain-id', type=int,
                         default=int(os.environ.get('ROS_DOMAIN_ID', '64')))
     parser.add_argument('--match-timeout', type=float, default=30.0)
-    parser.add_argument('--soak', action='store_true',
-                        help='RSS soak of one target instead of the throughput sweep')
-    parser.add_argument('--soak-minutes', type=int, default=10)
-    parser.add_argument('--soak-rate', type=float, default=1000.0)
-    parser.add_argument('--results-dir', type=Path, default=BENCH / 'results')
+    parser.add_argument('--json', type=Path, default=None,
+                        help='also write the results document (JSON) here')
     add_endpoint_profile_argument(parser)
-    parser.add_argument('--keep-traces', type=Path, default=None, metavar='DIR',
-                        help='keep each run\'s poses, reader times, target log and thread '
-                             'samples in DIR')
-    parser.add_argument('--sample-threads', type=float, default=0.0, metavar='MS',
-                        help='sample every thread\'s run and wait time of the target, '
-                             'publisher and subscriber, and every CPU\'s idle and steal time, '
-                             'every MS ms (bench/_thread_sampler.py; kept with --keep-traces; '
-                             'default 0 = off)')
-    parser.add_argument('--report', type=Path, default=BENCH / 'results' / 'throughput.md')
+    parser.add_argument('--report', type=Path, default=None,
+                        help='write the Markdown summary (and its PNG plot) here instead of '
+                             'printing it')
     args = parser.parse_args(argv)
     if args.repeats < 1:
         parser.error(f'expected --repeats >= 1, got {args.repeats}')
-    if args.soak_minutes < 2:
-        parser.error(f'expected --soak-minutes >= 2 (RSS at 1 min vs the end), '
-                     f'got {args.soak_minutes}')
     args.rates = [float(rate) for rate in args.rates.split(',') if rate]
     return args
 
@@ -569,23 +474,17 @@ def select_targets(args: argparse.Namespace) -> Dict[str, List[str]]:
 
 
 def main(argv: Optional[List[str]] = None) -> int:
-    """Run the sweep (or the soak), save the results and regenerate the report."""
+    """Run the sweep and write its summary (stdout or ``--report``) and, if asked, its JSON."""
     args = parse_args(argv)
     targets = select_targets(args)
-    args.results_dir.mkdir(parents=True, exist_ok=True)
     try:
-        if args.soak:
-            label, command = next(iter(targets.items()))
-            result = run_soak(label, command, args)
-            (args.results_dir / 'soak.json').write_text(json.dumps(result, indent=1))
-        else:
-            result = run_throughput(targets, args)
-            (args.results_dir / 'throughput.json').write_text(json.dumps(result, indent=1))
+        result = run_throughput(targets, args)
     except ProcessCrashed as err:
         print(f'error: {err}', file=sys.stderr)
         return 1
-    _report.write(args.results_dir, args.report)
-    print(f'wrote {args.report}')
+    if args.json is not None:
+        args.json.write_text(json.dumps(result, indent=1))
+    _report.write(result, args.report)
     return 1 if result.get('problems') else 0
 
 
