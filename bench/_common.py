@@ -141,7 +141,7 @@ def cpu_by_thread_name(before: Dict[int, Tuple[str, int]], after: Dict[int, Tupl
 
 
 def process_ticks() -> Dict[int, int]:
-    """Return {pid: utime + stime + cutime + cstime} of every process at the call (/proc/<pid>/stat).
+    """Return {pid: utime + stime + cutime + cstime} of every process (/proc/<pid>/stat).
 
     A process's own times are its threads' scheduler run times (exact, not tick samples);
     cutime + cstime add the children it reaped."""

@@ -209,7 +209,8 @@ def render(throughput: dict, png_name: Optional[str]) -> str:
               f'KEEP_LAST {throughput["depth"]}), {throughput["warmup_s"]} s warm-up, '
               f'{throughput["duration_s"]} s measured. *Lost* = published in the window but not '
               f'received within {throughput["drain_s"]} s after the last publish. CPU = '
-              f'{_cpu_clock(throughput)} of the target process over the window. '
+              'run time of all threads (ns, /proc/<pid>/task/*/schedstat) of the target '
+              'process over the window. '
               f'{_windows(throughput)}Latency = receive wall time − pose '
               'stamp (the publish wall time). "(short)" marks a publisher that fell more than '
               f'{100 * (1 - PUBLISHER_SHORTFALL):.0f} % short of the asked rate.', '']
@@ -223,13 +224,6 @@ def render(throughput: dict, png_name: Optional[str]) -> str:
         lines += [f'### {label}', '', f'`{target["command"]}`', '']
         lines += _table(target['rows']) + ['']
     return '\n'.join(lines)
-
-
-def _cpu_clock(throughput: dict) -> str:
-    """How the results measured CPU: schedstat run times (ns) or /proc ticks (older runs)."""
-    if throughput.get('cpu_clock') == 'schedstat_ns':
-        return 'run time of all threads (ns, /proc/<pid>/task/*/schedstat)'
-    return 'utime + stime (10 ms ticks, /proc/<pid>/stat)'
 
 
 def _windows(throughput: dict) -> str:

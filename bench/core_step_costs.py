@@ -25,8 +25,8 @@ RK4 dynamics step, torque-free body (classical RK4 on ``(q, ω)`` jointly, ``q``
   (``ahrs.common.orientation.q_prod``) for ``q ⊗ (0, ω)``.
 
 Usage: ``python bench/core_step_costs.py [--steps 20000] [--repeats 7] [--json PATH]``.
-Prints a Markdown table; ``--json`` also saves the figures (``bench/performance_report.py``
-puts them into ``docs/performance.md``). Exit 1 if a contender disagrees with ours.
+Prints the Markdown tables of ``docs/performance.md``; ``--json PATH`` also saves the figures.
+Exit 1 if a contender disagrees with ours.
 """
 
 from __future__ import annotations

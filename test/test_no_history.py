@@ -71,6 +71,17 @@ def history_hits(path: Path) -> list[str]:
     return hits
 
 
+def test_named_benchmarks_exist():
+    """A shipped file that names a benchmark names one that is there."""
+    missing = []
+    for path in shipped_files():
+        for number, line in enumerate(path.read_text(encoding='utf-8').splitlines(), start=1):
+            for name in re.findall(r'bench/([\w.]+\.(?:py|xml|md))', line):
+                if not (REPO_ROOT / 'bench' / name).is_file():
+                    missing.append(f'{path.relative_to(REPO_ROOT)}:{number}: bench/{name}')
+    assert missing == [], 'names a benchmark that does not exist:\n' + '\n'.join(missing)
+
+
 def test_scanned_set_holds_the_shipped_files():
     names = {path.relative_to(REPO_ROOT).as_posix() for path in shipped_files()}
     assert {'README.md', 'package.xml', 'setup.py', 'config/fastdds.xml',

@@ -1,4 +1,4 @@
-"""The README's parameter table and config/params.yaml say what the parameter table declares."""
+"""The README's parameter tables and config/params.yaml say what the parameter table declares."""
 
 import re
 from pathlib import Path
@@ -10,21 +10,43 @@ from rigid_body_attitude.session.parameters import PARAMETERS
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
-def readme_rows() -> dict[str, list[str]]:
+#: Declared by the parameter table but not documented as node parameters: the thread-scheduling
+#: parameters that the ros/session change removes. Empty this set once they are gone.
+UNDOCUMENTED = {'cpu_scheduling', 'idle_senders_above_hz', 'separate_cpus_above_hz'}
+DOCUMENTED = [parameter for parameter in PARAMETERS if parameter.name not in UNDOCUMENTED]
+
+
+def readme_rows(heading: str) -> dict[str, list[str]]:
+    """Name -> [type and default, run time] of each row of the README table under ``heading``."""
     text = (REPO_ROOT / 'README.md').read_text()
-    section = text[text.index('### Parameters'):text.index('### Topics and service')]
+    start = text.index(f'\n### {heading}\n')
+    section = text[start:text.index('\n#', start + 1)]
     rows = {}
     for line in section.splitlines():
-        match = re.match(r'\| `(\w+)` \| (.*?) \| (yes|no) \|', line)
+        match = re.match(r'\| `(\w+)` \| (.*?) \| (yes|no) \| .+ \|$', line)
         if match:
             rows[match.group(1)] = [match.group(2), match.group(3)]
     return rows
 
 
-def test_readme_lists_every_parameter_with_its_type_default_bounds_and_mutability():
-    rows = readme_rows()
-    assert list(rows) == [parameter.name for parameter in PARAMETERS]
-    for parameter in PARAMETERS:
+def test_readme_lists_every_parameter_once_standard_then_advanced():
+    standard, advanced = readme_rows('Standard parameters'), readme_rows('Advanced parameters')
+    assert standard and advanced
+    assert not set(standard) & set(advanced)
+    assert sorted([*standard, *advanced]) == sorted(p.name for p in DOCUMENTED)
+
+
+def test_readme_rows_are_one_line_each():
+    text = (REPO_ROOT / 'README.md').read_text()
+    for parameter in DOCUMENTED:
+        lines = [line for line in text.splitlines() if line.startswith(f'| `{parameter.name}` |')]
+        assert len(lines) == 1, parameter.name
+        assert len(lines[0]) <= 200, parameter.name
+
+
+def test_readme_gives_every_parameter_its_type_default_bounds_and_mutability():
+    rows = readme_rows('Standard parameters') | readme_rows('Advanced parameters')
+    for parameter in DOCUMENTED:
         type_default, run_time = rows[parameter.name]
         type_name = {float: 'double', bool: 'bool', str: 'string'}[parameter.type]
         default = str(parameter.default).lower() if parameter.default != '' else "''"
@@ -38,4 +60,4 @@ def test_params_yaml_holds_every_default():
     document = yaml.safe_load((REPO_ROOT / 'config' / 'params.yaml').read_text())
     values = document['/**/attitude_propagator']['ros__parameters']
     values.pop('use_sim_time')
-    assert values == {parameter.name: parameter.default for parameter in PARAMETERS}
+    assert values == {parameter.name: parameter.default for parameter in DOCUMENTED}
