@@ -33,7 +33,7 @@ class ReplayOptions:
 
     The first fields are the node's parameters, with the node's names, defaults and bounds
     (:data:`NODE_PARAMETERS`; their meaning: ``propagation_node --help`` or the README's
-    parameter table). Receive times are the bag times. The replay's own:
+    parameter tables). Receive times are the bag times. The replay's own:
 
     Attributes:
         gyro_topic: gyro topic (``''``: ``imu`` or else ``angular_velocity``, as the node).
