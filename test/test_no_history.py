@@ -107,8 +107,9 @@ def test_patterns_catch_history(text, tmp_path):
 
 
 @pytest.mark.parametrize('text', [
-    'The session layer is the node without ROS.', 'clock.now() gives the time', 'A known issue of Fast DDS 2.14.', 'Returns the items.',
-    'rclpy issue #968', 'Integrate up to ``now``.', 'stage 7 of the Runge-Kutta step'])
+    'The session layer is the node without ROS.', 'clock.now() gives the time',
+    'A known issue of Fast DDS 2.14.', 'Returns the items.', 'rclpy issue #968',
+    'Integrate up to ``now``.', 'stage 7 of the Runge-Kutta step'])
 def test_patterns_pass_ordinary_prose(text, tmp_path):
     path = tmp_path / 'page.md'
     path.write_text(text + '\n')
