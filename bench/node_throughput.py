@@ -24,7 +24,7 @@ the windows: latency percentiles over all their poses, the median window's CPU, 
 row kept under ``windows`` (:func:`pooled_row`).
 
 The results document goes to ``--json`` when given, and a Markdown summary (tables, thread
-breakdown at 1 kHz, plot beside it as PNG) to ``--report`` (default: stdout, no plot). Exit
+breakdown at 1 kHz, the node against the fast relay) to ``--report`` (default: stdout). Exit
 code 0 unless a process crashed, could not be started, or ignored SIGINT (measured losses
 are results, not errors).
 
@@ -443,8 +443,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         help='also write the results document (JSON) here')
     add_endpoint_profile_argument(parser)
     parser.add_argument('--report', type=Path, default=None,
-                        help='write the Markdown summary (and its PNG plot) here instead of '
-                             'printing it')
+                        help='write the Markdown summary here instead of printing it')
     args = parser.parse_args(argv)
     if args.repeats < 1:
         parser.error(f'expected --repeats >= 1, got {args.repeats}')
