@@ -170,9 +170,9 @@ class GravityAligner:
                 self._sums = [0.0] * 6
                 self._seconds = 0.0
             self.state = WAITING
-            if detector.window_full and detector.gyro_spread < self._quietest:
-                self._quietest = detector.gyro_spread
-                self._quietest_accel = detector.mean_accel
+        if detector.window_full and detector.gyro_spread < self._quietest:
+            self._quietest = detector.gyro_spread
+            self._quietest_accel = detector.mean_accel
         if self.elapsed >= self.align_timeout and self.state == WAITING:
             self._finish_without_rest()
             return True
@@ -187,11 +187,11 @@ class GravityAligner:
         self.state = ALIGNED
 
     def _finish_without_rest(self) -> None:
-        accel = self._quietest_accel if math.isfinite(self._quietest) else (
-            self.detector.mean_accel)
+        # The quietest full window's specific force; level if there was no full window or no
+        # specific force at all (zeros).
+        accel = self._quietest_accel
         if accel == (0.0, 0.0, 0.0):
-            accel = self.detector.mean_accel if self.detector.mean_accel != (0.0, 0.0, 0.0) \
-                else (0.0, 0.0, 1.0) if world_up(self.world_axes)[2] > 0 else (0.0, 0.0, -1.0)
+            accel = world_up(self.world_axes)
         self.specific_force = accel
         self.attitude = levelled_attitude(accel, self.initial_yaw, self.world_axes)
         self.gyro_bias = (0.0, 0.0, 0.0)
