@@ -31,11 +31,20 @@ from collections import deque
 
 from rigid_body_attitude.core.errors import InputError
 
-__all__ = ['RestBiasEstimator', 'RestDetector', 'STANDARD_GRAVITY']
+__all__ = ['DEFAULT_BIAS_TIME_CONSTANT', 'REFINE_BIAS_AT_REST', 'RestBiasEstimator',
+           'RestDetector', 'STANDARD_GRAVITY']
 
 Vec = tuple[float, float, float]
 #: [m/s²]
 STANDARD_GRAVITY = 9.80665
+#: Whether a session refines the gyro bias at rest by default. Measured on the four BROAD
+#: trials against the optical truth (test/tools/test_rest_study.py, docs/imu.md): on the
+#: trial with breaks refinement lowers the mean error over the motion phase from 2.120 to
+#: 2.022 deg, but over the four trials the mean errors add up to 9.39 deg against 8.87 deg
+#: with the alignment window's bias, so it is off by default.
+REFINE_BIAS_AT_REST = False
+#: Time constant of :class:`RestBiasEstimator` [s].
+DEFAULT_BIAS_TIME_CONSTANT = 60.0
 #: Samples between two recomputations of the running sums from the window (round-off).
 _RESUM_INTERVAL = 4096
 
@@ -225,7 +234,7 @@ class RestBiasEstimator:
     """
 
     def __init__(self, initial_bias: Vec = (0.0, 0.0, 0.0), initial_seconds: float = 1.0,
-                 time_constant: float = 60.0) -> None:
+                 time_constant: float = DEFAULT_BIAS_TIME_CONSTANT) -> None:
         self.time_constant = _positive('time_constant', time_constant)
         self.reset(initial_bias, initial_seconds)
 
