@@ -15,7 +15,8 @@ GravityAligner` from the trial's first sample; the tilt of its attitude is compa
   (:class:`~rigid_body_attitude.core.rest.RestBiasEstimator`). The attitude error against the
   ground truth is summarised over the motion phase.
 
-Command line: ``python -m rigid_body_attitude.tools.rest_study [DATA_DIR]`` prints both tables.
+Command line: ``python -m rigid_body_attitude.tools.rest_study [DATA_DIR] [--method-table]``
+prints both tables (and, with ``--method-table``, every strapdown method with the fixed bias).
 Data: BROAD, Laidig et al., Data 6(7):72, 2021, doi:10.3390/data6070072, CC BY 4.0.
 """
 
@@ -31,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from rigid_body_attitude.core.alignment import GravityAligner, levelled_attitude, tilt_angle
-from rigid_body_attitude.core.integrators.strapdown import strapdown_method
+from rigid_body_attitude.core.integrators.strapdown import STRAPDOWN_METHODS, strapdown_method
 from rigid_body_attitude.core.quaternion import attitude_error, to_matrix
 from rigid_body_attitude.core.rest import RestBiasEstimator, RestDetector
 from rigid_body_attitude.tools.broad import BroadTrial, load_trial
@@ -157,9 +158,21 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog='python -m rigid_body_attitude.tools.rest_study',
                                      description=__doc__.split('\n\n')[0])
     parser.add_argument('data_dir', nargs='?', type=Path, default=DEFAULT_DATA_DIR)
-    parser.add_argument('--methods', default='exp_map,delta_single')
+    parser.add_argument('--methods', default='exp_map,delta_single',
+                        help="strapdown methods of the bias table, comma-separated, or 'all'")
     parser.add_argument('--time-constants', default='10,60,600')
+    parser.add_argument('--method-table', action='store_true',
+                        help='also print every strapdown method with the fixed bias')
     return parser
+
+
+def _method_table(trials: list[BroadTrial]) -> None:
+    print('\n| method | ' + ' | '.join(trial.name[:2] + ' max / mean [deg]' for trial in trials)
+          + ' |\n|---|' + '---|' * len(trials))
+    for method in STRAPDOWN_METHODS:
+        rows = [strapdown_error(trial, method) for trial in trials]
+        print(f'| `{method}` | ' + ' | '.join(f'{row.max_deg:.3f} / {row.mean_deg:.3f}'
+                                              for row in rows) + ' |')
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -174,14 +187,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     constants = [float(text) for text in args.time_constants.split(',')]
     print('\n| trial | method | bias | max [deg] | mean [deg] | final rest [deg] |\n'
           '|---|---|---|---|---|---|')
+    methods = list(STRAPDOWN_METHODS) if args.methods == 'all' else args.methods.split(',')
     for trial in trials:
-        for method in args.methods.split(','):
+        for method in methods:
             rows = [('initial window', strapdown_error(trial, method))] + [
                 (f'refined, τ = {tau:g} s', strapdown_error(trial, method, True, tau))
                 for tau in constants]
             for label, row in rows:
                 print(f'| {trial.name} | {method} | {label} | {row.max_deg:.3f} | '
                       f'{row.mean_deg:.3f} | {row.final_deg:.3f} |')
+    if args.method_table:
+        _method_table(trials)
     return 0
 
 

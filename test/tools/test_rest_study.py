@@ -13,6 +13,7 @@ import pytest
 
 from rigid_body_attitude.core.alignment import ALIGNED
 from rigid_body_attitude.core.rest import DEFAULT_BIAS_TIME_CONSTANT, REFINE_BIAS_AT_REST
+from rigid_body_attitude.core.scene import load_scene
 from rigid_body_attitude.tools import rest_study
 from rigid_body_attitude.tools.broad import load_trial
 
@@ -69,3 +70,28 @@ def test_strapdown_error_with_and_without_bias_refinement(data_dir):
     # the default keeps the alignment window's bias.
     assert refined_total > fixed_total
     assert REFINE_BIAS_AT_REST is False
+
+
+#: Measured (max, mean) attitude error [deg] with the bias of the alignment window fixed.
+METHOD_DEG = {
+    '05_undisturbed_slow_rotation_with_breaks_B': {'exp_map': (3.789, 2.137),
+                                                   'delta_single': (3.675, 2.120)},
+    '07_undisturbed_fast_rotation_B': {'exp_map': (9.835, 4.352),
+                                       'delta_single': (7.003, 3.528)},
+    '15_undisturbed_fast_translation_A': {'exp_map': (5.048, 1.440),
+                                          'delta_single': (3.745, 1.270)},
+    '24_disturbed_tapping_A': {'exp_map': (5.759, 2.135), 'delta_single': (4.219, 1.955)},
+}
+
+
+@pytest.mark.parametrize('name', rest_study.TRIALS)
+def test_the_strapdown_scene_default_does_better_than_exp_map_on_every_trial(name, data_dir):
+    assert load_scene('strapdown').integrator == 'delta_single'
+    trial = load_trial(data_dir / f'{name}.npz')
+    errors = {}
+    for method in ('exp_map', 'delta_single'):
+        result = rest_study.strapdown_error(trial, method)
+        errors[method] = (result.max_deg, result.mean_deg)
+        assert errors[method] == pytest.approx(METHOD_DEG[name][method], abs=1e-3)
+    assert errors['delta_single'][0] < errors['exp_map'][0]
+    assert errors['delta_single'][1] < errors['exp_map'][1]
