@@ -168,29 +168,31 @@ class ImuCalibration:
 
     def correct_accelerometer(self, ax: float, ay: float, az: float) -> Vec:
         """``N (a − b_a)`` [m/s²], sensor frame."""
-        n, nb = self._n, self._nb
-        return (n[0][0] * ax + n[0][1] * ay + n[0][2] * az - nb[0],
-                n[1][0] * ax + n[1][1] * ay + n[1][2] * az - nb[1],
-                n[2][0] * ax + n[2][1] * ay + n[2][2] * az - nb[2])
+        (n00, n01, n02), (n10, n11, n12), (n20, n21, n22) = self._n
+        b0, b1, b2 = self._nb
+        return (n00 * ax + n01 * ay + n02 * az - b0, n10 * ax + n11 * ay + n12 * az - b1,
+                n20 * ax + n21 * ay + n22 * az - b2)
 
     def correct_gyro(self, wx: float, wy: float, wz: float,
                      ax: float = 0.0, ay: float = 0.0, az: float = 0.0) -> Vec:
         """``K (ω − b_g − G a_i)`` [rad/s] with ``a_i`` the corrected specific force [m/s²]."""
-        k, kb, kg = self._k, self._kb, self._kg
-        x = k[0][0] * wx + k[0][1] * wy + k[0][2] * wz - kb[0]
-        y = k[1][0] * wx + k[1][1] * wy + k[1][2] * wz - kb[1]
-        z = k[2][0] * wx + k[2][1] * wy + k[2][2] * wz - kb[2]
+        (k00, k01, k02), (k10, k11, k12), (k20, k21, k22) = self._k
+        b0, b1, b2 = self._kb
+        x = k00 * wx + k01 * wy + k02 * wz - b0
+        y = k10 * wx + k11 * wy + k12 * wz - b1
+        z = k20 * wx + k21 * wy + k22 * wz - b2
         if self._uses_acc:
-            x -= kg[0][0] * ax + kg[0][1] * ay + kg[0][2] * az
-            y -= kg[1][0] * ax + kg[1][1] * ay + kg[1][2] * az
-            z -= kg[2][0] * ax + kg[2][1] * ay + kg[2][2] * az
+            (g00, g01, g02), (g10, g11, g12), (g20, g21, g22) = self._kg
+            x -= g00 * ax + g01 * ay + g02 * az
+            y -= g10 * ax + g11 * ay + g12 * az
+            z -= g20 * ax + g21 * ay + g22 * az
         return x, y, z
 
     def correct(self, wx: float, wy: float, wz: float, ax: float, ay: float,
                 az: float) -> tuple[Vec, Vec]:
         """Both corrections of one sample: ``(ω_i [rad/s], a_i [m/s²])``."""
         acc = self.correct_accelerometer(ax, ay, az)
-        return self.correct_gyro(wx, wy, wz, *acc), acc
+        return self.correct_gyro(wx, wy, wz, acc[0], acc[1], acc[2]), acc
 
     def correct_rows(self, gyro: FloatArray, acc: FloatArray) -> tuple[FloatArray, FloatArray]:
         """The corrections of ``(N, 3)`` arrays of samples (rows), as :meth:`correct`."""
@@ -270,9 +272,9 @@ def _kalibr(section: Mapping[Any, Any], prefix: str, source: str) -> ImuCalibrat
                      MAX_G_SENSITIVITY)
     m_acc = _invertible(accs.get('M', _IDENTITY), f'{prefix}accelerometers.M')
     has_intrinsics = bool(gyros or accs)
-    return ImuCalibration(gyro_matrix=c_gyro.T @ np.linalg.inv(m_gyro),
+    return ImuCalibration(gyro_matrix=c_gyro.T @ _inverse(m_gyro),
                           g_sensitivity=a_gyro @ c_gyro,
-                          accelerometer_matrix=np.linalg.inv(m_acc), noise=noise,
+                          accelerometer_matrix=_inverse(m_acc), noise=noise,
                           kind='kalibr' if has_intrinsics else 'kalibr_noise', source=source)
 
 
@@ -378,6 +380,11 @@ def _conditioned(matrix: FloatArray, key: str) -> FloatArray:
                                f'{CONDITION_LIMIT:g}), got {quote(matrix.tolist())} (condition '
                                f'number {condition:.3g})')
     return matrix
+
+
+def _inverse(matrix: FloatArray) -> FloatArray:
+    inverse: FloatArray = np.linalg.inv(matrix).astype(np.float64)
+    return inverse
 
 
 def _invertible(value: Any, key: str) -> FloatArray:

@@ -102,6 +102,8 @@ class RestDetector:
         self.accel_spread = math.inf
         self.mean_gyro: Vec = (0.0, 0.0, 0.0)
         self.mean_accel: Vec = (0.0, 0.0, 0.0)
+        self.gyro_threshold = self.accel_threshold = 0.0
+        self._set_thresholds()
 
     def set_gyro_bias(self, bias: Vec) -> None:
         """The bias estimate [rad/s] subtracted from the mean rate in the rest test."""
@@ -118,33 +120,35 @@ class RestDetector:
         oldest = self._window[0]
         return oldest[0], oldest[1], oldest[2]
 
-    @property
-    def gyro_threshold(self) -> float:
-        """Largest total windowed gyro spread counted as rest [rad/s]."""
-        return self.noise_factor * self._floor(self._gyro_floor, self._gyro_bounds, True)
-
-    @property
-    def accel_threshold(self) -> float:
-        """Largest total windowed accelerometer spread counted as rest [m/s²]."""
-        return self.noise_factor * self._floor(self._accel_floor, self._accel_bounds, False)
-
-    def _floor(self, measured: float, bounds: tuple[float, float], gyro: bool) -> float:
-        if gyro and self.gyro_noise > 0.0:
-            return math.sqrt(3.0) * self.gyro_noise
-        return min(max(measured, bounds[0]), bounds[1])
+    def _set_thresholds(self) -> None:
+        """Thresholds from the floors: :attr:`gyro_threshold` [rad/s], :attr:`accel_threshold`
+        [m/s²] (largest total windowed spreads counted as rest)."""
+        low, high = self._gyro_bounds
+        gyro_floor = (math.sqrt(3.0) * self.gyro_noise if self.gyro_noise > 0.0
+                      else min(max(self._gyro_floor, low), high))
+        low, high = self._accel_bounds
+        self.gyro_threshold = self.noise_factor * gyro_floor
+        self.accel_threshold = self.noise_factor * min(max(self._accel_floor, low), high)
 
     def update(self, wx: float, wy: float, wz: float, ax: float, ay: float, az: float,
                dt: float) -> bool:
         """Add one sample (rates [rad/s], specific force [m/s²], its interval [s]); returns
         :attr:`at_rest`."""
-        sample = (wx, wy, wz, ax, ay, az, dt)
-        window, sums = self._window, self._sums
-        window.append(sample)
+        window, s = self._window, self._sums
+        window.append((wx, wy, wz, ax, ay, az, dt))
         self._duration += dt
-        for index in range(6):
-            value = sample[index]
-            sums[index] += value
-            sums[6 + index] += value * value
+        s[0] += wx
+        s[1] += wy
+        s[2] += wz
+        s[3] += ax
+        s[4] += ay
+        s[5] += az
+        s[6] += wx * wx
+        s[7] += wy * wy
+        s[8] += wz * wz
+        s[9] += ax * ax
+        s[10] += ay * ay
+        s[11] += az * az
         while len(window) > 2 and self._duration - window[0][6] >= self.window_seconds:
             self._drop(window.popleft())
         self._since_resum += 1
@@ -158,12 +162,21 @@ class RestDetector:
         return self.at_rest
 
     def _drop(self, sample: tuple[float, ...]) -> None:
-        sums = self._sums
-        self._duration -= sample[6]
-        for index in range(6):
-            value = sample[index]
-            sums[index] -= value
-            sums[6 + index] -= value * value
+        s = self._sums
+        wx, wy, wz, ax, ay, az, dt = sample
+        self._duration -= dt
+        s[0] -= wx
+        s[1] -= wy
+        s[2] -= wz
+        s[3] -= ax
+        s[4] -= ay
+        s[5] -= az
+        s[6] -= wx * wx
+        s[7] -= wy * wy
+        s[8] -= wz * wz
+        s[9] -= ax * ax
+        s[10] -= ay * ay
+        s[11] -= az * az
 
     def _resum(self) -> None:
         self._since_resum = 0
@@ -172,20 +185,26 @@ class RestDetector:
         self._duration = sum(sample[6] for sample in self._window)
 
     def _statistics(self) -> None:
-        sums, count = self._sums, len(self._window)
-        means = [value / count for value in sums[:6]]
-        spreads = [max(sums[6 + index] / count - means[index] ** 2, 0.0) for index in range(6)]
-        self.mean_gyro = (means[0], means[1], means[2])
-        self.mean_accel = (means[3], means[4], means[5])
-        self.gyro_spread = math.sqrt(spreads[0] + spreads[1] + spreads[2])
-        self.accel_spread = math.sqrt(spreads[3] + spreads[4] + spreads[5])
-        self._gyro_floor = min(self._gyro_floor, self.gyro_spread)
-        self._accel_floor = min(self._accel_floor, self.accel_spread)
+        s = self._sums
+        scale = 1.0 / len(self._window)
+        gx, gy, gz = s[0] * scale, s[1] * scale, s[2] * scale
+        fx, fy, fz = s[3] * scale, s[4] * scale, s[5] * scale
+        self.mean_gyro = (gx, gy, gz)
+        self.mean_accel = (fx, fy, fz)
+        # Variances Σx²/n − mean², summed over the axes; round-off can make a sum negative.
+        gyro = (s[6] + s[7] + s[8]) * scale - (gx * gx + gy * gy + gz * gz)
+        accel = (s[9] + s[10] + s[11]) * scale - (fx * fx + fy * fy + fz * fz)
+        self.gyro_spread = math.sqrt(gyro) if gyro > 0.0 else 0.0
+        self.accel_spread = math.sqrt(accel) if accel > 0.0 else 0.0
+        if self.gyro_spread < self._gyro_floor or self.accel_spread < self._accel_floor:
+            self._gyro_floor = min(self._gyro_floor, self.gyro_spread)
+            self._accel_floor = min(self._accel_floor, self.accel_spread)
+            self._set_thresholds()
 
     def _quiet(self) -> bool:
-        return (self.gyro_spread <= self.gyro_threshold
-                and self.accel_spread <= self.accel_threshold
-                and self.mean_rate() <= self.max_rest_rate
+        if self.gyro_spread > self.gyro_threshold or self.accel_spread > self.accel_threshold:
+            return False
+        return (self.mean_rate() <= self.max_rest_rate
                 and abs(self.mean_specific_force() - self.gravity) <= self.gravity_tolerance)
 
     def mean_rate(self) -> float:

@@ -86,7 +86,8 @@ def align(trial: BroadTrial, aligner: GravityAligner) -> int:
     dt = 1.0 / trial.sampling_rate
     gyro, acc = trial.gyro.tolist(), trial.acc.tolist()
     for index in range(trial.sample_count):
-        if aligner.update(*gyro[index], *acc[index], dt):
+        w, a = gyro[index], acc[index]
+        if aligner.update(w[0], w[1], w[2], a[0], a[1], a[2], dt):
             return index
     return trial.sample_count - 1
 
@@ -134,8 +135,8 @@ def strapdown_error(trial: BroadTrial, method: str = 'delta_single', refine: boo
     bias = aligner.gyro_bias
     previous = (gyro[start][0] - bias[0], gyro[start][1] - bias[1], gyro[start][2] - bias[2])
     for index in range(start + 1, trial.sample_count):
-        w = gyro[index]
-        if refine and detector.update(*w, *acc[index], dt):
+        w, a = gyro[index], acc[index]
+        if refine and detector.update(w[0], w[1], w[2], a[0], a[1], a[2], dt):
             bias = estimator.update(True, detector.delayed_gyro, dt)
             detector.set_gyro_bias(bias)
         current = (w[0] - bias[0], w[1] - bias[1], w[2] - bias[2])

@@ -143,8 +143,8 @@ def test_calibration_from_mapping_picks_the_named_imu():
 
 
 def test_imu_calibration_identity_by_default():
-    assert ImuCalibration().correct(1.0, 2.0, 3.0, 4.0, 5.0, 6.0) == ((1.0, 2.0, 3.0),
-                                                                     (4.0, 5.0, 6.0))
+    corrected = ImuCalibration().correct(1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
+    assert corrected == ((1.0, 2.0, 3.0), (4.0, 5.0, 6.0))
 
 
 def _refused(tmp_path: Path, text: str | bytes, pattern: str, imu_key: str = '') -> str:
