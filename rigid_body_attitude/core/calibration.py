@@ -116,7 +116,7 @@ def _matrix_tuple(matrix: FloatArray) -> Mat:
             (rows[2][0], rows[2][1], rows[2][2]))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ImuCalibration:
     """The correction of every sample: ``a_i = N (a − b_a)``, ``ω_i = K (ω − b_g − G a_i)``.
 
