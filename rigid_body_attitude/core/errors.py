@@ -9,6 +9,7 @@ from __future__ import annotations
 
 __all__ = [
     'AttitudeError',
+    'CalibrationError',
     'InertiaError',
     'InputError',
     'IntegratorError',
@@ -34,3 +35,7 @@ class SceneError(AttitudeError):
 
 class IntegratorError(AttitudeError):
     """An integrator was asked for something it cannot do (unknown name, unstable step)."""
+
+
+class CalibrationError(AttitudeError):
+    """An IMU calibration file is malformed: missing keys, wrong shapes, singular matrices."""

@@ -201,7 +201,7 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
                               >= count, 30.0), (len(orientations), len(poses), len(imu_outputs))
 
     published = scalar_first(orientations)
-    # exp_map with a held rate is exact for a constant rate (all factors exp(dt ω) commute),
+    # delta_single (as exp_map) is exact for a constant rate (all factors exp(dt ω) commute),
     # so only round-off remains: ~1000 steps x a few ulp ~ 1e-13, inside the 1e-9.
     times = np.arange(count) * 1e-3
     closed_form = quaternion.exp(times[:, None] * np.array(OMEGA))
@@ -386,7 +386,7 @@ def test_timing_faults_are_rejected_counted_and_reported(ros, request, capfd):
     final = status_values(own_statuses(diagnostics, node)[-1])
     assert (final['rejected stale_stamp'], final['rejected gap'], final['accepted']) == \
         ('2', '1', '7')  # baseline, 3 integrated steps, 2 after the gap, 2 after the jump
-    assert final['scene'] == 'strapdown' and final['integrator'] == 'exp_map'
+    assert final['scene'] == 'strapdown' and final['integrator'] == 'delta_single'
     assert capfd.readouterr().err.count('stamps jumped back') == 1  # logged once
 
 

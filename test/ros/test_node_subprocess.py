@@ -110,7 +110,7 @@ def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes):
                       first.quaternion.z]
     for message in orientations[1:]:
         q = message.quaternion
-        # Exact for a constant rate (exp_map; a lost sample only lengthens one step, all
+        # Exact for a constant rate (delta_single; a lost sample only lengthens one step, all
         # steps commute): round-off only over < 500 steps, 1e-12.
         expected = quaternion.multiply(
             first_attitude, quaternion.exp((seconds(message) - seconds(first)) * omega))
