@@ -50,7 +50,7 @@ FloatArray = NDArray[np.float64]
 
 #: Samples gathered before a fold (the covariance read in between is always current).
 DEFAULT_BATCH_SIZE = 32
-#: Smallest variance kept on the diagonal [rad², (rad/s)², 1]: keeps P positive definite.
+#: Smallest variance kept on the diagonal [rad², (rad/s)², 1] (a known-exact parameter).
 VARIANCE_FLOOR = 1e-24
 _SERIES_ANGLE = 1e-4
 
@@ -266,7 +266,8 @@ def _propagated(p: FloatArray, coupling: FloatArray, duration: float,
 
 
 def _checked_covariance(value: ArrayLike, name: str, size: int) -> FloatArray:
-    """``value`` as a symmetric positive-definite (size, size) matrix, else InputError."""
+    """``value`` as a symmetric positive semi-definite (size, size) matrix, diagonal floored at
+    :data:`VARIANCE_FLOOR`; else InputError."""
     matrix = np.array(value, dtype=np.float64)
     if matrix.shape != (size, size):
         raise InputError(f'Expected `{name}` to have shape ({size}, {size}), got {matrix.shape}')
@@ -276,8 +277,8 @@ def _checked_covariance(value: ArrayLike, name: str, size: int) -> FloatArray:
     if np.abs(matrix - matrix.T).max() > 1e-9 * scale:
         raise InputError(f'Expected `{name}` to be symmetric')
     matrix = 0.5 * (matrix + matrix.T)
-    try:
-        np.linalg.cholesky(matrix)
-    except np.linalg.LinAlgError:
-        raise InputError(f'Expected `{name}` to be positive definite') from None
+    if np.linalg.eigvalsh(matrix)[0] < -1e-12 * scale:
+        raise InputError(f'Expected `{name}` to be positive semi-definite')
+    diagonal = np.einsum('ii->i', matrix)
+    np.maximum(diagonal, VARIANCE_FLOOR, out=diagonal)
     return matrix

@@ -18,7 +18,7 @@ import numpy as np
 
 from rigid_body_attitude.core import quaternion
 
-SAMPLE_RATE = 200.0
+SAMPLE_RATE = 100.0
 SUBSTEPS = 8
 #: Known bias estimate of every run [rad/s] (the truth differs from it by the drawn error).
 BIAS_ESTIMATE = np.array([0.004, -0.003, 0.002])
@@ -33,19 +33,27 @@ def true_rate(t: np.ndarray) -> np.ndarray:
     return amplitude * np.sin(frequency * t + phase) + np.array([0.8, -0.5, 0.6])
 
 
+def _product(p: tuple[float, ...], q: tuple[float, ...]) -> tuple[float, ...]:
+    """Hamilton product of two plain-float quaternions."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return (pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw)
+
+
 def shared_motion(step_count: int) -> np.ndarray:
     """``Q(t_k)`` (step_count + 1, 4) from identity, fine exact steps (see module docstring)."""
     h = 1.0 / (SAMPLE_RATE * SUBSTEPS)
     mids = (np.arange(step_count * SUBSTEPS) + 0.5) * h
-    increments = quaternion.exp(true_rate(mids) * h)
+    increments = [tuple(row) for row in quaternion.exp(true_rate(mids) * h).tolist()]
     out = np.empty((step_count + 1, 4))
-    out[0] = (1.0, 0.0, 0.0, 0.0)
-    q = out[0].copy()
+    q: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)
+    out[0] = q
     for k in range(step_count):
         for step in increments[k * SUBSTEPS:(k + 1) * SUBSTEPS]:
-            q = quaternion.multiply(q, step)
-        out[k + 1] = q / np.linalg.norm(q)
-    return out
+            q = _product(q, step)
+        out[k + 1] = q
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
 @dataclass
