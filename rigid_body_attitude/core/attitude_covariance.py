@@ -49,7 +49,7 @@ __all__ = ['AttitudeCovariance', 'AttitudeStddev', 'DEFAULT_BATCH_SIZE', 'transi
 FloatArray = NDArray[np.float64]
 
 #: Samples gathered before a fold (the covariance read in between is always current).
-DEFAULT_BATCH_SIZE = 32
+DEFAULT_BATCH_SIZE = 64
 #: Smallest variance kept on the diagonal [rad², (rad/s)², 1] (a known-exact parameter).
 VARIANCE_FLOOR = 1e-24
 _SERIES_ANGLE = 1e-4
@@ -85,11 +85,11 @@ def _rotation_coefficients() -> FloatArray:
 
 
 def _skew_coefficients() -> FloatArray:
-    """(9, 3): ``(A [φ×])[a, j] = Σ_{i,k} A[a, i] φ_k C[3 i + k, j]``."""
-    coefficients = np.zeros((9, 3))
-    for i, j, k, sign in ((1, 0, 2, 1), (2, 0, 1, -1), (0, 1, 2, -1), (2, 1, 0, 1),
-                          (0, 2, 1, 1), (1, 2, 0, -1)):
-        coefficients[3 * i + k, j] = sign  # [φ×][i, j] = sign · φ_k
+    """(3, 9): ``vec([φ×]) = φ @ C`` (row-major)."""
+    coefficients = np.zeros((3, 9))
+    for k, entry, sign in ((2, 1, -1), (1, 2, 1), (2, 3, 1), (0, 5, -1), (1, 6, -1),
+                           (0, 7, 1)):
+        coefficients[k, entry] = sign
     return coefficients
 
 
@@ -97,19 +97,13 @@ _ROTATION = _rotation_coefficients()
 _SKEW = _skew_coefficients()
 
 
-def _times_skew(a: FloatArray, phi: FloatArray) -> FloatArray:
-    """``A_n [φ_n×]`` for stacks ``a`` (n, 3, 3) and ``phi`` (n, 3)."""
-    products = a[:, :, :, None] * phi[:, None, None, :]
-    result: FloatArray = (products.reshape(-1, 9) @ _SKEW).reshape(a.shape)
-    return result
-
-
 def transition_blocks(q: FloatArray, rates: FloatArray, dt: FloatArray) -> FloatArray:
     """Sum over the samples of the coupling block ``B`` (3, 12) of the transition.
 
     ``q`` (n, 4) the estimated attitudes at the start of each step, ``rates`` (n, 3) the
     estimated body rates held over it [rad/s], ``dt`` (n,) the step lengths [s].
-    ``M = R(q) J(φ) Δt`` with ``φ = ω Δt``, ``J = I + α [φ×] + β [φ×]²``,
+    ``M = R(q) J(φ) Δt`` with ``φ = ω Δt`` and the left Jacobian
+    ``J = I + α [φ×] + β [φ×]² = (1 − β θ²) I + α [φ×] + β φ φᵀ``,
     ``α = (1 − cos θ)/θ²``, ``β = (θ − sin θ)/θ³`` (series below θ = 10⁻⁴).
     """
     count = q.shape[0]
@@ -122,10 +116,10 @@ def transition_blocks(q: FloatArray, rates: FloatArray, dt: FloatArray) -> Float
     safe = np.where(small, 1.0, theta)
     alpha = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
     beta = np.where(small, 1.0 / 6.0 - theta2 / 120.0, (safe - np.sin(safe)) / safe ** 3)
-    once = _times_skew(rotation, phi)
-    twice = _times_skew(once, phi)
-    m = (rotation + alpha[:, None, None] * once + beta[:, None, None] * twice) \
-        * dt[:, None, None]
+    jacobian = (beta[:, None, None] * phi[:, :, None]) * phi[:, None, :]
+    jacobian += ((phi * alpha[:, None]) @ _SKEW).reshape(count, 3, 3)
+    jacobian += (1.0 - beta * theta2)[:, None, None] * np.eye(3)
+    m = (rotation * dt[:, None, None]) @ jacobian
     weights = np.empty((count, 4))
     weights[:, 0] = 1.0
     weights[:, 1:] = rates
@@ -211,6 +205,12 @@ class AttitudeCovariance:
     def attitude_covariance(self) -> FloatArray:
         """3×3 covariance [rad²] of the attitude error about fixed world axes (REP-145)."""
         self._fold()
+        return self._p[:3, :3].copy()
+
+    @property
+    def folded_attitude_covariance(self) -> FloatArray:
+        """The 3×3 world-frame attitude covariance as of the last fold (at most
+        ``batch_size − 1`` samples old), without folding: a cheap read for every sample."""
         return self._p[:3, :3].copy()
 
     def stddev(self) -> AttitudeStddev:
