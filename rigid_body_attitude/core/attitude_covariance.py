@@ -53,7 +53,9 @@ FloatArray = NDArray[np.float64]
 DEFAULT_BATCH_SIZE = 64
 #: Smallest variance kept on the diagonal [rad², (rad/s)², 1] (a known-exact parameter).
 VARIANCE_FLOOR = 1e-24
-_SERIES_ANGLE = 1e-4
+_SERIES_ANGLE = 0.1
+_TINY_ANGLE = 1e-4
+_EYE3 = np.eye(3)
 
 
 class AttitudeStddev(NamedTuple):
@@ -98,6 +100,21 @@ _ROTATION = _rotation_coefficients()
 _SKEW = _skew_coefficients()
 
 
+def _jacobian_coefficients(theta2: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``α = (1 − cos θ)/θ²``, ``β = (θ − sin θ)/θ³`` from ``θ²``: their series to θ⁴ when every
+    θ < 0.1 (truncation below 3·10⁻¹¹ relative), else the closed forms (series below 10⁻⁴)."""
+    if float(theta2.max(initial=0.0)) < _SERIES_ANGLE * _SERIES_ANGLE:
+        theta4 = theta2 * theta2
+        return (0.5 - theta2 / 24.0 + theta4 / 720.0,
+                1.0 / 6.0 - theta2 / 120.0 + theta4 / 5040.0)
+    theta = np.sqrt(theta2)
+    small = theta < _TINY_ANGLE
+    safe = np.where(small, 1.0, theta)
+    alpha = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
+    beta = np.where(small, 1.0 / 6.0 - theta2 / 120.0, (safe - np.sin(safe)) / safe ** 3)
+    return alpha, beta
+
+
 def transition_blocks(q: FloatArray, rates: FloatArray, dt: FloatArray) -> FloatArray:
     """Sum over the samples of the coupling block ``B`` (3, 12) of the transition.
 
@@ -105,21 +122,17 @@ def transition_blocks(q: FloatArray, rates: FloatArray, dt: FloatArray) -> Float
     estimated body rates held over it [rad/s], ``dt`` (n,) the step lengths [s].
     ``M = R(q) J(φ) Δt`` with ``φ = ω Δt`` and the left Jacobian
     ``J = I + α [φ×] + β [φ×]² = (1 − β θ²) I + α [φ×] + β φ φᵀ``,
-    ``α = (1 − cos θ)/θ²``, ``β = (θ − sin θ)/θ³`` (series below θ = 10⁻⁴).
+    ``α``, ``β`` from :func:`_jacobian_coefficients`.
     """
     count = q.shape[0]
     outer = (q[:, :, None] * q[:, None, :]).reshape(count, 16)
     rotation = (outer @ _ROTATION / outer[:, ::5].sum(axis=1)[:, None]).reshape(count, 3, 3)
     phi = rates * dt[:, None]
     theta2 = np.einsum('ni,ni->n', phi, phi)
-    theta = np.sqrt(theta2)
-    small = theta < _SERIES_ANGLE
-    safe = np.where(small, 1.0, theta)
-    alpha = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
-    beta = np.where(small, 1.0 / 6.0 - theta2 / 120.0, (safe - np.sin(safe)) / safe ** 3)
+    alpha, beta = _jacobian_coefficients(theta2)
     jacobian = (beta[:, None, None] * phi[:, :, None]) * phi[:, None, :]
     jacobian += ((phi * alpha[:, None]) @ _SKEW).reshape(count, 3, 3)
-    jacobian += (1.0 - beta * theta2)[:, None, None] * np.eye(3)
+    jacobian += (1.0 - beta * theta2)[:, None, None] * _EYE3
     m = (rotation * dt[:, None, None]) @ jacobian
     weights = np.empty((count, 4))
     weights[:, 0] = 1.0
@@ -250,14 +263,14 @@ def _propagated(p: FloatArray, coupling: FloatArray, duration: float,
     attitude = p[:3, :3] + coupling @ pax.T + cross @ coupling.T
     mean_rotation = -coupling[:, :3] / duration
     walk = model.gyroscope_random_walk ** 2
-    attitude += (model.gyroscope_noise_density ** 2 * duration * np.eye(3)
+    attitude += (model.gyroscope_noise_density ** 2 * duration * _EYE3
                  + walk * duration ** 3 / 3.0 * (mean_rotation @ mean_rotation.T))
     cross[:, :3] -= walk * duration ** 2 / 2.0 * mean_rotation
     out = p.copy()
     out[:3, :3] = 0.5 * (attitude + attitude.T)
     out[:3, 3:] = cross
     out[3:, :3] = cross.T
-    out[3:6, 3:6] += walk * duration * np.eye(3)
+    out[3:6, 3:6] += walk * duration * _EYE3
     diagonal = np.einsum('ii->i', out)
     np.maximum(diagonal, VARIANCE_FLOOR, out=diagonal)
     if not np.all(np.isfinite(out)):

@@ -132,3 +132,25 @@ def test_bad_steps_are_dropped_and_counted():
     assert covariance.rejected_samples == 4
     with pytest.raises(InputError, match='batch_size'):
         AttitudeCovariance(batch_size=0)
+
+
+def test_the_transition_block_is_the_integral_of_the_rotation_over_the_step():
+    """Against ``∫ R(q) expm(τ [ω×]) dτ`` by scipy quadrature, small and large steps (series
+    and closed-form branches)."""
+    from scipy.integrate import quad_vec
+    from scipy.linalg import expm
+    rng = np.random.default_rng(1)
+    q = rng.normal(size=(5, 4)) * 1.7
+    rates = rng.normal(size=(5, 3)) * 3.0
+    dt = np.array([0.001, 0.01, 0.1, 0.5, 1e-6])
+    expected = np.zeros((3, 12))
+    for k in range(5):
+        rotation = quaternion.to_matrix(q[k])
+        w = rates[k]
+        skew = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+        m = quad_vec(lambda tau: rotation @ expm(skew * tau), 0.0, dt[k], epsabs=1e-14)[0]
+        expected[:, :3] -= m
+        expected[:, 3:] -= (m[:, :, None] * w[None, None, :]).reshape(3, 9)
+    np.testing.assert_allclose(transition_blocks(q, rates, dt), expected, rtol=0, atol=1e-13)
+    per_row = sum(transition_blocks(q[i:i + 1], rates[i:i + 1], dt[i:i + 1]) for i in range(5))
+    np.testing.assert_allclose(per_row, expected, rtol=0, atol=1e-13)
