@@ -178,8 +178,8 @@ class AttitudeCovariance:
             self._fold()
 
     def add_samples(self, q: ArrayLike, rates: ArrayLike, dt: ArrayLike) -> None:
-        """Record many steps at once (``q`` (n, 4), ``rates`` (n, 3), ``dt`` (n,) or scalar),
-        folded in chunks of ``batch_size`` exactly as one :meth:`add_sample` per row would."""
+        """Record many steps at once (``q`` (n, 4), ``rates`` (n, 3), ``dt`` (n,) or scalar):
+        pending samples are folded first, then the rows in chunks of ``batch_size``."""
         self._fold()
         q = np.asarray(q, dtype=np.float64).reshape(-1, 4)
         rates = np.asarray(rates, dtype=np.float64).reshape(-1, 3)
@@ -193,8 +193,14 @@ class AttitudeCovariance:
 
     def _fold(self) -> None:
         if self._samples:
-            rows = np.array(self._samples)
-            self._samples.clear()
+            try:
+                rows = np.array(self._samples, dtype=np.float64)
+            except (TypeError, ValueError):
+                rows = np.empty((0, 0))
+            finally:
+                self._samples.clear()
+            if rows.ndim != 2 or rows.shape[1] != 8:
+                raise InputError('Expected 4 attitude, 3 rate and 1 step values per sample')
             self._apply(rows[:, :4], rows[:, 4:7], rows[:, 7])
 
     def _apply(self, q: FloatArray, rates: FloatArray, dt: FloatArray) -> None:

@@ -132,6 +132,10 @@ def test_bad_steps_are_dropped_and_counted():
     assert covariance.rejected_samples == 4
     with pytest.raises(InputError, match='batch_size'):
         AttitudeCovariance(batch_size=0)
+    with pytest.raises(InputError, match='per sample'):
+        covariance.add_sample((1.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.01)  # type: ignore[arg-type]
+        covariance.covariance
+    np.testing.assert_array_equal(covariance.covariance, before)
 
 
 def test_the_transition_block_is_the_integral_of_the_rotation_over_the_step():
