@@ -34,6 +34,7 @@ EXECUTABLES = {
     'propagation_node': 'rigid_body_attitude.ros.serve:main',
     'replay': 'rigid_body_attitude.tools.replay:main',
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
+    'imu_noise': 'rigid_body_attitude.tools.allan:main',
 }
 
 # rclpy is imported in one subpackage only: every other module must import without rclpy.
