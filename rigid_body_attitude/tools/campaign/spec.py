@@ -56,6 +56,7 @@ FloatArray = NDArray[np.float64]
 #: Most runs and output times of one campaign.
 MAX_RUNS = 10 ** 9
 MAX_OUTPUT_TIMES = 10_000
+MAX_COMMANDS = 1000
 DEFAULT_CHUNK = 8192
 COMMAND_EFFECT = 'constant_torque'
 _TOP_KEYS = {'name', 'description', 'scene', 'runs', 'seed', 'duration', 'output_times',
@@ -168,7 +169,8 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
         inertia=_inertia(dispersions.get('inertia')), attitude=attitude, attitude_cone=cone,
         omega_body=_optional_spread('dispersions.omega_body', dispersions.get('omega_body'),
                                     3, ('sigma', 'half_range')),
-        effects=_effects(dispersions.get('effects', {}), scene), commands=commands,
+        effects=_effects(dispersions.get('effects', {}), scene, bool(commands)),
+        commands=commands,
         command_dispersion=_command_dispersion(dispersions.get('commands'), commands),
         percentiles=_percentiles(statistics.get('percentiles', [5, 50, 95])),
         boresight=boresight,
@@ -295,8 +297,8 @@ def _with_command_effect(scene: Scene) -> Scene:
 
 
 def _commands(value: Any, duration: float) -> tuple[tuple[float, FloatArray], ...]:
-    if not isinstance(value, list) or len(value) > MAX_OUTPUT_TIMES:
-        raise SpecError(f'Expected commands to be a list of at most {MAX_OUTPUT_TIMES} '
+    if not isinstance(value, list) or len(value) > MAX_COMMANDS:
+        raise SpecError(f'Expected commands to be a list of at most {MAX_COMMANDS} '
                         f'{{time, torque}}, got {quote(value)}')
     commands = []
     for index, item in enumerate(value):
@@ -389,12 +391,15 @@ def _optional_spread(key: str, value: Any, size: int,
     return None if value is None else _spread(key, value, size, kinds)
 
 
-def _effects(value: Any, scene: Scene) -> dict[str, dict[str, Spread]]:
+def _effects(value: Any, scene: Scene, commands: bool) -> dict[str, dict[str, Spread]]:
     value = _mapping('dispersions.effects', value)
     named = dict(scene.effects)
     result: dict[str, dict[str, Spread]] = {}
     effects = {effect.name: effect for effect in scene.build_effects()}
     for name, parameters in value.items():
+        if name == COMMAND_EFFECT and scene.effects[-1][0] == COMMAND_EFFECT and commands:
+            raise SpecError(f'dispersions.effects.{name} carries the commands: disperse them '
+                            f'with dispersions.commands')
         if name not in named:
             raise SpecError(f'Unknown effect {quote(name)} in dispersions.effects; the scene '
                             f'names: {", ".join(sorted(named)) or "none"}')
