@@ -47,6 +47,7 @@ EXECUTABLES = {
     'propagation_node': 'rigid_body_attitude.ros.serve:main',
     'replay': 'rigid_body_attitude.tools.replay:main',
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
+    'campaign': 'rigid_body_attitude.tools.campaign:main',
 }
 
 # Names that say what they belong to, for <prefix>/bin on a shared PATH.
@@ -54,6 +55,7 @@ ALIASES = {
     'rigid-body-attitude-node': 'rigid_body_attitude.ros.serve:main',
     'rigid-body-attitude-replay': 'rigid_body_attitude.tools.replay:main',
     'rigid-body-attitude-study': 'rigid_body_attitude.tools.study:main',
+    'rigid-body-attitude-campaign': 'rigid_body_attitude.tools.campaign:main',
 }
 
 
@@ -88,7 +90,7 @@ setup(
         ('lib/' + PACKAGE_NAME, ['scripts/launchers/' + name for name in EXECUTABLES]),
         *config_data_files(),
     ],
-    install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags'],
+    install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags', 'dask[distributed]', 'pyarrow'],
     python_requires='>=3.10',
     zip_safe=True,
     maintainer='rigid_body_attitude developers',

@@ -34,6 +34,7 @@ EXECUTABLES = {
     'propagation_node': 'rigid_body_attitude.ros.serve:main',
     'replay': 'rigid_body_attitude.tools.replay:main',
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
+    'campaign': 'rigid_body_attitude.tools.campaign:main',
 }
 
 # rclpy is imported in one subpackage only: every other module must import without rclpy.
@@ -148,6 +149,7 @@ def test_config_installed_recursively():
     for relative in source_files:
         assert filecmp.cmp(source_config / relative, installed_config / relative, shallow=False)
     assert sorted((installed_config / 'scenes').glob('*.yaml')), 'no scene installed'
+    assert sorted((installed_config / 'campaigns').glob('*.yaml')), 'no campaign installed'
 
 
 @pytest.mark.parametrize('name', sorted(EXECUTABLES))
