@@ -311,7 +311,8 @@ class SceneBatch:
         the number of steps."""
         if not np.isfinite(t_end):
             raise InputError(f'Expected `t_end` to be finite, got {t_end!r}')
-        speed = float(np.sqrt(np.fmax.reduce(np.sum(self._state[4:] ** 2, axis=0))))  # NaN: skipped
+        # fmax skips NaN: discarded bodies take no part in the check.
+        speed = float(np.sqrt(np.fmax.reduce(np.sum(self._state[4:] ** 2, axis=0))))
         if self.scene.step * speed > 2.0:
             raise InputError(f'A body turns {self.scene.step * speed:.3g} rad per step of '
                              f'{self.scene.step} s: above RK4\'s limit of 2 rad')

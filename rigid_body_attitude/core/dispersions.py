@@ -76,8 +76,8 @@ class RunStreams:
     def seeds(self) -> UintArray:
         """Each run's seed: its stream's first counter (what reproduces it, with the key)."""
         with np.errstate(over='ignore'):
-            seeds: UintArray = self.key + _GAMMA * (self.runs * np.uint64(_PER_RUN)
-                                                   + np.uint64(1))
+            first = self.runs * np.uint64(_PER_RUN) + np.uint64(1)
+            seeds: UintArray = self.key + _GAMMA * first
         return seeds
 
     def bits(self, category: int, count: int) -> UintArray:

@@ -9,7 +9,6 @@ import os
 import signal
 import threading
 import time
-from pathlib import Path
 from typing import Any, Iterator
 
 import numpy as np
@@ -62,7 +61,7 @@ def assert_same_runs(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None
 
 def test_serial_and_a_two_worker_cluster_give_bit_identical_runs(tmp_path, client):
     serial = run_campaign(spec(), tmp_path / 'serial', serial=True)
-    cluster = run_campaign(spec(chunk=7), tmp_path / 'cluster', client=client)
+    cluster = run_campaign(spec(chunk=7), tmp_path / 'cluster', client=client, plot=False)
     assert serial.runs == cluster.runs == 60 and serial.failed == cluster.failed == 0
     assert cluster.chunks_run == 9
     serial_runs = read_runs(tmp_path / 'serial', spec())
@@ -82,35 +81,35 @@ def test_dispersions_are_applied_per_run():
     assert len({tuple(q) for q in parameters.attitude.round(12)}) == 60
     assert parameters.inertia is not None and parameters.inertia.shape == (60, 3, 3)
     damping = parameters.effects['viscous_damping']['coefficient']
-    assert damping.shape == (60,) and 0.0 <= damping.min() and damping.max() <= 0.1
+    assert damping.shape == (60, 3) and 0.0 <= damping.min() and damping.max() <= 0.1
     assert parameters.commands.shape == (2, 60, 3)
     assert abs(np.mean(parameters.commands[0, :, 2]) - 0.1) < 0.03
     assert np.std(parameters.commands[1, :, 0]) > 0.02
 
 
 def test_an_interrupted_campaign_resumes_without_redoing_finished_chunks(tmp_path):
-    first = run_campaign(spec(), tmp_path, serial=True)
+    first = run_campaign(spec(), tmp_path, serial=True, plot=False)
     assert first.chunks_run == 4
     complete = read_runs(tmp_path, spec())
     chunk_files = sorted((tmp_path / 'chunks').glob('*.parquet'))
     stamps = {path.name: path.stat().st_mtime_ns for path in chunk_files}
     chunk_files[2].unlink()  # as if interrupted before chunk 2 was written
     (tmp_path / 'chunks' / '00002.123.tmp').write_bytes(b'half a file')
-    again = run_campaign(spec(), tmp_path, serial=True)
+    again = run_campaign(spec(), tmp_path, serial=True, plot=False)
     assert (again.chunks_run, again.chunks_resumed) == (1, 3)
     for path in sorted((tmp_path / 'chunks').glob('*.parquet')):
         if path.name != chunk_files[2].name:
             assert path.stat().st_mtime_ns == stamps[path.name]
     assert_same_runs(complete, read_runs(tmp_path, spec()))
     with pytest.raises(SpecError, match='another campaign'):
-        run_campaign(spec(seed=12), tmp_path, serial=True)
+        run_campaign(spec(seed=12), tmp_path, serial=True, plot=False)
 
 
 def test_a_worker_killed_mid_campaign_loses_and_duplicates_no_run(tmp_path, client):
-    slow = spec(runs=240, chunk=20, duration=4.0)
+    slow = spec(runs=160, chunk=20, duration=3.0)
     result: dict[str, Any] = {}
     thread = threading.Thread(target=lambda: result.update(
-        done=run_campaign(slow, tmp_path / 'killed', client=client)))
+        done=run_campaign(slow, tmp_path / 'killed', client=client, plot=False)))
     thread.start()
     killed = False
     deadline = time.monotonic() + 60.0
@@ -125,10 +124,10 @@ def test_a_worker_killed_mid_campaign_loses_and_duplicates_no_run(tmp_path, clie
         time.sleep(0.05)
     thread.join(timeout=120.0)
     assert killed and not thread.is_alive()
-    assert result['done'].runs == 240 and result['done'].chunks_run == 12
+    assert result['done'].runs == 160 and result['done'].chunks_run == 8
     runs = read_runs(tmp_path / 'killed', slow)  # checks every run exactly once
-    assert np.array_equal(runs['run'], np.arange(240))
-    assert_same_runs(runs, run_chunk(slow, np.arange(240)))
+    assert np.array_equal(runs['run'], np.arange(160))
+    assert_same_runs(runs, run_chunk(slow, np.arange(160)))
     client.wait_for_workers(2, timeout=60)
 
 
@@ -136,7 +135,7 @@ def test_failed_runs_are_recorded_with_seed_and_parameters_and_counted(tmp_path)
     failing = spec(runs=40, dispersions={
         'omega_body': {'sigma': [120.0, 120.0, 120.0]},  # some above 2 rad per 0.01 s step
         'effects': {'viscous_damping': {'coefficient': {'sigma': 0.02}}}})  # some negative
-    result = run_campaign(failing, tmp_path, serial=True)
+    result = run_campaign(failing, tmp_path, serial=True, plot=False)
     runs = read_runs(tmp_path, failing)
     reasons = {FAILURE_REASONS[r] for r in runs['reason'][runs['failed']]}
     assert reasons == {'effect parameter out of range', 'rate beyond the RK4 step limit'}
@@ -212,9 +211,7 @@ def test_cli_runs_a_campaign_and_refuses_bad_options(tmp_path, capsys):
                  [str(path), '--out', 'x', '--serial', '--workers', '2'],
                  [str(tmp_path / 'missing.yaml'), '--out', 'x', '--serial'],
                  ['replay', '--out', 'x']):
-        with pytest.raises(SystemExit) as code:
-            raise SystemExit(main(argv))
-        assert code.value.code == 2
+        assert main(argv) == 2
         err = capsys.readouterr().err
         assert err.count('\n') == 1 and err.startswith('error: '), err
 

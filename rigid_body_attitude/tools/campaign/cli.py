@@ -116,6 +116,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point: 0 on success, 2 with ``error: ...`` for unusable input."""
     try:
         return _run(list(sys.argv[1:] if argv is None else argv))
+    except SystemExit as done:  # argparse: --help (0) or a usage error (2, printed)
+        return done.code if isinstance(done.code, int) else USAGE_ERROR
     except (AttitudeError, OSError, UnicodeError) as err:
         print(f'error: {str(err).splitlines()[0] if str(err) else type(err).__name__}',
               file=sys.stderr)

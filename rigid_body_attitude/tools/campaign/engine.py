@@ -113,12 +113,12 @@ def _progress(enabled: bool | None, spec: CampaignSpec, done: int) -> Any:
 
 def run_campaign(spec: CampaignSpec, out: str | Path, *, scheduler: str = '',
                  workers: int = 0, client: Any = None, serial: bool = False,
-                 progress: bool | None = False) -> CampaignResult:
+                 progress: bool | None = False, plot: bool = True) -> CampaignResult:
     """Run (or resume) ``spec`` into the folder ``out``; see the module.
 
     ``client``: an existing ``distributed.Client`` (else one of ``scheduler`` or a local
     cluster of ``workers`` processes); ``serial``: no Dask at all. ``progress``: a bar on
-    stderr (``None``: on a terminal only).
+    stderr (``None``: on a terminal only). ``plot``: write ``summary.png``.
     """
     begin = time.perf_counter()
     store = ChunkStore(out, spec)
@@ -140,7 +140,7 @@ def run_campaign(spec: CampaignSpec, out: str | Path, *, scheduler: str = '',
     finally:
         bar.close()
     compute = time.perf_counter() - begin
-    result = summarise(spec, store, len(chunks))
+    result = summarise(spec, store, len(chunks), plot)
     result.chunks_run, result.chunks_resumed = len(pending), len(chunks) - len(pending)
     result.compute_seconds, result.total_seconds = compute, time.perf_counter() - begin
     return result
@@ -183,8 +183,10 @@ def read_runs(folder: str | Path, spec: CampaignSpec) -> dict[str, NDArray[Any]]
     return arrays
 
 
-def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int) -> CampaignResult:
-    """Read every run back and write ``statistics.csv``, ``summary.json``, ``summary.png``."""
+def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
+              plot: bool = True) -> CampaignResult:
+    """Read every run back and write ``statistics.csv``, ``summary.json`` and (with
+    ``plot``) ``summary.png``."""
     arrays = read_runs(store.folder, spec)
     failed = arrays['failed'].astype(bool)
     times = np.array((0.0,) + spec.output_times)
@@ -200,8 +202,9 @@ def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int) -> Campai
                'statistics': {name: table[name].tolist() for name in METRICS},
                'failed_runs': _failed_runs(arrays, failed)}
     (store.folder / 'summary.json').write_text(json.dumps(summary, indent=1, allow_nan=True))
-    write_envelopes(store.folder / 'summary.png', times, spec.percentiles, table,
-                    f'{spec.name}: {spec.runs} runs, {int(np.sum(failed))} failed')
+    if plot:
+        write_envelopes(store.folder / 'summary.png', times, spec.percentiles, table,
+                        f'{spec.name}: {spec.runs} runs, {int(np.sum(failed))} failed')
     return CampaignResult(folder=store.folder, runs=spec.runs, failed=int(np.sum(failed)),
                           chunks_run=0, chunks_resumed=chunk_count, compute_seconds=0.0,
                           total_seconds=0.0, times=times, statistics=table,

@@ -300,7 +300,7 @@ def _commands(value: Any, duration: float) -> tuple[tuple[float, FloatArray], ..
     if not isinstance(value, list) or len(value) > MAX_COMMANDS:
         raise SpecError(f'Expected commands to be a list of at most {MAX_COMMANDS} '
                         f'{{time, torque}}, got {quote(value)}')
-    commands = []
+    commands: list[tuple[float, FloatArray]] = []
     for index, item in enumerate(value):
         key = f'commands[{index}]'
         item = _mapping(key, item)
