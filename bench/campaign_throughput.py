@@ -107,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
         for workers in (1, 2):
             begin = time.perf_counter()
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
+                                   dashboard_address=':0', silence_logs=logging.ERROR)
             clusters[workers] = (cluster, Client(cluster))
             clusters[workers][1].run(lambda: __import__('rigid_body_attitude.tools.campaign'))
             startup[f'{workers} worker{"s" if workers > 1 else ""}'] = \

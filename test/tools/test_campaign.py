@@ -43,7 +43,7 @@ SPEC = {'name': 'box_campaign', 'scene': SCENE, 'runs': 60, 'seed': 11, 'duratio
 def client() -> Iterator[Client]:
     """Two single-threaded worker processes (each with its nanny)."""
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+                      dashboard_address=':0', silence_logs=logging.ERROR) as cluster, \
             Client(cluster) as dask_client:
         yield dask_client
 

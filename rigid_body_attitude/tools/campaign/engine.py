@@ -99,7 +99,7 @@ def dask_client(scheduler: str = '', workers: int = 0) -> Iterator[Any]:
             yield client
         return
     with LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
-                      processes=True, dashboard_address=None,
+                      processes=True, dashboard_address=':0',
                       silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
         yield client
 

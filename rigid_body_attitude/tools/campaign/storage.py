@@ -103,7 +103,7 @@ class ChunkStore:
         """Write chunk ``index`` whole (temporary file, then an atomic rename)."""
         target = self.path(index)
         temporary = target.with_suffix(f'.{os.getpid()}.tmp')
-        pq.write_table(table_of(columns), temporary)
+        pq.write_table(table_of(columns), temporary, compression='none')
         os.replace(temporary, target)
 
     def read_all(self, chunk_count: int) -> dict[str, NDArray[Any]]:

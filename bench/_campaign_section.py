@@ -1,0 +1,53 @@
+"""The "Campaigns on Dask" section of ``docs/performance.md``, from
+``bench/results/campaign/throughput.json`` (``bench/campaign_throughput.py --json``).
+
+Used by ``bench/performance_report.py``.
+"""
+
+from __future__ import annotations
+
+from typing import List, Optional
+
+TARGET_OVERHEAD = 0.15
+
+
+def campaign_section(result: Optional[dict]) -> List[str]:
+    """Markdown lines: the table of times and the overhead and scaling verdicts."""
+    if result is None:
+        return []
+    body_steps = result['body_steps']
+    lines = [
+        '## Campaigns on Dask (`campaign`)', '',
+        f'`python bench/campaign_throughput.py --json bench/results/campaign/throughput.json`: '
+        f'{result["runs"]} runs of the batch-with-effects scene (gravity gradient and viscous '
+        f'damping, 1 ms RK4 steps), each with its own inertia tensor (axes uniform on SO(3)), '
+        f'attitude, rates and damping, {result["steps"]} steps with {result["outputs"]} output '
+        f'times. "bare batch": one `SceneBatch` of every run in one process, parameters drawn '
+        f'beforehand. "campaign": `run_campaign` on a `LocalCluster` of single-threaded worker '
+        f'processes started beforehand: drawing the parameters, the chunk tasks (8 192 runs '
+        f'each), the results sent back and written as Parquet, read back, checked and '
+        f'summarised (the PNG apart). Best of {len(result["times_s"]["bare"])} interleaved '
+        f'repetitions; {result["cpus"]} CPUs shared with other users (load average '
+        f'{result["load_average_1min"]:.1f} at the end).', '',
+        '| engine | best [s] | median [s] | body-steps/s (best) |',
+        '|---|---:|---:|---:|']
+    for name, values in result['times_s'].items():
+        ordered = sorted(values)
+        median = ordered[len(ordered) // 2] if len(ordered) % 2 else \
+            0.5 * (ordered[len(ordered) // 2 - 1] + ordered[len(ordered) // 2])
+        label = 'bare batch' if name == 'bare' else f'campaign, {name}'
+        lines.append(f'| {label} | {min(values):.2f} | {median:.2f} | '
+                     f'{body_steps / min(values):.3g} |')
+    overhead = result['overhead']
+    verdict = 'met' if overhead <= TARGET_OVERHEAD else 'NOT met'
+    startup = ', '.join(f'{name} {seconds:.1f} s'
+                        for name, seconds in result['cluster_startup_s'].items())
+    lines += [
+        '',
+        f'- campaign overhead on 1 worker against the bare batch: {overhead * 100:.1f} % '
+        f'(target at most {TARGET_OVERHEAD * 100:.0f} % at 10⁵ runs): {verdict}',
+        f'- scaling from 1 to 2 local workers: ×{result["scaling_1_to_2"]:.2f}',
+        f'- runs identical bit for bit on 1 and 2 workers: {result["identical"]}',
+        f'- fixed costs outside the table: cluster start-up ({startup}) and the summary PNG '
+        f'({result["plot_s"]:.1f} s)', '']
+    return lines
