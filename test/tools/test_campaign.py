@@ -61,7 +61,9 @@ def assert_same_runs(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None
 
 def test_serial_and_a_two_worker_cluster_give_bit_identical_runs(tmp_path, client):
     serial = run_campaign(spec(), tmp_path / 'serial', serial=True)
-    cluster = run_campaign(spec(chunk=7), tmp_path / 'cluster', client=client, plot=False)
+    # Through the scheduler's address, as `campaign --scheduler ADDRESS` does.
+    cluster = run_campaign(spec(chunk=7), tmp_path / 'cluster',
+                           scheduler=client.scheduler.address, plot=False)
     assert serial.runs == cluster.runs == 60 and serial.failed == cluster.failed == 0
     assert cluster.chunks_run == 9
     serial_runs = read_runs(tmp_path / 'serial', spec())
@@ -210,7 +212,8 @@ def test_cli_runs_a_campaign_and_refuses_bad_options(tmp_path, capsys):
     for argv in ([str(path)], [str(path), '--out', 'x', '--workers', '-1'],
                  [str(path), '--out', 'x', '--serial', '--workers', '2'],
                  [str(tmp_path / 'missing.yaml'), '--out', 'x', '--serial'],
-                 ['replay', '--out', 'x']):
+                 ['replay', '--out', 'x'],
+                 [str(path), '--out', str(tmp_path / 'o'), '--scheduler', 'tcp://127.0.0.1:9']):
         assert main(argv) == 2
         err = capsys.readouterr().err
         assert err.count('\n') == 1 and err.startswith('error: '), err

@@ -91,7 +91,7 @@ def dask_client(scheduler: str = '', workers: int = 0) -> Iterator[Any]:
     from distributed import Client, LocalCluster
     if scheduler:
         try:
-            client = Client(scheduler, timeout='10s')
+            client = Client(scheduler, timeout='5s')
         except (OSError, TimeoutError, ValueError, TypeError) as err:
             raise CampaignError(f'Cannot reach the Dask scheduler at {scheduler!r}: '
                                 f'{str(err).splitlines()[0] if str(err) else err!r}') from None
