@@ -9,7 +9,8 @@ Layout of ``OUT``::
     summary.json         counts, failures (run, seed, reason, time), the statistics
     summary.png          dispersion envelopes over time
 
-A chunk file exists only once its chunk is complete (written to a temporary name, then
+Chunk files are uncompressed: random doubles hardly compress, and writing stays cheap. A
+chunk file exists only once its chunk is complete (written to a temporary name, then
 renamed, which is atomic on one file system), so a campaign interrupted anywhere resumes by
 running the chunks without a file; the manifest must match the spec, or the folder belongs to
 another campaign and is refused.
