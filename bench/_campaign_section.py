@@ -1,24 +1,31 @@
 """The "Campaigns on Dask" section of ``docs/performance.md``, from
-``bench/results/campaign/throughput.json`` (``bench/campaign_throughput.py --json``).
+``bench/results/campaign/throughput*.json`` (``bench/campaign_throughput.py --json``: one
+table per file, e.g. 200 and 1000 steps per run).
 
 Used by ``bench/performance_report.py``.
 """
 
 from __future__ import annotations
 
-from typing import List, Optional
+from typing import List
 
 TARGET_OVERHEAD = 0.15
 
 
-def campaign_section(result: Optional[dict]) -> List[str]:
-    """Markdown lines: the table of times and the overhead and scaling verdicts."""
-    if result is None:
+def campaign_section(results: List[dict]) -> List[str]:
+    """Markdown lines: per result, the table of times and the overhead and scaling."""
+    if not results:
         return []
+    lines = ['## Campaigns on Dask (`campaign`)', '']
+    for result in results:
+        lines += _result_lines(result)
+    return lines
+
+
+def _result_lines(result: dict) -> List[str]:
     body_steps = result['body_steps']
     lines = [
-        '## Campaigns on Dask (`campaign`)', '',
-        f'`python bench/campaign_throughput.py --json bench/results/campaign/throughput.json`: '
+        f'`python bench/campaign_throughput.py --steps {result["steps"]}`: '
         f'{result["runs"]} runs of the batch-with-effects scene (gravity gradient and viscous '
         f'damping, 1 ms RK4 steps), each with its own inertia tensor (axes uniform on SO(3)), '
         f'attitude, rates and damping, {result["steps"]} steps with {result["outputs"]} output '

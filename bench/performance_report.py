@@ -10,8 +10,8 @@ Composes, from saved results in ``--results-dir`` (default ``bench/results/node`
 * ``scenes.json`` of ``bench/dynamics_scenes.py`` and ``effect_costs.json`` of
   ``bench/effect_costs.py`` in ``bench/results/dynamics`` (section "Dynamics scenes and
   effects", issue 13, with the batch with effects from ``batch.json``);
-* ``throughput.json`` of ``bench/campaign_throughput.py --json`` in ``bench/results/campaign``
-  (section "Campaigns on Dask");
+* ``throughput*.json`` of ``bench/campaign_throughput.py --json`` in
+  ``bench/results/campaign`` (section "Campaigns on Dask");
 * a closing section listing every target of issue 7 with the measured figure and, where one
   is missed, by how much and what limits it (``LIMITS``: from the profiles described there).
 
@@ -30,7 +30,9 @@ Usage (the commands that produced the committed report)::
     python bench/dynamics_scenes.py --before bench/results/dynamics/scenes_before.json \\
       --json bench/results/dynamics/scenes.json
     python bench/effect_costs.py --json bench/results/dynamics/effect_costs.json
-    python bench/campaign_throughput.py --json bench/results/campaign/throughput.json
+    python bench/campaign_throughput.py --repeats 2 --json bench/results/campaign/throughput.json
+    python bench/campaign_throughput.py --steps 1000 --repeats 1 \\
+      --json bench/results/campaign/throughput_1000steps.json
     python bench/performance_report.py
 """
 
@@ -475,7 +477,9 @@ def render(results_dir: Path, png_name: str) -> str:
     lines += _node_sections.dynamics_cpu_section(_load(results_dir / 'node_dynamics_cpu.json'))
     lines += DYNAMICS_NOTE.splitlines() + ['']
     lines += _campaign_section.campaign_section(
-        _load(results_dir.parent / 'campaign' / 'throughput.json'))
+        [json.loads(path.read_text()) for path in sorted(
+            (results_dir.parent / 'campaign').glob('throughput*.json'),
+            key=lambda path: json.loads(path.read_text())['steps'])])
     return '\n'.join(lines)
 
 
