@@ -19,6 +19,13 @@ def campaign_section(results: List[dict]) -> List[str]:
     lines = ['## Campaigns on Dask (`campaign`)', '']
     for result in results:
         lines += _result_lines(result)
+    lines += [
+        'What a campaign adds to the engine is a cost per run (drawing its parameters, its '
+        'metrics at the output times, its Parquet row written and read back) and the CPU of '
+        'Dask\'s own processes while it runs, not a cost per step: '
+        'its share falls as runs get longer, as the tables with more steps per run show. '
+        'Scaling to 2 workers is bounded by the machine: both of its CPUs are shared with '
+        'other users, and the client (writing the chunks) runs beside the workers.', '']
     return lines
 
 
@@ -33,9 +40,9 @@ def _result_lines(result: dict) -> List[str]:
         f'beforehand. "campaign": `run_campaign` on a `LocalCluster` of single-threaded worker '
         f'processes started beforehand: drawing the parameters, the chunk tasks (8 192 runs '
         f'each), the results sent back and written as Parquet, read back, checked and '
-        f'summarised (the PNG apart). Best of {len(result["times_s"]["bare"])} interleaved '
-        f'repetitions, wall-clock and CPU seconds (a campaign\'s: its workers\' and the '
-        f'client\'s, which also holds the scheduler); {result["cpus"]} CPUs shared with other '
+        f'summarised (the PNG apart). {_repeats(len(result["times_s"]["bare"]))}, '
+        f'wall-clock and CPU seconds (a campaign\'s: its workers\' and the client\'s, '
+        f'which also holds the scheduler); {result["cpus"]} CPUs shared with other '
         f'users (load average {result["load_average_1min"]:.1f} at the end), so wall-clock '
         f'times are those of a busy machine and CPU seconds the steadier measure.', '',
         '| engine | best [s] | median [s] | body-steps/s (best) | CPU [s] (best) |',
@@ -62,3 +69,7 @@ def _result_lines(result: dict) -> List[str]:
         f'- fixed costs outside the table: cluster start-up ({startup}) and the summary PNG '
         f'({result["plot_s"]:.1f} s)', '']
     return lines
+
+
+def _repeats(count: int) -> str:
+    return 'One run of each' if count == 1 else f'Best of {count} interleaved repetitions'
