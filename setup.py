@@ -48,6 +48,7 @@ EXECUTABLES = {
     'replay': 'rigid_body_attitude.tools.replay:main',
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
     'imu_noise': 'rigid_body_attitude.tools.allan:main',
+    'campaign': 'rigid_body_attitude.tools.campaign:main',
 }
 
 # Names that say what they belong to, for <prefix>/bin on a shared PATH.
@@ -56,6 +57,7 @@ ALIASES = {
     'rigid-body-attitude-replay': 'rigid_body_attitude.tools.replay:main',
     'rigid-body-attitude-study': 'rigid_body_attitude.tools.study:main',
     'rigid-body-attitude-imu-noise': 'rigid_body_attitude.tools.allan:main',
+    'rigid-body-attitude-campaign': 'rigid_body_attitude.tools.campaign:main',
 }
 
 
@@ -90,7 +92,8 @@ setup(
         ('lib/' + PACKAGE_NAME, ['scripts/launchers/' + name for name in EXECUTABLES]),
         *config_data_files(),
     ],
-    install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags', 'allantools'],
+    install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags', 'allantools', 'dask[distributed]',
+                      'pyarrow'],
     python_requires='>=3.10',
     zip_safe=True,
     maintainer='rigid_body_attitude developers',

@@ -35,6 +35,7 @@ EXECUTABLES = {
     'replay': 'rigid_body_attitude.tools.replay:main',
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
     'imu_noise': 'rigid_body_attitude.tools.allan:main',
+    'campaign': 'rigid_body_attitude.tools.campaign:main',
 }
 
 # rclpy is imported in one subpackage only: every other module must import without rclpy.
@@ -149,6 +150,7 @@ def test_config_installed_recursively():
     for relative in source_files:
         assert filecmp.cmp(source_config / relative, installed_config / relative, shallow=False)
     assert sorted((installed_config / 'scenes').glob('*.yaml')), 'no scene installed'
+    assert sorted((installed_config / 'campaigns').glob('*.yaml')), 'no campaign installed'
 
 
 @pytest.mark.parametrize('name', sorted(EXECUTABLES))

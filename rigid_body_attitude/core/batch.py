@@ -282,12 +282,37 @@ class SceneBatch:
         for effect in self.input_routes[input_name]:
             effect.accept_input(input_name, t, vector)
 
+    def set_effect_parameters(self, effect_parameters: Mapping[str, Mapping[str, ArrayLike]]
+                              ) -> None:
+        """Replace dispersed effect parameters (one value per body, as in the constructor)
+        for the steps that follow, e.g. a new torque per body at a command time."""
+        for index, effect in enumerate(self.effects):
+            given = effect_parameters.get(effect.name)
+            if given:
+                parameters, dispersed = self._parameters[index]
+                update, names = _effect_parameters(effect, given, self.count)
+                self._parameters[index] = ({**parameters, **{name: update[name]
+                                                             for name in names}},
+                                           dispersed | names)
+        unknown = sorted(set(effect_parameters) - {effect.name for effect in self.effects})
+        if unknown:
+            raise InputError(f'Scene {self.scene.name!r} has no effect {unknown[0]!r}')
+
+    def discard(self, bodies: NDArray[np.bool_]) -> None:
+        """Take ``bodies`` (a mask of N) out of the dynamics: their state becomes NaN, which
+        stays NaN and touches no other body (e.g. runs whose dynamics failed)."""
+        mask = np.asarray(bodies, dtype=bool)
+        if mask.shape != (self.count,):
+            raise InputError(f'Expected a mask of {self.count} bodies, got {mask.shape}')
+        self._state[:, mask] = np.nan
+
     def advance_to(self, t_end: float) -> int:
         """Advance every body to ``t_end`` with the single-body propagator's steps; returns
         the number of steps."""
         if not np.isfinite(t_end):
             raise InputError(f'Expected `t_end` to be finite, got {t_end!r}')
-        speed = float(np.sqrt(np.max(np.sum(self._state[4:] ** 2, axis=0))))
+        # fmax skips NaN: discarded bodies take no part in the check.
+        speed = float(np.sqrt(np.fmax.reduce(np.sum(self._state[4:] ** 2, axis=0))))
         if self.scene.step * speed > 2.0:
             raise InputError(f'A body turns {self.scene.step * speed:.3g} rad per step of '
                              f'{self.scene.step} s: above RK4\'s limit of 2 rad')

@@ -1,0 +1,238 @@
+"""Running a campaign: chunks of runs as Dask tasks (or in this process), results kept.
+
+:func:`run_campaign` splits the runs into chunks of ``spec.chunk`` consecutive runs, skips
+the chunks already in the results folder (:class:`.ChunkStore`), and runs the others with
+:func:`.run_chunk`: as tasks of a ``dask.distributed`` cluster (a :class:`LocalCluster` of
+one single-threaded worker process per CPU by default, or the scheduler at ``scheduler``),
+or one after the other in this process (``serial``). Each chunk's result comes back to this
+process, which writes it: workers need no shared file system, and a chunk is written once
+however often Dask ran it (a task whose worker died is run again elsewhere by the scheduler,
+so no run is lost, and a chunk written already is never written again, so none is
+duplicated). Then the runs are read back, checked (every run exactly once) and summarised:
+``statistics.csv``, ``summary.json``, ``summary.png`` (:mod:`.storage`).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import logging
+import os
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigid_body_attitude.core.errors import AttitudeError
+from rigid_body_attitude.tools.campaign.plot import write_envelopes
+from rigid_body_attitude.tools.campaign.runner import FAILURE_REASONS, run_chunk
+from rigid_body_attitude.tools.campaign.spec import CampaignSpec
+from rigid_body_attitude.tools.campaign.statistics import METRICS, percentile_table
+from rigid_body_attitude.tools.campaign.storage import ChunkStore, spec_digest
+
+__all__ = ['CampaignError', 'CampaignResult', 'chunk_runs', 'dask_client', 'default_workers',
+           'read_runs', 'run_campaign']
+
+#: Failed runs listed in ``summary.json`` at most (all are in the chunk files).
+MAX_LISTED_FAILURES = 1000
+_PARAMETER_PREFIXES = ('attitude0', 'omega_body0', 'inertia', 'effect.', 'commands')
+
+
+class CampaignError(AttitudeError):
+    """A campaign cannot run: no scheduler, a task that failed on every try, lost results."""
+
+
+@dataclass
+class CampaignResult:
+    """What a campaign produced.
+
+    Attributes:
+        folder: the results folder; runs, failed: counts.
+        chunks_run, chunks_resumed: chunks computed now and found finished already.
+        elapsed: seconds of computing (chunks) and of the whole call.
+        times: ``0`` and the output times [s]; statistics: percentiles (P, T) per metric.
+        failures: failed runs by reason.
+    """
+
+    folder: Path
+    runs: int
+    failed: int
+    chunks_run: int
+    chunks_resumed: int
+    compute_seconds: float
+    total_seconds: float
+    times: NDArray[np.float64]
+    statistics: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    failures: dict[str, int] = field(default_factory=dict)
+
+
+def default_workers() -> int:
+    """Worker processes of the default local cluster: the CPUs this process may use."""
+    return max(1, len(os.sched_getaffinity(0)))
+
+
+def chunk_runs(spec: CampaignSpec) -> list[NDArray[np.int64]]:
+    """The run indices of each chunk."""
+    return [np.arange(start, min(start + spec.chunk, spec.runs), dtype=np.int64)
+            for start in range(0, spec.runs, spec.chunk)]
+
+
+@contextmanager
+def dask_client(scheduler: str = '', workers: int = 0) -> Iterator[Any]:
+    """A ``distributed.Client``: of the scheduler at ``scheduler``, or of a local cluster of
+    ``workers`` single-threaded worker processes (default :func:`default_workers`), closed
+    on exit."""
+    from distributed import Client, LocalCluster
+    if scheduler:
+        try:
+            client = Client(scheduler, timeout='5s')
+        except (OSError, TimeoutError, ValueError, TypeError) as err:
+            raise CampaignError(f'Cannot reach the Dask scheduler at {scheduler!r}: '
+                                f'{str(err).splitlines()[0] if str(err) else err!r}') from None
+        with client:
+            yield client
+        return
+    with LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
+                      processes=True, dashboard_address=':0',
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+        yield client
+
+
+def _progress(enabled: bool | None, spec: CampaignSpec, done: int) -> Any:
+    from tqdm import tqdm
+    return tqdm(total=spec.runs, initial=done, unit='run', unit_scale=True, file=sys.stderr,
+                disable=None if enabled is None else not enabled, mininterval=0.5,
+                desc=spec.name)
+
+
+def run_campaign(spec: CampaignSpec, out: str | Path, *, scheduler: str = '',
+                 workers: int = 0, client: Any = None, serial: bool = False,
+                 progress: bool | None = False, plot: bool = True) -> CampaignResult:
+    """Run (or resume) ``spec`` into the folder ``out``; see the module.
+
+    ``client``: an existing ``distributed.Client`` (else one of ``scheduler`` or a local
+    cluster of ``workers`` processes); ``serial``: no Dask at all. ``progress``: a bar on
+    stderr (``None``: on a terminal only). ``plot``: write ``summary.png``.
+    """
+    begin = time.perf_counter()
+    store = ChunkStore(out, spec)
+    chunks = chunk_runs(spec)
+    pending = [index for index in range(len(chunks)) if not store.done(index)]
+    done_runs = sum(chunks[index].shape[0] for index in range(len(chunks))
+                    if index not in set(pending))
+    bar = _progress(progress, spec, done_runs)
+    try:
+        if serial:
+            for index in pending:
+                store.write(index, run_chunk(spec, chunks[index]))
+                bar.update(chunks[index].shape[0])
+        elif client is not None:
+            _run_on(client, spec, store, chunks, pending, bar)
+        elif pending:
+            with dask_client(scheduler, workers) as own:
+                _run_on(own, spec, store, chunks, pending, bar)
+    finally:
+        bar.close()
+    compute = time.perf_counter() - begin
+    result = summarise(spec, store, len(chunks), plot)
+    result.chunks_run, result.chunks_resumed = len(pending), len(chunks) - len(pending)
+    result.compute_seconds, result.total_seconds = compute, time.perf_counter() - begin
+    return result
+
+
+def _run_on(client: Any, spec: CampaignSpec, store: ChunkStore,
+            chunks: list[NDArray[np.int64]], pending: list[int], bar: Any) -> None:
+    """Submit the pending chunks; write each result as it arrives."""
+    from distributed import as_completed
+    token = spec_digest(spec)[:16]
+    shared = client.scatter(spec, broadcast=True)
+    futures = {client.submit(run_chunk, shared, chunks[index], pure=False,
+                             key=f'campaign-{token}-chunk-{index}'): index
+               for index in pending}
+    for future in as_completed(futures):
+        index = futures[future]
+        try:
+            columns = future.result()
+        except Exception as err:  # noqa: B902 - whatever the task raised, after Dask's retries
+            raise CampaignError(f'Chunk {index} failed: {type(err).__name__}: '
+                                f'{str(err).splitlines()[0] if str(err) else ""}; the '
+                                f'finished chunks are kept, run again to resume') from None
+        if not store.done(index):
+            store.write(index, columns)
+        bar.update(chunks[index].shape[0])
+        future.release()
+
+
+def read_runs(folder: str | Path, spec: CampaignSpec) -> dict[str, NDArray[Any]]:
+    """Every run of a finished campaign, in run order (checked: each run exactly once)."""
+    store = ChunkStore(folder, spec)
+    count = len(chunk_runs(spec))
+    missing = [index for index in range(count) if not store.done(index)]
+    if missing:
+        raise CampaignError(f'{len(missing)} of {count} chunks are not finished (first: '
+                            f'{missing[0]}); run the campaign again to resume')
+    arrays = store.read_all(count)
+    if not np.array_equal(arrays['run'], np.arange(spec.runs)):
+        raise CampaignError(f'The chunks of {folder} do not hold each run exactly once')
+    return arrays
+
+
+def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
+              plot: bool = True) -> CampaignResult:
+    """Read every run back and write ``statistics.csv``, ``summary.json`` and (with
+    ``plot``) ``summary.png``."""
+    arrays = read_runs(store.folder, spec)
+    failed = arrays['failed'].astype(bool)
+    times = np.array((0.0,) + spec.output_times)
+    table = percentile_table({name: arrays[name] for name in METRICS}, ~failed,
+                             spec.percentiles)
+    failures = {reason: int(np.sum(arrays['reason'] == index))
+                for index, reason in enumerate(FAILURE_REASONS)}
+    _write_statistics(store.folder / 'statistics.csv', times, spec.percentiles, table)
+    summary = {'name': spec.name, 'runs': spec.runs, 'succeeded': int(np.sum(~failed)),
+               'failed': int(np.sum(failed)), 'failures_by_reason': failures,
+               'seed': str(spec.seed), 'times': times.tolist(),
+               'percentiles': list(spec.percentiles),
+               'statistics': {name: table[name].tolist() for name in METRICS},
+               'failed_runs': _failed_runs(arrays, failed)}
+    (store.folder / 'summary.json').write_text(json.dumps(summary, indent=1, allow_nan=True))
+    if plot:
+        write_envelopes(store.folder / 'summary.png', times, spec.percentiles, table,
+                        f'{spec.name}: {spec.runs} runs, {int(np.sum(failed))} failed')
+    return CampaignResult(folder=store.folder, runs=spec.runs, failed=int(np.sum(failed)),
+                          chunks_run=0, chunks_resumed=chunk_count, compute_seconds=0.0,
+                          total_seconds=0.0, times=times, statistics=table,
+                          failures=failures)
+
+
+def _failed_runs(arrays: dict[str, NDArray[Any]], failed: NDArray[np.bool_]
+                 ) -> list[dict[str, Any]]:
+    """Run, seed, reason, time and parameters of the first failed runs."""
+    rows = []
+    for index in np.flatnonzero(failed)[:MAX_LISTED_FAILURES]:
+        row: dict[str, Any] = {
+            'run': int(arrays['run'][index]), 'seed': str(arrays['seed'][index]),
+            'reason': FAILURE_REASONS[int(arrays['reason'][index])],
+            'failed_at': float(arrays['failed_at'][index])}
+        for name, array in arrays.items():
+            if name.startswith(_PARAMETER_PREFIXES):
+                row[name] = np.asarray(array[index]).tolist()
+        rows.append(row)
+    return rows
+
+
+def _write_statistics(path: Path, times: NDArray[np.float64], percentiles: tuple[float, ...],
+                      table: dict[str, NDArray[np.float64]]) -> None:
+    with path.open('w', newline='') as file:
+        writer = csv.writer(file)
+        writer.writerow(['time_s', 'metric'] + [f'p{p:g}' for p in percentiles])
+        for name in METRICS:
+            for column, t in enumerate(times.tolist()):
+                writer.writerow([repr(t), name] + [repr(float(v))
+                                                   for v in table[name][:, column]])

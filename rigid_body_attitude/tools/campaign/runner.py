@@ -1,0 +1,156 @@
+"""One campaign task: a set of runs on the batch engine (:class:`.SceneBatch`).
+
+:func:`run_chunk` draws the runs' parameters (:func:`.sample_runs`), builds one
+:class:`~rigid_body_attitude.core.batch.SceneBatch`, applies the commands at their times and
+advances to every output time, recording each run's metrics (:mod:`.statistics`). A run fails
+without stopping the others when its dispersed effect parameters are outside the effect's
+range, its rate exceeds RK4's limit of 2 rad per step (checked at every output and command
+time) or its state stops being finite: it is taken out of the batch
+(:meth:`.SceneBatch.discard`) and recorded with the reason and the time; its later metrics
+and final state are NaN. The result is plain NumPy arrays (what a Dask worker sends back).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rigid_body_attitude.core.batch import SceneBatch
+from rigid_body_attitude.core.effects import BodyProperties, EFFECTS
+from rigid_body_attitude.tools.campaign.sampling import RunParameters, sample_runs
+from rigid_body_attitude.tools.campaign.spec import CampaignSpec, COMMAND_EFFECT
+from rigid_body_attitude.tools.campaign.statistics import BodyState, METRICS, metrics
+
+__all__ = ['FAILURE_REASONS', 'run_chunk']
+
+FloatArray = NDArray[np.float64]
+
+FAILURE_REASONS = ('effect parameter out of range', 'rate beyond the RK4 step limit',
+                   'non-finite state')
+
+
+class _Failures:
+    """Which runs failed, why (index into :data:`FAILURE_REASONS`) and when [s]."""
+
+    def __init__(self, n: int) -> None:
+        self.failed = np.zeros(n, dtype=bool)
+        self.reason = np.full(n, -1, dtype=np.int8)
+        self.time = np.full(n, np.nan)
+
+    def mark(self, mask: NDArray[np.bool_], reason: int, time: float) -> NDArray[np.bool_]:
+        """Record the runs of ``mask`` not yet failed; returns them."""
+        new: NDArray[np.bool_] = mask & ~self.failed
+        self.failed |= new
+        self.reason[new] = reason
+        self.time[new] = time
+        return new
+
+
+def _check_effect_parameters(spec: CampaignSpec, parameters: RunParameters,
+                             failures: _Failures) -> None:
+    """Fail runs whose dispersed effect parameters the effect would refuse; give them the
+    nominal value so the batch can be built."""
+    nominal = dict(spec.scene.effects)
+    for name, dispersed in parameters.effects.items():
+        specs = EFFECTS[name].parameters
+        for parameter, values in dispersed.items():
+            convert = specs[parameter].convert
+            rows = values if values.ndim == 2 else values[:, None]
+            bad = np.zeros(values.shape[0], dtype=bool)
+            if not _accepts(convert, rows.min(axis=0), values.ndim) or \
+                    not _accepts(convert, rows.max(axis=0), values.ndim):
+                bad = np.array([not _accepts(convert, row, values.ndim) for row in rows])
+            if np.any(bad):
+                failures.mark(bad, 0, 0.0)
+                body = BodyProperties(spec.scene.inertia, spec.scene.mass)
+                values[bad] = EFFECTS[name](nominal[name], body).params[parameter]
+
+
+def _accepts(convert: Any, row: FloatArray, ndim: int) -> bool:
+    try:
+        convert(row.tolist() if ndim == 2 else float(row[0]))
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+def _check_dynamics(batch: SceneBatch, failures: _Failures, time: float) -> None:
+    """Fail and discard runs whose state is not finite or turns too fast for RK4."""
+    attitude, omega = batch.attitude, batch.omega_body
+    with np.errstate(all='ignore'):
+        finite = np.all(np.isfinite(attitude), axis=1) & np.all(np.isfinite(omega), axis=1)
+        fast = finite & (np.linalg.norm(np.where(np.isfinite(omega), omega, 0.0), axis=1)
+                         * batch.scene.step > 2.0)
+    newly = failures.mark(~finite, 2, time) | failures.mark(fast, 1, time)
+    if np.any(newly):
+        batch.discard(failures.failed)
+
+
+def _events(spec: CampaignSpec) -> list[tuple[float, int, int]]:
+    """``(time, command index or −1, output index or −1)`` in time order."""
+    events = [(time, index, -1) for index, (time, _) in enumerate(spec.commands)]
+    events += [(time, -1, index) for index, time in enumerate(spec.output_times)]
+    return sorted(events, key=lambda event: (event[0], -event[1]))
+
+
+def run_chunk(spec: CampaignSpec, runs: ArrayLike) -> dict[str, NDArray[Any]]:
+    """Run the campaign's ``runs`` (indices) together; each result array has one row per
+    run: ``run``, ``seed``, ``failed``, ``reason`` (−1 or an index of
+    :data:`FAILURE_REASONS`), ``failed_at`` [s], the parameters (``attitude0``,
+    ``omega_body0``, ``inertia`` (n, 9), ``effect.<name>.<parameter>``, ``commands``
+    (n, 3k)), the final ``attitude`` and ``omega_body``, and each metric of
+    :data:`~.statistics.METRICS` at ``t = 0`` and each output time (n, 1 + T)."""
+    indices = np.asarray(runs, dtype=np.int64)
+    count = indices.shape[0]
+    # One body takes other arithmetic paths in the batch (no per-body einsum): pad to two.
+    padded = np.concatenate([indices, indices[:1]]) if count == 1 else indices
+    parameters = sample_runs(spec, padded)
+    failures = _Failures(padded.shape[0])
+    with np.errstate(all='ignore'):
+        _check_effect_parameters(spec, parameters, failures)
+        values = _simulate(spec, parameters, failures)
+    result: dict[str, NDArray[Any]] = {
+        'run': parameters.runs, 'seed': parameters.seeds, 'failed': failures.failed,
+        'reason': failures.reason, 'failed_at': failures.time,
+        'attitude0': parameters.attitude, 'omega_body0': parameters.omega_body}
+    if parameters.inertia is not None:
+        result['inertia'] = parameters.inertia.reshape(-1, 9)
+    for name, dispersed in parameters.effects.items():
+        for parameter, array in dispersed.items():
+            result[f'effect.{name}.{parameter}'] = array
+    if spec.commands:
+        result['commands'] = parameters.commands.transpose(1, 0, 2).reshape(padded.shape[0], -1)
+    result.update(values)
+    return {key: value[:count] for key, value in result.items()}
+
+
+def _simulate(spec: CampaignSpec, parameters: RunParameters,
+              failures: _Failures) -> dict[str, FloatArray]:
+    """Advance the runs through the commands and output times; metrics and final states."""
+    n = parameters.runs.shape[0]
+    batch = SceneBatch(spec.scene, parameters.attitude, parameters.omega_body,
+                       inertia=parameters.inertia, effect_parameters=parameters.effects)
+    inertia = spec.scene.inertia.tensor if parameters.inertia is None else parameters.inertia
+    initial = BodyState(batch.attitude, batch.omega_body, inertia)
+    series = {name: np.full((n, 1 + len(spec.output_times)), np.nan) for name in METRICS}
+    _record(series, 0, initial, initial, spec, failures)
+    _check_dynamics(batch, failures, 0.0)
+    for time, command, output in _events(spec):
+        batch.advance_to(time)
+        _check_dynamics(batch, failures, time)
+        if command >= 0:
+            batch.set_effect_parameters({COMMAND_EFFECT: {
+                'torque': parameters.commands[command]}})
+        if output >= 0:
+            state = BodyState(batch.attitude, batch.omega_body, inertia)
+            _record(series, output + 1, state, initial, spec, failures)
+    return {**series, 'attitude': np.where(failures.failed[:, None], np.nan, batch.attitude),
+            'omega_body': np.where(failures.failed[:, None], np.nan, batch.omega_body)}
+
+
+def _record(series: dict[str, FloatArray], column: int, state: BodyState, initial: BodyState,
+            spec: CampaignSpec, failures: _Failures) -> None:
+    for name, value in metrics(state, initial, spec.boresight, spec.target).items():
+        series[name][:, column] = np.where(failures.failed, np.nan, value)

@@ -1,0 +1,121 @@
+"""A campaign's results folder: a manifest and one Parquet file per finished chunk.
+
+Layout of ``OUT``::
+
+    campaign.json        what the campaign is (name, runs, chunk, seed, the spec's digest)
+    chunks/00000.parquet one row per run of chunk 0 (written whole, then renamed into place);
+                         the folder reads as one Parquet data set
+    statistics.csv       percentiles of each metric at each output time
+    summary.json         counts, failures (run, seed, reason, time), the statistics
+    summary.png          dispersion envelopes over time
+
+Chunk files are uncompressed: random doubles hardly compress, and writing stays cheap. A
+chunk file exists only once its chunk is complete (written to a temporary name, then
+renamed, which is atomic on one file system), so a campaign interrupted anywhere resumes by
+running the chunks without a file; the manifest must match the spec, or the folder belongs to
+another campaign and is refused.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import pickle
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+from numpy.typing import NDArray
+
+from rigid_body_attitude.tools.campaign.spec import CampaignSpec, SpecError
+
+__all__ = ['ChunkStore', 'spec_digest']
+
+
+def spec_digest(spec: CampaignSpec) -> str:
+    """A digest of everything that decides the runs' results (not the file's path)."""
+    return hashlib.sha256(pickle.dumps(replace(spec, source=''), protocol=4)).hexdigest()
+
+
+def _column(array: NDArray[Any]) -> pa.Array:
+    """A NumPy column: (n,) as is, (n, k) as fixed-size lists of k."""
+    if array.ndim == 1:
+        return pa.array(array)
+    flat = pa.array(np.ascontiguousarray(array).reshape(-1))
+    return pa.FixedSizeListArray.from_arrays(flat, array.shape[1])
+
+
+def table_of(columns: dict[str, NDArray[Any]]) -> pa.Table:
+    """A Parquet table of a chunk's result arrays."""
+    return pa.table({name: _column(array) for name, array in columns.items()})
+
+
+def arrays_of(table: pa.Table) -> dict[str, NDArray[Any]]:
+    """The arrays of a table written by :func:`table_of`."""
+    result: dict[str, NDArray[Any]] = {}
+    for name in table.column_names:
+        column = table.column(name).combine_chunks()
+        if pa.types.is_fixed_size_list(column.type):
+            size = column.type.list_size
+            result[name] = column.flatten().to_numpy(zero_copy_only=False).reshape(-1, size)
+        else:
+            result[name] = column.to_numpy(zero_copy_only=False)
+    return result
+
+
+class ChunkStore:
+    """The results folder of one campaign (see the module's layout)."""
+
+    def __init__(self, folder: str | Path, spec: CampaignSpec) -> None:
+        """Open or create ``folder`` for ``spec``; refuse a folder of another campaign."""
+        self.folder = Path(folder)
+        self.chunks = self.folder / 'chunks'
+        self.manifest = {'name': spec.name, 'runs': spec.runs, 'chunk': spec.chunk,
+                         'seed': str(spec.seed), 'output_times': list(spec.output_times),
+                         'spec_digest': spec_digest(spec), 'source': spec.source}
+        path = self.folder / 'campaign.json'
+        if path.is_file():
+            try:
+                found = json.loads(path.read_text())
+            except (ValueError, UnicodeError) as err:
+                raise SpecError(f'{path} is not a campaign manifest: {err}') from None
+            if not isinstance(found, dict) or found.get('spec_digest') != \
+                    self.manifest['spec_digest']:
+                raise SpecError(f'{self.folder} holds results of another campaign (its '
+                                f'campaign.json differs from this spec); choose another --out')
+        else:
+            self.chunks.mkdir(parents=True, exist_ok=True)
+            _write_atomic(path, json.dumps(self.manifest, indent=1).encode())
+        self.chunks.mkdir(parents=True, exist_ok=True)
+
+    def path(self, index: int) -> Path:
+        """The file of chunk ``index``."""
+        return self.chunks / f'{index:05d}.parquet'
+
+    def done(self, index: int) -> bool:
+        """Whether chunk ``index`` is written."""
+        return self.path(index).is_file()
+
+    def write(self, index: int, columns: dict[str, NDArray[Any]]) -> None:
+        """Write chunk ``index`` whole (temporary file, then an atomic rename)."""
+        target = self.path(index)
+        temporary = target.with_suffix(f'.{os.getpid()}.tmp')
+        pq.write_table(table_of(columns), temporary, compression='none')
+        os.replace(temporary, target)
+
+    def read_all(self, chunk_count: int) -> dict[str, NDArray[Any]]:
+        """Every chunk's rows, concatenated in run order."""
+        tables = [pq.read_table(self.path(index)) for index in range(chunk_count)]
+        arrays = arrays_of(pa.concat_tables(tables))
+        order = np.argsort(arrays['run'], kind='stable')
+        return {name: array[order] for name, array in arrays.items()}
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    temporary = path.with_suffix('.tmp')
+    temporary.write_bytes(data)
+    os.replace(temporary, path)

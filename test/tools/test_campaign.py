@@ -1,0 +1,258 @@
+"""Campaigns on a real Dask LocalCluster (worker processes): identical runs whatever the
+chunking and workers, resume, a killed worker, failed runs, the CLI, fleet replay."""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import signal
+import threading
+import time
+from typing import Any, Iterator
+
+import numpy as np
+import pytest
+import yaml
+from distributed import Client, LocalCluster
+
+from bag_fixtures import build_case, write_case_bag, write_scene
+from rigid_body_attitude.bag import write_bag
+from rigid_body_attitude.core.paths import config_folders
+from rigid_body_attitude.tools.campaign import (
+    FAILURE_REASONS, load_spec, main, read_runs, replay_fleet, run_campaign, run_chunk,
+    sample_runs, spec_from_mapping, SpecError)
+from rigid_body_attitude.tools.replay import ReplayOptions
+
+SCENE = {'name': 'box', 'rate_source': 'dynamics', 'integrator': 'rk4', 'step': 0.01,
+         'body': {'mass': 1.0, 'inertia': {'moments': [1.0, 2.0, 2.5]}},
+         'initial_state': {'omega_body': [0.1, 1.0, 0.05]},
+         'effects': [{'viscous_damping': {'coefficient': 0.01}}]}
+SPEC = {'name': 'box_campaign', 'scene': SCENE, 'runs': 60, 'seed': 11, 'duration': 1.0,
+        'output_times': {'every': 0.25}, 'chunk': 16,
+        'dispersions': {'inertia': {'second_moments_sigma': 0.1, 'axes': 'uniform'},
+                        'attitude': 'uniform', 'omega_body': {'sigma': [0.2, 0.2, 0.2]},
+                        'effects': {'viscous_damping': {'coefficient': {'uniform': [0, 0.1]}}},
+                        'commands': {'sigma': [0.05, 0.05, 0.05]}},
+        'commands': [{'time': 0.0, 'torque': [0.0, 0.0, 0.1]},
+                     {'time': 0.5, 'torque': [0.0, 0.0, 0.0]}],
+        'statistics': {'percentiles': [5, 50, 95]}}
+
+
+@pytest.fixture(scope='module')
+def client() -> Iterator[Client]:
+    """Two single-threaded worker processes (each with its nanny)."""
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=':0', silence_logs=logging.ERROR) as cluster, \
+            Client(cluster) as dask_client:
+        yield dask_client
+
+
+def spec(**changes: Any) -> Any:
+    return spec_from_mapping({**SPEC, **changes})
+
+
+def assert_same_runs(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None:
+    assert sorted(a) == sorted(b)
+    for name in a:
+        assert a[name].dtype == b[name].dtype, name
+        assert np.array_equal(a[name], b[name], equal_nan=a[name].dtype.kind == 'f'), name
+
+
+def test_serial_and_a_two_worker_cluster_give_bit_identical_runs(tmp_path, client):
+    serial = run_campaign(spec(), tmp_path / 'serial', serial=True)
+    # Through the scheduler's address, as `campaign --scheduler ADDRESS` does.
+    cluster = run_campaign(spec(chunk=7), tmp_path / 'cluster',
+                           scheduler=client.scheduler.address, plot=False)
+    assert serial.runs == cluster.runs == 60 and serial.failed == cluster.failed == 0
+    assert cluster.chunks_run == 9
+    serial_runs = read_runs(tmp_path / 'serial', spec())
+    assert_same_runs(serial_runs, read_runs(tmp_path / 'cluster', spec(chunk=7)))
+    # One run on its own, as when reproducing a case: the same numbers again.
+    assert_same_runs({k: v[[37]] for k, v in serial_runs.items()}, run_chunk(spec(), [37]))
+    for name, table in serial.statistics.items():
+        assert np.array_equal(table, cluster.statistics[name], equal_nan=True), name
+    files = {path.name for path in (tmp_path / 'serial').iterdir()}
+    assert {'campaign.json', 'chunks', 'statistics.csv', 'summary.json',
+            'summary.png'} <= files
+    assert (tmp_path / 'serial' / 'summary.png').read_bytes()[:4] == b'\x89PNG'
+
+
+def test_dispersions_are_applied_per_run():
+    parameters = sample_runs(spec(), np.arange(60))
+    assert len({tuple(q) for q in parameters.attitude.round(12)}) == 60
+    assert parameters.inertia is not None and parameters.inertia.shape == (60, 3, 3)
+    damping = parameters.effects['viscous_damping']['coefficient']
+    assert damping.shape == (60, 3) and 0.0 <= damping.min() and damping.max() <= 0.1
+    assert parameters.commands.shape == (2, 60, 3)
+    assert abs(np.mean(parameters.commands[0, :, 2]) - 0.1) < 0.03
+    assert np.std(parameters.commands[1, :, 0]) > 0.02
+
+
+def test_an_interrupted_campaign_resumes_without_redoing_finished_chunks(tmp_path):
+    first = run_campaign(spec(), tmp_path, serial=True, plot=False)
+    assert first.chunks_run == 4
+    complete = read_runs(tmp_path, spec())
+    chunk_files = sorted((tmp_path / 'chunks').glob('*.parquet'))
+    stamps = {path.name: path.stat().st_mtime_ns for path in chunk_files}
+    chunk_files[2].unlink()  # as if interrupted before chunk 2 was written
+    (tmp_path / 'chunks' / '00002.123.tmp').write_bytes(b'half a file')
+    again = run_campaign(spec(), tmp_path, serial=True, plot=False)
+    assert (again.chunks_run, again.chunks_resumed) == (1, 3)
+    for path in sorted((tmp_path / 'chunks').glob('*.parquet')):
+        if path.name != chunk_files[2].name:
+            assert path.stat().st_mtime_ns == stamps[path.name]
+    assert_same_runs(complete, read_runs(tmp_path, spec()))
+    with pytest.raises(SpecError, match='another campaign'):
+        run_campaign(spec(seed=12), tmp_path, serial=True, plot=False)
+
+
+def test_a_worker_killed_mid_campaign_loses_and_duplicates_no_run(tmp_path, client):
+    slow = spec(runs=160, chunk=20, duration=3.0)
+    result: dict[str, Any] = {}
+    thread = threading.Thread(target=lambda: result.update(
+        done=run_campaign(slow, tmp_path / 'killed', client=client, plot=False)))
+    thread.start()
+    killed = False
+    deadline = time.monotonic() + 60.0
+    while not killed and thread.is_alive() and time.monotonic() < deadline:
+        busy = [address for address, keys in client.processing().items() if keys]
+        written = len(list((tmp_path / 'killed' / 'chunks').glob('*.parquet'))) \
+            if (tmp_path / 'killed' / 'chunks').is_dir() else 0
+        if busy and written >= 1:
+            pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
+            os.kill(pid, signal.SIGKILL)
+            killed = True
+        time.sleep(0.05)
+    thread.join(timeout=120.0)
+    assert killed and not thread.is_alive()
+    assert result['done'].runs == 160 and result['done'].chunks_run == 8
+    runs = read_runs(tmp_path / 'killed', slow)  # checks every run exactly once
+    assert np.array_equal(runs['run'], np.arange(160))
+    assert_same_runs(runs, run_chunk(slow, np.arange(160)))
+    client.wait_for_workers(2, timeout=60)
+
+
+def test_failed_runs_are_recorded_with_seed_and_parameters_and_counted(tmp_path):
+    failing = spec(runs=40, dispersions={
+        'omega_body': {'sigma': [120.0, 120.0, 120.0]},  # some above 2 rad per 0.01 s step
+        'effects': {'viscous_damping': {'coefficient': {'sigma': 0.02}}}})  # some negative
+    result = run_campaign(failing, tmp_path, serial=True, plot=False)
+    runs = read_runs(tmp_path, failing)
+    reasons = {FAILURE_REASONS[r] for r in runs['reason'][runs['failed']]}
+    assert reasons == {'effect parameter out of range', 'rate beyond the RK4 step limit'}
+    assert 0 < result.failed < 40 and result.failed == int(runs['failed'].sum())
+    assert np.all(np.isfinite(runs['attitude'][~runs['failed']]))
+    assert np.all(np.isnan(runs['pointing_error_deg'][runs['failed'], -1]))
+    summary = json.loads((tmp_path / 'summary.json').read_text())
+    assert summary['failed'] == result.failed and summary['succeeded'] == 40 - result.failed
+    listed = summary['failed_runs'][0]
+    assert {'run', 'seed', 'reason', 'failed_at', 'omega_body0',
+            'effect.viscous_damping.coefficient'} <= set(listed)
+    assert int(listed['seed']) == int(runs['seed'][listed['run']])
+
+
+def test_a_run_whose_state_goes_non_finite_is_failed_and_the_campaign_goes_on(tmp_path):
+    scene = {**SCENE, 'effects': [{'constant_torque': {'torque': [0.0, 0.0, 0.0]}}]}
+    blowing_up = spec_from_mapping({
+        'scene': scene, 'runs': 12, 'seed': 1, 'duration': 1.0, 'chunk': 5,
+        'dispersions': {'effects': {'constant_torque': {'torque': {
+            'uniform': [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0e+74]]}}}}})
+    result = run_campaign(blowing_up, tmp_path, serial=True)
+    assert result.failed == 12 and result.failures['non-finite state'] > 0
+    assert np.all(np.isnan(result.statistics['rate']))
+    assert (tmp_path / 'summary.png').is_file()
+
+
+def test_the_shipped_example_spec_loads(tmp_path):
+    files = sorted(path for folder in config_folders('campaigns')
+                   for path in folder.glob('*.yaml'))
+    assert files
+    for path in files:
+        loaded = load_spec(path)
+        assert loaded.runs >= 1000 and loaded.inertia is not None and loaded.commands
+
+
+@pytest.mark.parametrize('change, key', [
+    ({'runs': 0}, 'runs'),
+    ({'runs': 'many'}, 'runs'),
+    ({'duration': -1.0}, 'duration'),
+    ({'output_times': [0.5, 2.0]}, 'output_times'),
+    ({'dispersions': {'attitude': {'cone_deg': 400}}}, 'dispersions.attitude.cone_deg'),
+    ({'dispersions': {'attitude': 'euler'}}, 'dispersions.attitude'),
+    ({'dispersions': {'inertia': {'axes': 'random'}}}, 'dispersions.inertia.axes'),
+    ({'dispersions': {'omega_body': {'sigma': [1, 2]}}}, 'dispersions.omega_body.sigma'),
+    ({'dispersions': {'effects': {'gravity_gradient': {}}}}, 'dispersions.effects'),
+    ({'dispersions': {'effects': {'viscous_damping': {'colour': {'sigma': 1}}}}},
+     'dispersions.effects.viscous_damping.colour'),
+    ({'dispersions': {'wind': 1}}, "'wind' in dispersions"),
+    ({'commands': [{'time': 0.0, 'torque': [1, 2]}]}, 'commands[0].torque'),
+    ({'statistics': {'percentiles': [50, 101]}}, 'statistics.percentiles'),
+    ({'scene': 'no_such_scene'}, "scene: Unknown scene 'no_such_scene'"),
+])
+def test_spec_errors_are_one_line_naming_the_key(tmp_path, capsys, change, key):
+    path = tmp_path / 'bad.yaml'
+    path.write_text(yaml.safe_dump({**SPEC, **change}))
+    with pytest.raises(SpecError) as error:
+        load_spec(path)
+    text = str(error.value)
+    assert text.startswith(f'Campaign file {str(path)!r}') and key in text
+    assert '\n' not in text
+    assert main([str(path), '--out', str(tmp_path / 'out'), '--serial']) == 2
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and err.startswith('error: ') and key in err
+
+
+def test_cli_runs_a_campaign_and_refuses_bad_options(tmp_path, capsys):
+    path = tmp_path / 'box.yaml'
+    path.write_text(yaml.safe_dump(SPEC))
+    assert main([str(path), '--out', str(tmp_path / 'out'), '--serial', '--no-progress']) == 0
+    out = capsys.readouterr().out
+    assert '60 runs, 0 failed' in out and 'pointing_error_deg at 1 s' in out
+    for argv in ([str(path)], [str(path), '--out', 'x', '--workers', '-1'],
+                 [str(path), '--out', 'x', '--serial', '--workers', '2'],
+                 [str(tmp_path / 'missing.yaml'), '--out', 'x', '--serial'],
+                 ['replay', '--out', 'x'],
+                 [str(path), '--out', str(tmp_path / 'o'), '--scheduler', 'tcp://127.0.0.1:9']):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count('\n') == 1 and err.startswith('error: '), err
+
+
+def test_fleet_replay_tabulates_every_bag_with_ground_truth_where_present(tmp_path, client):
+    case = build_case('constant_rate')
+    scene = write_scene(case, tmp_path)
+    bags = tmp_path / 'bags'
+    bags.mkdir()
+    write_case_bag(case, bags / 'with_truth')
+    write_bag(bags / 'no_truth', stamps=case.stamps, rates=case.rates)
+    (bags / 'broken.mcap').write_bytes(b'not a bag')
+    rows = replay_fleet([bags / 'broken.mcap', bags / 'no_truth', bags / 'with_truth'],
+                        tmp_path / 'out', ReplayOptions(scene=str(scene),
+                                                        ground_truth_topic='ground_truth'),
+                        client=client)
+    assert [row['status'] for row in rows] == ['error', 'ok', 'ok']
+    assert rows[0]['error'] and rows[1]['truth_samples'] == 0
+    assert rows[2]['truth_samples'] > 0 and rows[2]['error_max_deg'] < 1e-6
+    assert rows[1]['gyro_messages'] == rows[2]['gyro_messages'] == len(case.stamps)
+    assert (tmp_path / 'out' / 'with_truth_replayed' / 'metadata.yaml').is_file()
+    table = (tmp_path / 'out' / 'fleet.csv').read_text().splitlines()
+    assert len(table) == 4 and table[0].startswith('bag,status')
+
+
+def test_fleet_replay_cli_takes_a_folder_and_replay_options(tmp_path, capsys):
+    case = build_case('constant_rate')
+    scene = write_scene(case, tmp_path)
+    bags = tmp_path / 'bags'
+    bags.mkdir()
+    for name in ('a', 'b'):
+        write_case_bag(case, bags / name)
+    code = main(['replay', str(bags), '--out', str(tmp_path / 'out'), '--serial',
+                 '--scene', str(scene), '--ground-truth', 'ground_truth', '--no-progress'])
+    out = capsys.readouterr().out
+    assert code == 0 and '2 bags, 0 not replayed' in out and out.count('| ok |') == 2
+    assert main(['replay', str(tmp_path / 'nothing*'), '--out', str(tmp_path / 'o2'),
+                 '--serial']) == 2
+    assert 'No bag in' in capsys.readouterr().err
+    assert main(['replay', str(bags), '--out', str(tmp_path / 'o3'), '--serial',
+                 '--max-dt', 'x']) == 2
