@@ -3,8 +3,8 @@
 Prints messages per second (best of ``--repeats`` runs) for
 
 * ``rosbags`` ``deserialize_cdr`` / ``serialize_cdr`` of ``sensor_msgs/msg/Imu`` (reference),
-* the hand-written codecs of :mod:`rigid_body_attitude.bag.cdr` and the checked decoders of
-  :mod:`rigid_body_attitude.bag.decoders` on each of their paths: one frame id (the primed
+* the hand-written codecs of :mod:`rigid_body_attitude.msgs.cdr` and the checked decoders of
+  :mod:`rigid_body_attitude.msgs.decoders` on each of their paths: one frame id (the primed
   one-call path), two frame ids alternating (the look-up path), big-endian messages (the full
   check), and a malformed message (the full check raising ``MalformedMessage``),
 * reading a bag of Imu messages and decoding the rates (sqlite3, mcap fast path, mcap through
@@ -31,9 +31,9 @@ from pathlib import Path
 import numpy as np
 from rosbags.rosbag2 import Reader
 
-from rigid_body_attitude import bag
-from rigid_body_attitude.bag import cdr, decoders
-from rigid_body_attitude.bag.errors import MalformedMessage
+from rigid_body_attitude import bag, msgs
+from rigid_body_attitude.msgs import cdr, decoders
+from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.core.quaternion import scalar_exp_step
 
 
@@ -71,7 +71,7 @@ def decoder_rates(count: int, repeats: int) -> dict[str, float]:
     imu = cdr.encode_imu(stamp, 'base_link', (0.1, 0.2, 0.3))
     other_imu = cdr.encode_imu(stamp, 'imu_link', (0.1, 0.2, 0.3))
     big_endian_imu = bytes(bag.typestore().serialize_cdr(
-        bag.typestore().deserialize_cdr(imu, bag.IMU), bag.IMU, little_endian=False))
+        bag.typestore().deserialize_cdr(imu, msgs.IMU), msgs.IMU, little_endian=False))
     vector = cdr.encode_vector3_stamped(stamp, 'base_link', (0.1, 0.2, 0.3))
     wrench = cdr.encode_wrench_stamped(stamp, 'base_link', (1.0, 2.0, 3.0), (0.1, 0.2, 0.3))
     pose = cdr.encode_pose_stamped(stamp, 'world', (1.0, 2.0, 3.0), (1.0, 0.0, 0.0, 0.0))
@@ -96,14 +96,14 @@ def codec_rates(count: int, repeats: int) -> dict[str, float]:
     """Per-message codec throughput (no bag I/O)."""
     store = bag.typestore()
     data = cdr.encode_imu(1_700_000_000_000_000_000, 'base_link', (0.1, 0.2, 0.3))
-    message = store.deserialize_cdr(data, bag.IMU)
+    message = store.deserialize_cdr(data, msgs.IMU)
     rate, attitude = (0.1, 0.2, 0.3), (1.0, 0.0, 0.0, 0.0)
     loops = range(count)
     return {
         'rosbags deserialize_cdr Imu': best_rate(count, repeats, lambda: [
-            store.deserialize_cdr(data, bag.IMU) for _ in loops]),
+            store.deserialize_cdr(data, msgs.IMU) for _ in loops]),
         'rosbags serialize_cdr Imu': best_rate(count, repeats, lambda: [
-            store.serialize_cdr(message, bag.IMU) for _ in loops]),
+            store.serialize_cdr(message, msgs.IMU) for _ in loops]),
         **decoder_rates(count, repeats),
         'cdr.encode_imu': best_rate(count, repeats, lambda: [
             cdr.encode_imu(5, 'base_link', rate) for _ in loops]),
@@ -127,7 +127,7 @@ def _rosbags_read_decode(path: Path) -> None:
 
 def _write_output(path: Path, storage: str, count: int) -> None:
     with bag.BagWriter(path, storage=storage) as writer:
-        connection = writer.add_topic('orientation', bag.QUATERNION_STAMPED)
+        connection = writer.add_topic('orientation', msgs.QUATERNION_STAMPED)
         attitude = (1.0, 0.0, 0.0, 0.0)
         for step in range(count):
             writer.write(connection, step, cdr.encode_quaternion_stamped(step, 'world', attitude))
@@ -136,7 +136,7 @@ def _write_output(path: Path, storage: str, count: int) -> None:
 def _replay_like(source: Path, target: Path, storage: str) -> None:
     attitude, previous = (1.0, 0.0, 0.0, 0.0), None
     with bag.BagWriter(target, storage=storage) as writer:
-        connection = writer.add_topic('orientation', bag.QUATERNION_STAMPED)
+        connection = writer.add_topic('orientation', msgs.QUATERNION_STAMPED)
         for _, bag_time_ns, _, data in bag.read_messages(source, ['imu']):
             stamp, rate = cdr.imu_rates(data)
             if previous is not None:

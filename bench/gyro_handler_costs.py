@@ -64,7 +64,7 @@ def measure(count: int) -> List[Tuple[str, float]]:
         rows.append(('output attitude (sign continuity)',
                      per_message_us(lambda _: attitude(propagator), range(count), count)))
         rows.append(('outputs: three subscription counts, nothing published',
-                     per_message_us(lambda _: outputs.attitude(1, 2, (1.0, 0.0, 0.0, 0.0)),
+                     per_message_us(lambda _: outputs.attitude(1, 2, (1.0, 0.0, 0.0, 0.0), None),
                                     range(count), count)))
         encode = outputs.encode_pose
         rows.append(('pose encoder', per_message_us(
@@ -82,7 +82,7 @@ def measure(count: int) -> List[Tuple[str, float]]:
 
 def imu_messages(first: int, count: int) -> List[bytes]:
     """``count`` serialized Imu messages, the ``first``-th sample's stamp on."""
-    from rigid_body_attitude.bag.cdr import encode_imu
+    from rigid_body_attitude.msgs.cdr import encode_imu
     return [encode_imu(STAMP0_NS + (first + k) * PERIOD_NS, 'imu_link', RATE)
             for k in range(count)]
 

@@ -38,12 +38,13 @@ from pathlib import Path
 
 import numpy as np
 
-from rigid_body_attitude.bag import (
-    IMU, POSE_STAMPED, QUATERNION_STAMPED, BagReader, BagWriter, imu_with_orientation,
-    pose_stamped_encoder, quaternion_stamped_encoder, write_bag)
+from rigid_body_attitude.bag import BagReader, BagWriter, write_bag
 from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.quaternion import scalar_exp_step
 from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.msgs import (
+    IMU, POSE_STAMPED, QUATERNION_STAMPED, imu_with_orientation, pose_stamped_encoder,
+    quaternion_stamped_encoder)
 from rigid_body_attitude.session import decoding
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.outputs import OutputSample, OutputTracker
