@@ -88,7 +88,7 @@ setup(
         ('lib/' + PACKAGE_NAME, ['scripts/launchers/' + name for name in EXECUTABLES]),
         *config_data_files(),
     ],
-    install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags'],
+    install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags', 'apsw', 'matplotlib', 'tqdm'],
     python_requires='>=3.10',
     zip_safe=True,
     maintainer='rigid_body_attitude developers',
