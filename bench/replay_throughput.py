@@ -70,7 +70,8 @@ def make_bag(path: Path, count: int, storage: str) -> None:
 class NullSink:
     """An output sink that drops everything (to time the session alone)."""
 
-    def attitude(self, sec: int, nanosec: int, attitude: tuple[float, ...]) -> None:
+    def attitude(self, sec: int, nanosec: int, attitude: tuple[float, ...],
+                 imu: bytes | None) -> None:
         """Drop."""
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
