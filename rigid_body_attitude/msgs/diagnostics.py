@@ -4,7 +4,7 @@ The one variable-layout message the package writes (the replay tool's ``/diagnos
 a header, then a sequence of ``DiagnosticStatus`` (``byte level``, strings ``name``,
 ``message``, ``hardware_id``, a sequence of ``KeyValue`` string pairs). Written little-endian
 (``00 01 00 00``) with CDR's alignment: sequence lengths and string lengths on multiples of 4
-of the payload, ``level`` a single byte where it falls. ``test/msgs/test_diagnostics.py``
+of the payload, ``level`` a single byte where it falls. ``test/msgs/test_diagnostic_array.py``
 checks the bytes against ``rosbags``' serialiser.
 """
 
