@@ -1,7 +1,7 @@
 """The ``attitude_propagator`` node (executable ``propagation_node``): an rclpy adapter.
 
 Every subscription is raw: each callback decodes the CDR bytes with the project's checked
-decoders (:mod:`rigid_body_attitude.bag.cdr`) and hands the plain values to the scene's
+decoders (:mod:`rigid_body_attitude.msgs`) and hands the plain values to the scene's
 session (:mod:`rigid_body_attitude.session`), which applies the time rules, advances the
 propagator, counts, and gives what is to be published to :class:`~.outputs.RosOutputs`. A
 message that cannot be decoded is handed to the session as malformed: rejected, counted per

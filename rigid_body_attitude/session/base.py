@@ -46,13 +46,13 @@ Vector = tuple[float, float, float]
 class OutputSink(Protocol):
     """Where a session's outputs go (publishers, a bag writer, a list in a test)."""
 
-    #: The serialized Imu being handled, for ``imu/data`` (set around each gyro call).
-    current_imu: bytes | None
     #: Whether outputs carry the inputs' header stamps (else the receive time was used).
     use_header_stamps: bool
 
-    def attitude(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
-        """A gyro sample's attitude (w, x, y, z) stamped ``(sec, nanosec)``."""
+    def attitude(self, sec: int, nanosec: int, attitude: Quaternion,
+                 imu: bytes | None) -> None:
+        """A gyro sample's attitude (w, x, y, z) stamped ``(sec, nanosec)``; ``imu``: the
+        serialized Imu the sample came from (``imu/data`` is it with the attitude), or None."""
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:

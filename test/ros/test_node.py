@@ -26,7 +26,7 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 
-from rigid_body_attitude.bag.decoders import decode_pose_stamped
+from rigid_body_attitude.msgs.decoders import decode_pose_stamped
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import InputError, IntegratorError, SceneError
 from rigid_body_attitude.session.reports import body_frame_velocity

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from bag_fixtures import build_case, write_records, write_scene
-from rigid_body_attitude.bag import (
-    IMU, POSE_STAMPED, WRENCH_STAMPED, BagReader, deserialize, encode_imu,
-    encode_pose_stamped, encode_wrench_stamped, read_series)
+from rigid_body_attitude.bag import BagReader, deserialize, read_series
+from rigid_body_attitude.msgs import (
+    IMU, POSE_STAMPED, WRENCH_STAMPED, encode_imu, encode_pose_stamped, encode_wrench_stamped)
 from rigid_body_attitude.session.parameters import PARAMETERS
 from rigid_body_attitude.tools.replay import main
 from rigid_body_attitude.tools.replay.cli import parser

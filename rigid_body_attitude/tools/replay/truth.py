@@ -13,10 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from rigid_body_attitude.bag import ATTITUDE_DECODERS, BagError, BagReader, header_stamp_ns
+from rigid_body_attitude.bag import BagError, BagReader
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
+from rigid_body_attitude.msgs import ATTITUDE_DECODERS, header_stamp_ns
 from rigid_body_attitude.session.decoding import MALFORMED
 
 __all__ = ['AlignmentError', 'ErrorStatistics', 'GroundTruth', 'GroundTruthStart',
