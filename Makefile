@@ -78,7 +78,7 @@ ARGS ?=
 
 # Every command below sees the venv as the only ament prefix and a discovery range limited to
 # this machine (ROS_DOMAIN_ID is left to the user). A sourced ROS install's variables would mix
-# its Python 3.12 modules and libraries into the venv's, so they are not passed on.
+# its modules and libraries (another build of ROS 2) into the venv's, so they are not passed on.
 export AMENT_PREFIX_PATH := $(abspath $(VENV))
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 unexport PYTHONPATH LD_LIBRARY_PATH RMW_IMPLEMENTATION ROS_LOCALHOST_ONLY

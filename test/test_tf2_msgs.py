@@ -16,6 +16,7 @@ from pathlib import Path
 import subprocess
 import sys
 import textwrap
+import xml.etree.ElementTree as ElementTree
 
 from ament_index_python.packages import get_package_prefix, get_package_share_directory
 from geometry_msgs.msg import TransformStamped
@@ -91,8 +92,10 @@ def test_installed_into_the_venv_prefix():
     assert TFMessage.__module__.startswith('tf2_msgs.msg')
 
 
-def test_interface_package_is_ignored_by_colcon_in_a_ros_workspace():
-    assert (REPO_ROOT / 'interfaces' / 'COLCON_IGNORE').is_file()
+def test_a_ros_install_uses_its_own_tf2_msgs():
+    assert (REPO_ROOT / 'interfaces' / 'COLCON_IGNORE').is_file()  # colcon skips interfaces/
+    manifest = ElementTree.parse(REPO_ROOT / 'package.xml').getroot()
+    assert 'tf2_msgs' in {element.text for element in manifest.findall('depend')}
     definition = (REPO_ROOT / 'interfaces' / 'tf2_msgs' / 'msg' / 'TFMessage.msg').read_text()
     fields = [line for line in definition.splitlines() if line and not line.startswith('#')]
     assert fields == ['geometry_msgs/TransformStamped[] transforms']
