@@ -12,13 +12,11 @@ writes three records per gyro message and needs ≥ 10⁵ messages/s. The storag
 ``rosbags``' own with a ``write_many`` added (in
 :mod:`~rigid_body_attitude.bag.rosbags_internals`, with every other use of ``rosbags``'
 unexported API). The sqlite3 storage keeps ``rosbags``' schema and statements but runs on an
-``apsw`` connection (the SQLite binding ``rosbags`` reads with; its ``executemany`` inserts a
-row in about 1.1 µs against 2.0 µs for the standard ``sqlite3`` module), 512 rows per
-statement, in one transaction, with 32 KiB pages (0.6 µs a row in all). The MCAP storage lays
+``apsw`` connection (the SQLite binding ``rosbags`` reads with), 512 rows per statement, in one
+transaction, with 32 KiB pages. The MCAP storage lays
 out a batch of message records with C-level ``map`` calls and closes chunks at the same 1 MiB
 boundary as ``rosbags``, so the file is byte for byte the one ``rosbags`` writes. Metadata
 (message counts, start, duration) is kept by ``rosbags``' ``Writer`` as for single writes.
-``bench/replay_throughput.py`` measures it.
 """
 
 from __future__ import annotations

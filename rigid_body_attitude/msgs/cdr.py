@@ -1,10 +1,9 @@
 """Hand-written CDR codecs for the fixed-layout messages read and written once per sample.
 
-``rosbags``' generic ``deserialize_cdr``/``serialize_cdr`` build full message objects (about
-6.5 µs and 4.6 µs per ``sensor_msgs/msg/Imu``); the replay tool needs ≥ 10⁵ messages/s end to
-end, so the per-sample fields are read and written here with precompiled ``struct`` calls
-(``bench/bag_codecs.py`` measures both; ``test/msgs/test_cdr.py`` proves byte equality with
-``rosbags``' serialiser for every message type and frame-id padding).
+``rosbags``' generic ``deserialize_cdr``/``serialize_cdr`` build full message objects; the
+node and the replay tool read and write a message per sample, so the per-sample fields are read
+and written here with precompiled ``struct`` calls (``test/msgs/test_cdr.py`` proves byte
+equality with ``rosbags``' serialiser for every message type and frame-id padding).
 
 Decoding is done, and every byte checked, by :mod:`rigid_body_attitude.msgs.decoders` (what is
 taken and refused, and why, is stated there); every decoder here raises

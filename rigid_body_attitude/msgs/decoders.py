@@ -56,7 +56,6 @@ fields wanted) and two byte-string comparisons. A known frame id that is not the
 costs a second ``struct`` call and a dictionary look-up; anything else (another encapsulation,
 a new frame id, any fault) goes through the complete, slower check that names the fault and
 learns the frame id (up to 64 of at most 256 bytes; the table is emptied when full).
-``bench/bag_codecs.py`` measures each path.
 """
 
 from __future__ import annotations
