@@ -49,7 +49,7 @@ from node_throughput import CLOCK_TICKS, display, ProcessCrashed, Session  # noq
 #: Targets of issue 13 (% of one core).
 UNSUBSCRIBED_TARGET = 3.0
 SUBSCRIBED_TARGET = 5.0
-SERVING_LINE = b'cpu_scheduling'
+SERVING_LINE = b']: serving'
 
 
 def dynamics_scenes() -> List[str]:
@@ -87,7 +87,7 @@ def node_command() -> List[str]:
 
 
 def wait_serving(process, timeout: float) -> None:
-    """Wait until the node's log says it serves (its ``cpu_scheduling`` line)."""
+    """Wait until the node's log says it serves (its ``serving`` line)."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         process.check_alive()
