@@ -312,7 +312,8 @@ class GyroSession(Session):
         return self.alignment.status if self.alignment is not None else NOT_ALIGNED
 
     def strapdown_state(self) -> StrapdownState:
-        """The alignment and the bias estimate for the reports."""
+        """The alignment and the bias estimate for the reports (levelling: WARN, nothing is
+        integrated yet)."""
         levelling = self._aligning and self.levelling is not None and self.levelling.samples > 0
         return StrapdownState(self.alignment_text(), self.bias_text(), levelling)
 

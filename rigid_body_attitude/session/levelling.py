@@ -114,12 +114,10 @@ class SampleMap:
             self.mount = (w, x, y, z)
         rotation = quaternion.to_matrix(np.array(self.mount))
         calibration = self.calibration
-        self._rotation = rotation
+        r = rotation.ravel().tolist()
+        self._rotation_floats = (r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8])
         self._gyro_matrix = rotation @ calibration.gyro_matrix
         self._gyro_offset = -(self._gyro_matrix @ calibration.gyro_bias)
-        self._g_matrix = self._gyro_matrix @ calibration.g_sensitivity
-        self._accel_matrix = rotation @ calibration.accelerometer_matrix
-        self._accel_offset = -(self._accel_matrix @ calibration.accelerometer_bias)
         self._update_affine()
 
     def set_gyro_bias(self, bias: Vec) -> None:
@@ -144,20 +142,20 @@ class SampleMap:
     def body_sample(self, rate: Sequence[float], accel: Sequence[float] | None
                     ) -> tuple[Vec, Vec | None]:
         """``(ω_body, a_body)`` of a measured sample, before the bias: rate [rad/s] and
-        specific force [m/s²] (``None`` stays ``None``), body frame."""
-        rx, ry, rz = rate
-        omega = self._gyro_matrix @ np.array((rx, ry, rz)) + self._gyro_offset
+        specific force [m/s²] (``None`` stays ``None``), body frame (plain float math)."""
+        wx, wy, wz = rate
+        calibration = self.calibration
         if accel is None:
-            x, y, z = omega.tolist()
-            return (x, y, z), None
-        ax, ay, az = accel
-        accel_body = self._accel_matrix @ np.array((ax, ay, az)) + self._accel_offset
-        if self.uses_accelerometer:  # G a_i, a_i in the sensor frame
-            accel_sensor = self._rotation.T @ accel_body
-            omega = omega - self._g_matrix @ accel_sensor
-        x, y, z = omega.tolist()
-        fx, fy, fz = accel_body.tolist()
-        return (x, y, z), (fx, fy, fz)
+            return self._rotated(calibration.correct_gyro(wx, wy, wz)), None
+        omega, specific_force = calibration.correct(wx, wy, wz, accel[0], accel[1], accel[2])
+        return self._rotated(omega), self._rotated(specific_force)
+
+    def _rotated(self, vector: Vec) -> Vec:
+        """``R v``: a sensor-frame vector in the body frame."""
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._rotation_floats
+        x, y, z = vector
+        return (r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z,
+                r20 * x + r21 * y + r22 * z)
 
 
 class Levelling:

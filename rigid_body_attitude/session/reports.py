@@ -11,7 +11,8 @@ report the input counts and rates.
   period (``integration_failed``, ``non_finite_result``).
 * WARN: a drift above :data:`DRIFT_WARN_THRESHOLD`; any rejection of :data:`WARN_REASONS` or
   missed samples in the last period; inputs that arrived with none accepted (the main reason
-  named); a gyro scene that received no input; a dynamics scene behind its clock.
+  named); a gyro scene that received no input, or that is still levelling (nothing
+  integrated yet: the message starts ``aligning: ...``); a dynamics scene behind its clock.
 
 Each problem names the parameter that governs it (:data:`GOVERNING_PARAMETER`). The period
 figures come from :class:`PeriodCounts`, which the sessions fill.
@@ -123,8 +124,8 @@ class StrapdownState:
     Attributes:
         alignment: the alignment state in words (levelling from gravity, or why not).
         gyro_bias: the bias estimate in words (``None``: the scene's ``gyro_bias`` effect).
-        aligning: nothing is integrated yet: the session is levelling (the status message
-            says so instead of ``propagating``; the level stays what the inputs make it).
+        aligning: nothing is integrated yet: the session is levelling (the status is WARN
+            and its message starts with the alignment state).
     """
 
     alignment: str = NOT_ALIGNED
@@ -364,7 +365,8 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
     values += [(f'malformed {topic}', str(count))
                for topic, count in sorted(counts.malformed_by_topic.items())]
     values += [(key, str(value)) for key, value in sorted(propagator.counters().items())]
-    if state is not None and state.aligning:
+    if state is not None and state.aligning:  # nothing integrated yet: never OK
+        level = max(level, LEVEL_WARN)
         problems.insert(0, state.alignment)
     message = '; '.join(problems) or 'propagating'
     return DiagnosticReport(level, message, tuple(values))

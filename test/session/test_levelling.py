@@ -75,14 +75,15 @@ def test_nothing_is_published_while_levelling_and_the_diagnostics_say_so(open_sc
     clocks.monotonic = 1.0
     report = session.report()
     values = dict(report.values)
-    assert report.level == LEVEL_OK and report.message.startswith('aligning: ')
+    # Nothing integrated yet: never OK.
+    assert report.level == LEVEL_WARN and report.message.startswith('aligning: ')
     assert values['alignment'].startswith('aligning: ')
     assert values['accepted'] == '100'  # taken by the levelling, not rejected
     feed(handle, rest_samples(300, accel, random.Random(3), start=100))
     assert session.alignment_done and sink.attitudes
     clocks.monotonic = 2.0
     report = session.report()
-    assert report.message == 'propagating'
+    assert (report.level, report.message) == (LEVEL_OK, 'propagating')
     assert dict(report.values)['alignment'].startswith('aligned at rest over 1 s')
     assert '(levelling)' in dict(report.values)['gyro_bias [rad/s]']
 
