@@ -34,7 +34,8 @@ from rigid_body_attitude.session.stream import REASONS
 __all__ = [
     'DRIFT_ERROR_THRESHOLD', 'DRIFT_WARN_THRESHOLD', 'DiagnosticReport', 'GOVERNING_PARAMETER',
     'LEVEL_ERROR', 'LEVEL_OK', 'LEVEL_WARN', 'NOT_ALIGNED', 'PeriodCounts', 'REJECTION_KEYS',
-    'StrapdownState', 'WARN_REASONS', 'alignment_state', 'body_frame_velocity', 'body_summary', 'body_values',
+    'StrapdownState', 'WARN_REASONS', 'alignment_state', 'body_frame_velocity', 'body_summary',
+    'body_values',
     'diagnostic_report', 'gyro_bias_text', 'rotation_from_initial_deg', 'stale_command_count',
     'state_summary', 'strapdown_summary', 'strapdown_values',
 ]

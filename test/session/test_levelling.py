@@ -169,8 +169,8 @@ def test_a_kalibr_file_with_g_sensitivity_takes_the_accelerometer(open_scene, tm
 
 
 @pytest.mark.parametrize('source', ['angular_velocity', 'imu_zeros', 'imu_not_provided'])
-def test_without_accelerometer_data_it_starts_from_the_scene_and_says_so_once(open_scene,
-                                                                             source):
+def test_without_accelerometer_data_it_starts_from_the_scene_and_says_so_once(
+        open_scene, source):
     session, sink = open_scene('strapdown')
     topic = 'angular_velocity' if source == 'angular_velocity' else 'imu'
     handle = input_handler(session, topic)
