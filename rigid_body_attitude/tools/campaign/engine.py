@@ -8,7 +8,8 @@ or one after the other in this process (``serial``). Each chunk's result comes b
 process, which writes it: workers need no shared file system, and a chunk is written once
 however often Dask ran it (a task whose worker died is run again elsewhere by the scheduler,
 so no run is lost, and a chunk written already is never written again, so none is
-duplicated). Then the runs are read back, checked (every run exactly once) and summarised:
+duplicated). Then the runs are gathered (the chunks computed now from memory, the resumed ones
+read back), checked (every run exactly once) and summarised:
 ``statistics.csv``, ``summary.json``, ``summary.png`` (:mod:`.storage`).
 """
 
@@ -127,28 +128,32 @@ def run_campaign(spec: CampaignSpec, out: str | Path, *, scheduler: str = '',
     done_runs = sum(chunks[index].shape[0] for index in range(len(chunks))
                     if index not in set(pending))
     bar = _progress(progress, spec, done_runs)
+    kept: dict[int, dict[str, NDArray[Any]]] = {}
     try:
         if serial:
             for index in pending:
-                store.write(index, run_chunk(spec, chunks[index]))
+                kept[index] = run_chunk(spec, chunks[index])
+                store.write(index, kept[index])
                 bar.update(chunks[index].shape[0])
         elif client is not None:
-            _run_on(client, spec, store, chunks, pending, bar)
+            _run_on(client, spec, store, chunks, pending, bar, kept)
         elif pending:
             with dask_client(scheduler, workers) as own:
-                _run_on(own, spec, store, chunks, pending, bar)
+                _run_on(own, spec, store, chunks, pending, bar, kept)
     finally:
         bar.close()
     compute = time.perf_counter() - begin
-    result = summarise(spec, store, len(chunks), plot)
+    result = summarise(spec, store, len(chunks), plot, kept)
     result.chunks_run, result.chunks_resumed = len(pending), len(chunks) - len(pending)
     result.compute_seconds, result.total_seconds = compute, time.perf_counter() - begin
     return result
 
 
 def _run_on(client: Any, spec: CampaignSpec, store: ChunkStore,
-            chunks: list[NDArray[np.int64]], pending: list[int], bar: Any) -> None:
-    """Submit the pending chunks; write each result as it arrives."""
+            chunks: list[NDArray[np.int64]], pending: list[int], bar: Any,
+            kept: dict[int, dict[str, NDArray[Any]]]) -> None:
+    """Submit the pending chunks; write each result as it arrives (and keep it in
+    ``kept``)."""
     from distributed import as_completed
     token = spec_digest(spec)[:16]
     shared = client.scatter(spec, broadcast=True)
@@ -165,29 +170,33 @@ def _run_on(client: Any, spec: CampaignSpec, store: ChunkStore,
                                 f'finished chunks are kept, run again to resume') from None
         if not store.done(index):
             store.write(index, columns)
+        kept[index] = columns
         bar.update(chunks[index].shape[0])
         future.release()
 
 
-def read_runs(folder: str | Path, spec: CampaignSpec) -> dict[str, NDArray[Any]]:
-    """Every run of a finished campaign, in run order (checked: each run exactly once)."""
+def read_runs(folder: str | Path, spec: CampaignSpec,
+              kept: dict[int, dict[str, NDArray[Any]]] | None = None) -> dict[str, NDArray[Any]]:
+    """Every run of a finished campaign, in run order (checked: each run exactly once); the
+    chunks in ``kept`` (chunk index: the arrays just written) are not read back."""
     store = ChunkStore(folder, spec)
     count = len(chunk_runs(spec))
     missing = [index for index in range(count) if not store.done(index)]
     if missing:
         raise CampaignError(f'{len(missing)} of {count} chunks are not finished (first: '
                             f'{missing[0]}); run the campaign again to resume')
-    arrays = store.read_all(count)
+    arrays = store.read_all(count, kept)
     if not np.array_equal(arrays['run'], np.arange(spec.runs)):
         raise CampaignError(f'The chunks of {folder} do not hold each run exactly once')
     return arrays
 
 
 def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
-              plot: bool = True) -> CampaignResult:
-    """Read every run back and write ``statistics.csv``, ``summary.json`` and (with
-    ``plot``) ``summary.png``."""
-    arrays = read_runs(store.folder, spec)
+              plot: bool = True, kept: dict[int, dict[str, NDArray[Any]]] | None = None
+              ) -> CampaignResult:
+    """Read every run back (but the chunks in ``kept``) and write ``statistics.csv``,
+    ``summary.json`` and (with ``plot``) ``summary.png``."""
+    arrays = read_runs(store.folder, spec, kept)
     failed = arrays['failed'].astype(bool)
     times = np.array((0.0,) + spec.output_times)
     table = percentile_table({name: arrays[name] for name in METRICS}, ~failed,
