@@ -38,7 +38,7 @@ from rigid_body_attitude.tools.campaign.statistics import METRICS, percentile_ta
 from rigid_body_attitude.tools.campaign.storage import ChunkStore, spec_digest
 
 __all__ = ['CampaignError', 'CampaignResult', 'chunk_runs', 'dask_client', 'default_workers',
-           'read_runs', 'run_campaign']
+           'local_cluster', 'read_runs', 'run_campaign']
 
 #: Failed runs listed in ``summary.json`` at most (all are in the chunk files).
 MAX_LISTED_FAILURES = 1000
@@ -89,7 +89,7 @@ def dask_client(scheduler: str = '', workers: int = 0) -> Iterator[Any]:
     """A ``distributed.Client``: of the scheduler at ``scheduler``, or of a local cluster of
     ``workers`` single-threaded worker processes (default :func:`default_workers`), closed
     on exit."""
-    from distributed import Client, LocalCluster
+    from distributed import Client
     if scheduler:
         try:
             client = Client(scheduler, timeout='5s')
@@ -99,10 +99,27 @@ def dask_client(scheduler: str = '', workers: int = 0) -> Iterator[Any]:
         with client:
             yield client
         return
-    with LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
-                      processes=True, dashboard_address=':0',
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    with local_cluster(workers) as cluster, Client(cluster) as client:
         yield client
+
+
+def local_cluster(workers: int = 0) -> Any:
+    """A ``LocalCluster`` of ``workers`` single-threaded worker processes (default
+    :func:`default_workers`) whose memory allocator keeps glibc's adaptive thresholds.
+
+    Dask starts its workers with ``MALLOC_TRIM_THRESHOLD_`` set, which fixes glibc's
+    thresholds: every NumPy temporary of a chunk (a few hundred kB) is then mapped afresh and
+    faulted in page by page, and a worker computes a chunk noticeably slower than this
+    process does. The variable is left unset for these workers (Dask's documented way:
+    ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_: null``); a value set in
+    this process's environment still wins.
+    """
+    import dask
+    from distributed import LocalCluster
+    with dask.config.set({'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None}):
+        return LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
+                            processes=True, dashboard_address=':0',
+                            silence_logs=logging.ERROR)
 
 
 def _progress(enabled: bool | None, spec: CampaignSpec, done: int) -> Any:
