@@ -10,8 +10,9 @@ damping coefficients. ``--runs`` runs (default 10⁵) are advanced ``--steps`` s
   beforehand (not timed), advanced through the output times: the engine alone.
 * **campaign, N workers**: :func:`run_campaign` on a :func:`local_cluster` of N
   single-threaded worker processes (what ``campaign`` starts), started beforehand (its
-  start-up is reported apart): drawing the parameters, the chunk tasks, sending results back, the Parquet files, gathering the runs
-  and the statistics (the PNG is timed apart: a fixed cost of matplotlib).
+  start-up is reported apart): drawing the parameters, the chunk tasks, sending results
+  back, the Parquet files, gathering the runs and the statistics (the PNG is timed apart: a
+  fixed cost of matplotlib).
 
 Each is timed ``--repeats`` times, interleaved, in wall-clock and CPU seconds (a campaign's:
 its worker processes' and this process's, which holds the client and the scheduler); the best

@@ -37,8 +37,8 @@ from rigid_body_attitude.tools.campaign.spec import CampaignSpec
 from rigid_body_attitude.tools.campaign.statistics import METRICS, percentile_table
 from rigid_body_attitude.tools.campaign.storage import ChunkStore, spec_digest
 
-__all__ = ['CampaignError', 'CampaignResult', 'chunk_runs', 'dask_client', 'default_workers',
-           'local_cluster', 'read_runs', 'run_campaign']
+__all__ = ['CampaignError', 'CampaignResult', 'LOCAL_CLUSTER_CONFIG', 'chunk_runs',
+           'dask_client', 'default_workers', 'local_cluster', 'read_runs', 'run_campaign']
 
 #: Failed runs listed in ``summary.json`` at most (all are in the chunk files).
 MAX_LISTED_FAILURES = 1000
@@ -103,20 +103,32 @@ def dask_client(scheduler: str = '', workers: int = 0) -> Iterator[Any]:
         yield client
 
 
+#: Dask settings of :func:`local_cluster`: glibc's adaptive allocation thresholds kept in the
+#: workers, and Dask's own sampling (the workers' statistical profiler, event-loop ticks,
+#: system and memory monitors) made rare: campaign tasks are few and long, and at Dask's
+#: defaults this sampling takes CPU from the chunks in every process of the cluster.
+LOCAL_CLUSTER_CONFIG = {
+    'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None,
+    'distributed.worker.profile.enabled': False,
+    'distributed.admin.tick.interval': '1s',
+    'distributed.admin.system-monitor.interval': '2s',
+    'distributed.worker.memory.monitor-interval': '1s',
+}
+
+
 def local_cluster(workers: int = 0) -> Any:
     """A ``LocalCluster`` of ``workers`` single-threaded worker processes (default
-    :func:`default_workers`) whose memory allocator keeps glibc's adaptive thresholds.
+    :func:`default_workers`) with :data:`LOCAL_CLUSTER_CONFIG`.
 
     Dask starts its workers with ``MALLOC_TRIM_THRESHOLD_`` set, which fixes glibc's
     thresholds: every NumPy temporary of a chunk (a few hundred kB) is then mapped afresh and
-    faulted in page by page, and a worker computes a chunk noticeably slower than this
-    process does. The variable is left unset for these workers (Dask's documented way:
-    ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_: null``); a value set in
-    this process's environment still wins.
+    faulted in page by page. The variable is left unset for these workers (Dask's documented
+    way: a ``None`` in ``distributed.nanny.pre-spawn-environ``); a value set in this
+    process's environment still wins.
     """
     import dask
     from distributed import LocalCluster
-    with dask.config.set({'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None}):
+    with dask.config.set(LOCAL_CLUSTER_CONFIG):
         return LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
                             processes=True, dashboard_address=':0',
                             silence_logs=logging.ERROR)
