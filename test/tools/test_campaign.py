@@ -21,8 +21,7 @@ from rigid_body_attitude.bag import write_bag
 from rigid_body_attitude.core.paths import config_folders
 from rigid_body_attitude.tools.campaign import (
     FAILURE_REASONS, load_spec, local_cluster, main, read_runs, replay_fleet, run_campaign,
-    run_chunk,
-    sample_runs, spec_from_mapping, SpecError)
+    run_chunk, sample_runs, spec_from_mapping, SpecError)
 from rigid_body_attitude.tools.replay import ReplayOptions
 
 SCENE = {'name': 'box', 'rate_source': 'dynamics', 'integrator': 'rk4', 'step': 0.01,
