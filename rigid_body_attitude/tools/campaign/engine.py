@@ -8,8 +8,8 @@ or one after the other in this process (``serial``). Each chunk's result comes b
 process, which writes it: workers need no shared file system, and a chunk is written once
 however often Dask ran it (a task whose worker died is run again elsewhere by the scheduler,
 so no run is lost, and a chunk written already is never written again, so none is
-duplicated). Then the runs are gathered (the chunks computed now from memory, the resumed ones
-read back), checked (every run exactly once) and summarised:
+duplicated). Then the runs are gathered (the chunks this call computed from memory, the
+resumed ones read back), checked (every run exactly once) and summarised:
 ``statistics.csv``, ``summary.json``, ``summary.png`` (:mod:`.storage`).
 """
 
@@ -55,7 +55,7 @@ class CampaignResult:
 
     Attributes:
         folder: the results folder; runs, failed: counts.
-        chunks_run, chunks_resumed: chunks computed now and found finished already.
+        chunks_run, chunks_resumed: chunks this call computed and found finished.
         elapsed: seconds of computing (chunks) and of the whole call.
         times: ``0`` and the output times [s]; statistics: percentiles (P, T) per metric.
         failures: failed runs by reason.
@@ -122,16 +122,22 @@ def local_cluster(workers: int = 0) -> Any:
 
     Dask starts its workers with ``MALLOC_TRIM_THRESHOLD_`` set, which fixes glibc's
     thresholds: every NumPy temporary of a chunk (a few hundred kB) is then mapped afresh and
-    faulted in page by page. The variable is left unset for these workers (Dask's documented
-    way: a ``None`` in ``distributed.nanny.pre-spawn-environ``); a value set in this
-    process's environment still wins.
+    faulted in page by page. These workers start without it (Dask's documented way, a
+    ``None`` in ``distributed.nanny.pre-spawn-environ``; the variable is also kept out of
+    this process's environment while they start, where an earlier Dask nanny leaves it).
     """
     import dask
     from distributed import LocalCluster
-    with dask.config.set(LOCAL_CLUSTER_CONFIG):
-        return LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
-                            processes=True, dashboard_address=':0',
-                            silence_logs=logging.ERROR)
+    variable = 'MALLOC_TRIM_THRESHOLD_'
+    inherited = os.environ.pop(variable, None)
+    try:
+        with dask.config.set(LOCAL_CLUSTER_CONFIG):
+            return LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
+                                processes=True, dashboard_address=':0',
+                                silence_logs=logging.ERROR)
+    finally:
+        if inherited is not None:
+            os.environ[variable] = inherited
 
 
 def _progress(enabled: bool | None, spec: CampaignSpec, done: int) -> Any:
