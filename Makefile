@@ -3,14 +3,48 @@
 #   make run    create/update .venv, then start the propagation node with the default scene
 #   make test   create/update .venv, then run the whole test suite
 #
-# .venv holds Python 3.11, the pinned ROS 2 Jazzy wheels and tools (requirements.txt) and this
-# package, installed (not editable) the way colcon lays out an ament_python package. Stamp files
-# in .venv make a second run fast: the requirements are re-installed when requirements.txt
+# .venv holds Python 3.12 or 3.11 (the versions the ROS 2 Jazzy wheels are built for), the
+# pinned ROS 2 Jazzy wheels and tools (requirements.txt), tf2_msgs built from its interface
+# definition (interfaces/tf2_msgs, with the build-time wheels of requirements-build.txt, CMake
+# and a C/C++ compiler) and this package, installed (not editable) the way colcon lays out an
+# ament_python package. Stamp files in .venv make a second run fast: the requirements are
+# re-installed when a requirements file changes, tf2_msgs re-built when its interface package
 # changes, the package when any of its sources, config files or packaging files change.
+#
+# The interpreter: the newest of python3.12, then python3.11 (on PATH, else a pyenv install of
+# that version), then python3 if it is 3.12 or 3.11; an existing venv keeps the interpreter it
+# was made with. `make PYTHON=/path/to/python3.11 ...` chooses one (and re-creates the venv if
+# it was made with another version). A second venv: `make test VENV=.venv-3.11 PYTHON=...`.
 
-PYTHON ?= $(shell command -v python3.11 2>/dev/null || command -v python3 2>/dev/null)
 VENV := .venv
+SUPPORTED_PYTHONS := 3.12 3.11
+comma := ,
+space := $(subst ,, )
+PYTHON_VERSION_OF = $(shell $(1) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+
+# Candidates newest first; one that does not run (a pyenv shim of a version that is not enabled
+# says "command not found") or runs another version is passed over.
+PYENV_VERSIONS := $(shell pyenv root 2>/dev/null)/versions
+# PYTHON_SEARCH narrows the versions looked for (CI: PYTHON_SEARCH=3.11 for the older one).
+PYTHON_SEARCH ?= $(SUPPORTED_PYTHONS)
+PYTHON_CANDIDATES := $(foreach v,$(PYTHON_SEARCH),python$(v) \
+	$(lastword $(sort $(wildcard $(PYENV_VERSIONS)/$(v).*/bin/python$(v))))) python3
+find_python = $(firstword $(foreach c,$(PYTHON_CANDIDATES),$(if $(filter \
+	$(PYTHON_SEARCH),$(call PYTHON_VERSION_OF,$(c))),$(shell command -v $(c)))))
+
+# The venv's interpreter version is recorded as $(VENV)/.python-<version>.
+VENV_PYTHON_VERSION := $(patsubst $(VENV)/.python-%,%,$(firstword $(foreach \
+	v,$(PYTHON_SEARCH),$(wildcard $(VENV)/.python-$(v)))))
+ifeq ($(origin PYTHON),undefined)
+ifeq ($(VENV_PYTHON_VERSION),)
+PYTHON := $(find_python)
+endif
+endif
+PYTHON_VERSION := $(if $(PYTHON),$(call PYTHON_VERSION_OF,$(PYTHON)),$(VENV_PYTHON_VERSION))
+VENV_MARKER := $(VENV)/.python-$(PYTHON_VERSION)
+
 VENV_PYTHON := $(VENV)/bin/python
+REQUIREMENTS := requirements.txt requirements-build.txt
 REQUIREMENTS_STAMP := $(VENV)/.requirements.stamp
 PACKAGE_STAMP := $(VENV)/.package.stamp
 STAGE_DIR := $(VENV)/.stage
@@ -24,6 +58,18 @@ PACKAGE_FILES := setup.py setup.cfg package.xml LICENSE resource/$(PACKAGE) \
 	$(shell find $(PACKAGE) config scripts/launchers -name __pycache__ -prune \
 		-o ! -name '*.pyc' -print 2>/dev/null)
 
+# tf2_msgs has no wheel: it is built from its interface package against the venv's ROS 2 wheels
+# (CMake and a C/C++ compiler from the system) and installed into the venv prefix, as colcon
+# would install it. A ROS install uses its own tf2_msgs (interfaces/ holds a COLCON_IGNORE).
+TF2_MSGS_SOURCE := interfaces/tf2_msgs
+TF2_MSGS_STAMP := $(VENV)/.tf2_msgs.stamp
+TF2_MSGS_BUILD := $(VENV)/.tf2_msgs-build
+TF2_MSGS_FILES := $(shell find $(TF2_MSGS_SOURCE) -print 2>/dev/null)
+TF2_MSGS_CMAKE_INCLUDE := $(abspath $(TF2_MSGS_SOURCE))/cmake/strip_foreign_include_dirs.cmake
+VENV_PREFIX := $(abspath $(VENV))
+BUILD_ENV := env PATH="$(VENV_PREFIX)/bin:$$PATH"
+BUILD_JOBS := $(shell nproc 2>/dev/null || echo 2)
+
 # The node starts with config/params.yaml (as installed) when the package ships one. Extra
 # arguments: make run ARGS='--ros-args -p name:=value'.
 PARAMS_FILE := $(abspath $(VENV))/share/$(PACKAGE)/config/params.yaml
@@ -32,10 +78,11 @@ ARGS ?=
 
 # Every command below sees the venv as the only ament prefix and a discovery range limited to
 # this machine (ROS_DOMAIN_ID is left to the user). A sourced ROS install's variables would mix
-# its Python 3.12 modules and libraries into the venv's, so they are not passed on.
+# its modules and libraries (another build of ROS 2) into the venv's, so they are not passed on.
 export AMENT_PREFIX_PATH := $(abspath $(VENV))
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 unexport PYTHONPATH LD_LIBRARY_PATH RMW_IMPLEMENTATION ROS_LOCALHOST_ONLY
+unexport CMAKE_PREFIX_PATH COLCON_PREFIX_PATH AMENT_CURRENT_PREFIX
 unexport _ROS_WHEELS_BOOTSTRAP_COMPLETE
 
 .PHONY: run test install lint clean help
@@ -46,6 +93,7 @@ help:
 	@echo 'make test   run the whole test suite against the package installed in .venv'
 	@echo 'make lint   flake8 only'
 	@echo 'make clean  remove .venv'
+	@echo 'Python 3.12 or 3.11 (the newest found; make PYTHON=... chooses), venv: make VENV=...'
 
 run: install
 	$(VENV_PYTHON) scripts/ros2run $(PACKAGE) propagation_node $(RUN_ARGS) $(ARGS)
@@ -60,18 +108,35 @@ test: install
 lint: install
 	$(VENV_PYTHON) -m flake8 $(PACKAGE) test $(wildcard bench) setup.py scripts/ros2run
 
-install: $(PACKAGE_STAMP)
+install: $(TF2_MSGS_STAMP) $(PACKAGE_STAMP)
 
-$(VENV_PYTHON):
-	@test -n "$(PYTHON)" || { echo 'error: no python3.11 or python3 on PATH' >&2; exit 1; }
-	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))' || { \
-		echo "error: $(PYTHON) is Python `$(PYTHON) -c 'import platform; \
-		print(platform.python_version())'`; the ROS 2 Jazzy wheels need Python 3.11:" \
-		"make PYTHON=/path/to/python3.11 ..." >&2; exit 1; }
+# Made (or re-made, --clear) when the venv has no marker of the chosen Python version.
+$(VENV_MARKER):
+	@test -n "$(PYTHON)" || { echo 'error: no Python $(subst $(space),$(comma) ,$(PYTHON_SEARCH))' \
+		'found ($(PYTHON_CANDIDATES)): make PYTHON=/path/to/python3.12 ...' >&2; exit 1; }
+	@test -n "$(filter $(SUPPORTED_PYTHONS),$(PYTHON_VERSION))" || { \
+		echo 'error: $(PYTHON) $(if $(PYTHON_VERSION),is Python $(PYTHON_VERSION),does not run); the ROS 2' \
+		'Jazzy wheels need Python 3.12 or 3.11: make PYTHON=/path/to/python3.12 ...' >&2; \
+		exit 1; }
 	$(PYTHON) -m venv --clear $(VENV)
+	touch $@
 
-$(REQUIREMENTS_STAMP): requirements.txt | $(VENV_PYTHON)
-	$(PIP_INSTALL) -r requirements.txt
+$(REQUIREMENTS_STAMP): $(REQUIREMENTS) $(VENV_MARKER)
+	$(PIP_INSTALL) $(addprefix -r ,$(REQUIREMENTS))
+	touch $@
+
+# The project include drops the include folders of the wheels' build machine from the imported
+# targets (see the file). The build folder is removed afterwards.
+$(TF2_MSGS_STAMP): $(REQUIREMENTS_STAMP) $(TF2_MSGS_FILES)
+	rm -rf $(TF2_MSGS_BUILD)
+	$(BUILD_ENV) cmake -S $(TF2_MSGS_SOURCE) -B $(TF2_MSGS_BUILD) -Wno-dev \
+		-DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF \
+		-DCMAKE_INSTALL_PREFIX=$(VENV_PREFIX) -DCMAKE_PREFIX_PATH=$(VENV_PREFIX) \
+		-DPython3_EXECUTABLE=$(VENV_PREFIX)/bin/python -DCMAKE_INSTALL_MESSAGE=NEVER \
+		-DCMAKE_PROJECT_tf2_msgs_INCLUDE=$(TF2_MSGS_CMAKE_INCLUDE)
+	$(BUILD_ENV) cmake --build $(TF2_MSGS_BUILD) --parallel $(BUILD_JOBS)
+	$(BUILD_ENV) cmake --install $(TF2_MSGS_BUILD)
+	rm -rf $(TF2_MSGS_BUILD)
 	touch $@
 
 # A clean copy is built, so nothing is written into the source tree and no stale build/ output

@@ -10,7 +10,7 @@ without interference from other load, the median is printed beside it:
 * ``step + covariance read every sample``: as above, plus ``attitude_covariance`` read after
   each sample (a fold per sample);
 * ``step + folded covariance read every sample``: ``folded_attitude_covariance`` read after each
-  sample (as of the last fold, at most a batch old);
+  sample (the value at the last fold, at most a batch old);
 * ``step + covariance, batch 1``: a fold per sample, read at the end.
 
 Usage: ``python bench/attitude_covariance_cost.py [--steps 20000] [--repeats 5] [--json PATH]``.

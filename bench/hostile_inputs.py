@@ -331,7 +331,7 @@ def parameter_cases() -> dict[str, list[str]]:
     return {f'{name}:={value}': ['-p', f'{name}:={value}'] for name, value in [
         ('publish_rate', '50'), ('publish_rate', '0.0'), ('publish_rate', '.nan'),
         ('max_dt', '-1.0'), ('max_angular_rate', '0.0'), ('time_jump_threshold', '1e300'),
-        ('constant_dt', 'true'), ('use_header_stamps', '2.0'), ('cpu_scheduling', 'fifo'),
+        ('constant_dt', 'true'), ('use_header_stamps', '2.0'), ('step', '.inf'),
         ('world_frame', "''"), ('body_frame', 'world'), ('integrator', 'no_such'),
         ('scene', 'no_such_scene'), ('scene', 'x' * 5000), ('step', '-0.001')]}
 

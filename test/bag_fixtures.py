@@ -37,7 +37,8 @@ import numpy as np
 import yaml
 
 from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.bag import BagWriter, stamp_to_ns, write_bag
+from rigid_body_attitude.bag import BagWriter, write_bag
+from rigid_body_attitude.msgs import stamp_to_ns
 from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
 
 __all__ = ['AnalyticCase', 'CASES', 'GROUND_TRUTH_TOPIC', 'build_case', 'write_case_bag',

@@ -6,12 +6,14 @@ these tests check the install itself: the ament index marker, package.xml and co
 and a core that never imports rclpy.
 """
 
+import ast
 import configparser
 import filecmp
 import importlib.metadata
 import json
 import os
 from pathlib import Path
+import re
 import shutil
 import subprocess
 import sys
@@ -43,9 +45,17 @@ SHELL_MODULES: set[str] = set()
 SHELL_PACKAGES = {'ros'}
 
 REQUIRED_EXEC_DEPENDS = {
-    'rclpy', 'geometry_msgs', 'sensor_msgs', 'std_msgs', 'diagnostic_msgs', 'std_srvs',
-    'python3-numpy', 'python3-yaml', 'python3-scipy',
+    'rclpy', 'rcl_interfaces', 'geometry_msgs', 'sensor_msgs', 'std_msgs', 'diagnostic_msgs',
+    'std_srvs', 'python3-numpy', 'python3-yaml', 'python3-scipy', 'python3-matplotlib',
+    'python3-tqdm',
 }
+#: Third-party modules → the rosdep key that provides them (a ROS package: its own name).
+ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'python3-yaml',
+               'matplotlib': 'python3-matplotlib', 'tqdm': 'python3-tqdm'}
+#: Modules that rosdistro's rosdep/python.yaml has no key for → their pip distribution: pinned
+#: in requirements.txt and named in a comment of package.xml.
+WITHOUT_ROSDEP_KEY = {'rosbags': 'rosbags', 'apsw': 'apsw', 'dask': 'dask',
+                      'distributed': 'distributed', 'pyarrow': 'pyarrow'}
 REQUIRED_TEST_DEPENDS = {'python3-pytest'}
 
 # Run in a fresh interpreter: refuses rclpy through a meta path finder (so an import anywhere,
@@ -245,6 +255,73 @@ def test_package_xml_format_3_with_dependencies():
     version = root.findtext('version')
     assert version == rigid_body_attitude.__version__
     assert version == importlib.metadata.version(PACKAGE)
+
+
+def third_party_imports(package_dir: Path) -> dict[str, set[str]]:
+    """Top-level modules outside the standard library that the package imports anywhere
+    (module level or inside functions) → the files importing them."""
+    found: dict[str, set[str]] = {}
+    for path in sorted(package_dir.rglob('*.py')):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+                names = [node.module]
+            else:
+                continue
+            for name in names:
+                top = name.split('.')[0]
+                if top not in sys.stdlib_module_names and top != PACKAGE:
+                    found.setdefault(top, set()).add(str(path.relative_to(package_dir)))
+    return found
+
+
+def undeclared_imports(imports: dict[str, set[str]], package_xml: str, requirements: str,
+                       is_ros_package) -> list[str]:
+    """The imports that package.xml (and for modules without a rosdep key, requirements.txt)
+    does not declare."""
+    root = ElementTree.fromstring(package_xml)
+    declared = {element.text for element in root.findall('exec_depend')}
+    comments = ' '.join(re.findall(r'<!--(.*?)-->', package_xml, flags=re.S))
+    pinned = {line.split('==')[0].strip().lower() for line in requirements.splitlines()
+              if '==' in line and not line.lstrip().startswith('#')}
+    missing = []
+    for module, files in sorted(imports.items()):
+        if module in WITHOUT_ROSDEP_KEY:
+            distribution = WITHOUT_ROSDEP_KEY[module]
+            if distribution not in pinned or distribution not in comments:
+                missing.append(f'{module} (no rosdep key: pin {distribution} in requirements.txt '
+                               f'and name it in a package.xml comment), imported by '
+                               f'{sorted(files)}')
+            continue
+        key = ROSDEP_KEYS.get(module) or (module if is_ros_package(module) else None)
+        if key not in declared:
+            missing.append(f'{module} (rosdep key {key}), imported by {sorted(files)}')
+    return missing
+
+
+def installed_ros_package(name: str) -> bool:
+    """Whether ``name`` is a ROS package of the install prefix (its ament index marker)."""
+    return (PREFIX / 'share' / 'ament_index' / 'resource_index' / 'packages' / name).is_file()
+
+
+def test_every_import_of_the_package_is_a_declared_dependency():
+    imports = third_party_imports(Path(rigid_body_attitude.__file__).parent)
+    assert {'numpy', 'rclpy', 'rosbags'} <= set(imports)
+    missing = undeclared_imports(imports, (SHARE_DIR / 'package.xml').read_text(),
+                                 (REPO_ROOT / 'requirements.txt').read_text(),
+                                 installed_ros_package)
+    assert missing == []
+
+
+def test_an_undeclared_import_is_reported():
+    package_xml = ('<package><exec_depend>python3-numpy</exec_depend>'
+                   '<exec_depend>rclpy</exec_depend><!-- rosbags: pip --></package>')
+    imports = {'numpy': {'a.py'}, 'rclpy': {'b.py'}, 'rosbags': {'c.py'}, 'apsw': {'c.py'},
+               'pandas': {'d.py'}, 'std_srvs': {'e.py'}}
+    missing = undeclared_imports(imports, package_xml, 'rosbags==1.0\napsw==2.0\n',
+                                 lambda name: name in {'rclpy', 'std_srvs'})
+    assert [entry.split(' ')[0] for entry in missing] == ['apsw', 'pandas', 'std_srvs']
 
 
 def test_core_module_discovery_finds_the_core_and_leaves_out_shells():

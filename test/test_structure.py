@@ -2,6 +2,7 @@
 
 import ast
 from pathlib import Path
+import sys
 
 PACKAGE = Path(__file__).resolve().parents[1] / 'rigid_body_attitude'
 MAX_MODULE_LINES = 600
@@ -30,3 +31,41 @@ def test_rclpy_is_imported_in_the_ros_subpackage_only():
             == 'rclpy' for alias in node.names)
             for node in ast.walk(ast.parse(path.read_text()))))
     assert importers and all(name.startswith('ros/') for name in importers), importers
+
+
+def imported_modules(path):
+    """Names of the modules a file imports (absolute imports), anywhere in it."""
+    names = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names += [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            names.append(node.module)
+    return names
+
+
+def imports_outside(subpackages, allowed):
+    """``file: module`` for each import in ``subpackages`` that is neither the standard library
+    nor under one of the ``allowed`` prefixes."""
+    found = []
+    for subpackage in subpackages:
+        for path in sorted((PACKAGE / subpackage).rglob('*.py')):
+            for name in imported_modules(path):
+                if name.split('.')[0] in sys.stdlib_module_names or any(
+                        name == prefix or name.startswith(prefix + '.') for prefix in allowed):
+                    continue
+                found.append(f'{path.relative_to(PACKAGE)}: {name}')
+    return found
+
+
+def test_msgs_imports_the_standard_library_and_the_core_only():
+    allowed = ('rigid_body_attitude.msgs', 'rigid_body_attitude.core')
+    assert imports_outside(['msgs'], allowed) == []
+    assert imports_outside(['bag'], allowed) != []  # the check sees a storage library
+
+
+def test_the_node_layers_import_no_bag_or_tool_module():
+    forbidden = ('rigid_body_attitude.bag', 'rigid_body_attitude.tools', 'rosbags', 'apsw')
+    found = [entry for entry in imports_outside(['core', 'msgs', 'session', 'ros'], ())
+             if entry.split(': ')[1].startswith(forbidden)]
+    assert found == []

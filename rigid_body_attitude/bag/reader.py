@@ -2,8 +2,8 @@
 
 Messages come out as plain tuples ``(topic, bag_time_ns, msgtype, data)`` in bag-time order
 (the recorder's receive time; ties keep their write order). ``data`` is the CDR bytes: decode
-the per-sample fields with :mod:`rigid_body_attitude.bag.cdr` (fast) or a full message object
-with :func:`rigid_body_attitude.bag.msgtypes.deserialize` (slow). Indexed MCAP files are
+the per-sample fields with :mod:`rigid_body_attitude.msgs.cdr` (fast) or a full message object
+with :func:`rigid_body_attitude.bag.serde.deserialize` (slow). Indexed MCAP files are
 walked by :mod:`rigid_body_attitude.bag.mcap`, sqlite3 files queried by
 :mod:`rigid_body_attitude.bag.sqlite` (same output as ``rosbags``' iterator, faster).
 """
@@ -20,7 +20,10 @@ from numpy.typing import NDArray
 from rosbags.interfaces import Connection
 from rosbags.rosbag2 import Reader
 
-from rigid_body_attitude.bag.cdr import (
+from rigid_body_attitude.bag import mcap, sqlite
+from rigid_body_attitude.bag.errors import BagError
+from rigid_body_attitude.bag.rosbags_internals import custom_data
+from rigid_body_attitude.msgs.cdr import (
     Decoder,
     float64_value,
     imu_rates,
@@ -30,10 +33,8 @@ from rigid_body_attitude.bag.cdr import (
     vector3_stamped,
     wrench_torque,
 )
-from rigid_body_attitude.bag.errors import BagError
-from rigid_body_attitude.bag import mcap, sqlite
-from rigid_body_attitude.bag.rosbags_internals import custom_data
-from rigid_body_attitude.bag.msgtypes import (
+from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.types import (
     FLOAT64,
     IMU,
     POSE_STAMPED,
@@ -139,9 +140,9 @@ class BagReader:
     def decoder(self, topic: str, decoders: Mapping[str, Decoder]) -> Decoder:
         """The decoder in ``decoders`` (msgtype → decoder) for ``topic``'s type, or BagError.
 
-        Use with :data:`~rigid_body_attitude.bag.cdr.RATE_DECODERS`,
-        :data:`~rigid_body_attitude.bag.cdr.TORQUE_DECODERS` or
-        :data:`~rigid_body_attitude.bag.cdr.ATTITUDE_DECODERS`.
+        Use with :data:`~rigid_body_attitude.msgs.cdr.RATE_DECODERS`,
+        :data:`~rigid_body_attitude.msgs.cdr.TORQUE_DECODERS` or
+        :data:`~rigid_body_attitude.msgs.cdr.ATTITUDE_DECODERS`.
         """
         (connection, *others) = self.connections({topic: decoders.keys()})
         if any(other.msgtype != connection.msgtype for other in others):
@@ -222,19 +223,22 @@ def read_series(path: str | Path, topic: str, decoder: Decoder | None = None) ->
 
     Defaults: Imu → angular velocity, WrenchStamped → torque, TwistStamped → angular,
     QuaternionStamped/PoseStamped → ``(w, x, y, z)``. ``std_msgs/msg/Float64`` has no header:
-    its stamps are the bag times.
+    its stamps are the bag times. A message that cannot be decoded is a :class:`BagError`.
     """
     with BagReader(path) as reader:
-        if decoder is None and reader.topics.get(topic) == FLOAT64:
-            return _float64_series(reader, topic)
-        if decoder is None:
-            decoder = reader.decoder(topic, SERIES_DECODERS)
-        stamps, values, times = [], [], []
-        for _, bag_time_ns, _, data in reader.messages([topic]):
-            stamp, value = decoder(data)
-            stamps.append(stamp)
-            values.append(value)
-            times.append(bag_time_ns)
+        try:
+            if decoder is None and reader.topics.get(topic) == FLOAT64:
+                return _float64_series(reader, topic)
+            if decoder is None:
+                decoder = reader.decoder(topic, SERIES_DECODERS)
+            stamps, values, times = [], [], []
+            for _, bag_time_ns, _, data in reader.messages([topic]):
+                stamp, value = decoder(data)
+                stamps.append(stamp)
+                values.append(value)
+                times.append(bag_time_ns)
+        except MalformedMessage as err:
+            raise BagError(f'Cannot read topic {topic!r} of bag {str(path)!r}: {err}') from err
     width = len(values[0]) if values else 0
     return Series(np.array(stamps, dtype=np.float64),
                   np.array(values, dtype=np.float64).reshape(len(values), width),

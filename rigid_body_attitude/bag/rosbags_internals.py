@@ -1,4 +1,4 @@
-"""Every use of ``rosbags``' unexported API, in one module (issue 12, item 6).
+"""Every use of ``rosbags``' unexported API, in one module.
 
 ``rosbags`` (pinned in ``requirements.txt``) exports ``Reader``, ``Writer`` and a few enums from
 ``rosbags.rosbag2``; the fast bag paths of this package need more, and all of it is here:

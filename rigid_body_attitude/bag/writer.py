@@ -1,7 +1,7 @@
 """Writing rosbag2 bags: a writer for output bags and :func:`write_bag` for sample arrays.
 
 :class:`BagWriter` registers each topic's connection once and then writes CDR bytes made by
-the fast encoders of :mod:`rigid_body_attitude.bag.cdr` (or any message object through the
+the fast encoders of :mod:`rigid_body_attitude.msgs.cdr` (or any message object through the
 ``rosbags`` type store), one record at a time (:meth:`BagWriter.write`) or many per call
 (:meth:`BagWriter.write_many`). :func:`write_bag` turns arrays of samples into a bag of
 standard messages, for test fixtures and for users converting their own logs.
@@ -12,13 +12,11 @@ writes three records per gyro message and needs ≥ 10⁵ messages/s. The storag
 ``rosbags``' own with a ``write_many`` added (in
 :mod:`~rigid_body_attitude.bag.rosbags_internals`, with every other use of ``rosbags``'
 unexported API). The sqlite3 storage keeps ``rosbags``' schema and statements but runs on an
-``apsw`` connection (the SQLite binding ``rosbags`` reads with; its ``executemany`` inserts a
-row in about 1.1 µs against 2.0 µs for the standard ``sqlite3`` module), 512 rows per
-statement, in one transaction, with 32 KiB pages (0.6 µs a row in all). The MCAP storage lays
+``apsw`` connection (the SQLite binding ``rosbags`` reads with), 512 rows per statement, in one
+transaction, with 32 KiB pages. The MCAP storage lays
 out a batch of message records with C-level ``map`` calls and closes chunks at the same 1 MiB
 boundary as ``rosbags``, so the file is byte for byte the one ``rosbags`` writes. Metadata
 (message counts, start, duration) is kept by ``rosbags``' ``Writer`` as for single writes.
-``bench/replay_throughput.py`` measures it.
 """
 
 from __future__ import annotations
@@ -34,7 +32,11 @@ from numpy.typing import ArrayLike, NDArray
 from rosbags.interfaces import Connection
 from rosbags.rosbag2 import StoragePlugin, WriterError
 
-from rigid_body_attitude.bag.cdr import (
+from rigid_body_attitude.bag.errors import BagError
+from rigid_body_attitude.bag.rosbags_internals import Record, Rosbag2Writer
+from rigid_body_attitude.bag.serde import serialize, typestore
+from rigid_body_attitude.core.errors import InputError
+from rigid_body_attitude.msgs.cdr import (
     encode_imu,
     encode_pose_stamped,
     encode_quaternion_stamped,
@@ -42,18 +44,13 @@ from rigid_body_attitude.bag.cdr import (
     encode_wrench_stamped,
     stamp_to_ns,
 )
-from rigid_body_attitude.bag.errors import BagError
-from rigid_body_attitude.bag.msgtypes import (
+from rigid_body_attitude.msgs.types import (
     IMU,
     POSE_STAMPED,
     QUATERNION_STAMPED,
     VECTOR3_STAMPED,
     WRENCH_STAMPED,
-    serialize,
-    typestore,
 )
-from rigid_body_attitude.bag.rosbags_internals import Record, Rosbag2Writer
-from rigid_body_attitude.core.errors import InputError
 
 __all__ = ['GROUND_TRUTH_TYPES', 'STORAGES', 'BagWriter', 'Record', 'write_bag']
 

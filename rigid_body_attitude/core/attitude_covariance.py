@@ -229,7 +229,7 @@ class AttitudeCovariance:
 
     @property
     def folded_attitude_covariance(self) -> FloatArray:
-        """The 3×3 world-frame attitude covariance as of the last fold (at most
+        """The 3×3 world-frame attitude covariance at the last fold (at most
         ``batch_size − 1`` samples old), without folding: a cheap read for every sample."""
         return self._p[:3, :3].copy()
 

@@ -1,7 +1,7 @@
 """The ``attitude_propagator`` node (executable ``propagation_node``): an rclpy adapter.
 
 Every subscription is raw: each callback decodes the CDR bytes with the project's checked
-decoders (:mod:`rigid_body_attitude.bag.cdr`) and hands the plain values to the scene's
+decoders (:mod:`rigid_body_attitude.msgs`) and hands the plain values to the scene's
 session (:mod:`rigid_body_attitude.session`), which applies the time rules, advances the
 propagator, counts, and gives what is to be published to :class:`~.outputs.RosOutputs`. A
 message that cannot be decoded is handed to the session as malformed: rejected, counted per
@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 from geometry_msgs.msg import PoseStamped, Vector3Stamped, WrenchStamped
@@ -36,7 +36,6 @@ from rclpy.exceptions import InvalidParameterTypeException, ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
-from rclpy.timer import Timer
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
@@ -97,9 +96,6 @@ class AttitudePropagatorNode(Node):
             raise InputError(problem)
         self.scene = load_node_scene(values['scene'], values['integrator'], values['step'],
                                      values['torque_timeout'])
-        self.cpu_scheduling: str = values['cpu_scheduling']
-        self.idle_senders_above_hz: float = values['idle_senders_above_hz']
-        self.separate_cpus_above_hz: float = values['separate_cpus_above_hz']
         self.publish_rate: float = values['publish_rate']
         self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro')
         self.outputs.hardware_id = self.scene.name
@@ -176,14 +172,13 @@ class AttitudePropagatorNode(Node):
             DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group, clock=steady)
         self._diagnostics_count = 0
 
-    def gyro_loop(self, extra_timers: Sequence[Timer] = ()) -> GyroLoop:
-        """A :class:`GyroLoop` serving the gyro subscriptions (gyro scenes), the timers and
-        ``extra_timers`` (in :attr:`loop_group`); creating it takes them away from every
-        executor."""
+    def gyro_loop(self) -> GyroLoop:
+        """A :class:`GyroLoop` serving the gyro subscriptions (gyro scenes) and the timers (in
+        :attr:`loop_group`); creating it takes them away from every executor."""
         return GyroLoop(self.context, [
             (self.subscriptions_by_topic[topic], self.handlers[topic])
             for topic in ('imu', 'angular_velocity') if topic in self.subscriptions_by_topic],
-            [self.output_timer, self.diagnostics_timer, *extra_timers])
+            [self.output_timer, self.diagnostics_timer])
 
     # -- parameters -------------------------------------------------------------------------
 

@@ -3,7 +3,7 @@ rclpy publishers.
 
 Every per-sample and per-tick output (``orientation``, ``pose``, ``imu/data``, ``twist``,
 ``energy``, ``angular_momentum``) is written as CDR bytes with the header packed once
-(:mod:`rigid_body_attitude.bag.cdr`, the replay tool's codecs) and only when a subscription is
+(:mod:`rigid_body_attitude.msgs.cdr`, the replay tool's codecs) and only when a subscription is
 matched (:class:`RawOutput`); ``/diagnostics`` (once a second) is an ordinary message.
 ``imu/data`` is the input Imu with the orientation filled in (REP-145: orientation covariance
 all zeros = known, unknown covariance) and the stamp the session used.
@@ -21,7 +21,7 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 
-from rigid_body_attitude.bag.cdr import (
+from rigid_body_attitude.msgs.cdr import (
     encode_float64, imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder,
     stamped_floats_encoder)
 from rigid_body_attitude.ros.qos import OUTPUT_QOS
@@ -55,7 +55,7 @@ class RawOutput:
     def __init__(self, publisher: Any) -> None:
         """Bind ``publisher``'s handle."""
         handle = publisher.handle
-        #: Matched subscriptions now (``int``; call it).
+        #: Matched subscriptions at the moment of the call (``int``; call it).
         self.subscription_count: Callable[[], int] = handle.get_subscription_count
         #: Publish serialized (CDR) ``bytes``.
         self.publish: Callable[[bytes], None] = handle.publish_raw
@@ -83,8 +83,6 @@ class RosOutputs:
         else:
             self.twist = self._publisher(TwistStamped, 'twist')
             self.twist_raw = RawOutput(self.twist)
-        #: The Imu message being handled while the session runs it, else None.
-        self.current_imu: bytes | None = None
         #: Set by the session: outputs carry the inputs' stamps (else the receive time).
         self.use_header_stamps = True
         #: Frame of ``orientation``, ``pose`` and ``angular_momentum`` (:meth:`set_frames`).
@@ -108,14 +106,14 @@ class RosOutputs:
 
     # -- OutputSink -------------------------------------------------------------------------
 
-    def attitude(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
+    def attitude(self, sec: int, nanosec: int, attitude: Quaternion,
+                 imu: bytes | None) -> None:
         """``orientation``, ``pose`` and (Imu input) ``imu/data`` of one gyro sample."""
         orientation, pose = self.orientation_raw, self.pose_raw
         if orientation.subscription_count():
             orientation.publish(self.encode_orientation(sec, nanosec, attitude))
         if pose.subscription_count():
             pose.publish(self.encode_pose(sec, nanosec, _ZERO_POSITION, attitude))
-        imu = self.current_imu
         if imu is not None and self.imu_raw.subscription_count():
             stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
             self.imu_raw.publish(imu_with_orientation(imu, attitude, stamp))

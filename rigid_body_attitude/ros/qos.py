@@ -20,8 +20,9 @@
   that publish with the sensor-data profile are best effort. The node then receives nothing
   from them, and rclpy logs, for every input topic, ``New publisher discovered on topic
   '/imu', offering incompatible QoS. No messages will be received from it. Last incompatible
-  policy: RELIABILITY`` (the gyro loop leaves the subscriptions' QoS events to the executor,
-  :mod:`rigid_body_attitude.ros.gyro_loop`). Start the node with
+  policy: RELIABILITY`` (the gyro loop serves the gyro subscriptions' QoS events itself, at
+  least once a second, :mod:`rigid_body_attitude.ros.gyro_loop`; the executor thread those of
+  the other inputs). Start the node with
   ``-p qos_overrides./imu.subscription.reliability:=best_effort`` for such a driver: samples
   a transport drops are then lost, as they would be anyway with a best-effort writer.
 

@@ -5,39 +5,32 @@ thread (gyro messages, if any, and the two timers) and a ``SingleThreadedExecuto
 thread for the rest (parameter services, ``~/reset``, ``set_pose``, commands), which then
 sleeps in ``rcl_wait`` (GIL released) nearly all the time;
 :attr:`AttitudePropagatorNode.state_lock` keeps the two threads' changes of the state apart.
-:func:`main` also
-sets Fast DDS and the scheduler up for kHz rates (:mod:`rigid_body_attitude.ros.middleware`).
+:func:`main` also sets Fast DDS up (:mod:`rigid_body_attitude.ros.middleware`); threads keep
+the scheduling policy and CPUs the process was started with (``chrt``, ``taskset``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 import gc
-import platform
 import sys
 import threading
 
 import rclpy
-from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.timer import Timer
 
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
-from rigid_body_attitude.ros.cpu_split import cpu_split, CpuSplit
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
 from rigid_body_attitude.ros.middleware import (
-    apply_cpu_scheduling, CPU_SCHEDULING, use_asynchronous_publication,
-    use_packaged_fastdds_profile)
+    use_asynchronous_publication, use_packaged_fastdds_profile)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import RCLError
-from rigid_body_attitude.ros.sender_threads import (
-    GUARD_PERIOD, GuardNote, sender_guard, sender_thread_ids, SenderGuard)
-from rigid_body_attitude.ros.time_slices import (
-    kernel_takes_slices, SENDER_SLICE_NS, shorten_slices)
 
-__all__ = ['main', 'spin']
+__all__ = ['SERVING_LINE', 'main', 'spin']
+
+#: The log line after which the node serves its topics (the last of the start-up).
+SERVING_LINE = 'serving'
 
 
 def _error_text(err: BaseException) -> str:
@@ -107,105 +100,30 @@ def spin(node: AttitudePropagatorNode) -> None:
     a ``SingleThreadedExecutor`` in a daemon thread.
 
     An exception of a callback in either thread ends both and propagates. Before serving,
-    the objects of the start-up (about 60 000: rclpy, NumPy, SciPy, the scene) are collected
-    once and frozen out of the garbage collector's reach: a full collection would otherwise
-    scan them all (35 ms here, so dozens of gyro messages delayed at once); afterwards it
-    scans only what the run itself keeps. Everything that serves is built before the node's
-    threads take the ``cpu_scheduling`` policy
-    (:func:`~rigid_body_attitude.ros.middleware.apply_cpu_scheduling`) and the node logs it: a
-    KeyboardInterrupt inside an rclpy constructor would leave a half-built object whose
+    the objects of the start-up (rclpy, NumPy, SciPy, the scene) are collected once and
+    frozen out of the garbage collector's reach: a full collection would otherwise scan them
+    all and delay dozens of gyro messages at once; afterwards it scans only what the run
+    itself keeps. Everything that serves is built before the node logs :data:`SERVING_LINE`:
+    a KeyboardInterrupt inside an rclpy constructor would leave a half-built object whose
     finaliser fails at exit, so after that line a Ctrl-C always exits cleanly.
     """
     gc.collect()
     gc.freeze()
-    loop: GyroLoop | None = None  # built with the guard's timer, so read through a closure
-
-    def gyro_messages() -> int:
-        return 0 if loop is None else loop.handled
-    guard, sender_remark = _sender_rule(node, gyro_messages)
-    split, split_remark = _split_rule(node, gyro_messages)
-    guards = [rule.check for rule in (guard, split) if rule is not None]
     # Claims the gyro subscriptions and the timers before any executor spins.
-    loop = node.gyro_loop([_guard_timer(node, check) for check in guards])
+    loop = node.gyro_loop()
     executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)
     rest = _ExecutorThread(executor, node, loop)
     try:
         rest.thread.start()
-        _apply_cpu_scheduling(node, (sender_remark, split_remark))
+        node.get_logger().info(SERVING_LINE)
         loop.run()
     finally:
         rest.stop()
-        executor.shutdown()  # only now: its thread no longer waits (rclpy issue #968)
+        executor.shutdown()  # after the join: its thread no longer waits (rclpy issue #968)
         loop.close()
     if rest.failures:
         raise rest.failures[0]
-
-
-def _guard_timer(node: AttitudePropagatorNode, guard: Callable[[], list[GuardNote]]) -> Timer:
-    """A steady-clock timer in the gyro loop's group calling ``guard`` every
-    :data:`GUARD_PERIOD` seconds; the moves it notes are logged (warnings as warnings)."""
-    def check() -> None:
-        for note in guard():  # one call site per severity, as rclpy's logger wants
-            if note.warning:
-                node.get_logger().warning(note.text)
-            else:
-                node.get_logger().info(note.text)
-    return node.create_timer(GUARD_PERIOD, check, node.loop_group,
-                             clock=Clock(clock_type=ClockType.STEADY_TIME))
-
-
-def _sender_rule(node: AttitudePropagatorNode,
-                 gyro_messages: Callable[[], int]) -> tuple[SenderGuard | None, str]:
-    """What ``cpu_scheduling`` ``batch`` does with Fast DDS's sender threads, and the remark
-    for the start-up line: short time slices, given now (``sched_setscheduler`` keeps them);
-    or, with ``idle_senders_above_hz`` set, a guard for the idle rule (gyro scenes only)."""
-    if not CPU_SCHEDULING[node.cpu_scheduling].sender_rule:
-        return None, ''
-    if node.idle_senders_above_hz <= 0.0:
-        return None, _short_sender_slices()
-    if node.is_dynamics:
-        return None, ''
-    return sender_guard(gyro_messages, node.idle_senders_above_hz)
-
-
-def _split_rule(node: AttitudePropagatorNode,
-                gyro_messages: Callable[[], int]) -> tuple[CpuSplit | None, str]:
-    """With ``cpu_scheduling`` ``batch`` and ``separate_cpus_above_hz`` set, in a gyro scene:
-    the rule keeping the gyro loop (this thread) and the sender threads on different CPUs
-    while the gyro rate is high (:mod:`~.cpu_split`), and the remark for the start-up line."""
-    if (not CPU_SCHEDULING[node.cpu_scheduling].sender_rule
-            or node.separate_cpus_above_hz <= 0.0 or node.is_dynamics):
-        return None, ''
-    return cpu_split(threading.get_native_id(), gyro_messages, node.separate_cpus_above_hz)
-
-
-def _apply_cpu_scheduling(node: AttitudePropagatorNode, remarks: tuple[str, ...]) -> None:
-    """Give every thread of the process the node's ``cpu_scheduling`` policy; log it with
-    the ``remarks`` that are not empty (the sender rules')."""
-    outcome = apply_cpu_scheduling(node.cpu_scheduling)
-    logger = node.get_logger()
-    if outcome.refused:
-        logger.warning(
-            f'cpu_scheduling {node.cpu_scheduling!r} refused by the system '
-            f'({outcome.refused}); the other threads keep their policy')
-    remark = ''.join(f'; {text}' for text in remarks if text)
-    logger.info(f'cpu_scheduling {node.cpu_scheduling!r}: {outcome.changed} threads changed'
-                f'{remark}; serving')
-
-
-def _short_sender_slices() -> str:
-    """Give the sender threads :data:`~.time_slices.SENDER_SLICE_NS` slices; the remark for
-    the start-up line (``''`` with synchronous publication: no senders)."""
-    thread_ids = sender_thread_ids()
-    if not thread_ids:
-        return ''
-    if not kernel_takes_slices():
-        return (f'Fast DDS sender threads on SCHED_BATCH (this kernel, {platform.release()}, '
-                f'has no custom time slices; see idle_senders_above_hz)')
-    shortened = shorten_slices(thread_ids)
-    return (f'Fast DDS sender threads {shortened} on SCHED_BATCH with '
-            f'{SENDER_SLICE_NS / 1e6:g} ms time slices')
 
 
 def main(args: list[str] | None = None) -> int:

@@ -25,7 +25,7 @@ from rigid_body_attitude.session.outputs import OutputSample, OutputTracker
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, diagnostic_report,
-    stale_command_count)
+    stale_command_count, state_summary)
 
 __all__ = ['LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session', 'WARNING_INTERVAL']
 
@@ -46,13 +46,13 @@ Vector = tuple[float, float, float]
 class OutputSink(Protocol):
     """Where a session's outputs go (publishers, a bag writer, a list in a test)."""
 
-    #: The serialized Imu being handled, for ``imu/data`` (set around each gyro call).
-    current_imu: bytes | None
     #: Whether outputs carry the inputs' header stamps (else the receive time was used).
     use_header_stamps: bool
 
-    def attitude(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
-        """A gyro sample's attitude (w, x, y, z) stamped ``(sec, nanosec)``."""
+    def attitude(self, sec: int, nanosec: int, attitude: Quaternion,
+                 imu: bytes | None) -> None:
+        """A gyro sample's attitude (w, x, y, z) stamped ``(sec, nanosec)``; ``imu``: the
+        serialized Imu the sample came from (``imu/data`` is it with the attitude), or None."""
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:
@@ -95,6 +95,8 @@ class Session(ABC):
         self._last_warning: dict[str, float] = {}
         self._period: tuple[float, int, int, Counter[str], int] = (
             monotonic(), 0, 0, Counter(), 0)
+        #: Inputs accepted per second in the last diagnostics period [Hz].
+        self.last_input_rate = 0.0
         self.apply(values)
 
     # -- parameters -------------------------------------------------------------------------
@@ -217,6 +219,7 @@ class Session(ABC):
             missed_total=missed, malformed_by_topic=Counter(self.malformed_by_topic),
             gyro_scene=isinstance(self.propagator, GyroPropagator))
         self._timing(counts)
+        self.last_input_rate = counts.accepted / counts.elapsed
         return diagnostic_report(self.propagator, counts, self.step_text(), self.time_s())
 
     def _timing(self, counts: PeriodCounts) -> None:
@@ -243,11 +246,8 @@ class Session(ABC):
 
     def summary(self) -> str:
         """The INFO line the node logs every few diagnostics periods."""
-        diagnostics = self.propagator.diagnostics()
-        momentum = math.sqrt(sum(h * h for h in diagnostics.world_angular_momentum.tolist()))
+        state = state_summary(self.propagator)
         rejected = sum(self.rejection_counts().values())
-        return (f't={self.time_s():.3f} s: energy {diagnostics.kinetic_energy:.9g} J '
-                f'(drift {diagnostics.energy_drift:.2e}, balance residual '
-                f'{diagnostics.energy_balance_residual:.2e} J), |H| {momentum:.9g} N m s '
-                f'(drift {diagnostics.momentum_drift:.2e}), accepted {self.accepted_count()}, '
-                f'rejected {rejected}, missed {self.missed_count()}')
+        return (f't={self.time_s():.3f} s: {state}, accepted {self.accepted_count()} '
+                f'({self.last_input_rate:.1f} Hz), rejected {rejected}, missed '
+                f'{self.missed_count()}')

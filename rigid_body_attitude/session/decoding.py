@@ -1,16 +1,17 @@
-"""The sessions' input decoders: CDR bytes → the plain values a session takes.
+"""The sessions' inputs: CDR bytes → the plain values a session takes → the session.
 
-Shared by the node (:mod:`rigid_body_attitude.ros.node`, by topic: :data:`DECODERS`) and the
-replay tool (:mod:`rigid_body_attitude.tools.replay`, by message type: :data:`RATE_DECODERS`),
-so both accept and refuse exactly the same bytes, and :func:`input_handler`, the callback of
-one input topic (decode, then the session method of the topic), so both hand the same values
-to the session. Built on the checked decoders of :mod:`rigid_body_attitude.bag.decoders`;
-imports no rclpy.
+Shared by the node (:mod:`rigid_body_attitude.ros.node`) and the replay tool
+(:mod:`rigid_body_attitude.tools.replay`): :func:`input_handler` is the callback of one input
+topic (decode, then the session method of the topic) for both, so both accept and refuse exactly
+the same bytes and hand the same values to the session. Decoders by topic: :data:`DECODERS`;
+by gyro message type (the replay's gyro topic may carry any of them): :data:`RATE_DECODERS`.
+Built on the checked decoders of :mod:`rigid_body_attitude.msgs.decoders`; imports no rclpy
+and no bag library.
 
 Each decoder returns ``(sec, nanosec, frame_id, first, second)``: the header stamp as sent
 (not normalised: the session judges it) and frame, and the message's values (rate and the
 Imu bytes; force and torque; a vector; attitude (w, x, y, z) and position). Bytes that are
-not a valid message of the topic's type raise one of :data:`MALFORMED`; the caller hands them
+not a valid message of the topic's type raise one of :data:`MALFORMED`; the handler hands them
 to :meth:`~rigid_body_attitude.session.base.Session.malformed` and goes on.
 """
 
@@ -19,19 +20,24 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from rigid_body_attitude.bag.decoders import (
+from rigid_body_attitude.msgs.decoders import (
     GYRO_DECODERS, GyroDecoder, decode_imu_rate, decode_pose_stamped, decode_vector3_stamped,
     decode_wrench_stamped)
-from rigid_body_attitude.bag.errors import MalformedMessage
-from rigid_body_attitude.bag.msgtypes import IMU
+from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.types import IMU
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
-from rigid_body_attitude.session.settings import AnySession
+from rigid_body_attitude.session.settings import GYRO_TOPICS, AnySession
 
-__all__ = ['DECODERS', 'Decoded', 'MALFORMED', 'RATE_DECODERS', 'input_handler']
+__all__ = ['DECODERS', 'Decoded', 'Handler', 'MALFORMED', 'RATE_DECODERS', 'input_handler']
 
 #: What a decoder returns: stamp sec, stamp nanosec, frame id, two values.
 Decoded = tuple[int, int, str, Any, Any]
+
+#: A decoder of one input topic.
+Decode = Callable[[bytes], Decoded]
+#: The callback of one input topic: takes the message's CDR bytes.
+Handler = Callable[[bytes], None]
 
 #: The exceptions of a message that cannot be decoded.
 MALFORMED: tuple[type[Exception], ...] = (MalformedMessage,)
@@ -75,10 +81,20 @@ RATE_DECODERS: dict[str, Callable[[bytes], Decoded]] = {
 }
 
 
-def input_handler(session: AnySession, topic: str) -> Callable[[bytes], None]:
+def input_handler(session: AnySession, topic: str, decode: Decode | None = None,
+                  reraise: tuple[type[Exception], ...] = ()) -> Handler:
     """The callback of the node's input ``topic``: decode the bytes and hand the values to
-    the session; malformed bytes and a session's own failure are counted, never raised."""
-    decode, deliver = DECODERS[topic], _delivery(session, topic)
+    the session; malformed bytes and a session's own failure are counted, never raised.
+
+    ``decode`` replaces the topic's decoder (:data:`DECODERS`) with another of the same values
+    (the replay's gyro topic may carry any type of :data:`RATE_DECODERS`); exceptions of
+    ``reraise`` (the adapter's own, raised by its sink) propagate instead of being counted.
+    """
+    if decode is None:
+        decode = DECODERS[topic]
+    if isinstance(session, GyroSession) and topic in GYRO_TOPICS:
+        return _gyro_handler(session, topic, decode, reraise)
+    deliver = _delivery(session, topic)
 
     def handle(data: bytes) -> None:
         try:
@@ -88,24 +104,38 @@ def input_handler(session: AnySession, topic: str) -> Callable[[bytes], None]:
             return
         try:
             deliver(values)
+        except reraise:
+            raise
         except Exception as err:  # a bug must not end the node (nor the replay): counted
             session.internal_error(topic, err)
     return handle
 
 
+def _gyro_handler(session: GyroSession, topic: str, decode: Decode,
+                  reraise: tuple[type[Exception], ...]) -> Handler:
+    """:func:`input_handler` of a gyro topic (the hot path: one decoder call and
+    ``session.gyro`` with the Imu bytes, if any, for ``imu/data``)."""
+    gyro, malformed, internal_error = session.gyro, session.malformed, session.internal_error
+
+    def handle(data: bytes) -> None:
+        try:
+            sec, nanosec, _, rate, imu = decode(data)
+        except MALFORMED as err:
+            malformed(topic, str(err)[:200])
+            return
+        try:
+            gyro(sec, nanosec, rate, imu)
+        except reraise:
+            raise
+        except Exception as err:  # a bug must not end the node (nor the replay): counted
+            internal_error(topic, err)
+    return handle
+
+
 def _delivery(session: AnySession, topic: str) -> Callable[[Decoded], object]:
-    """The session method of ``topic`` applied to the decoded values."""
+    """The session method of ``topic`` (other than the gyro topics) applied to the values."""
     if topic == 'set_pose':
         return lambda values: session.set_pose(values[2], values[3], values[4])
-    if isinstance(session, GyroSession):
-        gyro, sink = session.gyro, session.sink
-        if topic == 'imu':
-            def imu(values: Decoded) -> None:
-                sink.current_imu = values[4]  # for imu/data
-                gyro(values[0], values[1], values[3])
-                sink.current_imu = None
-            return imu
-        return lambda values: gyro(values[0], values[1], values[3])
     assert isinstance(session, DynamicsSession), topic  # commands: dynamics scenes only
     if topic == 'torque':
         return lambda values: session.wrench(values[0], values[1], values[3], values[4])

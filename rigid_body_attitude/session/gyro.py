@@ -61,11 +61,13 @@ class GyroSession(Session):
         stream.max_angular_rate = values['max_angular_rate']
         stream.count_missed = values['use_header_stamps']
 
-    def gyro(self, sec: int, nanosec: int, rate: Sequence[float]) -> bool:
+    def gyro(self, sec: int, nanosec: int, rate: Sequence[float],
+             imu: bytes | None = None) -> bool:
         """One gyro sample stamped ``(sec, nanosec)`` with body rate ``rate`` [rad/s].
 
-        Returns whether the attitude went to the sink (the node then publishes ``imu/data``
-        with the same stamp, :attr:`output_stamp`).
+        ``imu``: the serialized ``sensor_msgs/msg/Imu`` the sample came from, if it came from
+        one; it goes to the sink with the attitude (for ``imu/data``). Returns whether the
+        attitude went to the sink (stamped :attr:`output_stamp`).
         """
         if not self.use_header_stamps:
             sec, nanosec = split_ns(self.clock_ns())
@@ -84,7 +86,7 @@ class GyroSession(Session):
         attitude = self.tracker.attitude(self.propagator)
         if not math.isfinite(attitude[0] + attitude[1] + attitude[2] + attitude[3]):
             return self._non_finite_result()
-        self.sink.attitude(sec, nanosec, attitude)
+        self.sink.attitude(sec, nanosec, attitude, imu)
         self._output_sec, self._output_nanosec = sec, nanosec
         self._fresh_output = True
         return True

@@ -34,7 +34,6 @@ class Parameter:
         choices: the allowed values of a string (empty: any non-empty name, or any string
             when ``may_be_empty``).
         may_be_empty: an empty string is allowed (it means "the scene's").
-        node_only: the replay tool has no such option (e.g. the node's thread scheduling).
     """
 
     name: str
@@ -47,7 +46,6 @@ class Parameter:
     read_only: bool = True
     choices: tuple[str, ...] = ()
     may_be_empty: bool = False
-    node_only: bool = False
 
     @property
     def type_text(self) -> str:
@@ -146,29 +144,14 @@ PARAMETERS: tuple[Parameter, ...] = (
               '("" = the scene\'s)', may_be_empty=True),
     Parameter('step', float, 0.0,
               's: integration step of dynamics scenes (0 = the scene\'s)', 0.0, 10.0),
-    Parameter('cpu_scheduling', str, 'batch',
-              'policy of the node\'s threads: batch (SCHED_BATCH, no wake-up preemption; Fast '
-              'DDS\'s sender threads with 0.1 ms time slices, Linux 6.12+, or SCHED_IDLE above '
-              'idle_senders_above_hz), all_batch (senders plain batch) or default (as started)',
-              choices=('batch', 'all_batch', 'default'), node_only=True),
-    Parameter('idle_senders_above_hz', float, 0.0,
-              'Hz: gyro input rate (over 0.5 s) from which cpu_scheduling batch puts Fast DDS\'s '
-              'sender threads on SCHED_IDLE instead of giving them short time slices; back on '
-              'SCHED_BATCH below 2/3 of it, or for good if starved (0 = never)', 0.0, 1.0e9,
-              node_only=True),
-    Parameter('separate_cpus_above_hz', float, 12000.0,
-              'Hz: gyro input rate (over 0.5 s) from which cpu_scheduling batch keeps the gyro '
-              'loop thread on one CPU and Fast DDS\'s sender threads on the others; every '
-              'thread back on every CPU below 2/3 of it (0 = never)', 0.0, 1.0e9,
-              node_only=True),
 )
 
 _BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}
 
 
-def defaults(node_only: bool = True) -> dict[str, Any]:
-    """Parameter name → default (without the node-only ones when ``node_only`` is false)."""
-    return {p.name: p.default for p in PARAMETERS if node_only or not p.node_only}
+def defaults() -> dict[str, Any]:
+    """Parameter name → default."""
+    return {p.name: p.default for p in PARAMETERS}
 
 
 def check_values(values: Mapping[str, Any], dynamics_step: float = 0.0,

@@ -1,6 +1,11 @@
 """The ``/diagnostics`` report of a session: level, message and key/value strings.
 
 Honest by construction: the level is OK only while inputs are accepted and the invariants hold.
+The values fit the scene: a dynamics scene simulates a body, so it reports its kinetic energy,
+angular momentum and their drift (:func:`body_values`); a gyro (strapdown) scene integrates
+measured rates, where those mean nothing, so it reports the rotation from the initial
+attitude, the gyro bias estimate and the alignment state (:func:`strapdown_values`). Both
+report the input counts and rates.
 
 * ERROR: a drift above :data:`DRIFT_ERROR_THRESHOLD`, or a refused integration in the last
   period (``integration_failed``, ``non_finite_result``).
@@ -18,18 +23,28 @@ from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+import math
+
 from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.effects.gyro_bias import GyroBias
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
 from rigid_body_attitude.session.stream import REASONS
 
 __all__ = [
     'DRIFT_ERROR_THRESHOLD', 'DRIFT_WARN_THRESHOLD', 'DiagnosticReport', 'GOVERNING_PARAMETER',
-    'LEVEL_ERROR', 'LEVEL_OK', 'LEVEL_WARN', 'PeriodCounts', 'REJECTION_KEYS', 'WARN_REASONS',
-    'body_frame_velocity', 'diagnostic_report', 'stale_command_count',
+    'LEVEL_ERROR', 'LEVEL_OK', 'LEVEL_WARN', 'NOT_ALIGNED', 'PeriodCounts', 'REJECTION_KEYS',
+    'WARN_REASONS', 'alignment_state', 'body_frame_velocity', 'body_summary', 'body_values',
+    'diagnostic_report', 'gyro_bias_text', 'rotation_from_initial_deg', 'stale_command_count',
+    'state_summary', 'strapdown_summary', 'strapdown_values',
 ]
 
 #: diagnostic_msgs/DiagnosticStatus levels.
 LEVEL_OK, LEVEL_WARN, LEVEL_ERROR = 0, 1, 2
+
+#: The alignment state of a strapdown scene: its initial attitude comes from the scene or
+#: ``set_pose``, never from the gravity an accelerometer measures.
+NOT_ALIGNED = ('not aligned: no accelerometer levelling (initial attitude from the scene or '
+               'set_pose)')
 
 #: Relative energy-balance residual or momentum drift above which the status is WARN / ERROR.
 #: RK4 at the shipped steps stays below 1e-12 over minutes (torque_free_box: 1.2e-14 after
@@ -216,6 +231,74 @@ def _vector_text(vector: tuple[float, ...]) -> str:
     return ' '.join(f'{float(value):.9g}' for value in vector)
 
 
+def body_values(propagator: DynamicsPropagator) -> list[tuple[str, str]]:
+    """What a simulated body reports: kinetic energy, angular momentum and their drift."""
+    diagnostics = propagator.diagnostics()
+    momentum = diagnostics.world_angular_momentum.tolist()
+    return [
+        ('kinetic_energy [J]', f'{diagnostics.kinetic_energy:.12g}'),
+        ('energy_drift', f'{diagnostics.energy_drift:.3e}'),
+        ('energy_balance_residual [J]', f'{diagnostics.energy_balance_residual:.3e}'),
+        ('world_angular_momentum [N m s]', _vector_text(tuple(momentum))),
+        ('momentum_drift', f'{diagnostics.momentum_drift:.3e}'),
+    ]
+
+
+def rotation_from_initial_deg(propagator: GyroPropagator) -> float:
+    """Angle [deg] of the rotation from the scene's initial attitude to the current one."""
+    return math.degrees(float(quaternion.attitude_error(propagator.scene.initial_attitude,
+                                                        propagator.state.attitude)))
+
+
+def gyro_bias_text(propagator: GyroPropagator) -> str:
+    """The bias the scene's ``gyro_bias`` effect subtracts [rad/s, body axes]: the vector,
+    ``estimating (N samples)`` during its rest window, or ``none`` without the effect."""
+    for effect in propagator.corrections:
+        if isinstance(effect, GyroBias):
+            if effect.estimating:
+                return f'estimating ({effect.sample_count} samples)'
+            return _vector_text(tuple(effect.bias.tolist()))
+    return 'none'
+
+
+def alignment_state(propagator: GyroPropagator) -> str:
+    """How the strapdown attitude was aligned to the world frame (:data:`NOT_ALIGNED`)."""
+    return NOT_ALIGNED
+
+
+def strapdown_values(propagator: GyroPropagator) -> list[tuple[str, str]]:
+    """What a strapdown scene reports: rotation from the initial attitude, the gyro bias, the
+    alignment state."""
+    return [
+        ('rotation_from_initial [deg]', f'{rotation_from_initial_deg(propagator):.6f}'),
+        ('gyro_bias [rad/s]', gyro_bias_text(propagator)),
+        ('alignment', alignment_state(propagator)),
+    ]
+
+
+def strapdown_summary(propagator: GyroPropagator) -> str:
+    """The scene-specific part of a strapdown session's INFO line."""
+    return (f'rotation {rotation_from_initial_deg(propagator):.3f} deg from the initial '
+            f'attitude, gyro bias [rad/s] {gyro_bias_text(propagator)}, '
+            f'{alignment_state(propagator)}')
+
+
+def body_summary(propagator: DynamicsPropagator) -> str:
+    """The scene-specific part of a dynamics session's INFO line: energy and momentum."""
+    diagnostics = propagator.diagnostics()
+    momentum = math.sqrt(sum(h * h for h in diagnostics.world_angular_momentum.tolist()))
+    return (f'energy {diagnostics.kinetic_energy:.9g} J (drift {diagnostics.energy_drift:.2e}, '
+            f'balance residual {diagnostics.energy_balance_residual:.2e} J), |H| '
+            f'{momentum:.9g} N m s (drift {diagnostics.momentum_drift:.2e})')
+
+
+def state_summary(propagator: DynamicsPropagator | GyroPropagator) -> str:
+    """The scene-specific part of the node's INFO line (and the replay's summary)."""
+    if isinstance(propagator, GyroPropagator):
+        return strapdown_summary(propagator)
+    return body_summary(propagator)
+
+
 def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: PeriodCounts,
                       step_text: str, time_s: float) -> DiagnosticReport:
     """Level, message and values of a session's status (see the module docstring).
@@ -230,18 +313,14 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
         check_level, check_problems = check(counts, parameters)
         level, problems = max(level, check_level), problems + check_problems
     scene = propagator.scene
-    momentum = diagnostics.world_angular_momentum.tolist()
     values = [
         ('scene', scene.name),
         ('rate_source', scene.rate_source),
         ('integrator', scene.integrator),
         ('step [s]', step_text),
         ('time [s]', f'{time_s:.9f}'),
-        ('kinetic_energy [J]', f'{diagnostics.kinetic_energy:.12g}'),
-        ('energy_drift', f'{diagnostics.energy_drift:.3e}'),
-        ('energy_balance_residual [J]', f'{diagnostics.energy_balance_residual:.3e}'),
-        ('world_angular_momentum [N m s]', _vector_text(tuple(momentum))),
-        ('momentum_drift', f'{diagnostics.momentum_drift:.3e}'),
+        *(strapdown_values(propagator) if isinstance(propagator, GyroPropagator)
+          else body_values(propagator)),
         ('quaternion_norm_error', f'{diagnostics.quaternion_norm_error:.3e}'),
         ('input_rate [Hz]', f'{counts.accepted / counts.elapsed:.1f}'),
         ('received_rate [Hz]', f'{counts.received / counts.elapsed:.1f}'),

@@ -17,6 +17,9 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from rigid_body_attitude.core.scene import Scene, load_scene
+from rigid_body_attitude.msgs.types import (
+    DIAGNOSTIC_ARRAY, FLOAT64, IMU, POSE_STAMPED, QUATERNION_STAMPED, TWIST_STAMPED,
+    VECTOR3_STAMPED, WRENCH_STAMPED)
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
@@ -31,8 +34,7 @@ __all__ = [
 NODE_NAME = 'attitude_propagator'
 
 #: Gyro input topics (relative names) → message type.
-GYRO_TOPICS = {'imu': 'sensor_msgs/msg/Imu',
-               'angular_velocity': 'geometry_msgs/msg/Vector3Stamped'}
+GYRO_TOPICS = {'imu': IMU, 'angular_velocity': VECTOR3_STAMPED}
 #: Commanded torque and force (``geometry_msgs/msg/WrenchStamped``).
 TORQUE_TOPIC = 'torque'
 #: Commanded motor torque on a rotor (``geometry_msgs/msg/Vector3Stamped``).
@@ -43,13 +45,13 @@ SET_POSE_TOPIC = 'set_pose'
 DIAGNOSTICS_TOPIC = '/diagnostics'
 #: Output topics (relative names) → message type.
 OUTPUT_TOPICS = {
-    'orientation': 'geometry_msgs/msg/QuaternionStamped',
-    'pose': 'geometry_msgs/msg/PoseStamped',
-    'energy': 'std_msgs/msg/Float64',
-    'angular_momentum': 'geometry_msgs/msg/Vector3Stamped',
-    'twist': 'geometry_msgs/msg/TwistStamped',
-    'imu/data': 'sensor_msgs/msg/Imu',
-    DIAGNOSTICS_TOPIC: 'diagnostic_msgs/msg/DiagnosticArray',
+    'orientation': QUATERNION_STAMPED,
+    'pose': POSE_STAMPED,
+    'energy': FLOAT64,
+    'angular_momentum': VECTOR3_STAMPED,
+    'twist': TWIST_STAMPED,
+    'imu/data': IMU,
+    DIAGNOSTICS_TOPIC: DIAGNOSTIC_ARRAY,
 }
 #: Seconds between diagnostics messages.
 DIAGNOSTICS_PERIOD = 1.0
@@ -66,10 +68,10 @@ def input_topics(scene: Scene, input_names: frozenset[str]) -> dict[str, str]:
     if scene.rate_source == 'gyro':
         topics.update(GYRO_TOPICS)
     if input_names & {'torque', 'force'}:
-        topics[TORQUE_TOPIC] = 'geometry_msgs/msg/WrenchStamped'
+        topics[TORQUE_TOPIC] = WRENCH_STAMPED
     if 'rotor_torque' in input_names:
-        topics[ROTOR_TORQUE_TOPIC] = 'geometry_msgs/msg/Vector3Stamped'
-    topics[SET_POSE_TOPIC] = 'geometry_msgs/msg/PoseStamped'
+        topics[ROTOR_TORQUE_TOPIC] = VECTOR3_STAMPED
+    topics[SET_POSE_TOPIC] = POSE_STAMPED
     return topics
 
 

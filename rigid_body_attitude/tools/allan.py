@@ -32,8 +32,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from rigid_body_attitude.bag import BagReader, imu_acceleration, imu_rates
-from rigid_body_attitude.bag.msgtypes import IMU
+from rigid_body_attitude.bag import BagReader
+from rigid_body_attitude.msgs import IMU, imu_acceleration, imu_rates
 from rigid_body_attitude.core.errors import AttitudeError, InputError
 
 __all__ = ['AllanCurve', 'NoiseFit', 'Recording', 'allan_curve', 'fit_noise', 'kalibr_yaml',

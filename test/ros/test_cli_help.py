@@ -37,7 +37,6 @@ def test_node_rows_cover_every_parameter_with_its_default_and_range():
         next(p for p in PARAMETERS if p.name == 'publish_rate').description, True)
     assert rows['constant_dt'].range == '[0, 10]'
     assert rows['time_jump_threshold'].range == '(0, 1e6]'
-    assert rows['cpu_scheduling'].description.endswith('(one of: batch, all_batch, default)')
     assert rows['scene'].type_name == 'string' and rows['use_header_stamps'].type_name == 'bool'
 
 

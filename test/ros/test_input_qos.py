@@ -22,7 +22,7 @@ from rclpy.qos import (
 from rclpy.serialization import serialize_message
 from ros_helpers import Harness, ros_session, RosContext, unique_namespace
 from sensor_msgs.msg import Imu
-from test_node_subprocess import read_until, start, START_TIMEOUT, stop_with_sigint
+from test_node_subprocess import read_until, SERVING, start, START_TIMEOUT, stop_with_sigint
 
 from rigid_body_attitude.ros.qos import INPUT_DEPTH
 
@@ -90,7 +90,7 @@ def start_node(processes: list, namespace: str, *parameters: str) -> subprocess.
         arguments += ['-p', parameter]
     process = start(*arguments)
     processes.append(process)
-    read_until(process, "cpu_scheduling 'batch'")
+    read_until(process, SERVING)
     return process
 
 

@@ -1,34 +1,25 @@
-"""The node's own middleware and scheduler set-up (:mod:`rigid_body_attitude.ros.middleware`).
+"""The node's own middleware set-up (:mod:`rigid_body_attitude.ros.middleware`).
 
-What the settings buy is measured, not tested: ``bench/NOTES.md`` sections 3 and 9 and
-``docs/performance.md``. Here: which profile is used when, that the shipped profile is what
-its comment says and reaches the node's participant, that the node publishes asynchronously
-unless told otherwise, and that the scheduling policy reaches every thread of the installed
-node.
+What the settings buy is measured, not tested (``bench/node_throughput.py``). Here: which
+profile is used when, that the shipped profile is what its comment says and reaches the node's
+participant, that the node publishes asynchronously unless told otherwise, and that the node
+leaves its threads' scheduling policy and CPUs as it was started.
 """
 
 from __future__ import annotations
 
 import os
-import re
 from pathlib import Path
 import subprocess
-import sys
-import textwrap
 import time
 import xml.etree.ElementTree as ElementTree
 
 import pytest
-from test_node_subprocess import read_until, start, stop_with_sigint
+from test_node_subprocess import executable, read_until, SERVING, start, stop_with_sigint
 
-from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.ros.middleware import (
-    apply_cpu_scheduling, check_cpu_scheduling, FASTDDS_PROFILE_VARIABLES, PROFILE_SETTINGS,
-    packaged_fastdds_profile, PUBLICATION_MODE_VARIABLE, use_asynchronous_publication,
-    use_packaged_fastdds_profile)
-from rigid_body_attitude.ros.sender_threads import can_leave_idle_policy, sender_thread_ids
-from rigid_body_attitude.ros.time_slices import (
-    kernel_takes_slices, SENDER_SLICE_NS, time_slice_ns)
+    FASTDDS_PROFILE_VARIABLES, PROFILE_SETTINGS, packaged_fastdds_profile,
+    PUBLICATION_MODE_VARIABLE, use_asynchronous_publication, use_packaged_fastdds_profile)
 
 FASTDDS_NAMESPACE = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
 
@@ -116,7 +107,7 @@ def test_the_nodes_idle_shared_memory_listener_wakes_every_10_ms_with_the_profil
         monkeypatch.setenv('FASTRTPS_DEFAULT_PROFILES_FILE', str(empty))
     process = start('--ros-args', '-p', 'scene:=strapdown')
     processes.append(process)
-    lines = read_until(process, 'serving')
+    lines = read_until(process, SERVING)
     wakeups = _user_data_listener_wakeups(process.pid, 2.0)
     code, stderr = stop_with_sigint(process)
     assert code == 0, ''.join(lines) + stderr
@@ -155,79 +146,10 @@ def test_a_default_profile_file_in_the_working_directory_wins(tmp_path):
                     'working directory')
 
 
-@pytest.mark.parametrize('value', ['fifo', 'BATCH', ''])
-def test_an_unknown_cpu_scheduling_value_is_named_in_the_error(value):
-    expected = (f"Expected parameter `cpu_scheduling` to be one of 'batch', 'all_batch', "
-                f"'default', got {value!r}")
-    assert check_cpu_scheduling(value) == expected
-    with pytest.raises(InputError) as raised:
-        apply_cpu_scheduling(value)
-    assert str(raised.value) == expected
-
-
-def _policies_after(script: str) -> list[str]:
-    """Run ``script`` (which applies a policy) in a fresh interpreter; its printed lines."""
-    result = subprocess.run([sys.executable, '-c', textwrap.dedent(script)],
-                            capture_output=True, text=True, timeout=60, check=True)
-    return result.stdout.split()
-
-
-def test_batch_moves_every_normal_thread_leaves_others_and_is_inherited():
-    # A separate process: the policy must not leak into the test run.
-    lines = _policies_after("""
-        import os, threading
-        from rigid_body_attitude.ros.middleware import apply_cpu_scheduling
-        idle_ready, release = threading.Event(), threading.Event()
-        def idle():
-            os.sched_setscheduler(threading.get_native_id(), os.SCHED_IDLE, os.sched_param(0))
-            idle_ready.set()
-            release.wait()
-        def normal():
-            release.wait()
-        threads = [threading.Thread(target=idle), threading.Thread(target=normal)]
-        for thread in threads:
-            thread.start()
-        idle_ready.wait()
-        print('changed', apply_cpu_scheduling('batch').changed)
-        later = threading.Thread(target=release.wait)
-        later.start()
-        for thread in threads + [later]:
-            print(os.sched_getscheduler(thread.native_id))
-        print(os.sched_getscheduler(0))
-        release.set()
-    """)
-    assert lines[:2] == ['changed', '2']  # the main thread and the normal one
-    assert [int(line) for line in lines[2:]] == [
-        os.SCHED_IDLE, os.SCHED_BATCH, os.SCHED_BATCH, os.SCHED_BATCH]
-
-
-def test_default_leaves_every_thread_as_it_started():
-    lines = _policies_after("""
-        import os
-        from rigid_body_attitude.ros.middleware import apply_cpu_scheduling
-        print(apply_cpu_scheduling('default').changed, os.sched_getscheduler(0))
-    """)
-    assert lines == ['0', str(os.SCHED_OTHER)]
-
-
-def test_a_refusal_by_the_system_is_returned_not_raised(tmp_path):
-    # A thread id the kernel refuses with EINVAL (sched_getscheduler(-1)) stands for any
-    # OSError other than "no such thread", e.g. EPERM from a container's seccomp policy.
-    (tmp_path / '-1').mkdir()
-    outcome = apply_cpu_scheduling('batch', tmp_path)
-    assert outcome.changed == 0
-    assert outcome.refused.startswith('thread -1: [Errno 22] Invalid argument')
-
-
-def test_a_thread_that_ended_is_skipped(tmp_path):
-    (tmp_path / str(2**22 + 12345)).mkdir()  # above pid_max: no such thread
-    assert apply_cpu_scheduling('batch', tmp_path) == (0, '')
-
-
-def _thread_policies(pid: int) -> dict[str, int]:
-    """Thread id → scheduling policy of every thread of process ``pid``."""
-    return {entry.name: os.sched_getscheduler(int(entry.name))
-            for entry in Path(f'/proc/{pid}/task').iterdir()}
+def _sender_thread_ids(pid: int) -> list[int]:
+    """Ids of the Fast DDS asynchronous sender threads (named ``dds.asyn.*``) of ``pid``."""
+    return sorted(int(task.name) for task in Path(f'/proc/{pid}/task').iterdir()
+                  if (task / 'comm').read_text().startswith('dds.asyn.'))
 
 
 @pytest.mark.parametrize('rmw', ['', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp'])
@@ -265,8 +187,8 @@ def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
         monkeypatch.delenv(PUBLICATION_MODE_VARIABLE, raising=False)
     process = start('--ros-args', '-p', 'scene:=strapdown')
     processes.append(process)
-    lines = read_until(process, 'serving')
-    senders = sender_thread_ids(Path(f'/proc/{process.pid}/task'))
+    lines = read_until(process, SERVING)
+    senders = _sender_thread_ids(process.pid)
     code, stderr = stop_with_sigint(process)
     stderr = ''.join(lines) + stderr
     assert code == 0, stderr
@@ -276,66 +198,28 @@ def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
     assert expected in stderr
 
 
-@pytest.mark.parametrize('arguments, policy, guarded, logged', [
-    ((), os.SCHED_BATCH, 'slices', "cpu_scheduling 'batch': "),
-    (('-p', 'idle_senders_above_hz:=12000.0'), os.SCHED_BATCH, 'idle',
-     "cpu_scheduling 'batch': "),
-    (('-p', 'cpu_scheduling:=all_batch'), os.SCHED_BATCH, False,
-     "cpu_scheduling 'all_batch': "),
-    (('-p', 'cpu_scheduling:=default'), os.SCHED_OTHER, False,
-     "cpu_scheduling 'default': 0 threads"),
-])
-def test_the_installed_node_runs_every_thread_on_its_cpu_scheduling(
-        processes, monkeypatch, arguments, policy, guarded, logged):
-    """Every thread, the senders too, starts on the policy; with ``batch`` the senders get
-    0.1 ms time slices where the kernel has them (Linux 6.12+), or with
-    ``idle_senders_above_hz`` the start-up line says when they go to SCHED_IDLE
-    (``test_sender_threads`` moves them); nothing else gets a custom slice."""
+def test_the_installed_node_keeps_the_policy_and_cpus_it_was_started_with(
+        processes, monkeypatch):
+    """Started under ``chrt --batch`` and ``taskset`` on one CPU (a user's recipe), every
+    thread of the serving node, Fast DDS's too, is still on SCHED_BATCH and that CPU; the
+    packaged profile was used and Fast DDS parsed it without complaint."""
     for variable in FASTDDS_PROFILE_VARIABLES:  # set by an in-process main() of another test
         monkeypatch.delenv(variable, raising=False)
-    process = start('--ros-args', '-p', 'scene:=strapdown', *arguments)
+    cpu = max(os.sched_getaffinity(0))
+    process = subprocess.Popen(
+        ['chrt', '--batch', '0', 'taskset', '-c', str(cpu), str(executable()), '--ros-args',
+         '-p', 'scene:=strapdown'], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     processes.append(process)
-    lines = read_until(process, logged)
-    policies = _thread_policies(process.pid)
-    senders = sender_thread_ids(Path(f'/proc/{process.pid}/task'))
-    assert len(policies) >= 5  # Python, the executor thread and Fast DDS's threads
-    assert len(senders) == 2  # asynchronous publication: discovery's and the writers'
-    assert set(policies.values()) == {policy}, policies
-    slices = {int(thread_id): time_slice_ns(int(thread_id)) for thread_id in policies}
-    shortened = guarded == 'slices' and kernel_takes_slices()
-    assert {thread_id for thread_id, value in slices.items() if value == SENDER_SLICE_NS} == (
-        set(senders) if shortened else set())
-    if not guarded:
-        assert 'Fast DDS sender threads' not in lines[-1]
-    else:  # and the split of the gyro loop from the senders (test_cpu_split)
-        split = (r'gyro loop on CPU \d+ and Fast DDS sender threads on CPUs? [\d,-]+ while '
-                 r'gyro input is above 12000 Hz' if len(os.sched_getaffinity(0)) > 1 else
-                 r'the gyro loop and Fast DDS sender threads share CPU \d+, the only one this '
-                 r'process may use')
-        assert re.search(f'; {split}; serving$', lines[-1].rstrip()), lines[-1]
-    if guarded == 'slices' and shortened:
-        assert (f'Fast DDS sender threads {senders} on SCHED_BATCH with 0.1 ms time slices; '
-                in lines[-1])
-    elif guarded == 'slices':
-        assert 'has no custom time slices; see idle_senders_above_hz); ' in lines[-1]
-    elif guarded and can_leave_idle_policy():
-        assert (f'Fast DDS sender threads {senders} on SCHED_IDLE while gyro input is above '
-                f'12000 Hz, else on SCHED_BATCH; ') in lines[-1]
-    elif guarded:
-        assert 'Fast DDS sender threads kept on SCHED_BATCH (leaving SCHED_IDLE' in lines[-1]
+    lines = read_until(process, SERVING)
+    time.sleep(0.5)
+    tasks = [int(entry.name) for entry in Path(f'/proc/{process.pid}/task').iterdir()]
+    policies = {task: os.sched_getscheduler(task) for task in tasks}
+    affinities = {task: os.sched_getaffinity(task) for task in tasks}
     code, stderr = stop_with_sigint(process)
     stderr = ''.join(lines) + stderr
     assert code == 0, stderr
-    # The profile is the packaged one and Fast DDS parsed it without complaint.
+    assert len(tasks) >= 5, tasks  # Python, the executor thread and Fast DDS's threads
+    assert set(policies.values()) == {os.SCHED_BATCH}, policies
+    assert all(cpus == {cpu} for cpus in affinities.values()), affinities
     assert f'Fast DDS profile {packaged_fastdds_profile()} ({PROFILE_SETTINGS})' in stderr
     assert 'XMLPARSER' not in stderr and 'Error' not in stderr and 'Traceback' not in stderr
-
-
-def test_a_bad_cpu_scheduling_gives_one_error_line_and_exit_2(processes):
-    process = start('--ros-args', '-p', 'scene:=strapdown', '-p', 'cpu_scheduling:=fifo')
-    processes.append(process)
-    _, stderr = process.communicate(timeout=60)
-    assert process.returncode == 2
-    assert stderr.strip().splitlines()[-1] == (
-        "error: Expected parameter `cpu_scheduling` to be one of 'batch', 'all_batch', "
-        "'default', got 'fifo'")

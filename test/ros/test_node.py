@@ -26,12 +26,12 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 
-from rigid_body_attitude.bag.decoders import decode_pose_stamped
+from rigid_body_attitude.msgs.decoders import decode_pose_stamped
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import InputError, IntegratorError, SceneError
 from rigid_body_attitude.session.reports import body_frame_velocity
 from rigid_body_attitude.session.times import TimeBase
-from rigid_body_attitude.ros.node import AttitudePropagatorNode
+from rigid_body_attitude.ros.node import AttitudePropagatorNode, LOG_EVERY_PERIODS
 from rigid_body_attitude.ros.serve import main
 from rigid_body_attitude.session.outputs import OutputTracker
 from rigid_body_attitude.core.propagator import build_propagator
@@ -388,6 +388,40 @@ def test_timing_faults_are_rejected_counted_and_reported(ros, request, capfd):
         ('2', '1', '7')  # baseline, 3 integrated steps, 2 after the gap, 2 after the jump
     assert final['scene'] == 'strapdown' and final['integrator'] == 'delta_single'
     assert capfd.readouterr().err.count('stamps jumped back') == 1  # logged once
+
+
+def test_a_gyro_scene_reports_what_a_strapdown_user_needs_and_no_energy(ros, request, capfd):
+    """/diagnostics of a gyro scene: accepted rate, missed samples, rotation from the initial
+    attitude, gyro bias, alignment; no rigid-body energy or momentum, in the status or in the
+    INFO line logged every LOG_EVERY_PERIODS periods."""
+    harness = Harness(ros, unique_namespace(request))
+    node = start_node(harness, scene='strapdown')
+    harness.publisher(Imu, 'imu')
+    diagnostics = harness.record(DiagnosticArray, '/diagnostics')
+    harness.wait_for_connections()
+    rate = (0.0, 0.0, math.pi / 2)  # 90°/s: 10 steps of 1 ms turn the body by 0.9°
+    for k in range(11):
+        publish_and_wait(harness, node, 'imu', imu_message(BASE_NS + k * MS, rate))
+    capfd.readouterr()
+    for _ in range(LOG_EVERY_PERIODS):
+        node.diagnostics_callback()
+    assert harness.spin_until(lambda: len(own_statuses(diagnostics, node)) >= 1, 5.0)
+    values = status_values(own_statuses(diagnostics, node)[-1])
+    assert [key for key in values if not key.startswith(('rejected ', 'malformed '))
+            and '.' not in key] == [
+        'scene', 'rate_source', 'integrator', 'step [s]', 'time [s]',
+        'rotation_from_initial [deg]', 'gyro_bias [rad/s]', 'alignment',
+        'quaternion_norm_error', 'input_rate [Hz]', 'received_rate [Hz]', 'received',
+        'accepted', 'missed_samples']
+    assert float(values['rotation_from_initial [deg]']) == pytest.approx(0.9, abs=1e-9)
+    assert values['gyro_bias [rad/s]'] == 'none'
+    assert values['alignment'].startswith('not aligned: no accelerometer levelling')
+    assert (values['accepted'], values['missed_samples']) == ('11', '0')
+    info = [line for line in capfd.readouterr().err.splitlines() if ' t=' in line]
+    assert len(info) == 1
+    text = info[0].split(']: ', 1)[1]  # the namespace holds the test's name
+    assert text.startswith('t=1700000000.133 s: rotation 0.900 deg from the initial attitude')
+    assert 'energy' not in text and ' J' not in text and text.endswith('missed 0')
 
 
 def test_non_finite_inputs_are_rejected_and_outputs_stay_finite(ros, request):

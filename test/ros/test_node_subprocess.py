@@ -26,10 +26,12 @@ from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 
 from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.ros.serve import SERVING_LINE
 from rigid_body_attitude.session.parameters import defaults
 
 PACKAGE = 'rigid_body_attitude'
 START_TIMEOUT = 30.0  # seconds for the process to start and discover the harness
+SERVING = f']: {SERVING_LINE}'  # the node's last start-up log line, as logged
 
 
 @pytest.fixture
@@ -213,14 +215,13 @@ def test_bad_parameters_give_one_error_line_and_exit_2(processes, arguments, exp
 
 @pytest.mark.parametrize('scene', ['strapdown', 'torque_free_box'])
 def test_sigint_right_as_serving_starts_exits_0_without_a_traceback(processes, scene):
-    """Ctrl-C as soon as the node logs its ``cpu_scheduling`` line (the last before serving):
-    before the fix the executor was still being built then, and the half-built rclpy objects
-    printed ``Exception ignored in: Executor.__del__`` tracebacks at exit. Three starts per
-    scene."""
+    """Ctrl-C as soon as the node logs that it serves (the last start-up line): half-built
+    rclpy objects (an executor still being built) would print ``Exception ignored in:
+    Executor.__del__`` tracebacks at exit. Three starts per scene."""
     for _ in range(3):
         process = start('--ros-args', '-p', f'scene:={scene}')
         processes.append(process)
-        head = read_until(process, "cpu_scheduling 'batch'")
+        head = read_until(process, SERVING)
         code, stderr = stop_with_sigint(process)
         stderr = ''.join(head) + stderr
         assert code == 0, stderr

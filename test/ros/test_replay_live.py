@@ -40,9 +40,10 @@ from std_msgs.msg import Float64
 from bag_fixtures import (
     AnalyticCase, build_case, CASES, write_case_bag, write_records, write_scene)
 from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.bag import (
-    BagReader, encode_imu, float64_value, header_stamp_ns, IMU, pose_orientation,
-    pose_position, quaternion_stamped, twist_angular, twist_linear, vector3_stamped)
+from rigid_body_attitude.bag import BagReader
+from rigid_body_attitude.msgs import (
+    encode_imu, float64_value, header_stamp_ns, IMU, pose_orientation, pose_position,
+    quaternion_stamped, twist_angular, twist_linear, vector3_stamped)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.tools.replay import main as replay_main
 from rigid_body_attitude.session.settings import timer_period_ns

@@ -24,11 +24,13 @@ class RecordingSink:
         default_factory=list)
     reports: list[Any] = field(default_factory=list)
     logs: list[tuple[int, str]] = field(default_factory=list)
-    current_imu: bytes | None = None
     use_header_stamps: bool = True
 
-    def attitude(self, sec, nanosec, attitude):
+    imus: list[bytes | None] = field(default_factory=list)
+
+    def attitude(self, sec, nanosec, attitude, imu):
         self.attitudes.append((sec, nanosec, attitude))
+        self.imus.append(imu)
 
     def dynamics(self, sec, nanosec, sample, velocity_body):
         self.ticks.append((sec, nanosec, sample, velocity_body))

@@ -12,8 +12,7 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 
 #: Declared by the parameter table but not documented as node parameters: the thread-scheduling
 #: parameters that the ros/session change removes. Empty this set once they are gone.
-UNDOCUMENTED = {'cpu_scheduling', 'idle_senders_above_hz', 'separate_cpus_above_hz'}
-DOCUMENTED = [parameter for parameter in PARAMETERS if parameter.name not in UNDOCUMENTED]
+DOCUMENTED = list(PARAMETERS)
 
 
 def readme_rows(heading: str) -> dict[str, list[str]]:

@@ -5,7 +5,7 @@ import math
 import pytest
 
 from rigid_body_attitude.session.parameters import (
-    check_values, defaults, PARAMETERS)
+    check_values, defaults, Parameter, PARAMETERS)
 
 
 def test_defaults_pass_their_own_checks():
@@ -13,10 +13,16 @@ def test_defaults_pass_their_own_checks():
     assert all(parameter.problem(parameter.default) == '' for parameter in PARAMETERS)
 
 
-def test_names_are_unique_and_replay_defaults_leave_out_node_only_ones():
+def test_names_are_unique_and_no_parameter_schedules_threads():
     names = [parameter.name for parameter in PARAMETERS]
     assert len(names) == len(set(names))
-    assert 'cpu_scheduling' in defaults() and 'cpu_scheduling' not in defaults(node_only=False)
+    assert not [name for name in names if 'cpu' in name or 'sched' in name or '_hz' in name]
+
+
+def test_a_string_with_choices_names_them():
+    parameter = Parameter('mode', str, 'a', 'a mode', choices=('a', 'b'))
+    assert parameter.problem('c') == "Expected parameter `mode` to be one of 'a', 'b', got 'c'"
+    assert parameter.problem('b') == ''
 
 
 @pytest.mark.parametrize('name, value, expected', [
@@ -30,8 +36,6 @@ def test_names_are_unique_and_replay_defaults_leave_out_node_only_ones():
     ('scene', ' ', '`scene` to be a non-empty name'),
     ('scene', 'x' * 5000, '`scene` to be at most 4096 characters, got 5000'),
     ('use_header_stamps', 1.0, '`use_header_stamps` to be a boolean (true or false), got 1.0'),
-    ('cpu_scheduling', 'fifo',
-     "`cpu_scheduling` to be one of 'batch', 'all_batch', 'default', got 'fifo'"),
     ('body_frame', 'world', '`world_frame` and `body_frame` to differ, both are \'world\''),
 ])
 def test_check_values_names_the_parameter_and_the_bad_value(name, value, expected):

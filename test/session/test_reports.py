@@ -8,10 +8,10 @@ import pytest
 
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.session.reports import (
-    body_frame_velocity, diagnostic_report, LEVEL_ERROR, LEVEL_OK, LEVEL_WARN, REJECTION_KEYS,
-    PeriodCounts, stale_command_count)
+    body_frame_velocity, diagnostic_report, gyro_bias_text, LEVEL_ERROR, LEVEL_OK, LEVEL_WARN,
+    NOT_ALIGNED, REJECTION_KEYS, PeriodCounts, stale_command_count, state_summary)
 from rigid_body_attitude.core.propagator import build_propagator
-from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.core.scene import load_scene, scene_from_mapping
 
 
 def test_body_frame_velocity_rotates_the_world_velocity_into_body_axes():
@@ -134,3 +134,48 @@ def test_diagnostic_report_is_an_error_after_a_refused_integration():
     assert report.message == ('1 integration_failed in the last period (parameter '
                               '`integrator`); 1 gap in the last period (parameter '
                               '`time_jump_threshold`)')
+
+
+ENERGY_KEYS = ('kinetic_energy [J]', 'energy_drift', 'energy_balance_residual [J]',
+               'world_angular_momentum [N m s]', 'momentum_drift')
+
+
+def test_a_gyro_scene_reports_rotation_bias_and_alignment_and_no_energy():
+    propagator = build_propagator(load_scene('strapdown'))
+    propagator.start(0.0, [0.0, 0.0, math.pi / 2])
+    propagator.update(0.5, [0.0, 0.0, math.pi / 2])  # 45° about z
+    values = report_values(diagnostic_report(propagator, counts(gyro=True), 'gyro stamps', 0.5))
+    assert not set(ENERGY_KEYS) & set(values)
+    assert float(values['rotation_from_initial [deg]']) == pytest.approx(45.0, abs=1e-9)
+    assert values['gyro_bias [rad/s]'] == 'none'
+    assert values['alignment'] == NOT_ALIGNED
+    assert values['input_rate [Hz]'] == '10.0' and values['missed_samples'] == '0'
+    summary = state_summary(propagator)
+    assert summary.startswith('rotation 45.000 deg from the initial attitude, gyro bias '
+                              '[rad/s] none, not aligned: ')
+    assert 'energy' not in summary and ' J' not in summary
+
+
+def test_a_gyro_scene_reports_the_bias_of_its_gyro_bias_effect_as_it_is_estimated():
+    scene = scene_from_mapping({
+        'name': 'biased', 'rate_source': 'gyro', 'integrator': 'exp_map',
+        'body': {'mass': 1.0, 'inertia': {'box': {'edges': [0.1, 0.1, 0.1], 'about': 'centre'}}},
+        'effects': [{'gyro_bias': {'estimate_seconds': 0.1}}]})
+    propagator = build_propagator(scene)
+    assert gyro_bias_text(propagator) == 'estimating (0 samples)'
+    propagator.start(0.0, [0.01, -0.02, 0.03])
+    for k in range(1, 30):
+        propagator.update(k * 0.01, [0.01, -0.02, 0.03])
+    assert gyro_bias_text(propagator) == '0.01 -0.02 0.03'
+    values = report_values(diagnostic_report(propagator, counts(gyro=True), '', 0.29))
+    assert values['gyro_bias [rad/s]'] == '0.01 -0.02 0.03'
+    assert float(values['rotation_from_initial [deg]']) < 1e-12  # bias removed: at rest
+
+
+def test_a_dynamics_scene_reports_energy_and_momentum_and_no_strapdown_values():
+    propagator = build_propagator(load_scene('torque_free_box'))
+    propagator.advance_to(0.5)
+    values = report_values(diagnostic_report(propagator, counts(), '0.001', 0.5))
+    assert set(ENERGY_KEYS) <= set(values)
+    assert not {'rotation_from_initial [deg]', 'gyro_bias [rad/s]', 'alignment'} & set(values)
+    assert state_summary(propagator).startswith('energy ')

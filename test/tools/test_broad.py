@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from rigid_body_attitude import bag
+from rigid_body_attitude import bag, msgs
 from rigid_body_attitude.tools import broad
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.quaternion import attitude_error, scalar_exp_step
@@ -66,14 +66,14 @@ def test_trial_to_bag_round_trip(trials, tmp_path, name, storage):
     rates = bag.read_series(path, 'imu')
     assert np.array_equal(rates.values, trial.gyro)
     assert np.allclose(rates.stamps, trial.stamps, rtol=0.0, atol=1e-9)
-    acceleration = bag.read_series(path, 'imu', decoder=bag.imu_acceleration)
+    acceleration = bag.read_series(path, 'imu', decoder=msgs.imu_acceleration)
     assert np.array_equal(acceleration.values, trial.acc)
     truth = bag.read_series(path, 'ground_truth')
     assert np.array_equal(truth.values, trial.ground_truth[kept])
     assert np.array_equal(truth.bag_times_ns, rates.bag_times_ns[kept])
     with bag.BagReader(path) as reader:
         metadata = reader.custom_data
-        assert reader.topics == {'ground_truth': bag.QUATERNION_STAMPED, 'imu': bag.IMU}
+        assert reader.topics == {'ground_truth': msgs.QUATERNION_STAMPED, 'imu': msgs.IMU}
     assert metadata['citation'] == broad.CITATION and 'doi:10.3390/data6070072' in broad.CITATION
     assert metadata['license'].startswith('CC BY 4.0')
     assert metadata['broad_trial'] == name

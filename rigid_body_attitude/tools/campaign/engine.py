@@ -55,7 +55,7 @@ class CampaignResult:
 
     Attributes:
         folder: the results folder; runs, failed: counts.
-        chunks_run, chunks_resumed: chunks this call computed and found finished.
+        chunks_run, chunks_resumed: chunks computed in this call and found finished already.
         elapsed: seconds of computing (chunks) and of the whole call.
         times: ``0`` and the output times [s]; statistics: percentiles (P, T) per metric.
         failures: failed runs by reason.

@@ -10,10 +10,10 @@ As the node runs with ``use_sim_time`` when a player publishes ``/clock`` with t
   attitude, once more at the first tick after the last message);
 * **diagnostics** every second of bag time from the first message, and once more at the next
   second (or tick) after the end;
-* **messages**: decoded with the node's decoders (:mod:`rigid_body_attitude.session.decoding`)
-  and handed to the session as the node's callbacks hand them; one that cannot be decoded goes
-  to ``session.malformed`` and one that raises inside the session to
-  ``session.internal_error``, and the replay goes on, as the node does.
+* **messages**: handed to the node's own input handlers
+  (:func:`rigid_body_attitude.session.decoding.input_handler`): decoded and given to the
+  session; one that cannot be decoded goes to ``session.malformed`` and one that raises inside
+  the session to ``session.internal_error``, and the replay goes on, as the node does.
 
 The session's clocks read the bag time: ``clock_ns`` the time of the message or tick being
 handled, ``monotonic`` the same in seconds, so warnings are throttled on bag time and the
@@ -27,7 +27,7 @@ from collections.abc import Iterator
 from typing import Protocol
 
 from rigid_body_attitude.bag import BagMessage
-from rigid_body_attitude.session.decoding import MALFORMED, input_handler
+from rigid_body_attitude.session.decoding import Handler, input_handler
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.settings import AnySession, DIAGNOSTICS_PERIOD
@@ -75,6 +75,12 @@ class EventLoop:
         self.ticks = 0
         self.handlers = {topic: input_handler(self.session, node_topic)
                          for topic, node_topic in plan.inputs.items()}
+        #: The gyro topic's handler (gyro scenes): the node's, with the bag's message type.
+        self.gyro_handler: Handler | None = None
+        if plan.gyro_decoder is not None:
+            self.gyro_handler = input_handler(
+                session, 'imu' if plan.gyro_is_imu else 'angular_velocity', plan.gyro_decoder,
+                reraise=(AlignmentError,))
         sink.now_ns = first_ns
 
     # -- timers -----------------------------------------------------------------------------
@@ -127,7 +133,7 @@ class EventLoop:
     def run(self, messages: Iterator[BagMessage], progress: Progress) -> int:
         """Replay every message, then :meth:`finish`; returns the gyro messages handled."""
         if isinstance(self.session, GyroSession):
-            count = self._gyro_messages(self.session, messages, progress)
+            count = self._gyro_messages(messages, progress)
         else:
             count = 0
             self._messages(messages, progress)
@@ -153,14 +159,12 @@ class EventLoop:
                 chunk = 0
         progress.update(chunk)
 
-    def _gyro_messages(self, session: GyroSession, messages: Iterator[BagMessage],
-                       progress: Progress) -> int:
-        """Gyro scenes (the hot path): per gyro message one decoder call, ``session.gyro``,
-        and the sink appending the encoded outputs to its buffer."""
+    def _gyro_messages(self, messages: Iterator[BagMessage], progress: Progress) -> int:
+        """Gyro scenes (the hot path): per gyro message the node's gyro handler (one decoder
+        call, ``session.gyro``, the sink appending the encoded outputs to its buffer)."""
         plan, sink, handlers, read = self.plan, self.sink, self.handlers, self.read
-        gyro_topic, decode, gyro = plan.gyro_topic, plan.gyro_decoder, session.gyro
-        assert decode is not None
-        node_topic = 'imu' if plan.gyro_is_imu else 'angular_velocity'
+        gyro_topic, handle = plan.gyro_topic, self.gyro_handler
+        assert handle is not None
         next_event = self.next_event_ns()
         count = chunk = 0
         for topic, bag_time_ns, _, data in messages:
@@ -178,17 +182,7 @@ class EventLoop:
                 handlers[topic](data)
                 continue
             count += 1
-            try:
-                sec, nanosec, _, rate, sink.current_imu = decode(data)
-            except MALFORMED as err:
-                session.malformed(node_topic, str(err)[:200])
-                continue
-            try:
-                gyro(sec, nanosec, rate)
-            except AlignmentError:
-                raise
-            except Exception as err:  # a bug must not end the replay (nor the node): counted
-                session.internal_error(node_topic, err)
+            handle(data)
         progress.update(chunk)
         read[gyro_topic] += count
         return count

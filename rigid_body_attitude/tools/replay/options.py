@@ -2,8 +2,8 @@
 replay's own (topics, ground truth, outputs, storage).
 
 The node's parameters are the entries of
-:data:`rigid_body_attitude.session.parameters.PARAMETERS` that are not ``node_only``: the same
-names, defaults, bounds and checks (:func:`~rigid_body_attitude.session.parameters.check_values`).
+:data:`rigid_body_attitude.session.parameters.PARAMETERS`: the same names, defaults, bounds and
+checks (:func:`~rigid_body_attitude.session.parameters.check_values`).
 :class:`ReplayOptions` declares them as typed fields (so ``mypy`` and readers see them); the
 check at the end of this module fails at import when the fields and the table part ways.
 """
@@ -22,8 +22,8 @@ from rigid_body_attitude.session.settings import (
 
 __all__ = ['NODE_PARAMETERS', 'ReplayOptions', 'check_options']
 
-#: The node's parameters the replay takes (the table less the ``node_only`` ones).
-NODE_PARAMETERS: tuple[Parameter, ...] = tuple(p for p in PARAMETERS if not p.node_only)
+#: The node's parameters the replay takes: every one of the table.
+NODE_PARAMETERS: tuple[Parameter, ...] = PARAMETERS
 _DEFAULT = {p.name: p.default for p in NODE_PARAMETERS}
 
 

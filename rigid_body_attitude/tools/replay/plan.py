@@ -11,10 +11,11 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
-from rigid_body_attitude.bag import (
-    ATTITUDE_DECODERS, IMU, POSE_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED, BagError, BagReader)
+from rigid_body_attitude.bag import BagError, BagReader
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.msgs import (
+    ATTITUDE_DECODERS, IMU, POSE_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED)
 from rigid_body_attitude.session.decoding import RATE_DECODERS, Decoded
 from rigid_body_attitude.session.settings import (
     GYRO_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC, input_topics,

@@ -56,13 +56,7 @@ def summary(result: ReplayResult) -> str:
         w, x, y, z = result.final_attitude
         lines.append(f'final attitude (w, x, y, z) at stamp {result.final_stamp_ns * 1e-9:.9f} '
                      f's: {w:.12f} {x:.12f} {y:.12f} {z:.12f}')
-    diagnostics = result.diagnostics
-    measured = ' (gyro scene: from measured rates, not conserved)' if (
-        result.scene.rate_source == 'gyro') else ''
-    lines.append(f'energy {diagnostics.kinetic_energy:.9g} J, drift '
-                 f'{diagnostics.energy_drift:.3e}, balance residual '
-                 f'{diagnostics.energy_balance_residual:.3e} J; momentum drift '
-                 f'{diagnostics.momentum_drift:.3e}{measured}')
+    lines.append(f'final state: {result.final_state}')
     if result.alignment_stamp_ns is not None:
         lines.append(f'attitude set from the ground truth at stamp '
                      f'{result.alignment_stamp_ns * 1e-9:.9f} s')

@@ -23,6 +23,7 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.reports import state_summary
 from rigid_body_attitude.session.settings import (
     AnySession, load_node_scene, open_session, timer_period_ns)
 from rigid_body_attitude.session.times import seconds_to_ns, to_ns
@@ -63,6 +64,8 @@ class ReplayResult:
         gyro_messages: gyro messages processed (for the throughput).
         elapsed: seconds spent in the replay loop.
         notes: remarks for the user (ignored topics and the like).
+        final_state: the scene's state as the node's INFO line gives it (a dynamics scene:
+            energy and momentum; a gyro scene: rotation, gyro bias, alignment).
     """
 
     input_path: Path
@@ -84,6 +87,7 @@ class ReplayResult:
     gyro_messages: int
     elapsed: float
     notes: list[str]
+    final_state: str = ''
 
 
 class _NoProgress:
@@ -253,4 +257,5 @@ def _result(input_path: Path, output_path: Path, scene: Scene, plan: Plan,
         logged=Counter(sink.logged), final_stamp_ns=_final_stamp_ns(run),
         final_attitude=sink.last_attitude, diagnostics=session.propagator.diagnostics(),
         series=series, errors=errors, alignment_stamp_ns=aligned_at,
-        gyro_messages=run.gyro_messages, elapsed=run.elapsed, notes=notes)
+        gyro_messages=run.gyro_messages, elapsed=run.elapsed, notes=notes,
+        final_state=state_summary(session.propagator))

@@ -5,7 +5,7 @@ CDR records in the output bag (the replay's counterpart of the node's publishers
 Each record is written at the bag time of the input or tick being handled (:attr:`BagSink.now_ns`,
 which the replay sets before it calls the session), with the message the node would publish:
 the same topics, types, stamps and frames. Gyro-rate outputs use the per-frame encoders of
-:mod:`rigid_body_attitude.bag.cdr` (one ``struct`` call each); records collect in a buffer that
+:mod:`rigid_body_attitude.msgs.cdr` (one ``struct`` call each); records collect in a buffer that
 :meth:`BagSink.flush` hands to :meth:`BagWriter.write_many`.
 """
 
@@ -19,11 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from rigid_body_attitude.bag import (
-    BagWriter, DiagnosticStatus, Record, encode_diagnostic_array, encode_float64,
-    encode_pose_stamped, encode_quaternion_stamped, encode_twist_stamped,
-    encode_vector3_stamped, imu_with_orientation, pose_stamped_encoder,
-    quaternion_stamped_encoder)
+from rigid_body_attitude.bag import BagWriter, Record
+from rigid_body_attitude.msgs import (
+    DiagnosticStatus, encode_diagnostic_array, encode_float64, encode_pose_stamped,
+    encode_quaternion_stamped, encode_twist_stamped, encode_vector3_stamped,
+    imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder)
 from rigid_body_attitude.session.base import Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import (
@@ -92,8 +92,6 @@ class BagSink:
         self.records: list[Record] = []
         #: Bag time of the input or tick being handled [ns]: the records' time.
         self.now_ns = 0
-        #: The Imu message being handled (``imu/data`` is it with the orientation), or None.
-        self.current_imu: bytes | None = None
         self.use_header_stamps = True
         self.series = OutputSeries() if keep_series else None
         self.hardware_id = hardware_id
@@ -145,7 +143,8 @@ class BagSink:
 
     # -- OutputSink -------------------------------------------------------------------------
 
-    def attitude(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
+    def attitude(self, sec: int, nanosec: int, attitude: Quaternion,
+                 imu: bytes | None) -> None:
         """``orientation``, ``pose`` and (Imu input) ``imu/data`` of one gyro sample."""
         if self._aligning:
             attitude = self._started(sec * NANOSECONDS_PER_SECOND + nanosec, attitude)
@@ -154,7 +153,6 @@ class BagSink:
             append((self._orientation, now, self.encode_orientation(sec, nanosec, attitude)))
         if self._pose is not None:
             append((self._pose, now, self.encode_pose(sec, nanosec, _ZERO, attitude)))
-        imu = self.current_imu
         if imu is not None and self._imu is not None:
             stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
             append((self._imu, now, imu_with_orientation(imu, attitude, stamp)))

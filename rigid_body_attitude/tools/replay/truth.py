@@ -12,11 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation, Slerp
 
-from rigid_body_attitude.bag import ATTITUDE_DECODERS, BagError, BagReader, header_stamp_ns
+from rigid_body_attitude.bag import BagError, BagReader
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
+from rigid_body_attitude.msgs import ATTITUDE_DECODERS, header_stamp_ns
 from rigid_body_attitude.session.decoding import MALFORMED
 
 __all__ = ['AlignmentError', 'ErrorStatistics', 'GroundTruth', 'GroundTruthStart',
@@ -67,18 +69,25 @@ def read_ground_truth(reader: BagReader, topic: str) -> GroundTruth:
 
 
 def interpolate(stamps_ns: StampArray, attitudes: FloatArray, at_ns: StampArray) -> FloatArray:
-    """Attitudes at ``at_ns`` (within the stamps) by slerp ``q_a ⊗ exp(s log(q_a* ⊗ q_b))``."""
-    upper = np.clip(np.searchsorted(stamps_ns, at_ns, side='left'), 0, len(stamps_ns) - 1)
-    exact = stamps_ns[upper] == at_ns
-    lower = np.maximum(upper - 1, 0)
-    span = (stamps_ns[upper] - stamps_ns[lower]).astype(np.float64)
-    fraction = np.where(exact | (span == 0), 1.0,
-                        (at_ns - stamps_ns[lower]) / np.where(span == 0, 1.0, span))
-    start = np.where(exact[:, None], attitudes[upper], attitudes[lower])
-    relative = quaternion.multiply(quaternion.conjugate(start), attitudes[upper])
-    step = quaternion.exp(fraction[:, None] * quaternion.log(quaternion.normalize(relative)))
-    result: FloatArray = np.where(exact[:, None], attitudes[upper],
-                                  quaternion.multiply(start, step))
+    """Attitudes at ``at_ns`` (within the sorted ``stamps_ns``) by slerp between the
+    neighbouring samples (scipy's :class:`~scipy.spatial.transform.Slerp`); at a sample's own
+    stamp, that sample unchanged (the first of equal stamps)."""
+    sample_ns, first = np.unique(stamps_ns, return_index=True)
+    samples = attitudes[first]
+    nearest = np.clip(np.searchsorted(sample_ns, at_ns), 0, len(sample_ns) - 1)
+    exact = sample_ns[nearest] == at_ns
+    if len(sample_ns) == 1:
+        return samples[nearest]
+    # Only the samples around ``at_ns``: neighbours stay neighbours, and Slerp's set-up costs
+    # per sample given.
+    used = np.unique(np.concatenate([nearest, np.maximum(nearest - 1, 0)]))
+    if len(used) == 1:
+        used = np.array([0, 1])
+    # Times relative to the first sample: float64 holds integer ns exactly up to 104 days.
+    slerp = Slerp((sample_ns[used] - sample_ns[0]).astype(np.float64),
+                  Rotation.from_quat(quaternion.to_ros(samples[used])))
+    between = quaternion.from_ros(slerp((at_ns - sample_ns[0]).astype(np.float64)).as_quat())
+    result: FloatArray = np.where(exact[:, None], samples[nearest], between)
     return result
 
 

@@ -3,8 +3,8 @@
 import pytest
 from rosbags.typesys import get_typestore, Stores
 
-from rigid_body_attitude.bag import decoders
-from rigid_body_attitude.bag.cdr import encode_imu, imu_with_orientation
+from rigid_body_attitude.msgs import decoders
+from rigid_body_attitude.msgs.cdr import encode_imu, imu_with_orientation
 
 IMU = 'sensor_msgs/msg/Imu'
 

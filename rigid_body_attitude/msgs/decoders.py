@@ -2,7 +2,7 @@
 
 Every decoder takes the serialised bytes of one message (a raw rclpy subscription's
 ``bytes``, or a bag record) and returns plain values, or raises
-:class:`~rigid_body_attitude.bag.errors.MalformedMessage` (one type, never ``struct.error``,
+:class:`~rigid_body_attitude.msgs.errors.MalformedMessage` (one type, never ``struct.error``,
 ``IndexError``, ``UnicodeDecodeError`` or ``MemoryError``) with a short, bounded ``reason``.
 No value is judged here beyond the wire format: ``nanosec ≥ 10⁹``, NaN or 1e308 come out as
 they are (physical bounds are the session's job).
@@ -29,10 +29,10 @@ What is taken. Layout (OMG CDR): a 4-byte encapsulation header, then ``std_msgs/
 (``int32 sec`` at payload offset 0, ``uint32 nanosec`` at 4, ``uint32 n`` at 8, ``n`` string
 bytes at 12 including the terminating NUL), then the float64 body at the next multiple of the
 float64 alignment. The reference is what a typed subscription of rclpy (Jazzy, rmw_fastrtps_cpp,
-Fast CDR 2.2) takes, measured by ``test/bag/test_decoders_rclpy.py`` through
+Fast CDR 2.2) takes, measured by ``test/msgs/test_decoders_rclpy.py`` through
 ``rclpy.serialization`` and a real publisher sending raw bytes to a typed subscription; where
 it differs from ``rosbags``' ``deserialize_cdr`` that is said below and tested by
-``test/bag/test_decoders_properties.py``.
+``test/msgs/test_decoders_properties.py``.
 
 * Encapsulation (bytes 0-1): ``0x0000`` CDR_BE and ``0x0001`` CDR_LE (what every ROS 2 writer
   produces), and, as rclpy reads them, ``0x0002``/``0x0003`` (PL_CDR, read as plain XCDR1) and
@@ -56,7 +56,6 @@ fields wanted) and two byte-string comparisons. A known frame id that is not the
 costs a second ``struct`` call and a dictionary look-up; anything else (another encapsulation,
 a new frame id, any fault) goes through the complete, slower check that names the fault and
 learns the frame id (up to 64 of at most 256 bytes; the table is emptied when full).
-``bench/bag_codecs.py`` measures each path.
 """
 
 from __future__ import annotations
@@ -66,8 +65,9 @@ from collections.abc import Callable
 from struct import Struct
 from typing import Any, NamedTuple
 
-from rigid_body_attitude.bag.errors import MalformedMessage
-from rigid_body_attitude.bag.msgtypes import (
+from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.types import (
+    FIXED_LAYOUTS,
     FLOAT64,
     IMU,
     POSE_STAMPED,
@@ -126,9 +126,10 @@ ENCAPSULATIONS: dict[int, Encapsulation] = {
 }
 
 # Body sizes in float64 after the header of each stamped message, and field positions.
-IMU_COUNT = 37              # orientation 4, cov 9, angular_velocity 3, cov 9, accel 3, cov 9
-_IMU_RATE_AT = 13
-_IMU_ACCELERATION_AT = 25
+_IMU = FIXED_LAYOUTS[IMU]
+IMU_COUNT = _IMU.count      # orientation 4, cov 9, angular_velocity 3, cov 9, accel 3, cov 9
+_IMU_RATE_AT = _IMU.at('angular_velocity.x')
+_IMU_ACCELERATION_AT = _IMU.at('linear_acceleration.x')
 _HEADER = 16                 # encapsulation 4, sec, nanosec, string length
 _MAX_FRAMES = 64
 _MAX_CACHED_FRAME = 256
@@ -343,16 +344,25 @@ def _decoder(msgtype: str, count: int, at: int, width: int) -> GyroDecoder:
 decode_imu_rate = _decoder(IMU, IMU_COUNT, _IMU_RATE_AT, 3)
 decode_imu_rate.__doc__ = ('``(sec, nanosec, frame_id, (ωx, ωy, ωz))`` of a '
                            '``sensor_msgs/msg/Imu``: the body-frame rate [rad/s].')
-decode_vector3_stamped = _decoder(VECTOR3_STAMPED, 3, 0, 3)
+decode_vector3_stamped = _decoder(VECTOR3_STAMPED, FIXED_LAYOUTS[VECTOR3_STAMPED].count, 0, 3)
 decode_vector3_stamped.__doc__ = ('``(sec, nanosec, frame_id, (x, y, z))`` of a '
                                   '``geometry_msgs/msg/Vector3Stamped``.')
-decode_twist_angular = _decoder(TWIST_STAMPED, 6, 3, 3)
+decode_twist_angular = _decoder(TWIST_STAMPED, FIXED_LAYOUTS[TWIST_STAMPED].count,
+                                FIXED_LAYOUTS[TWIST_STAMPED].at('twist.angular.x'), 3)
 decode_twist_angular.__doc__ = ('``(sec, nanosec, frame_id, (ωx, ωy, ωz))``: the angular '
                                 'velocity of a ``geometry_msgs/msg/TwistStamped`` [rad/s].')
-_wrench = _decoder(WRENCH_STAMPED, 6, 0, 6)
-_twist = _decoder(TWIST_STAMPED, 6, 0, 6)
-_pose = _decoder(POSE_STAMPED, 7, 0, 7)
-_quaternion = _decoder(QUATERNION_STAMPED, 4, 0, 4)
+
+
+def _whole(msgtype: str) -> GyroDecoder:
+    """A decoder of every float64 of a fixed-layout message."""
+    count = FIXED_LAYOUTS[msgtype].count
+    return _decoder(msgtype, count, 0, count)
+
+
+_wrench = _whole(WRENCH_STAMPED)
+_twist = _whole(TWIST_STAMPED)
+_pose = _whole(POSE_STAMPED)
+_quaternion = _whole(QUATERNION_STAMPED)
 
 #: Rate decoders by gyro message type (TwistStamped: its angular part).
 GYRO_DECODERS: dict[str, GyroDecoder] = {

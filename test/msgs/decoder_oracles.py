@@ -1,6 +1,6 @@
 """The decoders under test, the two typed deserialisers they are held to, and the contract.
 
-Every decoder of :mod:`rigid_body_attitude.bag.decoders` is paired with the typed message class
+Every decoder of :mod:`rigid_body_attitude.msgs.decoders` is paired with the typed message class
 (rclpy's generated Python class, deserialised by ``rclpy.serialization`` through
 rmw_fastrtps_cpp, as a typed subscription does) and the ``rosbags`` type name. :func:`check`
 runs one byte string through all three and asserts the documented contract:
@@ -29,11 +29,11 @@ from rosbags.serde import SerdeError
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 
-from rigid_body_attitude import bag
-from rigid_body_attitude.bag import decoders
-from rigid_body_attitude.bag.errors import MalformedMessage
+from rigid_body_attitude import bag, msgs
+from rigid_body_attitude.msgs import decoders
+from rigid_body_attitude.msgs.errors import MalformedMessage
 
-#: Reasons for refusing a frame id that rclpy forgives (documented in bag/decoders.py).
+#: Reasons for refusing a frame id that rclpy forgives (documented in msgs/decoders.py).
 FRAME_FAULTS = ('frame_id length 0', 'frame_id lacks its NUL terminator', 'frame_id has a NUL',
                 'frame_id is not UTF-8')
 
@@ -62,27 +62,27 @@ class Kind(NamedTuple):
 
 
 KINDS: dict[str, Kind] = {
-    'imu_rate': Kind(decoders.decode_imu_rate, bag.IMU, Imu,
+    'imu_rate': Kind(decoders.decode_imu_rate, msgs.IMU, Imu,
                      lambda m: (*_head(m), _xyz(m.angular_velocity)), 37),
-    'imu': Kind(decoders.decode_imu, bag.IMU, Imu,
+    'imu': Kind(decoders.decode_imu, msgs.IMU, Imu,
                 lambda m: (*_head(m), _wxyz(m.orientation), _xyz(m.angular_velocity),
                            _xyz(m.linear_acceleration)), 37),
-    'vector3_stamped': Kind(decoders.decode_vector3_stamped, bag.VECTOR3_STAMPED,
+    'vector3_stamped': Kind(decoders.decode_vector3_stamped, msgs.VECTOR3_STAMPED,
                             Vector3Stamped, lambda m: (*_head(m), _xyz(m.vector)), 3),
-    'twist_angular': Kind(decoders.decode_twist_angular, bag.TWIST_STAMPED, TwistStamped,
+    'twist_angular': Kind(decoders.decode_twist_angular, msgs.TWIST_STAMPED, TwistStamped,
                           lambda m: (*_head(m), _xyz(m.twist.angular)), 6),
-    'twist_stamped': Kind(decoders.decode_twist_stamped, bag.TWIST_STAMPED, TwistStamped,
+    'twist_stamped': Kind(decoders.decode_twist_stamped, msgs.TWIST_STAMPED, TwistStamped,
                           lambda m: (*_head(m), _xyz(m.twist.linear), _xyz(m.twist.angular)), 6),
-    'wrench_stamped': Kind(decoders.decode_wrench_stamped, bag.WRENCH_STAMPED, WrenchStamped,
+    'wrench_stamped': Kind(decoders.decode_wrench_stamped, msgs.WRENCH_STAMPED, WrenchStamped,
                            lambda m: (*_head(m), _xyz(m.wrench.force), _xyz(m.wrench.torque)),
                            6),
-    'pose_stamped': Kind(decoders.decode_pose_stamped, bag.POSE_STAMPED, PoseStamped,
+    'pose_stamped': Kind(decoders.decode_pose_stamped, msgs.POSE_STAMPED, PoseStamped,
                          lambda m: (*_head(m), _xyz(m.pose.position),
                                     _wxyz(m.pose.orientation)), 7),
-    'quaternion_stamped': Kind(decoders.decode_quaternion_stamped, bag.QUATERNION_STAMPED,
+    'quaternion_stamped': Kind(decoders.decode_quaternion_stamped, msgs.QUATERNION_STAMPED,
                                QuaternionStamped,
                                lambda m: (*_head(m), _wxyz(m.quaternion)), 4),
-    'float64': Kind(decoders.decode_float64, bag.FLOAT64, Float64, lambda m: m.data, 1),
+    'float64': Kind(decoders.decode_float64, msgs.FLOAT64, Float64, lambda m: m.data, 1),
 }
 
 

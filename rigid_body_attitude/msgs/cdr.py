@@ -1,14 +1,13 @@
 """Hand-written CDR codecs for the fixed-layout messages read and written once per sample.
 
-``rosbags``' generic ``deserialize_cdr``/``serialize_cdr`` build full message objects (about
-6.5 µs and 4.6 µs per ``sensor_msgs/msg/Imu``); the replay tool needs ≥ 10⁵ messages/s end to
-end, so the per-sample fields are read and written here with precompiled ``struct`` calls
-(``bench/bag_codecs.py`` measures both; ``test/bag/test_bag.py`` proves byte equality with
-``rosbags``' serialiser for every message type and frame-id padding).
+``rosbags``' generic ``deserialize_cdr``/``serialize_cdr`` build full message objects; the
+node and the replay tool read and write a message per sample, so the per-sample fields are read
+and written here with precompiled ``struct`` calls (``test/msgs/test_cdr.py`` proves byte
+equality with ``rosbags``' serialiser for every message type and frame-id padding).
 
-Decoding is done, and every byte checked, by :mod:`rigid_body_attitude.bag.decoders` (what is
+Decoding is done, and every byte checked, by :mod:`rigid_body_attitude.msgs.decoders` (what is
 taken and refused, and why, is stated there); every decoder here raises
-:class:`~rigid_body_attitude.bag.errors.MalformedMessage` and nothing else for bad bytes. The
+:class:`~rigid_body_attitude.msgs.errors.MalformedMessage` and nothing else for bad bytes. The
 functions here are the float-stamp forms used by bag readers: ``(stamp_s, values)`` with
 ``stamp_s = sec + nanosec·10⁻⁹``.
 
@@ -25,7 +24,7 @@ them). Encoders take integer nanoseconds. Encoders do not check finiteness (faul
 bags need NaN values); :func:`rigid_body_attitude.bag.write_bag` does.
 
 Per-sample fast paths of the node and the replay tool: the gyro decoders of
-:mod:`rigid_body_attitude.bag.decoders` read the header stamp as integers ``(sec, nanosec)``,
+:mod:`rigid_body_attitude.msgs.decoders` read the header stamp as integers ``(sec, nanosec)``,
 the frame id and the rate in one pass; :func:`quaternion_stamped_encoder`
 and :func:`pose_stamped_encoder` precompute the header bytes of one frame id (one ``struct``
 call per message); :func:`imu_with_orientation` splices the orientation into an Imu's bytes.
@@ -39,7 +38,7 @@ import struct
 from collections.abc import Callable, Sequence
 from struct import Struct
 
-from rigid_body_attitude.bag.decoders import (
+from rigid_body_attitude.msgs.decoders import (
     IMU_COUNT,
     Floats,
     body_offset,
@@ -54,7 +53,7 @@ from rigid_body_attitude.bag.decoders import (
     decode_vector3_stamped,
     decode_wrench_stamped,
 )
-from rigid_body_attitude.bag.msgtypes import (
+from rigid_body_attitude.msgs.types import (
     IMU,
     POSE_STAMPED,
     QUATERNION_STAMPED,
@@ -232,8 +231,8 @@ def imu_with_orientation(data: bytes, attitude: Sequence[float],
     and an all-zero (unknown) orientation covariance, and with the header stamp ``stamp``
     ``(sec, nanosec)`` when given (the receive time the node used instead of the message's);
     everything else, the encapsulation and byte order included, as it came. ``data`` is checked as
-    :func:`~rigid_body_attitude.bag.decoders.decode_imu` checks it
-    (:class:`~rigid_body_attitude.bag.errors.MalformedMessage`).
+    :func:`~rigid_body_attitude.msgs.decoders.decode_imu` checks it
+    (:class:`~rigid_body_attitude.msgs.errors.MalformedMessage`).
     """
     offset, little_endian = body_offset(data, IMU, IMU_COUNT)
     w, x, y, z = attitude

@@ -17,8 +17,8 @@ from decoder_oracles import check, encode, KINDS, same
 from hypothesis import given, HealthCheck, settings, strategies as st
 import pytest
 
-from rigid_body_attitude.bag import decoders
-from rigid_body_attitude.bag.errors import MalformedMessage
+from rigid_body_attitude.msgs import decoders
+from rigid_body_attitude.msgs.errors import MalformedMessage
 
 SETTINGS = settings(max_examples=150, derandomize=True, deadline=None,
                     suppress_health_check=[HealthCheck.too_slow])
