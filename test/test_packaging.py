@@ -54,7 +54,9 @@ ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'pyth
                'matplotlib': 'python3-matplotlib', 'tqdm': 'python3-tqdm'}
 #: Modules that rosdistro's rosdep/python.yaml has no key for → their pip distribution: pinned
 #: in requirements.txt and named in a comment of package.xml.
-WITHOUT_ROSDEP_KEY = {'rosbags': 'rosbags', 'apsw': 'apsw'}
+WITHOUT_ROSDEP_KEY = {'rosbags': 'rosbags', 'apsw': 'apsw', 'dask': 'dask',
+                      'distributed': 'distributed', 'pyarrow': 'pyarrow',
+                      'allantools': 'allantools'}
 REQUIRED_TEST_DEPENDS = {'python3-pytest'}
 
 # Run in a fresh interpreter: refuses rclpy through a meta path finder (so an import anywhere,
