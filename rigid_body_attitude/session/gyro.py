@@ -49,6 +49,8 @@ class GyroSession(Session):
                                  values['time_jump_threshold'])
         self._fresh_output = False
         self._output_sec = self._output_nanosec = 0
+        #: The mount (w, x, y, z) of the sensor frame in the body frame (None: identity).
+        self.mount: tuple[float, float, float, float] | None = None
         super().__init__(scene, values, sink, clock_ns, monotonic)
 
     def apply(self, values: Mapping[str, Any]) -> None:
@@ -60,6 +62,18 @@ class GyroSession(Session):
         stream.constant_dt = values['constant_dt']
         stream.max_angular_rate = values['max_angular_rate']
         stream.count_missed = values['use_header_stamps']
+        self.body_frame: str = values['body_frame']
+        self.mount_rpy: tuple[float, ...] = tuple(values.get('mount_rpy', ()))
+
+    def mount_needed(self, sensor_frame: str) -> bool:
+        """Whether the mount must come from TF: ``mount_rpy`` is not set and the samples'
+        ``sensor_frame`` (not empty) differs from ``body_frame``."""
+        return not self.mount_rpy and bool(sensor_frame) and sensor_frame != self.body_frame
+
+    def set_mount(self, q_body_sensor: tuple[float, float, float, float] | None) -> None:
+        """The mount rotation (w, x, y, z) mapping sensor-frame vectors into the body frame
+        (None: identity), set before the first sample is integrated."""
+        self.mount = q_body_sensor
 
     def gyro(self, sec: int, nanosec: int, rate: Sequence[float],
              imu: bytes | None = None) -> bool:
