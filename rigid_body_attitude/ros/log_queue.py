@@ -5,21 +5,22 @@ rcutils writes each console line synchronously to stderr (stdout with
 that falls behind), the write blocks until the reader makes room; a node logging from its
 gyro path, under its state lock, would stop integrating meanwhile. The node hands its lines to
 a :class:`LogQueue` instead: :meth:`LogQueue.put` never blocks (a full queue drops the line and
-counts it), and the queue's thread writes them, each only once the stream has room for a line
+counts it), and the queue's thread hands them to the logger (each severity from a call site
+of its own: rclpy refuses a call site whose severity changes), each only once the stream has room for a line
 (it waits with ``select``, which releases the GIL: the rest of the process runs on), then says
 how many were dropped.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 import os
 import queue
 import select
 import sys
 import threading
+from typing import Any
 
-__all__ = ['LOG_QUEUE_SIZE', 'LogQueue']
+__all__ = ['ERROR', 'INFO', 'LOG_QUEUE_SIZE', 'LogQueue', 'WARN']
 
 #: Lines waiting to be written; more are dropped and counted.
 LOG_QUEUE_SIZE = 1000
@@ -28,7 +29,8 @@ LOG_QUEUE_SIZE = 1000
 #: PIPE_BUF = 4 096 free bytes takes a write of that size without blocking).
 _LINE_ROOM = 4096
 
-Write = Callable[[str], None]
+#: Severities of :meth:`LogQueue.put`.
+INFO, WARN, ERROR = 0, 1, 2
 
 
 def _console_fd() -> int | None:
@@ -41,11 +43,13 @@ def _console_fd() -> int | None:
 
 
 class LogQueue:
-    """A bounded queue of ``(write, text)`` drained by a daemon thread (:meth:`start`)."""
+    """A bounded queue of ``(severity, text)`` drained into ``logger`` by a daemon thread
+    (:meth:`start`)."""
 
-    def __init__(self, size: int = LOG_QUEUE_SIZE) -> None:
-        """An empty queue of ``size`` lines; not yet started."""
-        self._queue: queue.Queue[tuple[Write, str] | None] = queue.Queue(size)
+    def __init__(self, logger: Any, size: int = LOG_QUEUE_SIZE) -> None:
+        """An empty queue of ``size`` lines for ``logger`` (an rclpy logger); not started."""
+        self.logger = logger
+        self._queue: queue.Queue[tuple[int, str] | None] = queue.Queue(size)
         self._fd = _console_fd()
         self._dropped = 0
         self._lock = threading.Lock()
@@ -57,10 +61,11 @@ class LogQueue:
         """Start the thread that writes the lines."""
         self._thread.start()
 
-    def put(self, write: Write, text: str) -> None:
-        """Queue ``write(text)``; never blocks (a full queue drops and counts the line)."""
+    def put(self, severity: int, text: str) -> None:
+        """Queue ``text`` at ``severity`` (:data:`INFO`, :data:`WARN`, :data:`ERROR`); never
+        blocks (a full queue drops and counts the line)."""
         try:
-            self._queue.put_nowait((write, text))
+            self._queue.put_nowait((severity, text))
         except queue.Full:
             with self._lock:
                 self._dropped += 1
@@ -82,14 +87,20 @@ class LogQueue:
             item = self._queue.get()
             if item is None:
                 return
-            write, text = item
+            severity, text = item
             self._wait_for_room()
             with self._lock:
                 dropped, self._dropped = self._dropped, 0
             if dropped:
-                write(f'{dropped} log lines dropped: the log output is read too slowly')
+                self.logger.warning(f'{dropped} log lines dropped: the log output is read too '
+                                    f'slowly')
                 self._wait_for_room()
-            write(text)
+            if severity >= ERROR:
+                self.logger.error(text)
+            elif severity == WARN:
+                self.logger.warning(text)
+            else:
+                self.logger.info(text)
 
     def _wait_for_room(self) -> None:
         """Wait until the console stream takes a line without blocking (pipes; a file or a

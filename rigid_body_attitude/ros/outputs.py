@@ -102,7 +102,7 @@ class RosOutputs:
         self.tf_period_ns = 0
         self._tf_due_ns = self._tf_last_ns = 0
         #: Where :meth:`log` puts its lines (started by the node).
-        self.log_queue = LogQueue()
+        self.log_queue = LogQueue(node.get_logger())
 
     def enable_tf(self, tf_rate: float) -> None:
         """Publish ``world_frame`` -> ``body_frame`` on ``/tf``, at most ``tf_rate`` per
@@ -190,10 +190,4 @@ class RosOutputs:
     def log(self, level: int, text: str) -> None:
         """A line for the node's logger, queued (:class:`~.log_queue.LogQueue`): never
         blocks."""
-        logger = self.node.get_logger()
-        if level >= LEVEL_ERROR:
-            self.log_queue.put(logger.error, text)
-        elif level == LEVEL_WARN:
-            self.log_queue.put(logger.warning, text)
-        else:
-            self.log_queue.put(logger.info, text)
+        self.log_queue.put(level, text)
