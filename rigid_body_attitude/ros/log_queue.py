@@ -6,9 +6,9 @@ that falls behind), the write blocks until the reader makes room; a node logging
 gyro path, under its state lock, would stop integrating meanwhile. The node hands its lines to
 a :class:`LogQueue` instead: :meth:`LogQueue.put` never blocks (a full queue drops the line and
 counts it), and the queue's thread hands them to the logger (each severity from a call site
-of its own: rclpy refuses a call site whose severity changes), each only once the stream has room for a line
-(it waits with ``select``, which releases the GIL: the rest of the process runs on), then says
-how many were dropped.
+of its own: rclpy refuses a call site whose severity changes), each only once the stream has
+room for a line (it waits with ``select``, which releases the GIL: the rest of the process
+runs on), and says how many were dropped.
 """
 
 from __future__ import annotations

@@ -315,4 +315,4 @@ class AttitudePropagatorNode(Node):
     def destroy_node(self) -> None:
         """Write the queued log lines (at most 1 s), then destroy the node."""
         self.outputs.log_queue.stop()
-        super().destroy_node()
+        super().destroy_node()  # type: ignore[no-untyped-call]
