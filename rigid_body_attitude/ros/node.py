@@ -20,10 +20,10 @@ same session, so a replayed bag gives the same numbers.
   with an INFO log line every 5 s; ``set_pose`` re-initialises the attitude (and position);
   ``~/reset`` restores the scene's initial state.
 * Commands (``set_pose``, ``torque``, ``rotor_torque``) are coalesced: only the newest of
-  each topic matters, so the executor thread keeps the newest message's bytes (counted
-  ``superseded`` when a newer one replaces it before use) and the gyro loop applies it before
-  its next gyro sample or tick. Log lines go through a queue with a thread of its own
-  (:mod:`~.log_queue`), never written while the state lock is held.
+  each topic matters, so each callback takes every message queued behind its own and hands
+  the newest to the session once (the others counted ``superseded``). Log lines go through a
+  queue with a thread of its own (:mod:`~.log_queue`), never written while the state lock is
+  held.
 * Gyro scenes read the sensor's mount from ``/tf_static`` when the samples' frame is not
   ``body_frame`` and ``mount_rpy`` is not set (:mod:`~.tf_lookup`); with ``publish_tf`` the
   attitude also goes to ``/tf``.
@@ -161,10 +161,6 @@ class AttitudePropagatorNode(Node):
         self.loop_group = DedicatedGroup()  # gyro subscriptions and the timers
         self.subscriptions_by_topic = {}
         self.handlers: dict[str, Callable[[bytes], None]] = {}
-        #: The newest command of each topic not yet applied (bytes), and its lock.
-        self.pending_commands: dict[str, bytes] = {}
-        self._command_lock = threading.Lock()
-        self._command_handlers: dict[str, Callable[[bytes], None]] = {}
         self.mount_gate: MountGate | None = None
         session = self.session
         if isinstance(session, GyroSession):
@@ -174,11 +170,7 @@ class AttitudePropagatorNode(Node):
                 TFMessage, '/tf_static', self.tf_static_callback, TF_STATIC_QOS)
         for topic in input_topics(self.scene, session.propagator.input_names):
             gyro = topic in _GYRO_TOPICS
-            if gyro:
-                handler = self._gyro_handler(topic)
-            else:
-                self._command_handlers[topic] = input_handler(session, topic)
-                handler = self._command_callback(topic)
+            handler = self._gyro_handler(topic) if gyro else self._command_callback(topic)
             self.handlers[topic] = handler
             self.subscriptions_by_topic[topic] = self.create_subscription(
                 _MESSAGE_TYPES[topic], topic, handler, GYRO_QOS if gyro else COMMAND_QOS,
@@ -187,15 +179,12 @@ class AttitudePropagatorNode(Node):
 
     def _gyro_handler(self, topic: str) -> Callable[[bytes], None]:
         """The session's handler of a gyro ``topic`` (:func:`input_handler`) under the state
-        lock, behind the mount gate until it opens; pending commands are applied first."""
-        handle, lock = input_handler(self.session, topic), self.state_lock
-        gate, pending, apply = self.mount_gate, self.pending_commands, self._apply_commands
+        lock, behind the mount gate until it opens."""
+        handle, lock, gate = input_handler(self.session, topic), self.state_lock, self.mount_gate
         assert gate is not None
 
         def locked(data: bytes) -> None:
             with lock:
-                if pending:
-                    apply()
                 if gate.open:
                     handle(data)
                 else:
@@ -203,33 +192,33 @@ class AttitudePropagatorNode(Node):
         return locked
 
     def _command_callback(self, topic: str) -> Callable[[bytes], None]:
-        """Keep the newest decodable command of ``topic`` (applied by :meth:`_apply_commands`);
-        a malformed one is counted at once."""
-        decode, pending, command_lock = DECODERS[topic], self.pending_commands, self._command_lock
-        session, state_lock = self.session, self.state_lock
+        """The callback of a command ``topic``: it also takes every message queued behind the
+        one it was given and hands only the newest decodable one to the session (the others
+        are counted ``superseded``; malformed ones ``malformed``)."""
+        decode, handle = DECODERS[topic], input_handler(self.session, topic)
+        session, lock = self.session, self.state_lock
 
-        def keep(data: bytes) -> None:
-            try:
-                decode(data)
-            except MALFORMED:
-                with state_lock:
-                    self._command_handlers[topic](data)  # counts it as malformed
-                return
-            with command_lock:
-                superseded = topic in pending
-                pending[topic] = data
-            if superseded:
-                with state_lock:
-                    session.rejections['superseded'] += 1
-        return keep
-
-    def _apply_commands(self) -> None:
-        """Hand the newest pending command of each topic to the session (state lock held)."""
-        with self._command_lock:
-            commands = list(self.pending_commands.items())
-            self.pending_commands.clear()
-        for topic, data in commands:
-            self._command_handlers[topic](data)
+        def coalesce(data: bytes) -> None:
+            subscription = self.subscriptions_by_topic[topic]
+            newest: bytes | None = None
+            superseded = 0
+            taken: tuple[bytes, Any] | None = (data, None)
+            while taken is not None:
+                try:
+                    decode(taken[0])
+                except MALFORMED:
+                    with lock:
+                        handle(taken[0])  # counted as malformed
+                else:
+                    superseded += newest is not None
+                    newest = taken[0]
+                taken = subscription.handle.take_message(subscription.msg_type, True)
+            with lock:
+                if superseded:
+                    session.rejections['superseded'] += superseded
+                if newest is not None:
+                    handle(newest)
+        return coalesce
 
     def tf_static_callback(self, message: TFMessage) -> None:
         """Static transforms for the mount (:class:`~.tf_lookup.MountGate`)."""
@@ -297,8 +286,6 @@ class AttitudePropagatorNode(Node):
         """Dynamics: integrate up to the node clock and publish; gyro: energy and momentum."""
         with self.state_lock:
             session = self.session
-            if self.pending_commands:
-                self._apply_commands()
             if isinstance(session, DynamicsSession):
                 session.tick(self.clock_ns())
             else:

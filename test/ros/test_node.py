@@ -57,7 +57,7 @@ def imu_message(at_ns: int, omega: tuple[float, float, float]) -> Imu:
     """An Imu with only the gyro filled in (orientation marked absent, as IMUs do)."""
     imu = Imu()
     imu.header.stamp = stamp(at_ns)
-    imu.header.frame_id = 'imu_link'
+    imu.header.frame_id = 'base_link'  # mounted in the body frame: no mount to look up
     imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z = omega
     imu.orientation_covariance[0] = -1.0
     return imu
@@ -223,7 +223,7 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
                for m in poses)
     last = imu_outputs[-1]
     assert nanoseconds(last.header.stamp) == stamps_ns[-1]
-    assert last.header.frame_id == 'imu_link'
+    assert last.header.frame_id == 'base_link'
     assert (last.orientation.w, last.orientation.x, last.orientation.y,
             last.orientation.z) == tuple(published[-1])
     assert (last.angular_velocity.x, last.angular_velocity.y, last.angular_velocity.z) == OMEGA
