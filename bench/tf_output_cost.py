@@ -1,6 +1,7 @@
 """Per-sample cost of ``publish_tf``: the node's output path with and without ``/tf``, one run.
 
-A ``RosOutputs`` of a real node (rclpy, Fast DDS, the package's profile not loaded) publishes
+A ``RosOutputs`` of a real node (rclpy, Fast DDS set up as the node sets it up: the package's
+profile, asynchronous publication) publishes
 ``orientation`` and ``pose`` per gyro sample stamped 1 ms apart (1 kHz), with a subscriber of
 each output, ``/tf`` included, in another process (``ros2``-free: a ``python -c`` rclpy
 node), so every publish really goes out. Contenders, over the same ``--samples`` samples
@@ -28,6 +29,8 @@ import rclpy
 from rclpy.context import Context
 from rclpy.node import Node
 
+from rigid_body_attitude.ros.middleware import (
+    use_asynchronous_publication, use_packaged_fastdds_profile)
 from rigid_body_attitude.ros.outputs import RosOutputs
 
 SUBSCRIBER = '''
@@ -66,6 +69,8 @@ def main() -> int:
     parser.add_argument('--samples', type=int, default=5000)
     parser.add_argument('--repeats', type=int, default=5)
     args = parser.parse_args()
+    use_packaged_fastdds_profile()
+    use_asynchronous_publication()
     subscriber = subprocess.Popen([sys.executable, '-c', SUBSCRIBER], stdout=subprocess.PIPE,
                                   text=True, env=os.environ.copy())
     try:
