@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -417,7 +418,13 @@ def test_a_gyro_scene_reports_what_a_strapdown_user_needs_and_no_energy(ros, req
     assert values['gyro_bias [rad/s]'] == 'none'
     assert values['alignment'].startswith('not aligned: no accelerometer levelling')
     assert (values['accepted'], values['missed_samples']) == ('11', '0')
-    info = [line for line in capfd.readouterr().err.splitlines() if ' t=' in line]
+    err, deadline = '', time.monotonic() + 5.0  # the log thread writes it
+    while ' t=' not in err and time.monotonic() < deadline:
+        time.sleep(0.05)
+        err += capfd.readouterr().err
+    time.sleep(0.2)
+    err += capfd.readouterr().err
+    info = [line for line in err.splitlines() if ' t=' in line]
     assert len(info) == 1
     text = info[0].split(']: ', 1)[1]  # the namespace holds the test's name
     assert text.startswith('t=1700000000.133 s: rotation 0.900 deg from the initial attitude')
