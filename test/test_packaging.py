@@ -282,7 +282,8 @@ def undeclared_imports(imports: dict[str, set[str]], package_xml: str, requireme
     """The imports that package.xml (and for modules without a rosdep key, requirements.txt)
     does not declare."""
     root = ElementTree.fromstring(package_xml)
-    declared = {element.text for element in root.findall('exec_depend')}
+    declared = {element.text for tag in ('exec_depend', 'depend')  # depend: build and exec
+                for element in root.findall(tag)}
     comments = ' '.join(re.findall(r'<!--(.*?)-->', package_xml, flags=re.S))
     pinned = {line.split('==')[0].strip().lower() for line in requirements.splitlines()
               if '==' in line and not line.lstrip().startswith('#')}

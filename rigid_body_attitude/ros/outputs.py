@@ -6,7 +6,12 @@ Every per-sample and per-tick output (``orientation``, ``pose``, ``imu/data``, `
 (:mod:`rigid_body_attitude.msgs.cdr`, the replay tool's codecs) and only when a subscription is
 matched (:class:`RawOutput`); ``/diagnostics`` (once a second) is an ordinary message.
 ``imu/data`` is the input Imu with the orientation filled in (REP-145: orientation covariance
-all zeros = known, unknown covariance) and the stamp the session used.
+all zeros = known, unknown covariance) and the stamp the session used. With ``publish_tf``
+(:meth:`RosOutputs.enable_tf`) the attitude also goes to ``/tf`` as the transform
+``world_frame`` -> ``body_frame`` (``tf2_msgs/msg/TFMessage``, CDR bytes too) at the output
+stamps, at most ``tf_rate`` transforms per second of stamps. Log lines go through a
+:class:`~.log_queue.LogQueue`: the session logs from the gyro path, which must never wait for
+a slow console.
 """
 
 from __future__ import annotations
@@ -20,11 +25,13 @@ from rclpy.node import Node
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
+from tf2_msgs.msg import TFMessage
 
 from rigid_body_attitude.msgs.cdr import (
     encode_float64, imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder,
-    stamped_floats_encoder)
-from rigid_body_attitude.ros.qos import OUTPUT_QOS
+    stamped_floats_encoder, transform_encoder)
+from rigid_body_attitude.ros.log_queue import LogQueue
+from rigid_body_attitude.ros.qos import OUTPUT_QOS, TF_QOS
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
 
@@ -90,6 +97,29 @@ class RosOutputs:
         #: Frame of ``twist`` (:meth:`set_frames`).
         self.body_frame = ''
         self.hardware_id = ''
+        #: ``/tf`` (:meth:`enable_tf`), or None.
+        self.tf_raw: RawOutput | None = None
+        self.tf_period_ns = 0
+        self._tf_due_ns = self._tf_last_ns = 0
+        #: Where :meth:`log` puts its lines (started by the node).
+        self.log_queue = LogQueue(node.get_logger())
+
+    def enable_tf(self, tf_rate: float) -> None:
+        """Publish ``world_frame`` -> ``body_frame`` on ``/tf``, at most ``tf_rate`` per
+        second of stamps (0: with every output)."""
+        self.tf = self.node.create_publisher(TFMessage, '/tf', TF_QOS)
+        self.tf_raw = RawOutput(self.tf)
+        self.tf_period_ns = round(1e9 / tf_rate) if tf_rate > 0.0 else 0
+
+    def _publish_tf(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
+        """The transform at ``(sec, nanosec)`` if one is due (or the stamps went back)."""
+        stamp_ns = sec * 1_000_000_000 + nanosec
+        if stamp_ns < self._tf_due_ns and stamp_ns >= self._tf_last_ns:
+            return
+        tf = self.tf_raw
+        if tf is not None and tf.subscription_count():
+            tf.publish(self.encode_tf(sec, nanosec, attitude))
+            self._tf_due_ns, self._tf_last_ns = stamp_ns + self.tf_period_ns, stamp_ns
 
     def _publisher(self, message_type: Any, topic: str) -> Any:
         return self.node.create_publisher(
@@ -103,6 +133,7 @@ class RosOutputs:
         self.encode_pose = pose_stamped_encoder(world_frame)
         self.encode_momentum = stamped_floats_encoder(world_frame, 3)
         self.encode_twist = stamped_floats_encoder(body_frame, 6)
+        self.encode_tf = transform_encoder(world_frame, body_frame)
 
     # -- OutputSink -------------------------------------------------------------------------
 
@@ -117,6 +148,8 @@ class RosOutputs:
         if imu is not None and self.imu_raw.subscription_count():
             stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
             self.imu_raw.publish(imu_with_orientation(imu, attitude, stamp))
+        if self.tf_raw is not None:
+            self._publish_tf(sec, nanosec, attitude)
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:
@@ -128,6 +161,8 @@ class RosOutputs:
             pose.publish(self.encode_pose(sec, nanosec, sample.position, sample.attitude))
         if twist.subscription_count():
             twist.publish(self.encode_twist(sec, nanosec, velocity_body + sample.omega_body))
+        if self.tf_raw is not None:
+            self._publish_tf(sec, nanosec, sample.attitude)
 
     def wants_invariants(self) -> bool:
         """Whether ``energy`` or ``angular_momentum`` has a subscriber."""
@@ -153,11 +188,6 @@ class RosOutputs:
         self.diagnostics_publisher.publish(array)
 
     def log(self, level: int, text: str) -> None:
-        """The node's logger."""
-        logger = self.node.get_logger()
-        if level >= LEVEL_ERROR:
-            logger.error(text)
-        elif level == LEVEL_WARN:
-            logger.warning(text)
-        else:
-            logger.info(text)
+        """A line for the node's logger, queued (:class:`~.log_queue.LogQueue`): never
+        blocks."""
+        self.log_queue.put(level, text)

@@ -144,7 +144,8 @@ class Session(ABC):
             return
         self.poses_accepted += 1
         where = f', position {position}' if propagator.has_translation else ''
-        self.sink.log(LEVEL_INFO, f'set_pose: attitude (w, x, y, z) {attitude}{where}')
+        self.note('set_pose', f'set_pose: attitude (w, x, y, z) {attitude}{where}',
+                  self.poses_accepted)
 
     def _pose_problem(self, frame_id: str, attitude: Quaternion,
                       position: Vector) -> tuple[str, str]:
@@ -171,6 +172,14 @@ class Session(ABC):
         if now - self._last_warning.get(reason, -math.inf) >= WARNING_INTERVAL:
             self._last_warning[reason] = now
             self.sink.log(LEVEL_WARN, f'{text} [{self.rejection_counts()[reason]} so far]')
+
+    def note(self, key: str, text: str, count: int) -> None:
+        """An INFO line per ``key`` at most every :data:`WARNING_INTERVAL` seconds, with the
+        ``count`` of such events so far."""
+        now, key = self.monotonic(), f'note {key}'
+        if now - self._last_warning.get(key, -math.inf) >= WARNING_INTERVAL:
+            self._last_warning[key] = now
+            self.sink.log(LEVEL_INFO, f'{text} [{count} so far]')
 
     def error(self, text: str) -> None:
         """An error log line (never throttled: each marks a reset of the state)."""

@@ -100,8 +100,8 @@ class ImuStart(Session):
 
     def mount_needed(self, sensor_frame: str) -> bool:
         """Whether the mount must come from TF: ``mount_rpy`` is not set and the Imu's frame
-        ``sensor_frame`` differs from ``body_frame``."""
-        return not self._mount_given and sensor_frame != self.body_frame
+        ``sensor_frame`` (not empty) differs from ``body_frame``."""
+        return not self._mount_given and bool(sensor_frame) and sensor_frame != self.body_frame
 
     def set_mount(self, q_body_sensor: tuple[float, float, float, float] | None) -> None:
         """The rotation ``(w, x, y, z)`` mapping sensor-frame vectors into the body frame

@@ -193,6 +193,15 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter('calibration_imu_key', str, '',
               'the IMU of a kalibr result holding several (e.g. imu0; "" = the only one)',
               may_be_empty=True),
+    # TF: the transform world_frame -> body_frame out, the sensor's mount in.
+    Parameter('publish_tf', bool, False,
+              'publish world_frame -> body_frame on /tf at the output stamps'),
+    Parameter('tf_rate', float, 100.0,
+              'Hz: most transforms per second of stamps on /tf (0 = one per output)', 0.0,
+              1.0e6),
+    Parameter('tf_timeout', float, 5.0,
+              's: how long gyro samples wait for the mount body_frame -> sensor frame on '
+              '/tf_static before they are dropped', 0.0, 3600.0, low_open=True),
 )
 
 _BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}

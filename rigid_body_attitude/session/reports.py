@@ -55,14 +55,16 @@ DRIFT_WARN_THRESHOLD = 1e-6
 DRIFT_ERROR_THRESHOLD = 1e-3
 
 #: Rejection counters reported, in order: the stream reasons, the session's own (malformed
-#: messages, invalid or zero stamps, poses), expired commands and refused integrations.
+#: messages, invalid or zero stamps, poses), expired commands, refused integrations, gyro
+#: samples dropped without a mount and commands superseded by a newer one before use.
 REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
                   'wrong_frame', 'stale_torque', 'integration_failed', 'non_finite_result',
-                  'internal_error')
+                  'internal_error', 'no_mount', 'superseded')
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
-                'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame')
+                'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame',
+                'no_mount')
 ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
 
 #: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).
@@ -73,7 +75,7 @@ GOVERNING_PARAMETER = {
     'invalid_pose': 'world_frame', 'wrong_frame': 'world_frame',
     'integration_failed': 'integrator', 'non_finite_result': 'integrator',
     'missed_samples': 'qos_overrides./imu.subscription.depth',
-    'no_input': 'use_header_stamps', 'behind': 'step',
+    'no_input': 'use_header_stamps', 'behind': 'step', 'no_mount': 'mount_rpy',
 }
 DYNAMICS_GOVERNING_PARAMETER = {
     **{key: value for key, value in GOVERNING_PARAMETER.items() if key != 'out_of_range'},

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -58,7 +59,7 @@ def imu_message(at_ns: int, omega: tuple[float, float, float]) -> Imu:
     """An Imu with only the gyro filled in (orientation marked absent, as IMUs do)."""
     imu = Imu()
     imu.header.stamp = stamp(at_ns)
-    imu.header.frame_id = 'imu_link'
+    imu.header.frame_id = 'base_link'  # mounted in the body frame: no mount to look up
     imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z = omega
     imu.orientation_covariance[0] = -1.0
     return imu
@@ -241,7 +242,7 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
                for m in poses)
     last = imu_outputs[-1]
     assert nanoseconds(last.header.stamp) == stamps_ns[-1]
-    assert last.header.frame_id == 'imu_link'
+    assert last.header.frame_id == 'base_link'
     assert (last.orientation.w, last.orientation.x, last.orientation.y,
             last.orientation.z) == tuple(published[-1])
     assert (last.angular_velocity.x, last.angular_velocity.y, last.angular_velocity.z) == OMEGA
@@ -435,7 +436,13 @@ def test_a_gyro_scene_reports_what_a_strapdown_user_needs_and_no_energy(ros, req
     assert values['gyro_bias [rad/s]'] == 'none'
     assert values['alignment'].startswith('not levelled: no accelerometer data')
     assert (values['accepted'], values['missed_samples']) == ('11', '0')
-    info = [line for line in capfd.readouterr().err.splitlines() if ' t=' in line]
+    err, deadline = '', time.monotonic() + 5.0  # the log thread writes it
+    while ' t=' not in err and time.monotonic() < deadline:
+        time.sleep(0.05)
+        err += capfd.readouterr().err
+    time.sleep(0.2)
+    err += capfd.readouterr().err
+    info = [line for line in err.splitlines() if ' t=' in line]
     assert len(info) == 1
     text = info[0].split(']: ', 1)[1]  # the namespace holds the test's name
     assert text.startswith('t=1700000000.133 s: rotation 0.900 deg from the initial attitude')

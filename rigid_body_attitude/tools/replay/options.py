@@ -2,8 +2,8 @@
 replay's own (topics, ground truth, outputs, storage).
 
 The node's parameters are the entries of
-:data:`rigid_body_attitude.session.parameters.PARAMETERS`: the same names, defaults, bounds and
-checks (:func:`~rigid_body_attitude.session.parameters.check_values`).
+:data:`rigid_body_attitude.session.parameters.PARAMETERS` but the TF ones: the same names,
+defaults, bounds and checks (:func:`~rigid_body_attitude.session.parameters.check_values`).
 :class:`ReplayOptions` declares them as typed fields (so ``mypy`` and readers see them); the
 check at the end of this module fails at import when the fields and the table part ways.
 """
@@ -20,10 +20,14 @@ from rigid_body_attitude.session.parameters import PARAMETERS, Parameter, check_
 from rigid_body_attitude.session.settings import (
     OUTPUT_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC)
 
-__all__ = ['NODE_PARAMETERS', 'ReplayOptions', 'check_options']
+__all__ = ['NODE_PARAMETERS', 'ReplayOptions', 'TF_PARAMETERS', 'check_options']
 
-#: The node's parameters the replay takes: every one of the table.
-NODE_PARAMETERS: tuple[Parameter, ...] = PARAMETERS
+#: Node parameters about TF only (a bag has no ``/tf_static`` to wait for, the replay writes
+#: no ``/tf``): the replay does not take them.
+TF_PARAMETERS = ('publish_tf', 'tf_rate', 'tf_timeout')
+#: The node's parameters the replay takes: every one of the table but :data:`TF_PARAMETERS`.
+NODE_PARAMETERS: tuple[Parameter, ...] = tuple(
+    p for p in PARAMETERS if p.name not in TF_PARAMETERS)
 _DEFAULT = {p.name: p.default for p in NODE_PARAMETERS}
 
 
