@@ -3,8 +3,8 @@
 Per sample (:meth:`GyroSession.gyro`): the stamp is checked (``nanosec`` in ``[0, 1e9)``,
 ``sec`` non-negative; a zero stamp is refused while header stamps are used) or replaced by the
 receive time (``use_header_stamps`` false); the stream rules decide; when the state moved the
-attitude goes to the sink stamped with the time used. At each tick (:meth:`GyroSession.tick`)
-energy and angular momentum of the last attitude go to the sink, once per attitude published.
+attitude goes to the sink stamped with the time used. A gyro scene simulates no body, so it
+has no output timer and hands no energy or angular momentum to the sink.
 """
 
 from __future__ import annotations
@@ -47,7 +47,6 @@ class GyroSession(Session):
         self.propagator = GyroPropagator(scene)
         self.stream = GyroStream(self.propagator, values['max_dt'],
                                  values['time_jump_threshold'])
-        self._fresh_output = False
         self._output_sec = self._output_nanosec = 0
         super().__init__(scene, values, sink, clock_ns, monotonic)
 
@@ -88,7 +87,6 @@ class GyroSession(Session):
             return self._non_finite_result()
         self.sink.attitude(sec, nanosec, attitude, imu)
         self._output_sec, self._output_nanosec = sec, nanosec
-        self._fresh_output = True
         return True
 
     @property
@@ -127,16 +125,6 @@ class GyroSession(Session):
                    f'of scene {self.scene.name!r} (parameter `integrator`)')
         self.stream.reset()
         return False
-
-    def tick(self) -> None:
-        """The output timer: energy and angular momentum of the last attitude published."""
-        if not self._fresh_output:
-            return
-        self._fresh_output = False
-        if self.sink.wants_invariants():
-            x, y, z = self.propagator.world_momentum().tolist()
-            self.sink.invariants(self._output_sec, self._output_nanosec,
-                                 self.propagator.energy(), (x, y, z))
 
     def reset(self) -> None:
         """Back to the initial attitude; the next sample is a new baseline."""
