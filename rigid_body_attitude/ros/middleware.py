@@ -89,4 +89,3 @@ def use_packaged_fastdds_profile(environ: MutableMapping[str, str] | None = None
     for variable in FASTDDS_PROFILE_VARIABLES:
         environ[variable] = str(profile)
     return f'Fast DDS profile {profile} ({PROFILE_SETTINGS})'
-

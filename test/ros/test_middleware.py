@@ -175,3 +175,30 @@ def test_the_installed_node_leaves_the_publication_mode_to_the_environment(
     assert code == 0, stderr
     assert len(senders) == asynchronous_threads, senders
     assert 'publication' not in stderr
+
+
+def test_the_installed_node_keeps_the_policy_and_cpus_it_was_started_with(
+        processes, monkeypatch):
+    """Started under ``chrt --batch`` and ``taskset`` on one CPU (a user's recipe), every
+    thread of the serving node, Fast DDS's too, is still on SCHED_BATCH and that CPU; the
+    packaged profile was used and Fast DDS parsed it without complaint."""
+    for variable in FASTDDS_PROFILE_VARIABLES:  # set by an in-process main() of another test
+        monkeypatch.delenv(variable, raising=False)
+    cpu = max(os.sched_getaffinity(0))
+    process = subprocess.Popen(
+        ['chrt', '--batch', '0', 'taskset', '-c', str(cpu), str(executable()), '--ros-args',
+         '-p', 'scene:=strapdown'], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    processes.append(process)
+    lines = read_until(process, SERVING)
+    time.sleep(0.5)
+    tasks = [int(entry.name) for entry in Path(f'/proc/{process.pid}/task').iterdir()]
+    policies = {task: os.sched_getscheduler(task) for task in tasks}
+    affinities = {task: os.sched_getaffinity(task) for task in tasks}
+    code, stderr = stop_with_sigint(process)
+    stderr = ''.join(lines) + stderr
+    assert code == 0, stderr
+    assert len(tasks) >= 5, tasks  # Python, the executor thread and Fast DDS's threads
+    assert set(policies.values()) == {os.SCHED_BATCH}, policies
+    assert all(cpus == {cpu} for cpus in affinities.values()), affinities
+    assert f'Fast DDS profile {packaged_fastdds_profile()} ({PROFILE_SETTINGS})' in stderr
+    assert 'XMLPARSER' not in stderr and 'Error' not in stderr and 'Traceback' not in stderr
