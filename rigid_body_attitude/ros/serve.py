@@ -18,6 +18,7 @@ import threading
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import uninstall_signal_handlers
 
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
@@ -118,6 +119,11 @@ def spin(node: AttitudePropagatorNode) -> None:
         node.get_logger().info(SERVING_LINE)
         loop.run()
     finally:
+        # rclpy's signal thread triggers every SIGINT guard condition (the loop's, the
+        # executor's) some time after the signal; on a loaded machine it ran after they were
+        # destroyed here: a segfault in rcl_trigger_guard_condition (seen in a core dump).
+        # Uninstalling the handlers joins that thread first.
+        uninstall_signal_handlers()
         rest.stop()
         executor.shutdown()  # after the join: its thread no longer waits (rclpy issue #968)
         loop.close()
