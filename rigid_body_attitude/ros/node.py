@@ -26,6 +26,7 @@ Parameters are declared from :data:`rigid_body_attitude.session.parameters.PARAM
 
 from __future__ import annotations
 
+import array
 import threading
 import time
 from collections.abc import Callable
@@ -33,7 +34,8 @@ from typing import Any
 
 from geometry_msgs.msg import PoseStamped, Vector3Stamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import InvalidParameterTypeException, ParameterException
+from rclpy.exceptions import (
+    InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
@@ -52,7 +54,7 @@ from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_
 from rigid_body_attitude.session.settings import (
     DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, AnySession)
 
-__all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor']
+__all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor', 'ros_value']
 
 #: Diagnostics periods between INFO log lines.
 LOG_EVERY_PERIODS = 5
@@ -71,6 +73,16 @@ def parameter_descriptor(parameter: Parameter) -> ParameterDescriptor:
     return ParameterDescriptor(
         name=parameter.name, description=parameter.description,
         read_only=parameter.read_only, floating_point_range=limits)
+
+
+def ros_value(parameter: Parameter, value: Any) -> Any:
+    """A parameter's value as the table takes it: a double array (rclpy gives a list or an
+    ``array.array``, ``None`` when not set) as a tuple; other values as they are."""
+    if parameter.type is not tuple:
+        return value
+    if value is None:
+        return parameter.default
+    return tuple(value) if isinstance(value, (list, tuple, array.array)) else value
 
 
 class AttitudePropagatorNode(Node):
@@ -126,9 +138,13 @@ class AttitudePropagatorNode(Node):
     def _declare_parameters(self) -> dict[str, Any]:
         values = {}
         for parameter in PARAMETERS:
+            # A double array without a value ([]: not set) is declared by its type (an empty
+            # list would make it a byte array); unset, it reads as the table's default.
+            default = (RosParameter.Type.DOUBLE_ARRAY if parameter.type is tuple
+                       else parameter.default)
             try:
-                values[parameter.name] = self.declare_parameter(
-                    parameter.name, parameter.default, parameter_descriptor(parameter)).value
+                values[parameter.name] = ros_value(parameter, self.declare_parameter(
+                    parameter.name, default, parameter_descriptor(parameter)).value)
             except InvalidParameterTypeException as err:
                 raise InputError(f'Expected parameter `{parameter.name}` to be a '
                                  f'{parameter.type_text}: {str(err)[:200]}') from err
@@ -188,12 +204,21 @@ class AttitudePropagatorNode(Node):
 
     def get_parameters_values(self) -> dict[str, Any]:
         """Current values of the node's own parameters by name."""
-        return {p.name: self.get_parameter(p.name).value for p in PARAMETERS}
+        values = {}
+        for parameter in PARAMETERS:
+            try:
+                value = self.get_parameter(parameter.name).value
+            except ParameterUninitializedException:  # a double array not set
+                value = None
+            values[parameter.name] = ros_value(parameter, value)
+        return values
 
     def parameters_callback(self, parameters: list[RosParameter]) -> SetParametersResult:
         """Refuse run-time values that the parameter table or the session finds unusable."""
         values = self.get_parameters_values()
-        values.update({p.name: p.value for p in parameters if p.name in values})
+        by_name = {p.name: p for p in PARAMETERS}
+        values.update({p.name: ros_value(by_name[p.name], p.value) for p in parameters
+                       if p.name in values})
         reason = self.session.check(values)
         return SetParametersResult(successful=not reason, reason=reason)
 

@@ -24,7 +24,7 @@ from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.session.outputs import OutputSample, OutputTracker
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.reports import (
-    DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, diagnostic_report,
+    DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, StrapdownState, diagnostic_report,
     stale_command_count, state_summary)
 
 __all__ = ['LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session', 'WARNING_INTERVAL']
@@ -218,7 +218,12 @@ class Session(ABC):
             gyro_scene=isinstance(self.propagator, GyroPropagator))
         self._timing(counts)
         self.last_input_rate = counts.accepted / counts.elapsed
-        return diagnostic_report(self.propagator, counts, self.step_text(), self.time_s())
+        return diagnostic_report(self.propagator, counts, self.step_text(), self.time_s(),
+                                 self.strapdown_state())
+
+    def strapdown_state(self) -> StrapdownState | None:
+        """A strapdown session's alignment and bias for the reports (``None``: none)."""
+        return None
 
     def _timing(self, counts: PeriodCounts) -> None:
         """Dynamics: fill in the real-time factor and lag of the period."""
@@ -244,7 +249,7 @@ class Session(ABC):
 
     def summary(self) -> str:
         """The INFO line the node logs every few diagnostics periods."""
-        state = state_summary(self.propagator)
+        state = state_summary(self.propagator, self.strapdown_state())
         rejected = sum(self.rejection_counts().values())
         return (f't={self.time_s():.3f} s: {state}, accepted {self.accepted_count()} '
                 f'({self.last_input_rate:.1f} Hz), rejected {rejected}, missed '

@@ -43,17 +43,37 @@ def _help(parameter: Parameter) -> str:
     """The table's description, its unit moved to the end, with default and bounds."""
     text, unit = parameter.description, ''
     head, _, rest = text.partition(': ')
-    if parameter.type is float and rest and ' ' not in head:
+    if parameter.type in (float, tuple) and rest and ' ' not in head:
         text, unit = rest, f' [{head}]'
     default = repr(parameter.default) if parameter.type is str else str(parameter.default)
+    if parameter.type is tuple:
+        default = f'[{", ".join(map(str, parameter.default))}]'
     bounds = f', in {parameter.range_text()}' if parameter.range_text() else ''
     choices = f', one of {", ".join(parameter.choices)}' if parameter.choices else ''
     return f'{text}{unit} (default {default}{bounds}{choices})'.replace('%', '%%')
 
 
+def double_array(text: str) -> tuple[float, ...]:
+    """A double array option: numbers separated by commas, optionally in brackets
+    (``0,0,1.57`` or ``[0, 0, 1.57]``; ``[]`` or an empty string: none)."""
+    inner = text.strip()
+    if inner.startswith('[') and inner.endswith(']'):
+        inner = inner[1:-1]
+    if not inner.strip():
+        return ()
+    try:
+        return tuple(float(item) for item in inner.split(','))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected numbers separated by commas, got {text!r}'
+                                         ) from None
+
+
 def _add_node_parameters(group: Any) -> None:
     for parameter in NODE_PARAMETERS:
-        if parameter.type is bool:
+        if parameter.type is tuple:
+            group.add_argument(_option(parameter), type=double_array, default=None,
+                               dest=parameter.name, metavar='X,Y,Z', help=_help(parameter))
+        elif parameter.type is bool:
             group.add_argument(_option(parameter), action=argparse.BooleanOptionalAction,
                                default=None, help=_help(parameter))
         else:

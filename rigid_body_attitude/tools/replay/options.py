@@ -59,6 +59,14 @@ class ReplayOptions:
     torque_timeout: float = _DEFAULT['torque_timeout']
     integrator: str = _DEFAULT['integrator']
     step: float = _DEFAULT['step']
+    mount_rpy: tuple[float, ...] = _DEFAULT['mount_rpy']
+    world_axes: str = _DEFAULT['world_axes']
+    align_seconds: float = _DEFAULT['align_seconds']
+    align_timeout: float = _DEFAULT['align_timeout']
+    initial_yaw: float = _DEFAULT['initial_yaw']
+    refine_bias_at_rest: bool = _DEFAULT['refine_bias_at_rest']
+    calibration_file: str = _DEFAULT['calibration_file']
+    calibration_imu_key: str = _DEFAULT['calibration_imu_key']
     gyro_topic: str = ''
     torque_topic: str = TORQUE_TOPIC
     rotor_torque_topic: str = ROTOR_TORQUE_TOPIC
@@ -69,12 +77,15 @@ class ReplayOptions:
     storage: str = 'sqlite3'
 
     def parameters(self) -> dict[str, Any]:
-        """The node's parameters by name (an ``int`` given for a double becomes a float)."""
+        """The node's parameters by name (an ``int`` given for a double becomes a float, a
+        list for a double array a tuple)."""
         values = {}
         for parameter in NODE_PARAMETERS:
             value = getattr(self, parameter.name)
             if parameter.type is float and type(value) is int:  # Python callers write 50
                 value = float(value)
+            elif parameter.type is tuple and isinstance(value, list):
+                value = tuple(float(item) if type(item) is int else item for item in value)
             values[parameter.name] = value
         return values
 

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from rigid_body_attitude.bag import BagError, BagReader
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.msgs import (
     ATTITUDE_DECODERS, IMU, POSE_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED)
-from rigid_body_attitude.session.decoding import RATE_DECODERS, Decoded
+from rigid_body_attitude.session.decoding import RATE_DECODERS
 from rigid_body_attitude.session.settings import (
     GYRO_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC, input_topics,
     output_topics)
@@ -24,7 +25,7 @@ from rigid_body_attitude.tools.replay.options import ReplayOptions
 
 __all__ = ['Plan', 'make_plan']
 
-Decoder = Callable[[bytes], Decoded]
+Decoder = Callable[[bytes], tuple[Any, ...]]
 
 
 @dataclass(frozen=True)
