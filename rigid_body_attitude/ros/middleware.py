@@ -17,13 +17,9 @@ file's comment says why):
   participant's event thread, which wakes up for it. The profile sets 10 ms; the timer then
   fires at most 100 times a second.
 
-And, through rmw_fastrtps's own variable (:func:`use_asynchronous_publication`):
-
-* **Asynchronous publication.** rmw_fastrtps publishes synchronously by default: the gyro loop's
-  thread itself hands every output sample to the readers. With
-  ``RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS`` a Fast DDS thread sends while the loop decodes
-  and integrates the next message, so a backlog drains on two cores. The user's own choice of
-  the variable is kept.
+Nothing else: rmw_fastrtps publishes synchronously by default (the gyro loop's thread hands
+every output sample to the readers itself), and the node leaves
+``RMW_FASTRTPS_PUBLICATION_MODE`` to the user's environment (docs/tuning.md).
 
 The node leaves the threads' scheduling policy and CPU affinity as the process was started
 (``chrt``, ``taskset``); what these settings cost and buy is measured by
@@ -38,8 +34,7 @@ from pathlib import Path
 
 from rigid_body_attitude.core.paths import config_folders
 
-__all__ = ['FASTDDS_PROFILE_VARIABLES', 'PROFILE_SETTINGS', 'PUBLICATION_MODE_VARIABLE',
-           'packaged_fastdds_profile', 'use_asynchronous_publication',
+__all__ = ['FASTDDS_PROFILE_VARIABLES', 'PROFILE_SETTINGS', 'packaged_fastdds_profile',
            'use_packaged_fastdds_profile']
 
 #: What the packaged profile sets, for the start-up log.
@@ -50,9 +45,6 @@ FASTDDS_RMWS = ('', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp')
 
 #: Environment variables naming a Fast DDS XML profile file (Fast DDS 2.x and 3.x names).
 FASTDDS_PROFILE_VARIABLES = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE')
-
-#: rmw_fastrtps's variable for its writers' publication mode (its default: SYNCHRONOUS).
-PUBLICATION_MODE_VARIABLE = 'RMW_FASTRTPS_PUBLICATION_MODE'
 
 #: Files Fast DDS loads from the working directory when present.
 FASTDDS_WORKING_DIRECTORY_PROFILES = ('DEFAULT_FASTRTPS_PROFILES.xml',
@@ -97,24 +89,3 @@ def use_packaged_fastdds_profile(environ: MutableMapping[str, str] | None = None
     for variable in FASTDDS_PROFILE_VARIABLES:
         environ[variable] = str(profile)
     return f'Fast DDS profile {profile} ({PROFILE_SETTINGS})'
-
-
-def use_asynchronous_publication(environ: MutableMapping[str, str] | None = None) -> str:
-    """Ask rmw_fastrtps for asynchronous publication unless the user chose how to publish.
-
-    Sets :data:`PUBLICATION_MODE_VARIABLE` to ``ASYNCHRONOUS`` in ``environ`` (default
-    ``os.environ``) when the RMW is Fast DDS, the variable is not set and
-    ``RMW_FASTRTPS_USE_QOS_FROM_XML`` is not 1 (the user's XML then decides). Must run before
-    the first node of the process is created. Returns one line for the log.
-    """
-    environ = os.environ if environ is None else environ
-    rmw = environ.get('RMW_IMPLEMENTATION', '')
-    if rmw not in FASTDDS_RMWS:
-        return f'publication mode left alone: RMW_IMPLEMENTATION is {rmw!r}'
-    if environ.get(PUBLICATION_MODE_VARIABLE):
-        return (f'publication mode left alone: {PUBLICATION_MODE_VARIABLE} is '
-                f'{environ[PUBLICATION_MODE_VARIABLE]!r}')
-    if environ.get('RMW_FASTRTPS_USE_QOS_FROM_XML') == '1':
-        return 'publication mode left alone: RMW_FASTRTPS_USE_QOS_FROM_XML is 1'
-    environ[PUBLICATION_MODE_VARIABLE] = 'ASYNCHRONOUS'
-    return f'asynchronous publication ({PUBLICATION_MODE_VARIABLE}=ASYNCHRONOUS)'

@@ -16,7 +16,8 @@ same session, so a replayed bag gives the same numbers.
 * Dynamics scenes advance on a timer of the node clock (``use_sim_time`` works) at
   ``publish_rate``, served by the same gyro loop (timers only); commands arrive on
   ``torque`` (WrenchStamped) and ``rotor_torque`` (Vector3Stamped) when the scene takes them.
-* ``energy`` and ``angular_momentum`` at ``publish_rate``; ``/diagnostics`` once a second,
+* Dynamics scenes also publish ``twist``, ``energy`` and ``angular_momentum`` per tick (a gyro
+  scene simulates no body); ``/diagnostics`` once a second,
   with an INFO log line every 5 s; ``set_pose`` re-initialises the attitude (and position);
   ``~/reset`` restores the scene's initial state.
 * Commands (``set_pose``, ``torque``, ``rotor_torque``) are coalesced: only the newest of
@@ -248,11 +249,13 @@ class AttitudePropagatorNode(Node):
             for t in message.transforms)
 
     def _create_timers(self) -> None:
-        """The output timer (node clock) and the diagnostics timer (steady clock), in the
-        loop group, so :func:`~.serve.main`'s gyro loop serves them (an executor rebuilds its
-        wait set of every entity per tick: about 2.8 % of a core at 50 Hz)."""
-        self.output_timer = self.create_timer(1.0 / self.publish_rate, self.tick_callback,
-                                              self.loop_group)
+        """The output timer (node clock; dynamics scenes only) and the diagnostics timer
+        (steady clock), in the loop group, so :func:`~.serve.main`'s gyro loop serves them (an
+        executor rebuilds its wait set of every entity per tick: about 2.8 % of a core at
+        50 Hz)."""
+        self.output_timer = (self.create_timer(1.0 / self.publish_rate, self.tick_callback,
+                                               self.loop_group)
+                             if self.is_dynamics else None)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.diagnostics_timer = self.create_timer(
             DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group, clock=steady)
@@ -264,7 +267,8 @@ class AttitudePropagatorNode(Node):
         return GyroLoop(self.context, [
             (self.subscriptions_by_topic[topic], self.handlers[topic])
             for topic in ('imu', 'angular_velocity') if topic in self.subscriptions_by_topic],
-            [self.output_timer, self.diagnostics_timer])
+            [timer for timer in (self.output_timer, self.diagnostics_timer)
+             if timer is not None])
 
     # -- parameters -------------------------------------------------------------------------
 
@@ -308,13 +312,11 @@ class AttitudePropagatorNode(Node):
         return response
 
     def tick_callback(self) -> None:
-        """Dynamics: integrate up to the node clock and publish; gyro: energy and momentum."""
+        """The output timer of a dynamics scene: integrate up to the node clock, publish."""
         with self.state_lock:
             session = self.session
             if isinstance(session, DynamicsSession):
                 session.tick(self.clock_ns())
-            else:
-                session.tick()
 
     def diagnostics_callback(self) -> None:
         """Publish ``/diagnostics``; every :data:`LOG_EVERY_PERIODS` periods log a summary."""

@@ -1,8 +1,8 @@
 """The node's outputs: a session's :class:`~rigid_body_attitude.session.base.OutputSink` over
 rclpy publishers.
 
-Every per-sample and per-tick output (``orientation``, ``pose``, ``imu/data``, ``twist``,
-``energy``, ``angular_momentum``) is written as CDR bytes with the header packed once
+Every per-sample and per-tick output (``orientation``, ``pose``, ``imu/data``; dynamics scenes:
+``twist``, ``energy``, ``angular_momentum``) is written as CDR bytes with the header packed once
 (:mod:`rigid_body_attitude.msgs.cdr`, the replay tool's codecs) and only when a subscription is
 matched (:class:`RawOutput`); ``/diagnostics`` (once a second) is an ordinary message.
 ``imu/data`` is the input Imu with the orientation filled in (REP-145: orientation covariance
@@ -76,20 +76,21 @@ class RosOutputs:
         self.node = node
         self.orientation = self._publisher(QuaternionStamped, 'orientation')
         self.pose = self._publisher(PoseStamped, 'pose')
-        self.energy = self._publisher(Float64, 'energy')
-        self.momentum = self._publisher(Vector3Stamped, 'angular_momentum')
         self.diagnostics_publisher = node.create_publisher(
             DiagnosticArray, '/diagnostics', OUTPUT_QOS)
         self.orientation_raw = RawOutput(self.orientation)
         self.pose_raw = RawOutput(self.pose)
-        self.energy_raw = RawOutput(self.energy)
-        self.momentum_raw = RawOutput(self.momentum)
         if gyro_scene:
             self.imu = self._publisher(Imu, 'imu/data')
             self.imu_raw = RawOutput(self.imu)
         else:
             self.twist = self._publisher(TwistStamped, 'twist')
             self.twist_raw = RawOutput(self.twist)
+            # A simulated body's invariants (a gyro scene simulates none).
+            self.energy = self._publisher(Float64, 'energy')
+            self.momentum = self._publisher(Vector3Stamped, 'angular_momentum')
+            self.energy_raw = RawOutput(self.energy)
+            self.momentum_raw = RawOutput(self.momentum)
         #: Set by the session: outputs carry the inputs' stamps (else the receive time).
         self.use_header_stamps = True
         #: Frame of ``orientation``, ``pose`` and ``angular_momentum`` (:meth:`set_frames`).
@@ -164,14 +165,10 @@ class RosOutputs:
         if self.tf_raw is not None:
             self._publish_tf(sec, nanosec, sample.attitude)
 
-    def wants_invariants(self) -> bool:
-        """Whether ``energy`` or ``angular_momentum`` has a subscriber."""
-        return bool(self.energy_raw.subscription_count()
-                    or self.momentum_raw.subscription_count())
-
     def invariants(self, sec: int, nanosec: int, energy: float,
                    world_momentum: Vector) -> None:
-        """``energy`` and ``angular_momentum`` (stamped like the attitude)."""
+        """``energy`` and ``angular_momentum`` of a dynamics tick (stamped like the
+        attitude)."""
         if self.energy_raw.subscription_count():
             self.energy_raw.publish(encode_float64(energy))
         if self.momentum_raw.subscription_count():

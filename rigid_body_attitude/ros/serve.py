@@ -18,12 +18,12 @@ import threading
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import uninstall_signal_handlers
 
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
-from rigid_body_attitude.ros.middleware import (
-    use_asynchronous_publication, use_packaged_fastdds_profile)
+from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import RCLError
 
@@ -119,6 +119,11 @@ def spin(node: AttitudePropagatorNode) -> None:
         node.get_logger().info(SERVING_LINE)
         loop.run()
     finally:
+        # rclpy's signal thread triggers every SIGINT guard condition (the loop's, the
+        # executor's) some time after the signal; on a loaded machine it ran after they were
+        # destroyed here: a segfault in rcl_trigger_guard_condition (seen in a core dump).
+        # Uninstalling the handlers joins that thread first.
+        uninstall_signal_handlers()
         rest.stop()
         executor.shutdown()  # after the join: its thread no longer waits (rclpy issue #968)
         loop.close()
@@ -136,8 +141,7 @@ def main(args: list[str] | None = None) -> int:
     if wants_help((sys.argv if args is None else args)[1:]):
         print(usage_text(node_parameter_rows()))
         return 0
-    # Both before the participant exists.
-    middleware_notes = (use_packaged_fastdds_profile(), use_asynchronous_publication())
+    middleware_note = use_packaged_fastdds_profile()  # before the participant exists
     try:
         rclpy.init(args=args)
     except RuntimeError as err:  # rcl could not parse the ROS arguments
@@ -146,8 +150,7 @@ def main(args: list[str] | None = None) -> int:
     node = None
     try:
         node = AttitudePropagatorNode()
-        for note in middleware_notes:
-            node.get_logger().info(note)
+        node.get_logger().info(middleware_note)
         spin(node)
     except (AttitudeError, ParameterException, OSError) as err:
         print(f'error: {_error_text(err)}', file=sys.stderr)

@@ -58,12 +58,10 @@ class OutputSink(Protocol):
                  velocity_body: Vector) -> None:
         """A dynamics tick's state (attitude, position, rate, velocity in body axes)."""
 
-    def wants_invariants(self) -> bool:
-        """Whether energy and angular momentum are wanted (computed only then)."""
-
     def invariants(self, sec: int, nanosec: int, energy: float,
                    world_momentum: Vector) -> None:
-        """Kinetic energy [J] and world angular momentum [N m s] stamped like the attitude."""
+        """A dynamics tick's kinetic energy [J] and world angular momentum [N m s], stamped
+        like its attitude."""
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """One diagnostics report."""

@@ -5,9 +5,9 @@ Per sample (:meth:`GyroSession.gyro`): the stamp is checked (``nanosec`` in ``[0
 receive time (``use_header_stamps`` false); the sensor-frame sample is calibrated, rotated into
 the body frame and, at start, levelled (:mod:`~rigid_body_attitude.session.levelling`: nothing
 is integrated or published until then); the bias estimate is subtracted; the stream rules
-decide; when the state moved the attitude goes to the sink stamped with the time used. At each
-tick (:meth:`GyroSession.tick`) energy and angular momentum of the last attitude go to the
-sink, once per attitude published.
+decide; when the state moved the attitude goes to the sink stamped with the time used. A gyro
+scene simulates no body, so it has no output timer and hands no energy or angular momentum to
+the sink.
 
 Samples without accelerometer data (``angular_velocity`` input, or an Imu whose acceleration
 is all zeros) and ``align_seconds`` 0 start from the scene's attitude at once (said once, at
@@ -50,7 +50,6 @@ class GyroSession(ImuStart):
         self.propagator = GyroPropagator(scene)
         self.stream = GyroStream(self.propagator, values['max_dt'],
                                  values['time_jump_threshold'])
-        self._fresh_output = False
         self._output_sec = self._output_nanosec = 0
         self._start_imu(values)
         super().__init__(scene, values, sink, clock_ns, monotonic)
@@ -116,7 +115,6 @@ class GyroSession(ImuStart):
             return self._non_finite_result()
         self.sink.attitude(sec, nanosec, attitude, imu)
         self._output_sec, self._output_nanosec = sec, nanosec
-        self._fresh_output = True
         return True
 
     def _stepped(self, sec: int, nanosec: int, rate: Sequence[float],
@@ -149,7 +147,6 @@ class GyroSession(ImuStart):
             return self._non_finite_result()
         self.sink.attitude(sec, nanosec, attitude, imu)
         self._output_sec, self._output_nanosec = sec, nanosec
-        self._fresh_output = True
         return True
 
     @property
@@ -188,16 +185,6 @@ class GyroSession(ImuStart):
                    f'of scene {self.scene.name!r} (parameter `integrator`)')
         self.stream.reset()
         return False
-
-    def tick(self) -> None:
-        """The output timer: energy and angular momentum of the last attitude published."""
-        if not self._fresh_output:
-            return
-        self._fresh_output = False
-        if self.sink.wants_invariants():
-            x, y, z = self.propagator.world_momentum().tolist()
-            self.sink.invariants(self._output_sec, self._output_nanosec,
-                                 self.propagator.energy(), (x, y, z))
 
     def reset(self) -> None:
         """Back to the scene's initial attitude and level again (with levelling); the next

@@ -77,13 +77,12 @@ def input_topics(scene: Scene, input_names: frozenset[str]) -> dict[str, str]:
 
 def output_topics(scene: Scene, imu_input: bool = True) -> tuple[str, ...]:
     """Output topics of a scene, in the order they are listed; ``imu/data`` for gyro scenes
-    fed by ``sensor_msgs/Imu`` (``imu_input``), ``twist`` for dynamics scenes."""
+    fed by ``sensor_msgs/Imu`` (``imu_input``); ``twist``, ``energy`` and
+    ``angular_momentum`` for dynamics scenes (the only ones that simulate a body)."""
     if scene.rate_source == 'gyro':
-        rate_output = ('imu/data',) if imu_input else ()
-    else:
-        rate_output = ('twist',)
-    return ('orientation', 'pose', *rate_output, 'energy', 'angular_momentum',
-            DIAGNOSTICS_TOPIC)
+        return ('orientation', 'pose', *(('imu/data',) if imu_input else ()),
+                DIAGNOSTICS_TOPIC)
+    return ('orientation', 'pose', 'twist', 'energy', 'angular_momentum', DIAGNOSTICS_TOPIC)
 
 
 def timer_period_ns(publish_rate: float) -> int:

@@ -19,8 +19,10 @@ from test_node_subprocess import executable, read_until, SERVING, start, stop_wi
 
 from rigid_body_attitude.ros.middleware import (
     FASTDDS_PROFILE_VARIABLES, PROFILE_SETTINGS, packaged_fastdds_profile,
-    PUBLICATION_MODE_VARIABLE, use_asynchronous_publication, use_packaged_fastdds_profile)
+    use_packaged_fastdds_profile)
 
+#: rmw_fastrtps's variable for its writers' publication mode (its default: SYNCHRONOUS).
+PUBLICATION_MODE_VARIABLE = 'RMW_FASTRTPS_PUBLICATION_MODE'
 FASTDDS_NAMESPACE = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
 
 
@@ -152,38 +154,17 @@ def _sender_thread_ids(pid: int) -> list[int]:
                   if (task / 'comm').read_text().startswith('dds.asyn.'))
 
 
-@pytest.mark.parametrize('rmw', ['', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp'])
-def test_asynchronous_publication_is_asked_for_when_no_mode_is_chosen(rmw):
-    environ = {'RMW_IMPLEMENTATION': rmw} if rmw else {}
-    note = use_asynchronous_publication(environ)
-    assert environ[PUBLICATION_MODE_VARIABLE] == 'ASYNCHRONOUS'
-    assert note == 'asynchronous publication (RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS)'
-
-
-@pytest.mark.parametrize('environ, reason', [
-    ({'RMW_IMPLEMENTATION': 'rmw_cyclonedds_cpp'}, "RMW_IMPLEMENTATION is 'rmw_cyclonedds_cpp'"),
-    ({'RMW_FASTRTPS_PUBLICATION_MODE': 'SYNCHRONOUS'},
-     "RMW_FASTRTPS_PUBLICATION_MODE is 'SYNCHRONOUS'"),
-    ({'RMW_FASTRTPS_USE_QOS_FROM_XML': '1'}, 'RMW_FASTRTPS_USE_QOS_FROM_XML is 1'),
-])
-def test_a_users_publication_mode_is_never_overridden(environ, reason):
-    before = dict(environ)
-    note = use_asynchronous_publication(environ)
-    assert environ == before
-    assert note == f'publication mode left alone: {reason}'
-
-
 @pytest.mark.parametrize('mode, asynchronous_threads', [
-    ('', 2),  # the node's default: discovery's own and the writers' asynchronous thread
-    ('SYNCHRONOUS', 1),  # discovery's only
+    ('', 1),  # rmw_fastrtps's default, synchronous: discovery's own only
+    ('ASYNCHRONOUS', 2),  # the user's choice: plus the writers' asynchronous thread
 ])
-def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
+def test_the_installed_node_leaves_the_publication_mode_to_the_environment(
         processes, monkeypatch, mode, asynchronous_threads):
     """Fast DDS names its asynchronous sender threads ``dds.asyn.*``: the participant's
     discovery always has one; writers publishing asynchronously add one."""
     if mode:
         monkeypatch.setenv(PUBLICATION_MODE_VARIABLE, mode)
-    else:  # set by an in-process main() of another test
+    else:
         monkeypatch.delenv(PUBLICATION_MODE_VARIABLE, raising=False)
     process = start('--ros-args', '-p', 'scene:=strapdown')
     processes.append(process)
@@ -193,9 +174,7 @@ def test_the_installed_node_publishes_from_an_asynchronous_thread_by_default(
     stderr = ''.join(lines) + stderr
     assert code == 0, stderr
     assert len(senders) == asynchronous_threads, senders
-    expected = (f"publication mode left alone: {PUBLICATION_MODE_VARIABLE} is '{mode}'" if mode
-                else 'asynchronous publication (RMW_FASTRTPS_PUBLICATION_MODE=ASYNCHRONOUS)')
-    assert expected in stderr
+    assert 'publication' not in stderr
 
 
 def test_the_installed_node_keeps_the_policy_and_cpus_it_was_started_with(

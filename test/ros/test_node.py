@@ -177,10 +177,10 @@ def test_runtime_parameter_changes_are_checked_and_applied(ros, request):
 
 @pytest.mark.parametrize('scene, inputs, outputs', [
     ('strapdown', {'imu', 'angular_velocity', 'set_pose'}, {'imu/data'}),
-    ('torque_free_box', {'set_pose'}, {'twist'}),
-    ('commanded_torque', {'torque', 'set_pose'}, {'twist'}),
-    ('free_flyer', {'torque', 'set_pose'}, {'twist'}),
-    ('gyrostat', {'rotor_torque', 'set_pose'}, {'twist'}),
+    ('torque_free_box', {'set_pose'}, {'twist', 'energy', 'angular_momentum'}),
+    ('commanded_torque', {'torque', 'set_pose'}, {'twist', 'energy', 'angular_momentum'}),
+    ('free_flyer', {'torque', 'set_pose'}, {'twist', 'energy', 'angular_momentum'}),
+    ('gyrostat', {'rotor_torque', 'set_pose'}, {'twist', 'energy', 'angular_momentum'}),
 ])
 def test_subscriptions_exist_only_for_the_inputs_the_scene_uses(ros, request, scene, inputs,
                                                                 outputs):
@@ -191,8 +191,7 @@ def test_subscriptions_exist_only_for_the_inputs_the_scene_uses(ros, request, sc
     published = {name.removeprefix(namespace + '/')
                  for name, _ in node.get_publisher_names_and_types_by_node(
                      node.get_name(), namespace)}
-    common = {'orientation', 'pose', 'energy', 'angular_momentum', '/diagnostics',
-              '/rosout', '/parameter_events'}
+    common = {'orientation', 'pose', '/diagnostics', '/rosout', '/parameter_events'}
     assert published == common | outputs
     node.destroy_node()
 
@@ -265,7 +264,6 @@ def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request
     orientations = harness.record(QuaternionStamped, 'orientation')
     poses = harness.record(PoseStamped, 'pose')
     imu_outputs = harness.record(Imu, 'imu/data')
-    energies = harness.record(Float64, 'energy')
     diagnostics = harness.record(DiagnosticArray, '/diagnostics')
     harness.wait_for_connections()
     loop = node.gyro_loop()
@@ -284,8 +282,10 @@ def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request
         assert np.array_equal(scalar_first(poses), scalar_first(orientations))
         assert [nanoseconds(m.header.stamp) for m in imu_outputs] == stamps_ns
         assert loop.handled == count
-        # Timers run in the loop: energy at publish_rate after new samples, diagnostics.
-        assert harness.spin_until(lambda: len(energies) >= 1 and any(
+        # The diagnostics timer runs in the loop (a gyro scene has no output timer).
+        assert node.output_timer is None and loop.timers == [
+            (node.diagnostics_timer.handle, node.diagnostics_callback)]
+        assert harness.spin_until(lambda: any(
             status_values(m)['accepted'] == str(count) for m in own_statuses(diagnostics,
                                                                              node)), 5.0)
         # set_pose goes through the executor, the next gyro sample through the loop.

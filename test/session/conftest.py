@@ -35,9 +35,6 @@ class RecordingSink:
     def dynamics(self, sec, nanosec, sample, velocity_body):
         self.ticks.append((sec, nanosec, sample, velocity_body))
 
-    def wants_invariants(self):
-        return True
-
     def invariants(self, sec, nanosec, energy, world_momentum):
         self.invariant_samples.append((sec, nanosec, energy, world_momentum))
 

@@ -70,18 +70,17 @@ def test_main_writes_the_node_outputs_and_a_summary(tmp_path, capsys, storage):
     with BagReader(out) as reader:
         topics, counts = reader.topics, reader.message_counts
     assert topics == {name: OUTPUT_TOPICS[name] for name in
-                      ('orientation', 'pose', 'imu/data', 'energy', 'angular_momentum',
-                       '/diagnostics')}
+                      ('orientation', 'pose', 'imu/data', '/diagnostics')}
     assert counts['orientation'] == counts['pose'] == counts['imu/data'] == 200
-    # Energy and momentum at 50 Hz ticks over 0.2 s of bag time: 10 ticks with fresh outputs
-    # (10.02 ... 10.18 inside the bag, plus the tick after the last sample).
-    assert counts['energy'] == counts['angular_momentum'] == 10
+    # A gyro scene simulates no body: no energy or angular momentum; diagnostics once, at the
+    # second after the first sample (the bag spans 0.2 s).
+    assert counts['/diagnostics'] == 1
     series = read_series(out, 'orientation')
     assert series.stamps == pytest.approx(10.0 + np.arange(200) / RATE, abs=1e-9)
     expected = quaternion.exp(np.multiply.outer(np.arange(200) / RATE, OMEGA))
     assert np.max(np.abs(series.values - expected)) < 1e-13
     for expected_text in ('read: imu 200', 'used: 200; rejected: none',
-                          'written: orientation 200, pose 200, imu/data 200, energy 10',
+                          'written: orientation 200, pose 200, imu/data 200, /diagnostics 1',
                           'final attitude (w, x, y, z) at stamp 10.199000000 s',
                           'final state: rotation ', 'gyro messages in'):
         assert expected_text in text
@@ -223,8 +222,8 @@ def test_ground_truth_statistics_csv_and_plot(tmp_path, capsys):
     assert len(rows) == 200 and rows[0]['stamp_s'] == '10.000000000'
     assert float(rows[-1]['qw']) == pytest.approx(
         quaternion.exp(OMEGA * 0.199)[0], abs=1e-12)
-    # Energy at each tick with a fresh output, stamped like that output (the last one too).
-    assert sum(1 for row in rows if row['energy_J']) == 10
+    # A gyro scene simulates no body: no energy or momentum columns.
+    assert list(rows[0]) == ['stamp_s', 'qw', 'qx', 'qy', 'qz', 'px', 'py', 'pz']
     with open(tmp_path / 'values_error.csv', encoding='utf-8') as stream:
         errors = [float(row['attitude_error_rad']) for row in csv.DictReader(stream)]
     assert len(errors) == 200 and max(errors) < 1e-13

@@ -95,8 +95,9 @@ def parser() -> argparse.ArgumentParser:
     result = argparse.ArgumentParser(
         prog='replay',
         description='Replay a rosbag2 bag (sqlite3 or mcap) through the propagation node\'s '
-                    'session and write its outputs (orientation, pose, energy, '
-                    'angular_momentum, /diagnostics, twist or imu/data) to a new bag.')
+                    'session and write its outputs (orientation, pose, imu/data, '
+                    '/diagnostics; dynamics scenes: twist, energy, angular_momentum) to a '
+                    'new bag.')
     result.add_argument('bag', help='input bag (directory with metadata.yaml, or a .db3/.mcap '
                                     'file), or many: a folder of bags or a glob pattern')
     result.add_argument('-o', '--output', help='output bag directory (must not exist; '
@@ -125,7 +126,7 @@ def parser() -> argparse.ArgumentParser:
                         help='set the attitude from the ground truth at the first output at '
                              'or after this header stamp [s]')
     report.add_argument('--plot', metavar='PNG',
-                        help='error and energy plot (default with --ground-truth: '
+                        help='error (and dynamics: energy) plot (default with --ground-truth: '
                              'OUTPUT_error.png)')
     report.add_argument('--csv', metavar='FILE',
                         help='outputs as CSV (and FILE_error.csv with --ground-truth)')

@@ -3,13 +3,12 @@
 As the node runs with ``use_sim_time`` when a player publishes ``/clock`` with the bag times
 (bag time = the recorder's receive time):
 
-* **ticks** of the output timer at the multiples ``k P`` (``k ≥ 1``) of its period
-  ``P = timer_period_ns(publish_rate)`` within the bag's time span, each before the messages
-  recorded at the same instant (the player publishes ``/clock = T`` first): the session's
-  ``tick`` (dynamics: integrate to ``T`` and publish; gyro: energy and momentum of the last
-  attitude, once more at the first tick after the last message);
+* **ticks** of the output timer (dynamics scenes; a gyro scene has none) at the multiples
+  ``k P`` (``k ≥ 1``) of its period ``P = timer_period_ns(publish_rate)`` within the bag's time
+  span, each before the messages recorded at the same instant (the player publishes
+  ``/clock = T`` first): the session integrates to ``T`` and publishes;
 * **diagnostics** every second of bag time from the first message, and once more at the next
-  second (or tick) after the end;
+  second (dynamics: or tick, if later) after the end;
 * **messages**: handed to the node's own input handlers
   (:func:`rigid_body_attitude.session.decoding.input_handler`): decoded and given to the
   session; one that cannot be decoded goes to ``session.malformed`` and one that raises inside
@@ -44,6 +43,8 @@ PROGRESS_CHUNK = 4096
 #: Output records buffered at most before they are written (about 3 MB of messages).
 FLUSH_RECORDS = 4 * PROGRESS_CHUNK
 _DIAGNOSTICS_NS = seconds_to_ns(DIAGNOSTICS_PERIOD)
+#: The next tick of a scene without an output timer (gyro scenes): never.
+_NEVER_NS = 2**63 - 1
 
 
 class Progress(Protocol):
@@ -67,7 +68,8 @@ class EventLoop:
         self.sink = sink
         self.plan = plan
         self.period_ns = period_ns
-        self.next_tick_ns = max(-(-first_ns // period_ns), 1) * period_ns
+        self.next_tick_ns = (max(-(-first_ns // period_ns), 1) * period_ns
+                             if isinstance(session, DynamicsSession) else _NEVER_NS)
         self.next_diagnostics_ns = first_ns + _DIAGNOSTICS_NS
         #: Messages read per bag topic (the gyro topic's added at the end of the gyro loop).
         self.read: Counter[str] = Counter()
@@ -109,8 +111,6 @@ class EventLoop:
         session = self.session
         if isinstance(session, DynamicsSession):
             session.tick(now_ns)
-        else:
-            session.tick()
         self.ticks += 1
         if len(self.sink.records) >= FLUSH_RECORDS:
             self.sink.flush()
@@ -121,12 +121,12 @@ class EventLoop:
         self.session.publish_diagnostics()
 
     def finish(self) -> None:
-        """After the last message: the gyro scene's pending energy and momentum at the next
-        tick, and the diagnostics at the next second (or that tick, if later)."""
+        """After the last message: the diagnostics at the next second (dynamics: or the
+        next tick, if later)."""
         if isinstance(self.session, GyroSession):
-            self.sink.now_ns = self.next_tick_ns
-            self.session.tick()
-        self.diagnostics(max(self.next_diagnostics_ns, self.next_tick_ns))
+            self.diagnostics(self.next_diagnostics_ns)
+        else:
+            self.diagnostics(max(self.next_diagnostics_ns, self.next_tick_ns))
 
     # -- messages ---------------------------------------------------------------------------
 

@@ -74,20 +74,23 @@ def _stamp_text(stamp_ns: int) -> str:
 
 
 def write_csv(result: ReplayResult, path: Path) -> None:
-    """One row per attitude output; energy and momentum where published at that stamp."""
+    """One row per attitude output; a dynamics scene's rows also have the energy and momentum
+    published at that stamp (a gyro scene simulates no body: no such columns)."""
     stamps, attitudes, positions = result.series.attitude_array()
+    body = result.scene.rate_source == 'dynamics'
     invariant_stamps, energies, momenta = result.series.invariant_array()
     invariants = {int(s): (e, m) for s, e, m in zip(invariant_stamps.tolist(),
                                                     energies.tolist(), momenta.tolist())}
     with open(path, 'w', newline='', encoding='utf-8') as stream:
         out = csv.writer(stream)
-        out.writerow(['stamp_s', 'qw', 'qx', 'qy', 'qz', 'px', 'py', 'pz', 'energy_J',
-                      'Hx', 'Hy', 'Hz'])
+        out.writerow(['stamp_s', 'qw', 'qx', 'qy', 'qz', 'px', 'py', 'pz']
+                     + (['energy_J', 'Hx', 'Hy', 'Hz'] if body else []))
         for stamp, q, p in zip(stamps.tolist(), attitudes.tolist(), positions.tolist()):
             published = invariants.get(stamp)
             extra = ([repr(published[0]), *map(repr, published[1])] if published is not None
                      else ['', '', '', ''])
-            out.writerow([_stamp_text(stamp), *map(repr, q), *map(repr, p), *extra])
+            out.writerow([_stamp_text(stamp), *map(repr, q), *map(repr, p),
+                          *(extra if body else [])])
 
 
 def write_error_csv(errors: ErrorStatistics, path: Path) -> None:
@@ -100,7 +103,7 @@ def write_error_csv(errors: ErrorStatistics, path: Path) -> None:
 
 
 def write_plot(result: ReplayResult, path: Path) -> None:
-    """PNG: attitude error [deg] and energy [J] against time [s]."""
+    """PNG: attitude error [deg] and (dynamics scenes) kinetic energy [J] against time [s]."""
     import matplotlib
     matplotlib.use('Agg')
     from matplotlib import pyplot
@@ -108,7 +111,10 @@ def write_plot(result: ReplayResult, path: Path) -> None:
     errors = result.errors if result.errors is not None and result.errors.count else None
     origin = int(errors.stamps_ns[0] if errors is not None
                  else (invariant_stamps[0] if invariant_stamps.size else 0))
-    figure, (error_axes, energy_axes) = pyplot.subplots(2, 1, sharex=True, figsize=(9, 6))
+    body = result.scene.rate_source == 'dynamics'
+    figure, axes = pyplot.subplots(2 if body else 1, 1, sharex=True,
+                                   figsize=(9, 6 if body else 3.5), squeeze=False)
+    error_axes = axes[0][0]
     if errors is not None:
         error_axes.plot((errors.stamps_ns - origin) * 1e-9, np.degrees(errors.errors),
                         linewidth=0.8)
@@ -116,10 +122,12 @@ def write_plot(result: ReplayResult, path: Path) -> None:
     error_axes.set_title(f'{result.input_path.name}: scene {result.scene.name}, '
                          f'{result.scene.integrator}')
     error_axes.grid(True, alpha=0.3)
-    energy_axes.plot((invariant_stamps - origin) * 1e-9, energies, linewidth=0.8)
-    energy_axes.set_ylabel('kinetic energy [J]')
-    energy_axes.set_xlabel(f'time since stamp {origin * 1e-9:.3f} s [s]')
-    energy_axes.grid(True, alpha=0.3)
+    if body:
+        energy_axes = axes[1][0]
+        energy_axes.plot((invariant_stamps - origin) * 1e-9, energies, linewidth=0.8)
+        energy_axes.set_ylabel('kinetic energy [J]')
+        energy_axes.grid(True, alpha=0.3)
+    axes[-1][0].set_xlabel(f'time since stamp {origin * 1e-9:.3f} s [s]')
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     pyplot.close(figure)

@@ -57,7 +57,7 @@ class OutputSeries:
     """The published values kept in memory (for statistics, CSV and plots).
 
     ``attitude_*``: one row per ``orientation`` output; ``invariant_*``: one row per
-    ``energy``/``angular_momentum`` output. Stamps are integer nanoseconds.
+    ``energy``/``angular_momentum`` output (dynamics scenes). Stamps are integer nanoseconds.
     """
 
     attitude_stamps_ns: array.array[int] = field(default_factory=_int64)
@@ -108,7 +108,6 @@ class BagSink:
         self._orientation = self.ids.get('orientation')
         self._pose = self.ids.get('pose')
         self._imu = self.ids.get('imu/data')
-        self._invariants = bool({'energy', 'angular_momentum'} & set(outputs)) or keep_series
         self.set_frames('world', 'base_link')
 
     def set_frames(self, world_frame: str, body_frame: str) -> None:
@@ -195,13 +194,10 @@ class BagSink:
             self.series.attitudes.extend(sample.attitude)
             self.series.positions.extend(sample.position)
 
-    def wants_invariants(self) -> bool:
-        """Whether ``energy`` or ``angular_momentum`` is written, or the series kept."""
-        return self._invariants
-
     def invariants(self, sec: int, nanosec: int, energy: float,
                    world_momentum: Vector) -> None:
-        """``energy`` (Float64) and ``angular_momentum`` (stamped like the attitude)."""
+        """``energy`` (Float64) and ``angular_momentum`` of a dynamics tick (stamped like the
+        attitude)."""
         stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
         self._write('energy', encode_float64(energy))
         self._write('angular_momentum', encode_vector3_stamped(stamp_ns, self.world_frame,
