@@ -17,8 +17,9 @@ from typing import Any
 from rigid_body_attitude.core.propagator import GyroPropagator
 from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.session.base import OutputSink, Session
-from rigid_body_attitude.session.reports import LEVEL_WARN
+from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.stream import GyroStream, INTEGRATED, Outcome
+from rigid_body_attitude.session.uncertainty import Uncertainty
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns, stamp_problem
 
 __all__ = ['GyroSession']
@@ -49,7 +50,15 @@ class GyroSession(Session):
                                  values['time_jump_threshold'])
         self._fresh_output = False
         self._output_sec = self._output_nanosec = 0
+        #: Called once each time levelling completes, with its result.
+        self.on_aligned: Callable[[Any], None] | None = None
+        #: The attitude covariance (parameter ``covariance``), or None.
+        self.uncertainty: Uncertainty | None = None
         super().__init__(scene, values, sink, clock_ns, monotonic)
+        if values['covariance']:
+            self.uncertainty = Uncertainty(values)
+            self.on_aligned = self._aligned
+            sink.attitude_covariance(self.uncertainty.published)
 
     def apply(self, values: Mapping[str, Any]) -> None:
         """Take the run-time parameters."""
@@ -60,6 +69,9 @@ class GyroSession(Session):
         stream.constant_dt = values['constant_dt']
         stream.max_angular_rate = values['max_angular_rate']
         stream.count_missed = values['use_header_stamps']
+        uncertainty = getattr(self, 'uncertainty', None)
+        if uncertainty is not None:
+            uncertainty.apply(values)
 
     def gyro(self, sec: int, nanosec: int, rate: Sequence[float],
              imu: bytes | None = None) -> bool:
@@ -75,10 +87,16 @@ class GyroSession(Session):
             return self._bad_stamp(sec, nanosec)
         stream = self.stream
         outliers = stream.outliers if stream.pending else -1  # a jump waits: watch for them
+        if self.uncertainty is not None:
+            state = self.propagator.state
+            time_before, q_before = state.time, state.attitude_tuple()
         outcome = stream.add(sec * NANOSECONDS_PER_SECOND + nanosec, rate)
         if outliers >= 0 and stream.outliers != outliers:
             self.warn('outlier_stamp', f'gyro: {_DETAIL["outlier_stamp"]} (parameter `max_dt`)')
-        if outcome is not INTEGRATED:  # the common case needs no further look
+        if outcome is INTEGRATED:
+            if self.uncertainty is not None:
+                self._after_step(q_before, state.omega_tuple(), state.time - time_before)
+        else:  # the common case needs no further look
             if outcome.reason:
                 self._rejected(outcome)
             if not outcome.moved:
@@ -90,6 +108,44 @@ class GyroSession(Session):
         self._output_sec, self._output_nanosec = sec, nanosec
         self._fresh_output = True
         return True
+
+    def _after_step(self, q_before: tuple[float, float, float, float],
+                    rate_body: tuple[float, float, float], dt: float) -> None:
+        """One integrated step: attitude at its start, the corrected body rate of the sample
+        that ends it [rad/s] (held over the step), its length [s]; grows the covariance."""
+        uncertainty = self.uncertainty
+        if uncertainty is not None and uncertainty.step(q_before, rate_body, dt):
+            self.sink.attitude_covariance(uncertainty.published)
+
+    def _aligned(self, result: Any) -> None:
+        """Levelling completed: the covariance starts from its uncertainty."""
+        if self.uncertainty is not None:
+            self.uncertainty.aligned(result)
+            self.sink.attitude_covariance(self.uncertainty.published)
+
+    def _restart_uncertainty(self) -> None:
+        """Back to the unlevelled prior (reset, a backward time jump)."""
+        if self.uncertainty is not None:
+            self.uncertainty.start(None)
+            self.sink.attitude_covariance(self.uncertainty.published)
+
+    def _pose_set(self, orientation_covariance: tuple[float, ...] | None) -> None:
+        """``set_pose``: the message's orientation covariance, or ``set_pose_stddev``."""
+        if self.uncertainty is not None:
+            self.uncertainty.set_pose(orientation_covariance)
+            self.sink.attitude_covariance(self.uncertainty.published)
+
+    def report(self) -> DiagnosticReport:
+        """The diagnostics report, with the 1σ tilt and yaw (WARN past ``tilt_stddev_warn``)."""
+        report = super().report()
+        if self.uncertainty is None:
+            return report
+        problem, values = self.uncertainty.diagnostic()
+        level, message = report.level, report.message
+        if problem:
+            level = max(level, LEVEL_WARN)
+            message = problem if message == 'propagating' else f'{message}; {problem}'
+        return DiagnosticReport(level, message, report.values + tuple(values))
 
     @property
     def output_stamp(self) -> tuple[int, int]:
@@ -111,6 +167,7 @@ class GyroSession(Session):
     def _rejected(self, outcome: Outcome) -> None:
         reason = outcome.reason
         if outcome.reset:  # once per jump, never throttled
+            self._restart_uncertainty()
             self.sink.log(LEVEL_WARN, f'gyro: stamps jumped back by more than '
                                       f'time_jump_threshold ({self.stream.time_jump_threshold:g}'
                                       f' s; looping bag?), confirmed by the next samples; reset '
@@ -126,6 +183,7 @@ class GyroSession(Session):
         self.error(f'gyro: integration gave a non-finite attitude; reset to the initial state '
                    f'of scene {self.scene.name!r} (parameter `integrator`)')
         self.stream.reset()
+        self._restart_uncertainty()
         return False
 
     def tick(self) -> None:
@@ -141,6 +199,7 @@ class GyroSession(Session):
     def reset(self) -> None:
         """Back to the initial attitude; the next sample is a new baseline."""
         self.stream.reset()
+        self._restart_uncertainty()
 
     def accepted_count(self) -> int:
         """Gyro samples and poses used so far."""
