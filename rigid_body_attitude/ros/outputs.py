@@ -92,13 +92,13 @@ class RosOutputs:
                 self.pose_with_covariance = self._publisher(PoseWithCovarianceStamped,
                                                             'pose_with_covariance')
                 self.pose_covariance_raw = RawOutput(self.pose_with_covariance)
+        else:
+            self.twist = self._publisher(TwistStamped, 'twist')
+            self.twist_raw = RawOutput(self.twist)
         #: Row-major 3×3 ``imu/data`` orientation covariance and 6×6 ``pose_with_covariance``
         #: covariance (:meth:`attitude_covariance`).
         self.orientation_covariance: tuple[float, ...] = _UNKNOWN
         self.pose_covariance = pose_covariance(_UNKNOWN)
-        else:
-            self.twist = self._publisher(TwistStamped, 'twist')
-            self.twist_raw = RawOutput(self.twist)
         #: Set by the session: outputs carry the inputs' stamps (else the receive time).
         self.use_header_stamps = True
         #: Frame of ``orientation``, ``pose`` and ``angular_momentum`` (:meth:`set_frames`).

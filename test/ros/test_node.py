@@ -231,7 +231,11 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
     assert (last.orientation.w, last.orientation.x, last.orientation.y,
             last.orientation.z) == tuple(published[-1])
     assert (last.angular_velocity.x, last.angular_velocity.y, last.angular_velocity.z) == OMEGA
-    assert not np.any(last.orientation_covariance)  # all zeros: covariance unknown
+    # The attitude covariance about world axes (REP-145), as the session holds it after the
+    # last fold (1000 steps: 15 folds of 64, 40 steps pending).
+    assert tuple(last.orientation_covariance) == node.session.uncertainty.published
+    covariance = np.reshape(last.orientation_covariance, (3, 3))
+    assert np.array_equal(covariance, covariance.T) and np.linalg.eigvalsh(covariance)[0] > 0.0
     assert node.session.stream.accepted == count and not node.session.stream.rejected
 
 
@@ -416,7 +420,7 @@ def test_a_gyro_scene_reports_what_a_strapdown_user_needs_and_no_energy(ros, req
         'scene', 'rate_source', 'integrator', 'step [s]', 'time [s]',
         'rotation_from_initial [deg]', 'gyro_bias [rad/s]', 'alignment',
         'quaternion_norm_error', 'input_rate [Hz]', 'received_rate [Hz]', 'received',
-        'accepted', 'missed_samples']
+        'accepted', 'missed_samples', 'tilt_stddev [deg]', 'yaw_stddev [deg]']
     assert float(values['rotation_from_initial [deg]']) == pytest.approx(0.9, abs=1e-9)
     assert values['gyro_bias [rad/s]'] == 'none'
     assert values['alignment'].startswith('not aligned: no accelerometer levelling')
