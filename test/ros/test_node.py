@@ -461,7 +461,7 @@ def test_the_published_covariance_is_about_fixed_world_axes_on_a_rotating_body(r
     for k in range(count):
         harness.publishers['imu'].publish(imu_message(BASE_NS + k * MS, rate))
     assert harness.spin_until(lambda: min(len(imu_outputs), len(poses)) >= count, 30.0)
-    assert quaternion.attitude_error(scalar_first([poses[-1].pose]) [0],
+    assert quaternion.attitude_error(scalar_first([poses[-1].pose])[0],
                                      quaternion.exp(np.array([0.0, 0.0, math.pi / 2]))) < 1e-9
     published = np.reshape(imu_outputs[-1].orientation_covariance, (3, 3))
     assert published[0, 0] == pytest.approx(1e-2, rel=1e-9)
