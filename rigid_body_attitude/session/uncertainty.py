@@ -9,9 +9,8 @@ unlevelled prior (tilt and yaw 1σ ``initial_yaw_stddev``, bias 1σ ``gyroscope_
 or ``set_pose_stddev`` on each axis).
 
 Published values (REP-145: about fixed **world** axes, rad²): :attr:`Uncertainty.published` is
-the row-major 3×3 attitude covariance at the last fold (every
-:data:`~rigid_body_attitude.core.attitude_covariance.DEFAULT_BATCH_SIZE` samples, so a read is
-free per sample); :func:`pose_covariance` the 6×6 of ``pose_with_covariance`` with the position
+the row-major 3×3 attitude covariance at the last fold (every :data:`BATCH_SIZE` samples,
+so a read is free per sample); :func:`pose_covariance` the 6×6 of ``pose_with_covariance`` with the position
 block marked unknown (:data:`UNKNOWN_POSITION_VARIANCE` on its diagonal).
 
 Noise from a kalibr calibration file overrides the parameters: :func:`error_model_from`.
@@ -25,11 +24,11 @@ from typing import Any
 
 import numpy as np
 
-from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance, DEFAULT_BATCH_SIZE
+from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.gyro_error_model import GyroErrorModel
 
-__all__ = ['MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE', 'Uncertainty', 'error_model_from',
+__all__ = ['BATCH_SIZE', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE', 'Uncertainty', 'error_model_from',
            'orientation_block', 'pose_covariance']
 
 #: Variance [m²] on the diagonal of the position block of ``pose_with_covariance``: the
@@ -37,6 +36,10 @@ __all__ = ['MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE', 'Uncertainty', 'erro
 #: (fuse refuses anything else) and a filter that fuses it anyway gives it no weight; a
 #: robot_localization user excludes the position with ``pose0_config``.
 UNKNOWN_POSITION_VARIANCE = 1e9
+#: Integrated steps gathered before a fold (the transition is exact for any batch): 256 costs
+#: about a sixth of 64 per sample (docs/performance.md); the published covariance is at most
+#: 255 samples old.
+BATCH_SIZE = 256
 #: Node parameters that are fields of :class:`GyroErrorModel` (same names).
 MODEL_PARAMETERS = ('gyroscope_noise_density', 'gyroscope_random_walk',
                     'gyroscope_turn_on_bias', 'gyroscope_scale_stddev',
@@ -118,7 +121,8 @@ class Uncertainty:
 
     def start(self, window_seconds: float | None) -> None:
         """A new covariance: levelled over ``window_seconds`` of rest, or unlevelled (None)."""
-        self.covariance = AttitudeCovariance(self.model, window_seconds=window_seconds)
+        self.covariance = AttitudeCovariance(self.model, window_seconds=window_seconds,
+                                             batch_size=BATCH_SIZE)
         self._pending = 0
         self._publish()
 
@@ -135,7 +139,7 @@ class Uncertainty:
         returns whether :attr:`published` changed (a fold)."""
         self.covariance.add_sample(q_before, rate_body, dt)
         self._pending += 1
-        if self._pending < DEFAULT_BATCH_SIZE:
+        if self._pending < BATCH_SIZE:
             return False
         self._pending = 0
         self._publish()

@@ -31,6 +31,7 @@ from rigid_body_attitude.msgs.decoders import decode_pose_stamped
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import InputError, IntegratorError, SceneError
 from rigid_body_attitude.session.reports import body_frame_velocity
+from rigid_body_attitude.session.uncertainty import BATCH_SIZE
 from rigid_body_attitude.session.times import TimeBase
 from rigid_body_attitude.ros.node import AttitudePropagatorNode, LOG_EVERY_PERIODS
 from rigid_body_attitude.ros.serve import main
@@ -232,7 +233,7 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
             last.orientation.z) == tuple(published[-1])
     assert (last.angular_velocity.x, last.angular_velocity.y, last.angular_velocity.z) == OMEGA
     # The attitude covariance about world axes (REP-145), as the session holds it after the
-    # last fold (1000 steps: 15 folds of 64, 40 steps pending).
+    # last fold (1000 steps: 3 folds of 256, 232 steps pending).
     assert tuple(last.orientation_covariance) == node.session.uncertainty.published
     covariance = np.reshape(last.orientation_covariance, (3, 3))
     assert np.array_equal(covariance, covariance.T) and np.linalg.eigvalsh(covariance)[0] > 0.0
@@ -456,7 +457,7 @@ def test_the_published_covariance_is_about_fixed_world_axes_on_a_rotating_body(r
     covariance[3:, 3:] = np.diag([1e-2, 1e-6, 1e-6])  # about world x (east)
     start.pose.covariance = covariance.reshape(36).tolist()
     publish_and_wait(harness, node, 'set_pose_with_covariance', start)
-    count = 1 + 4 * 64  # whole batches: the last output carries every step
+    count = 1 + 2 * BATCH_SIZE  # whole batches: the last output carries every step
     rate = (0.0, 0.0, math.pi / 2 / ((count - 1) * 1e-3))
     for k in range(count):
         harness.publishers['imu'].publish(imu_message(BASE_NS + k * MS, rate))

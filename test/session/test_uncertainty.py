@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 from conftest import BASE_NS, MS
 
-from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance, DEFAULT_BATCH_SIZE
+from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.gyro_error_model import GyroErrorModel, initial_covariance
 from rigid_body_attitude.session.parameters import defaults
 from rigid_body_attitude.session.reports import LEVEL_WARN
 from rigid_body_attitude.session.uncertainty import (
-    UNKNOWN_POSITION_VARIANCE, error_model_from, orientation_block, pose_covariance)
+    BATCH_SIZE, UNKNOWN_POSITION_VARIANCE, error_model_from, orientation_block, pose_covariance)
 
 OMEGA = (0.3, -0.2, 1.0)
 
@@ -47,20 +47,21 @@ def test_the_sink_gets_the_unlevelled_prior_then_one_covariance_per_fold(open_sc
     model = GyroErrorModel()
     prior = initial_covariance(model, None)[:3, :3]
     assert sink.covariances == [tuple(prior.reshape(9).tolist())]
-    feed(session, 1 + 3 * DEFAULT_BATCH_SIZE)  # a baseline, then 3 batches of steps
+    feed(session, 1 + 3 * BATCH_SIZE)  # a baseline, then 3 batches of steps
     assert len(sink.covariances) == 4
     state = session.propagator.state
     grown = np.reshape(sink.covariances[-1], (3, 3))
     assert np.all(np.diag(grown) > np.diag(prior)) and is_spd(sink.covariances[-1], 3)
-    assert state.time == pytest.approx(3 * DEFAULT_BATCH_SIZE * 1e-3)
+    assert state.time == pytest.approx(3 * BATCH_SIZE * 1e-3)
 
 
 def test_the_session_feeds_the_core_exactly_its_steps(open_scene):
     session, sink = open_scene('strapdown', integrator='exp_map')
-    reference = AttitudeCovariance(GyroErrorModel(), window_seconds=None)
+    reference = AttitudeCovariance(GyroErrorModel(), window_seconds=None,
+                                   batch_size=BATCH_SIZE)
     state = session.propagator.state
     session.gyro(*divmod(BASE_NS, 10**9), OMEGA)
-    for k in range(1, 2 * DEFAULT_BATCH_SIZE + 1):
+    for k in range(1, 2 * BATCH_SIZE + 1):
         q_before, time_before = state.attitude_tuple(), state.time
         session.gyro(*divmod(BASE_NS + k * MS, 10**9), OMEGA)
         assert state.time - time_before == pytest.approx(1e-3, abs=1e-12)
@@ -71,12 +72,12 @@ def test_the_session_feeds_the_core_exactly_its_steps(open_scene):
 
 def test_reset_and_a_backward_jump_start_the_covariance_again(open_scene):
     session, sink = open_scene('strapdown')
-    feed(session, 2 * DEFAULT_BATCH_SIZE + 1)
+    feed(session, 2 * BATCH_SIZE + 1)
     start = sink.covariances[0]
     assert sink.covariances[-1] != start
     session.reset()
     assert sink.covariances[-1] == start
-    feed(session, 2 * DEFAULT_BATCH_SIZE + 1)
+    feed(session, 2 * BATCH_SIZE + 1)
     feed(session, 5, start_ns=BASE_NS - 10**10)  # back 10 s, confirmed: reset
     assert sink.covariances[-1] == start
 
