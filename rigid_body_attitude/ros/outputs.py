@@ -61,7 +61,7 @@ class RawOutput:
     def __init__(self, publisher: Any) -> None:
         """Bind ``publisher``'s handle."""
         handle = publisher.handle
-        #: Matched subscriptions now (``int``; call it).
+        #: Matched subscriptions at the moment of the call (``int``; call it).
         self.subscription_count: Callable[[], int] = handle.get_subscription_count
         #: Publish serialized (CDR) ``bytes``.
         self.publish: Callable[[bytes], None] = handle.publish_raw

@@ -10,8 +10,8 @@ or ``set_pose_stddev`` on each axis).
 
 Published values (REP-145: about fixed **world** axes, rad²): :attr:`Uncertainty.published` is
 the row-major 3×3 attitude covariance at the last fold (every :data:`BATCH_SIZE` samples,
-so a read is free per sample); :func:`pose_covariance` the 6×6 of ``pose_with_covariance`` with the position
-block marked unknown (:data:`UNKNOWN_POSITION_VARIANCE` on its diagonal).
+so a read is free per sample); :func:`pose_covariance` the 6×6 of ``pose_with_covariance``
+with the position block marked unknown (:data:`UNKNOWN_POSITION_VARIANCE` on its diagonal).
 
 Noise from a kalibr calibration file overrides the parameters: :func:`error_model_from`.
 """
@@ -28,8 +28,8 @@ from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.gyro_error_model import GyroErrorModel
 
-__all__ = ['BATCH_SIZE', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE', 'Uncertainty', 'error_model_from',
-           'orientation_block', 'pose_covariance']
+__all__ = ['BATCH_SIZE', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE', 'Uncertainty',
+           'error_model_from', 'orientation_block', 'pose_covariance']
 
 #: Variance [m²] on the diagonal of the position block of ``pose_with_covariance``: the
 #: position is not estimated. Large and finite, so the 6×6 stays symmetric positive definite
