@@ -54,7 +54,9 @@ ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'pyth
                'matplotlib': 'python3-matplotlib', 'tqdm': 'python3-tqdm'}
 #: Modules that rosdistro's rosdep/python.yaml has no key for → their pip distribution: pinned
 #: in requirements.txt and named in a comment of package.xml.
-WITHOUT_ROSDEP_KEY = {'rosbags': 'rosbags', 'apsw': 'apsw'}
+WITHOUT_ROSDEP_KEY = {'rosbags': 'rosbags', 'apsw': 'apsw', 'dask': 'dask',
+                      'distributed': 'distributed', 'pyarrow': 'pyarrow',
+                      'allantools': 'allantools'}
 REQUIRED_TEST_DEPENDS = {'python3-pytest'}
 
 # Run in a fresh interpreter: refuses rclpy through a meta path finder (so an import anywhere,
@@ -280,7 +282,8 @@ def undeclared_imports(imports: dict[str, set[str]], package_xml: str, requireme
     """The imports that package.xml (and for modules without a rosdep key, requirements.txt)
     does not declare."""
     root = ElementTree.fromstring(package_xml)
-    declared = {element.text for element in root.findall('exec_depend')}
+    declared = {element.text for tag in ('exec_depend', 'depend')  # depend: build and exec
+                for element in root.findall(tag)}
     comments = ' '.join(re.findall(r'<!--(.*?)-->', package_xml, flags=re.S))
     pinned = {line.split('==')[0].strip().lower() for line in requirements.splitlines()
               if '==' in line and not line.lstrip().startswith('#')}

@@ -90,6 +90,7 @@ __all__ = [
     'quaternion_stamped_encoder',
     'stamp_to_ns',
     'stamped_floats_encoder',
+    'transform_encoder',
     'twist_angular',
     'twist_linear',
     'vector3_stamped',
@@ -466,3 +467,29 @@ def encode_float64(value: float) -> bytes:
         return _FLOAT64_LE.pack(_ENCAPSULATION_LE, value)
     except struct.error as err:
         raise InputError(f'Expected `value` to be a float, got {value!r}') from err
+
+
+def transform_encoder(parent_frame: str, child_frame: str
+                      ) -> Callable[[int, int, Sequence[float]], bytes]:
+    """``encode(sec, nanosec, (w, x, y, z))``: a ``tf2_msgs/msg/TFMessage`` of one
+    ``geometry_msgs/msg/TransformStamped`` from ``parent_frame`` to ``child_frame`` with a zero
+    translation and the rotation ``(w, x, y, z)`` (what ``/tf`` carries).
+
+    The frames' bytes are packed once; each call is one ``struct`` call. Layout: ``uint32``
+    transform count (1), the header (stamp, ``parent_frame``), ``child_frame`` at the next
+    multiple of 4, translation and rotation (float64) at the next multiple of 8.
+    """
+    parent, child = _frame_bytes(parent_frame), _frame_bytes(child_frame)
+    child_at = 16 + len(parent) + (-(16 + len(parent)) % 4)  # payload offset of its length
+    end = child_at + 4 + len(child)
+    constant = (struct.pack('<I', len(parent)) + parent + bytes(child_at - 16 - len(parent))
+                + struct.pack('<I', len(child)) + child + bytes(-end % 8))
+    pack = Struct(f'<4sIiI{len(constant)}s7d').pack
+
+    def encode(sec: int, nanosec: int, attitude: Sequence[float]) -> bytes:
+        w, x, y, z = attitude
+        try:
+            return pack(_ENCAPSULATION_LE, 1, sec, nanosec, constant, 0.0, 0.0, 0.0, x, y, z, w)
+        except struct.error as err:
+            raise _stamp_error(sec, nanosec) from err
+    return encode

@@ -9,6 +9,7 @@ they are (physical bounds are the session's job).
 
 ==================================  ===========================================================
 ``decode_imu_rate(data)``           ``(sec, nanosec, frame_id, (ωx, ωy, ωz))`` of an Imu
+``decode_imu_motion(data)``         ``(sec, nanosec, frame_id, (ωx, ωy, ωz), (ax, ay, az))``
 ``decode_vector3_stamped(data)``    ``(sec, nanosec, frame_id, (x, y, z))``
 ``decode_twist_angular(data)``      ``(sec, nanosec, frame_id, (ωx, ωy, ωz))`` of a TwistStamped
 ``decode_wrench_stamped(data)``     ``(sec, nanosec, frame_id, force, torque)``
@@ -88,6 +89,7 @@ __all__ = [
     'decode_float64',
     'decode_header',
     'decode_imu',
+    'decode_imu_motion',
     'decode_imu_rate',
     'decode_pose_stamped',
     'decode_pose_with_covariance_stamped',
@@ -243,11 +245,13 @@ class _Primed(NamedTuple):
     size: int
 
 
-def _primed(frame_bytes: bytes, frame_id: str, count: int, at: int, width: int) -> _Primed:
-    """Encapsulation, stamp, string length and bytes, and the fields wanted, in one call."""
+def _primed(frame_bytes: bytes, frame_id: str, count: int, at: int, width: int,
+            tail: str = '') -> _Primed:
+    """Encapsulation, stamp, string length and bytes, and the fields wanted, in one call
+    (``tail``: more of the ``struct`` format after them)."""
     length = len(frame_bytes)
     offset = ((_HEADER + length + 3) & -8) + 4
-    unpack = Struct(f'<2s2xiI{4 + length}s{offset - _HEADER - length}x{8 * at}x{width}d')
+    unpack = Struct(f'<2s2xiI{4 + length}s{offset - _HEADER - length}x{8 * at}x{width}d{tail}')
     return _Primed(unpack.unpack_from, struct.pack('<I', length) + frame_bytes, frame_id,
                    offset + 8 * count)
 
@@ -354,6 +358,69 @@ decode_twist_angular = _decoder(TWIST_STAMPED, FIXED_LAYOUTS[TWIST_STAMPED].coun
                                 FIXED_LAYOUTS[TWIST_STAMPED].at('twist.angular.x'), 3)
 decode_twist_angular.__doc__ = ('``(sec, nanosec, frame_id, (ωx, ωy, ωz))``: the angular '
                                 'velocity of a ``geometry_msgs/msg/TwistStamped`` [rad/s].')
+
+
+#: ``(sec, nanosec, frame_id, (ωx, ωy, ωz), (ax, ay, az) or None)``.
+ImuMotion = tuple[int, int, str, Floats, Floats | None]
+# After the angular velocity: its covariance (9 float64, skipped), the linear acceleration and
+# the first element of its covariance (-1: not provided, REP-145).
+_IMU_MOTION_TAIL = f'{8 * (_IMU_ACCELERATION_AT - _IMU_RATE_AT - 3)}x4d'
+
+
+def _imu_motion_decoder() -> Callable[[bytes], ImuMotion]:
+    """The decoder of an Imu's rate and specific force: the three paths of :func:`_decoder`
+    with the acceleration read by the same ``struct`` call."""
+    field_at = 8 * _IMU_RATE_AT
+    unpack = Struct(f'<3d{_IMU_MOTION_TAIL}').unpack_from
+    accel_at = _IMU_ACCELERATION_AT
+    header = _LE_HEADER
+    frames = _FRAMES
+    primed = _primed(b'\x00', '', IMU_COUNT, _IMU_RATE_AT, 3, _IMU_MOTION_TAIL)
+    missed = b''
+
+    def decode_other(data: bytes) -> ImuMotion:
+        nonlocal primed, missed
+        try:
+            encapsulation, sec, nanosec, length = header(data, 0)
+            end = _HEADER + length
+            frame_bytes = data[_HEADER:end]
+            frame_id = frames[frame_bytes]
+            offset = ((end + 3) & -8) + 4
+            if encapsulation == _CDR_LE and len(data) >= offset + 8 * IMU_COUNT:
+                if frame_bytes == missed:
+                    primed = _primed(bytes(frame_bytes), frame_id, IMU_COUNT, _IMU_RATE_AT, 3,
+                                     _IMU_MOTION_TAIL)
+                missed = frame_bytes
+                x, y, z, ax, ay, az, covariance = unpack(data, offset + field_at)
+                return (sec, nanosec, frame_id, (x, y, z),
+                        None if covariance == -1.0 else (ax, ay, az))
+        except _FAST_ERRORS:
+            pass
+        parsed = parse_stamped(data, IMU, IMU_COUNT)
+        body = parsed.body
+        return (parsed.sec, parsed.nanosec, parsed.frame_id,
+                body[_IMU_RATE_AT:_IMU_RATE_AT + 3],
+                None if body[accel_at + 3] == -1.0 else body[accel_at:accel_at + 3])
+
+    def decode_imu_motion(data: bytes) -> ImuMotion:
+        """``(sec, nanosec, frame_id, (ωx, ωy, ωz), (ax, ay, az))`` of a
+        ``sensor_msgs/msg/Imu``: rate [rad/s] and specific force [m/s²] in its frame; the
+        acceleration is ``None`` when its covariance says "not provided" (element 0 is −1,
+        REP-145)."""
+        unpack_all, length_and_frame, frame_id, size = primed
+        try:
+            encapsulation, sec, nanosec, frame, x, y, z, ax, ay, az, covariance = unpack_all(
+                data, 0)
+            if encapsulation == b'\x00\x01' and frame == length_and_frame and len(data) >= size:
+                return (sec, nanosec, frame_id, (x, y, z),
+                        None if covariance == -1.0 else (ax, ay, az))
+        except _FAST_ERRORS:
+            pass
+        return decode_other(data)
+    return decode_imu_motion
+
+
+decode_imu_motion = _imu_motion_decoder()
 
 
 def _whole(msgtype: str) -> GyroDecoder:

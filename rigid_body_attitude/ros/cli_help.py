@@ -18,7 +18,8 @@ __all__ = ['ParameterRow', 'format_parameter_help', 'node_parameter_rows', 'usag
            'wants_help']
 
 #: Type names as ``ros2 param describe`` shows them.
-_TYPE_NAMES = {bool: 'bool', float: 'double', int: 'integer', str: 'string'}
+_TYPE_NAMES = {bool: 'bool', float: 'double', int: 'integer', str: 'string',
+               tuple: 'double array'}
 
 _WIDTH = 96
 
@@ -58,6 +59,8 @@ def _value_text(value: Any) -> str:
     ``'world'``."""
     if isinstance(value, bool):
         return 'true' if value else 'false'
+    if isinstance(value, tuple):
+        return f'[{", ".join(map(repr, value))}]'
     return repr(value)
 
 

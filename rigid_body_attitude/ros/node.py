@@ -22,12 +22,21 @@ same session, so a replayed bag gives the same numbers.
   ``set_pose_with_covariance`` (PoseWithCovarianceStamped) re-initialises the attitude (and
   position) and its covariance;
   ``~/reset`` restores the scene's initial state.
+* Commands (``set_pose``, ``set_pose_with_covariance``, ``torque``, ``rotor_torque``) are
+  coalesced: only the newest of each topic matters, so each callback takes every message queued
+  behind its own and hands the newest to the session once (the others counted ``superseded``). Log
+  lines go through a queue with a thread of its own (:mod:`~.log_queue`), never written while the
+  state lock is held.
+* Gyro scenes read the sensor's mount from ``/tf_static`` when the samples' frame is not
+  ``body_frame`` and ``mount_rpy`` is not set (:mod:`~.tf_lookup`); with ``publish_tf`` the
+  attitude also goes to ``/tf``.
 
 Parameters are declared from :data:`rigid_body_attitude.session.parameters.PARAMETERS`.
 """
 
 from __future__ import annotations
 
+import array
 import threading
 import time
 from collections.abc import Callable
@@ -36,30 +45,36 @@ from typing import Any
 from geometry_msgs.msg import (
     PoseStamped, PoseWithCovarianceStamped, Vector3Stamped, WrenchStamped)
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import InvalidParameterTypeException, ParameterException
+from rclpy.exceptions import (
+    InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
+from tf2_msgs.msg import TFMessage
 
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.session.decoding import input_handler
+from rigid_body_attitude.session.base import LEVEL_INFO
+from rigid_body_attitude.session.decoding import DECODERS, input_handler, MALFORMED
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.outputs import RosOutputs
-from rigid_body_attitude.ros.qos import INPUT_QOS
+from rigid_body_attitude.ros.qos import COMMAND_QOS, GYRO_QOS, TF_STATIC_QOS
+from rigid_body_attitude.ros.tf_lookup import MountGate
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds
 from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
 from rigid_body_attitude.session.settings import (
     DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, AnySession)
 
-__all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor']
+__all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor', 'ros_value']
 
 #: Diagnostics periods between INFO log lines.
 LOG_EVERY_PERIODS = 5
 
+_GYRO_TOPICS = ('imu', 'angular_velocity')
 _MESSAGE_TYPES = {'imu': Imu, 'angular_velocity': Vector3Stamped, 'torque': WrenchStamped,
                   'rotor_torque': Vector3Stamped, 'set_pose': PoseStamped,
                   'set_pose_with_covariance': PoseWithCovarianceStamped}
@@ -75,6 +90,16 @@ def parameter_descriptor(parameter: Parameter) -> ParameterDescriptor:
     return ParameterDescriptor(
         name=parameter.name, description=parameter.description,
         read_only=parameter.read_only, floating_point_range=limits)
+
+
+def ros_value(parameter: Parameter, value: Any) -> Any:
+    """A parameter's value as the table takes it: a double array (rclpy gives a list or an
+    ``array.array``, ``None`` when not set) as a tuple; other values as they are."""
+    if parameter.type is not tuple:
+        return value
+    if value is None:
+        return parameter.default
+    return tuple(value) if isinstance(value, (list, tuple, array.array)) else value
 
 
 class AttitudePropagatorNode(Node):
@@ -111,6 +136,9 @@ class AttitudePropagatorNode(Node):
         if problem:
             raise InputError(problem)
         self.outputs.set_frames(values['world_frame'], values['body_frame'])
+        self.outputs.log_queue.start()
+        if values['publish_tf']:
+            self.outputs.enable_tf(values['tf_rate'])
         self._create_inputs()
         self._create_timers()
         self.reset_service = self.create_service(Trigger, '~/reset', self.reset_callback)
@@ -131,9 +159,13 @@ class AttitudePropagatorNode(Node):
     def _declare_parameters(self) -> dict[str, Any]:
         values = {}
         for parameter in PARAMETERS:
+            # A double array without a value ([]: not set) is declared by its type (an empty
+            # list would make it a byte array); unset, it reads as the table's default.
+            default = (RosParameter.Type.DOUBLE_ARRAY if parameter.type is tuple
+                       else parameter.default)
             try:
-                values[parameter.name] = self.declare_parameter(
-                    parameter.name, parameter.default, parameter_descriptor(parameter)).value
+                values[parameter.name] = ros_value(parameter, self.declare_parameter(
+                    parameter.name, default, parameter_descriptor(parameter)).value)
             except InvalidParameterTypeException as err:
                 raise InputError(f'Expected parameter `{parameter.name}` to be a '
                                  f'{parameter.type_text}: {str(err)[:200]}') from err
@@ -142,7 +174,8 @@ class AttitudePropagatorNode(Node):
         return values
 
     def _create_inputs(self) -> None:
-        """Raw subscriptions for the inputs the scene uses (and set_pose).
+        """Raw subscriptions for the inputs the scene uses (and set_pose); ``/tf_static``
+        for gyro scenes (the mount).
 
         The gyro subscriptions share a :class:`DedicatedGroup`, so :func:`~.serve.main`'s
         :class:`GyroLoop` can take them over (:meth:`gyro_loop`).
@@ -150,22 +183,75 @@ class AttitudePropagatorNode(Node):
         self.loop_group = DedicatedGroup()  # gyro subscriptions and the timers
         self.subscriptions_by_topic = {}
         self.handlers: dict[str, Callable[[bytes], None]] = {}
-        for topic in input_topics(self.scene, self.session.propagator.input_names):
-            handler = self._handler(topic)
-            group = self.loop_group if topic in ('imu', 'angular_velocity') else None
+        self.mount_gate: MountGate | None = None
+        session = self.session
+        if isinstance(session, GyroSession):
+            self.mount_gate = MountGate(session, self.get_parameter('tf_timeout').value,
+                                        time.monotonic)
+            self.tf_static_subscription = self.create_subscription(
+                TFMessage, '/tf_static', self.tf_static_callback, TF_STATIC_QOS)
+        for topic in input_topics(self.scene, session.propagator.input_names):
+            gyro = topic in _GYRO_TOPICS
+            handler = self._gyro_handler(topic) if gyro else self._command_callback(topic)
             self.handlers[topic] = handler
             self.subscriptions_by_topic[topic] = self.create_subscription(
-                _MESSAGE_TYPES[topic], topic, handler, INPUT_QOS, callback_group=group,
+                _MESSAGE_TYPES[topic], topic, handler, GYRO_QOS if gyro else COMMAND_QOS,
+                callback_group=self.loop_group if gyro else None,
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(), raw=True)
 
-    def _handler(self, topic: str) -> Callable[[bytes], None]:
-        """The session's handler of ``topic`` (:func:`input_handler`) under the state lock."""
-        handle, lock = input_handler(self.session, topic), self.state_lock
+    def _gyro_handler(self, topic: str) -> Callable[[bytes], None]:
+        """The session's handler of a gyro ``topic`` (:func:`input_handler`) under the state
+        lock, behind the mount gate until it opens."""
+        handle, lock, gate = input_handler(self.session, topic), self.state_lock, self.mount_gate
+        assert gate is not None
 
         def locked(data: bytes) -> None:
             with lock:
-                handle(data)
+                if gate.open:
+                    handle(data)
+                else:
+                    gate.sample(data, handle)
         return locked
+
+    def _command_callback(self, topic: str) -> Callable[[bytes], None]:
+        """The callback of a command ``topic``: it also takes every message queued behind the
+        one it was given and hands only the newest decodable one to the session (the others
+        are counted ``superseded``; malformed ones ``malformed``)."""
+        decode, handle = DECODERS[topic], input_handler(self.session, topic)
+        session, lock = self.session, self.state_lock
+
+        def coalesce(data: bytes) -> None:
+            subscription = self.subscriptions_by_topic[topic]
+            newest: bytes | None = None
+            superseded = 0
+            taken: tuple[bytes, Any] | None = (data, None)
+            while taken is not None:
+                try:
+                    decode(taken[0])
+                except MALFORMED:
+                    with lock:
+                        handle(taken[0])  # counted as malformed
+                else:
+                    superseded += newest is not None
+                    newest = taken[0]
+                taken = subscription.handle.take_message(subscription.msg_type, True)
+            with lock:
+                if superseded:
+                    session.rejections['superseded'] += superseded
+                if newest is not None:
+                    handle(newest)
+        return coalesce
+
+    def tf_static_callback(self, message: TFMessage) -> None:
+        """Static transforms for the mount (:class:`~.tf_lookup.MountGate`)."""
+        gate = self.mount_gate
+        if gate is None or gate.open:
+            return
+        gate.add_transforms(
+            (t.header.frame_id, t.child_frame_id,
+             (t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z,
+              t.transform.rotation.w))
+            for t in message.transforms)
 
     def _create_timers(self) -> None:
         """The output timer (node clock) and the diagnostics timer (steady clock), in the
@@ -190,12 +276,21 @@ class AttitudePropagatorNode(Node):
 
     def get_parameters_values(self) -> dict[str, Any]:
         """Current values of the node's own parameters by name."""
-        return {p.name: self.get_parameter(p.name).value for p in PARAMETERS}
+        values = {}
+        for parameter in PARAMETERS:
+            try:
+                value = self.get_parameter(parameter.name).value
+            except ParameterUninitializedException:  # a double array not set
+                value = None
+            values[parameter.name] = ros_value(parameter, value)
+        return values
 
     def parameters_callback(self, parameters: list[RosParameter]) -> SetParametersResult:
         """Refuse run-time values that the parameter table or the session finds unusable."""
         values = self.get_parameters_values()
-        values.update({p.name: p.value for p in parameters if p.name in values})
+        by_name = {p.name: p for p in PARAMETERS}
+        values.update({p.name: ros_value(by_name[p.name], p.value) for p in parameters
+                       if p.name in values})
         reason = self.session.check(values)
         return SetParametersResult(successful=not reason, reason=reason)
 
@@ -215,7 +310,7 @@ class AttitudePropagatorNode(Node):
             self.session.reset()
         response.success = True
         response.message = f'reset to the initial state of scene {self.scene.name!r}'
-        self.get_logger().info(response.message)
+        self.outputs.log(LEVEL_INFO, response.message)
         return response
 
     def tick_callback(self) -> None:
@@ -233,4 +328,9 @@ class AttitudePropagatorNode(Node):
             self.session.publish_diagnostics()
             self._diagnostics_count += 1
             if self._diagnostics_count % LOG_EVERY_PERIODS == 0:
-                self.get_logger().info(self.session.summary())
+                self.outputs.log(LEVEL_INFO, self.session.summary())
+
+    def destroy_node(self) -> None:
+        """Write the queued log lines (at most 1 s), then destroy the node."""
+        self.outputs.log_queue.stop()
+        super().destroy_node()  # type: ignore[no-untyped-call]

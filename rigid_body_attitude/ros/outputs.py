@@ -8,8 +8,13 @@ matched (:class:`RawOutput`); ``/diagnostics`` (once a second) is an ordinary me
 ``imu/data`` is the input Imu with the orientation filled in and the stamp the session used;
 its ``orientation_covariance`` is the session's attitude covariance about fixed world axes
 (REP-145), or all zeros (REP-145: unknown) with the parameter ``covariance`` off.
-``pose_with_covariance`` carries the same attitude block in its 6×6 covariance, the position
-block marked unknown (:data:`~rigid_body_attitude.session.uncertainty.UNKNOWN_POSITION_VARIANCE`).
+``pose_with_covariance`` carries the same attitude block in its 6×6 covariance, the position block
+marked unknown (:data:`~rigid_body_attitude.session.uncertainty.UNKNOWN_POSITION_VARIANCE`). With
+``publish_tf`` (:meth:`RosOutputs.enable_tf`) the attitude also goes to ``/tf`` as the transform
+``world_frame`` -> ``body_frame`` (``tf2_msgs/msg/TFMessage``, CDR bytes too) at the output stamps,
+at most ``tf_rate`` transforms per second of stamps. Log lines go through a
+:class:`~.log_queue.LogQueue`: the session logs from the gyro path, which must never wait for a
+slow console.
 """
 
 from __future__ import annotations
@@ -24,11 +29,14 @@ from rclpy.node import Node
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
+from tf2_msgs.msg import TFMessage
 
 from rigid_body_attitude.msgs.cdr import (
     encode_float64, imu_with_orientation, pose_stamped_encoder,
-    pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder)
-from rigid_body_attitude.ros.qos import OUTPUT_QOS
+    pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
+    transform_encoder)
+from rigid_body_attitude.ros.log_queue import LogQueue
+from rigid_body_attitude.ros.qos import OUTPUT_QOS, TF_QOS
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
 from rigid_body_attitude.session.uncertainty import pose_covariance
@@ -106,6 +114,29 @@ class RosOutputs:
         #: Frame of ``twist`` (:meth:`set_frames`).
         self.body_frame = ''
         self.hardware_id = ''
+        #: ``/tf`` (:meth:`enable_tf`), or None.
+        self.tf_raw: RawOutput | None = None
+        self.tf_period_ns = 0
+        self._tf_due_ns = self._tf_last_ns = 0
+        #: Where :meth:`log` puts its lines (started by the node).
+        self.log_queue = LogQueue(node.get_logger())
+
+    def enable_tf(self, tf_rate: float) -> None:
+        """Publish ``world_frame`` -> ``body_frame`` on ``/tf``, at most ``tf_rate`` per
+        second of stamps (0: with every output)."""
+        self.tf = self.node.create_publisher(TFMessage, '/tf', TF_QOS)
+        self.tf_raw = RawOutput(self.tf)
+        self.tf_period_ns = round(1e9 / tf_rate) if tf_rate > 0.0 else 0
+
+    def _publish_tf(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
+        """The transform at ``(sec, nanosec)`` if one is due (or the stamps went back)."""
+        stamp_ns = sec * 1_000_000_000 + nanosec
+        if stamp_ns < self._tf_due_ns and stamp_ns >= self._tf_last_ns:
+            return
+        tf = self.tf_raw
+        if tf is not None and tf.subscription_count():
+            tf.publish(self.encode_tf(sec, nanosec, attitude))
+            self._tf_due_ns, self._tf_last_ns = stamp_ns + self.tf_period_ns, stamp_ns
 
     def _publisher(self, message_type: Any, topic: str) -> Any:
         return self.node.create_publisher(
@@ -120,6 +151,7 @@ class RosOutputs:
         self.encode_pose_covariance = pose_with_covariance_stamped_encoder(world_frame)
         self.encode_momentum = stamped_floats_encoder(world_frame, 3)
         self.encode_twist = stamped_floats_encoder(body_frame, 6)
+        self.encode_tf = transform_encoder(world_frame, body_frame)
 
     # -- OutputSink -------------------------------------------------------------------------
 
@@ -139,6 +171,8 @@ class RosOutputs:
         if with_covariance is not None and with_covariance.subscription_count():
             with_covariance.publish(self.encode_pose_covariance(
                 sec, nanosec, _ZERO_POSITION, attitude, self.pose_covariance))
+        if self.tf_raw is not None:
+            self._publish_tf(sec, nanosec, attitude)
 
     def attitude_covariance(self, covariance: tuple[float, ...]) -> None:
         """The attitude covariance of the following ``imu/data`` and ``pose_with_covariance``
@@ -156,6 +190,8 @@ class RosOutputs:
             pose.publish(self.encode_pose(sec, nanosec, sample.position, sample.attitude))
         if twist.subscription_count():
             twist.publish(self.encode_twist(sec, nanosec, velocity_body + sample.omega_body))
+        if self.tf_raw is not None:
+            self._publish_tf(sec, nanosec, sample.attitude)
 
     def wants_invariants(self) -> bool:
         """Whether ``energy`` or ``angular_momentum`` has a subscriber."""
@@ -181,11 +217,6 @@ class RosOutputs:
         self.diagnostics_publisher.publish(array)
 
     def log(self, level: int, text: str) -> None:
-        """The node's logger."""
-        logger = self.node.get_logger()
-        if level >= LEVEL_ERROR:
-            logger.error(text)
-        elif level == LEVEL_WARN:
-            logger.warning(text)
-        else:
-            logger.info(text)
+        """A line for the node's logger, queued (:class:`~.log_queue.LogQueue`): never
+        blocks."""
+        self.log_queue.put(level, text)

@@ -1,39 +1,42 @@
 """The node's default QoS profiles, and why (users override them with ``qos_overrides``).
 
-**Inputs** (:data:`INPUT_QOS`: ``imu``, ``angular_velocity``, ``torque``, ``rotor_torque``,
-``set_pose``): RELIABLE, VOLATILE, KEEP_LAST :data:`INPUT_DEPTH` (5 000).
+**Gyro inputs** (:data:`GYRO_QOS`: ``imu``, ``angular_velocity``): BEST_EFFORT, VOLATILE,
+KEEP_LAST :data:`INPUT_DEPTH` (5 000).
 
-* *Reliable*, because it is the only setting under which the middleware repairs what it
-  dropped, and a strapdown integrator that misses samples silently returns a wrong attitude.
-  Between processes on one host Fast DDS hands samples over through a shared-memory port of
-  512 descriptors and the sender's 512 KiB segment; when the receiving node cannot keep up
-  with a burst they overflow. Measured with a 2 000-sample burst from a Python publisher
-  (``test/ros/test_input_qos.py``): a best-effort input lost 11–511 samples at the transport
-  even with a 5 000-deep queue (the former sensor-data profile, depth 5, kept 236), a
-  reliable one lost none: the reader asks for the missing samples and the writer resends
-  them from its history.
+* *Best effort*, because that is how IMU drivers publish (the sensor-data profile of
+  realsense-ros, ouster-ros and most others) and how REP-2003 asks sensor consumers to
+  subscribe: a best-effort subscription matches best-effort and reliable publishers alike, so
+  the node hears every driver out of the box. A reliable subscription would hear no
+  best-effort driver at all.
 * *A deep queue*, because the gyro loop drains the queue at every wake-up and the depth only
   has to cover the samples that arrive while the node cannot run (a scheduler delay on a
-  loaded machine, a burst). 5 000 holds 5 s at 1 kHz and 0.25 s at 20 kHz; it fills only
-  while the node falls behind.
-* The price: a reliable subscription does not match a best-effort publisher, and IMU drivers
-  that publish with the sensor-data profile are best effort. The node then receives nothing
-  from them, and rclpy logs, for every input topic, ``New publisher discovered on topic
-  '/imu', offering incompatible QoS. No messages will be received from it. Last incompatible
-  policy: RELIABILITY`` (the gyro loop serves the gyro subscriptions' QoS events itself, at
-  least once a second, :mod:`rigid_body_attitude.ros.gyro_loop`; the executor thread those of
-  the other inputs). Start the node with
-  ``-p qos_overrides./imu.subscription.reliability:=best_effort`` for such a driver: samples
-  a transport drops are then lost, as they would be anyway with a best-effort writer.
+  loaded machine). 5 000 holds 5 s at 1 kHz. Measured (``test/ros/test_input_qos.py``): a
+  sensor-data publisher paced at 1 kHz for 10 s beside two CPU-bound processes loses nothing.
+* What best effort gives up: the middleware does not resend what its transport dropped. A
+  burst of thousands of samples published at full speed (a bag player far behind) can
+  overflow Fast DDS's shared-memory port; such losses show as gaps in the stamps, counted as
+  ``missed_samples`` in ``/diagnostics``. For a reliable source that bursts, make the input
+  reliable: ``-p qos_overrides./imu.subscription.reliability:=reliable`` (the reader then asks
+  for the samples it missed and the writer resends them from its history; it then matches
+  reliable publishers only).
+
+**Commands** (:data:`COMMAND_QOS`: ``torque``, ``rotor_torque``, ``set_pose``,
+``set_pose_with_covariance``): RELIABLE, VOLATILE, KEEP_LAST :data:`INPUT_DEPTH`. A command is sent
+once and must arrive: a lost ``set_pose`` leaves the attitude where it was, a lost torque command
+leaves the old torque applied until ``torque_timeout``. Command publishers (a controller, ``ros2
+topic pub``) are reliable by default.
 
 **Outputs** (:data:`OUTPUT_QOS`): RELIABLE, VOLATILE, KEEP_LAST :data:`OUTPUT_DEPTH` (5 000,
 as deep as the inputs). A reliable publisher matches reliable and best-effort subscribers; the
-depth is the history from which a reliable subscriber's missing samples are resent (10, the
-ROS default, is 10 ms at 1 kHz: a repair after a burst found the sample gone). A burst the
-input queue takes is published as a burst too: with 1 000, a 2 000-sample burst lost two
-``pose`` samples to a subscriber slowed by the full test suite (``test/ros/test_input_qos.py``);
-the node's RSS 4 s after start was 96.0 MiB with 1 000 and 96.1 MiB with 5 000 (one start
+depth is the history from which a reliable subscriber's missing samples are resent. The node's
+RSS 4 s after start was 96.0 MiB with a depth of 1 000 and 96.1 MiB with 5 000 (one start
 each).
+
+**TF** (:data:`TF_QOS`, ``/tf`` with ``publish_tf``): RELIABLE, VOLATILE, KEEP_LAST 100, as
+tf2_ros's broadcaster. **Static TF** (:data:`TF_STATIC_QOS`, ``/tf_static``, read for the
+mount): RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1, as robot_state_publisher and
+``static_transform_publisher`` publish it, so transforms published before the node started
+still arrive.
 """
 
 from __future__ import annotations
@@ -41,7 +44,8 @@ from __future__ import annotations
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
 
-__all__ = ['INPUT_DEPTH', 'INPUT_QOS', 'OUTPUT_DEPTH', 'OUTPUT_QOS']
+__all__ = ['COMMAND_QOS', 'GYRO_QOS', 'INPUT_DEPTH', 'OUTPUT_DEPTH', 'OUTPUT_QOS', 'TF_QOS',
+           'TF_STATIC_QOS']
 
 #: Samples an input queue holds while the node cannot take them (5 s at 1 kHz).
 INPUT_DEPTH = 5000
@@ -49,8 +53,13 @@ INPUT_DEPTH = 5000
 #: Samples an output writer keeps for repairs: as many as an input queue holds.
 OUTPUT_DEPTH = INPUT_DEPTH
 
-#: Inputs: reliable (repairs; matches reliable publishers only), keep last 5 000.
-INPUT_QOS = QoSProfile(
+#: Gyro inputs: best effort (matches every publisher), keep last 5 000.
+GYRO_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=INPUT_DEPTH,
+    reliability=ReliabilityPolicy.BEST_EFFORT, durability=DurabilityPolicy.VOLATILE)
+
+#: Commands (torque, rotor torque, set_pose): reliable, keep last 5 000.
+COMMAND_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST, depth=INPUT_DEPTH,
     reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 
@@ -58,3 +67,14 @@ INPUT_QOS = QoSProfile(
 OUTPUT_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
     reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+
+#: ``/tf``: as tf2_ros's TransformBroadcaster (reliable, volatile, keep last 100).
+TF_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=100,
+    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+
+#: ``/tf_static``: as robot_state_publisher publishes it (reliable, transient local, keep
+#: last 1), so a transform published before the node started is delivered to it.
+TF_STATIC_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=1,
+    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)

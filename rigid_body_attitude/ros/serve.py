@@ -120,7 +120,7 @@ def spin(node: AttitudePropagatorNode) -> None:
         loop.run()
     finally:
         rest.stop()
-        executor.shutdown()  # only now: its thread no longer waits (rclpy issue #968)
+        executor.shutdown()  # after the join: its thread no longer waits (rclpy issue #968)
         loop.close()
     if rest.failures:
         raise rest.failures[0]

@@ -25,7 +25,7 @@ from rigid_body_attitude.session.outputs import OutputSample, OutputTracker
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.uncertainty import orientation_block
 from rigid_body_attitude.session.reports import (
-    DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, diagnostic_report,
+    DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, StrapdownState, diagnostic_report,
     stale_command_count, state_summary)
 
 __all__ = ['LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session', 'WARNING_INTERVAL']
@@ -163,7 +163,8 @@ class Session(ABC):
         self.poses_accepted += 1
         self._pose_set(block)
         where = f', position {position}' if propagator.has_translation else ''
-        self.sink.log(LEVEL_INFO, f'set_pose: attitude (w, x, y, z) {attitude}{where}')
+        self.note('set_pose', f'set_pose: attitude (w, x, y, z) {attitude}{where}',
+                  self.poses_accepted)
 
     def _pose_set(self, orientation_covariance: tuple[float, ...] | None) -> None:
         """A pose was set, with the row-major 3×3 orientation covariance given (or None)."""
@@ -193,6 +194,14 @@ class Session(ABC):
         if now - self._last_warning.get(reason, -math.inf) >= WARNING_INTERVAL:
             self._last_warning[reason] = now
             self.sink.log(LEVEL_WARN, f'{text} [{self.rejection_counts()[reason]} so far]')
+
+    def note(self, key: str, text: str, count: int) -> None:
+        """An INFO line per ``key`` at most every :data:`WARNING_INTERVAL` seconds, with the
+        ``count`` of such events so far."""
+        now, key = self.monotonic(), f'note {key}'
+        if now - self._last_warning.get(key, -math.inf) >= WARNING_INTERVAL:
+            self._last_warning[key] = now
+            self.sink.log(LEVEL_INFO, f'{text} [{count} so far]')
 
     def error(self, text: str) -> None:
         """An error log line (never throttled: each marks a reset of the state)."""
@@ -242,7 +251,12 @@ class Session(ABC):
             gyro_scene=isinstance(self.propagator, GyroPropagator))
         self._timing(counts)
         self.last_input_rate = counts.accepted / counts.elapsed
-        return diagnostic_report(self.propagator, counts, self.step_text(), self.time_s())
+        return diagnostic_report(self.propagator, counts, self.step_text(), self.time_s(),
+                                 self.strapdown_state())
+
+    def strapdown_state(self) -> StrapdownState | None:
+        """A strapdown session's alignment and bias for the reports (``None``: none)."""
+        return None
 
     def _timing(self, counts: PeriodCounts) -> None:
         """Dynamics: fill in the real-time factor and lag of the period."""
@@ -268,7 +282,7 @@ class Session(ABC):
 
     def summary(self) -> str:
         """The INFO line the node logs every few diagnostics periods."""
-        state = state_summary(self.propagator)
+        state = state_summary(self.propagator, self.strapdown_state())
         rejected = sum(self.rejection_counts().values())
         return (f't={self.time_s():.3f} s: {state}, accepted {self.accepted_count()} '
                 f'({self.last_input_rate:.1f} Hz), rejected {rejected}, missed '

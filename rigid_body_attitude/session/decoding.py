@@ -9,11 +9,14 @@ Built on the checked decoders of :mod:`rigid_body_attitude.msgs.decoders`; impor
 and no bag library.
 
 Each decoder returns ``(sec, nanosec, frame_id, first, second)``: the header stamp as sent
-(not normalised: the session judges it) and frame, and the message's values (rate and the
-Imu bytes; force and torque; a vector; attitude (w, x, y, z) and position, or attitude and
-(position, covariance)). Bytes that are
-not a valid message of the topic's type raise one of :data:`MALFORMED`; the handler hands them
-to :meth:`~rigid_body_attitude.session.base.Session.malformed` and goes on.
+(not normalised: the session judges it) and frame, and the message's values (force and
+torque; a vector; attitude (w, x, y, z) and position, or attitude and (position,
+covariance)). The gyro decoders return
+``(sec, nanosec, frame_id, rate, imu, accel)`` (:data:`GyroDecoded`): the rate [rad/s], the
+Imu bytes (for ``imu/data``; ``None`` for other types) and the specific force [m/s²] (``None``
+unless an Imu provides it), sensor frame. Bytes that are not a valid message of the topic's
+type raise one of :data:`MALFORMED`; the handler hands them to
+:meth:`~rigid_body_attitude.session.base.Session.malformed` and goes on.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rigid_body_attitude.msgs.decoders import (
-    GYRO_DECODERS, GyroDecoder, decode_imu_rate, decode_pose_stamped,
+    GYRO_DECODERS, Floats, GyroDecoder, decode_imu_motion, decode_pose_stamped,
     decode_pose_with_covariance_stamped, decode_vector3_stamped, decode_wrench_stamped)
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.types import IMU
@@ -30,13 +33,14 @@ from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.settings import GYRO_TOPICS, AnySession
 
-__all__ = ['DECODERS', 'Decoded', 'Handler', 'MALFORMED', 'RATE_DECODERS', 'input_handler']
+__all__ = ['DECODERS', 'Decoded', 'GyroDecoded', 'Handler', 'MALFORMED', 'RATE_DECODERS',
+           'input_handler']
 
 #: What a decoder returns: stamp sec, stamp nanosec, frame id, two values.
 Decoded = tuple[int, int, str, Any, Any]
+#: What a gyro decoder returns: stamp sec, nanosec, frame id, rate, Imu bytes, specific force.
+GyroDecoded = tuple[int, int, str, Floats, bytes | None, Floats | None]
 
-#: A decoder of one input topic.
-Decode = Callable[[bytes], Decoded]
 #: The callback of one input topic: takes the message's CDR bytes.
 Handler = Callable[[bytes], None]
 
@@ -44,18 +48,28 @@ Handler = Callable[[bytes], None]
 MALFORMED: tuple[type[Exception], ...] = (MalformedMessage,)
 
 
-def _rate_decoder(decode_rate: GyroDecoder, keep_bytes: bool) -> Callable[[bytes], Decoded]:
-    """A gyro decoder: stamp, frame id and rate (and, for Imu, the message bytes)."""
-    def decode(data: bytes) -> Decoded:
+def _rate_decoder(decode_rate: GyroDecoder) -> Callable[[bytes], GyroDecoded]:
+    """A gyro decoder of a type without bytes to keep or acceleration: stamp, frame, rate."""
+    def decode(data: bytes) -> GyroDecoded:
         sec, nanosec, frame_id, rate = decode_rate(data)
-        return sec, nanosec, frame_id, rate, data if keep_bytes else None
+        return sec, nanosec, frame_id, rate, None, None
     return decode
 
 
-#: Imu: the body rate [rad/s] and the message bytes (for ``imu/data``).
-imu = _rate_decoder(decode_imu_rate, keep_bytes=True)
-#: Vector3Stamped: the body rate [rad/s] (or a rotor torque [N m]).
-angular_velocity = _rate_decoder(decode_vector3_stamped, keep_bytes=False)
+def imu(data: bytes) -> GyroDecoded:
+    """Imu: the rate [rad/s], the message bytes (for ``imu/data``), the specific force."""
+    sec, nanosec, frame_id, rate, accel = decode_imu_motion(data)
+    return sec, nanosec, frame_id, rate, data, accel
+
+
+#: Vector3Stamped: the body rate [rad/s].
+angular_velocity = _rate_decoder(decode_vector3_stamped)
+
+
+def vector(data: bytes) -> Decoded:
+    """Vector3Stamped: a vector (a rotor torque [N m])."""
+    sec, nanosec, frame_id, value = decode_vector3_stamped(data)
+    return sec, nanosec, frame_id, value, None
 
 
 def wrench(data: bytes) -> Decoded:
@@ -77,21 +91,22 @@ def pose_with_covariance(data: bytes) -> Decoded:
     return sec, nanosec, frame_id, attitude, (position, covariance)
 
 
-#: The node's input topics → decoder.
-DECODERS: dict[str, Callable[[bytes], Decoded]] = {
+#: The node's input topics → decoder (the gyro topics': :data:`GyroDecoded`).
+DECODERS: dict[str, Callable[[bytes], tuple[Any, ...]]] = {
     'imu': imu, 'angular_velocity': angular_velocity, 'torque': wrench,
-    'rotor_torque': angular_velocity, 'set_pose': pose,
+    'rotor_torque': vector, 'set_pose': pose,
     'set_pose_with_covariance': pose_with_covariance,
 }
 #: Gyro message types → decoder (the replay tool's gyro topic may carry any of them:
 #: Imu, Vector3Stamped, TwistStamped's angular part).
-RATE_DECODERS: dict[str, Callable[[bytes], Decoded]] = {
-    msgtype: _rate_decoder(decode_rate, keep_bytes=msgtype == IMU)
+RATE_DECODERS: dict[str, Callable[[bytes], GyroDecoded]] = {
+    msgtype: imu if msgtype == IMU else _rate_decoder(decode_rate)
     for msgtype, decode_rate in GYRO_DECODERS.items()
 }
 
 
-def input_handler(session: AnySession, topic: str, decode: Decode | None = None,
+def input_handler(session: AnySession, topic: str,
+                  decode: Callable[[bytes], tuple[Any, ...]] | None = None,
                   reraise: tuple[type[Exception], ...] = ()) -> Handler:
     """The callback of the node's input ``topic``: decode the bytes and hand the values to
     the session; malformed bytes and a session's own failure are counted, never raised.
@@ -105,10 +120,11 @@ def input_handler(session: AnySession, topic: str, decode: Decode | None = None,
     if isinstance(session, GyroSession) and topic in GYRO_TOPICS:
         return _gyro_handler(session, topic, decode, reraise)
     deliver = _delivery(session, topic)
+    decode_values = decode
 
     def handle(data: bytes) -> None:
         try:
-            values = decode(data)
+            values = decode_values(data)
         except MALFORMED as err:
             session.malformed(topic, str(err)[:200])
             return
@@ -121,20 +137,20 @@ def input_handler(session: AnySession, topic: str, decode: Decode | None = None,
     return handle
 
 
-def _gyro_handler(session: GyroSession, topic: str, decode: Decode,
+def _gyro_handler(session: GyroSession, topic: str, decode: Callable[[bytes], Any],
                   reraise: tuple[type[Exception], ...]) -> Handler:
     """:func:`input_handler` of a gyro topic (the hot path: one decoder call and
-    ``session.gyro`` with the Imu bytes, if any, for ``imu/data``)."""
+    ``session.gyro`` with the Imu bytes, if any, for ``imu/data``, and the specific force)."""
     gyro, malformed, internal_error = session.gyro, session.malformed, session.internal_error
 
     def handle(data: bytes) -> None:
         try:
-            sec, nanosec, _, rate, imu = decode(data)
+            sec, nanosec, _, rate, imu, accel = decode(data)
         except MALFORMED as err:
             malformed(topic, str(err)[:200])
             return
         try:
-            gyro(sec, nanosec, rate, imu)
+            gyro(sec, nanosec, rate, imu, accel)
         except reraise:
             raise
         except Exception as err:  # a bug must not end the node (nor the replay): counted

@@ -2,9 +2,17 @@
 
 Per sample (:meth:`GyroSession.gyro`): the stamp is checked (``nanosec`` in ``[0, 1e9)``,
 ``sec`` non-negative; a zero stamp is refused while header stamps are used) or replaced by the
-receive time (``use_header_stamps`` false); the stream rules decide; when the state moved the
-attitude goes to the sink stamped with the time used. At each tick (:meth:`GyroSession.tick`)
-energy and angular momentum of the last attitude go to the sink, once per attitude published.
+receive time (``use_header_stamps`` false); the sensor-frame sample is calibrated, rotated into
+the body frame and, at start, levelled (:mod:`~rigid_body_attitude.session.levelling`: nothing
+is integrated or published until then); the bias estimate is subtracted; the stream rules
+decide; when the state moved the attitude goes to the sink stamped with the time used. At each
+tick (:meth:`GyroSession.tick`) energy and angular momentum of the last attitude go to the
+sink, once per attitude published.
+
+Samples without accelerometer data (``angular_velocity`` input, or an Imu whose acceleration
+is all zeros) and ``align_seconds`` 0 start from the scene's attitude at once (said once, at
+INFO). After levelling the levelled attitude is the initial state: a time jump back (a
+looping bag) returns to it; ``~/reset`` (:meth:`GyroSession.reset`) levels again.
 """
 
 from __future__ import annotations
@@ -16,7 +24,9 @@ from typing import Any
 
 from rigid_body_attitude.core.propagator import GyroPropagator
 from rigid_body_attitude.core.scene import Scene
-from rigid_body_attitude.session.base import OutputSink, Session
+from rigid_body_attitude.session.base import OutputSink
+from rigid_body_attitude.session.imu_start import REJECTION_DETAIL, ImuStart
+from rigid_body_attitude.session.levelling import FROM_SCENE, AlignmentResult
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.stream import GyroStream, INTEGRATED, Outcome
 from rigid_body_attitude.session.uncertainty import Uncertainty
@@ -24,23 +34,17 @@ from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns, 
 
 __all__ = ['GyroSession']
 
-_DETAIL = {
-    'non_finite': 'a non-finite rate (NaN or Inf); sample ignored',
-    'out_of_range': 'a rate above max_angular_rate; sample ignored',
-    'stale_stamp': 'a stamp not newer than the last one; sample ignored',
-    'outlier_stamp': 'a stamp off the time line that the next samples did not confirm; '
-                     'ignored',
-    'gap': 'a gap longer than max_dt, confirmed by the next samples; not integrated across, '
-           'attitude held',
-}
 _HINT = {'stale_stamp': 'use_header_stamps', 'out_of_range': 'max_angular_rate',
          'outlier_stamp': 'max_dt', 'gap': 'max_dt'}
 
 
-class GyroSession(Session):
-    """Strapdown integration of a gyro scene's samples."""
+class GyroSession(ImuStart):
+    """Strapdown integration of a gyro scene's samples (a real IMU's start: :class:`ImuStart`).
+    """
 
     propagator: GyroPropagator
+    #: Whether :meth:`_after_step` is called after each integrated sample.
+    wants_steps = False
 
     def __init__(self, scene: Scene, values: Mapping[str, Any], sink: OutputSink,
                  clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> None:
@@ -50,14 +54,14 @@ class GyroSession(Session):
                                  values['time_jump_threshold'])
         self._fresh_output = False
         self._output_sec = self._output_nanosec = 0
-        #: Called once each time levelling completes, with its result.
-        self.on_aligned: Callable[[Any], None] | None = None
         #: The attitude covariance (parameter ``covariance``), or None.
         self.uncertainty: Uncertainty | None = None
+        self._start_imu(values)
         super().__init__(scene, values, sink, clock_ns, monotonic)
         if values['covariance']:
-            self.uncertainty = Uncertainty(values)
-            self.on_aligned = self._aligned
+            self.uncertainty = Uncertainty(values, self.calibration_noise())
+            self.wants_steps = True
+            self.on_aligned = self._covariance_aligned
             sink.attitude_covariance(self.uncertainty.published)
 
     def apply(self, values: Mapping[str, Any]) -> None:
@@ -69,13 +73,15 @@ class GyroSession(Session):
         stream.constant_dt = values['constant_dt']
         stream.max_angular_rate = values['max_angular_rate']
         stream.count_missed = values['use_header_stamps']
+        self.body_frame: str = values['body_frame']
         uncertainty = getattr(self, 'uncertainty', None)
         if uncertainty is not None:
             uncertainty.apply(values)
 
     def gyro(self, sec: int, nanosec: int, rate: Sequence[float],
-             imu: bytes | None = None) -> bool:
-        """One gyro sample stamped ``(sec, nanosec)`` with body rate ``rate`` [rad/s].
+             imu: bytes | None = None, accel: Sequence[float] | None = None) -> bool:
+        """One gyro sample stamped ``(sec, nanosec)``: rate ``rate`` [rad/s] and specific
+        force ``accel`` [m/s²] (``None``: none) in the sensor frame.
 
         ``imu``: the serialized ``sensor_msgs/msg/Imu`` the sample came from, if it came from
         one; it goes to the sink with the attitude (for ``imu/data``). Returns whether the
@@ -85,18 +91,29 @@ class GyroSession(Session):
             sec, nanosec = split_ns(self.clock_ns())
         elif nanosec >= NANOSECONDS_PER_SECOND or (sec <= 0 and (sec < 0 or not nanosec)):
             return self._bad_stamp(sec, nanosec)
+        if self._special:
+            mapped = self._special_sample(sec, nanosec, rate, accel)
+            if mapped is None:
+                return False
+            rate = mapped
+        elif self._affine is not None:
+            try:
+                wx, wy, wz = rate
+            except (TypeError, ValueError):
+                pass  # the stream refuses it
+            else:
+                a00, a01, a02, a10, a11, a12, a20, a21, a22, c0, c1, c2 = self._affine
+                rate = (a00 * wx + a01 * wy + a02 * wz + c0, a10 * wx + a11 * wy + a12 * wz + c1,
+                        a20 * wx + a21 * wy + a22 * wz + c2)
+        if self.wants_steps:
+            return self._stepped(sec, nanosec, rate, imu)
         stream = self.stream
         outliers = stream.outliers if stream.pending else -1  # a jump waits: watch for them
-        if self.uncertainty is not None:
-            state = self.propagator.state
-            time_before, q_before = state.time, state.attitude_tuple()
         outcome = stream.add(sec * NANOSECONDS_PER_SECOND + nanosec, rate)
         if outliers >= 0 and stream.outliers != outliers:
-            self.warn('outlier_stamp', f'gyro: {_DETAIL["outlier_stamp"]} (parameter `max_dt`)')
-        if outcome is INTEGRATED:
-            if self.uncertainty is not None:
-                self._after_step(q_before, state.omega_tuple(), state.time - time_before)
-        else:  # the common case needs no further look
+            self.warn('outlier_stamp',
+                      f'gyro: {REJECTION_DETAIL["outlier_stamp"]} (parameter `max_dt`)')
+        if outcome is not INTEGRATED:  # the common case needs no further look
             if outcome.reason:
                 self._rejected(outcome)
             if not outcome.moved:
@@ -117,11 +134,16 @@ class GyroSession(Session):
         if uncertainty is not None and uncertainty.step(q_before, rate_body, dt):
             self.sink.attitude_covariance(uncertainty.published)
 
-    def _aligned(self, result: Any) -> None:
-        """Levelling completed: the covariance starts from its uncertainty."""
-        if self.uncertainty is not None:
-            self.uncertainty.aligned(result)
-            self.sink.attitude_covariance(self.uncertainty.published)
+    def _covariance_aligned(self, result: AlignmentResult) -> None:
+        """The integration's start is settled (``on_aligned``): levelled, the covariance
+        starts from the levelling's uncertainty (the sink hears of it when it changed); from
+        the scene it stays as it is (the unlevelled prior, or a ``set_pose``'s)."""
+        uncertainty = self.uncertainty
+        if uncertainty is not None and result.source != FROM_SCENE:
+            before = uncertainty.published
+            uncertainty.aligned(result)
+            if uncertainty.published != before:
+                self.sink.attitude_covariance(uncertainty.published)
 
     def _restart_uncertainty(self) -> None:
         """Back to the unlevelled prior (reset, a backward time jump)."""
@@ -146,6 +168,37 @@ class GyroSession(Session):
             level = max(level, LEVEL_WARN)
             message = problem if message == 'propagating' else f'{message}; {problem}'
         return DiagnosticReport(level, message, report.values + tuple(values))
+
+    def _stepped(self, sec: int, nanosec: int, rate: Sequence[float],
+                 imu: bytes | None) -> bool:
+        """:meth:`gyro`'s integration with :meth:`_after_step` after each integrated step."""
+        stream = self.stream
+        outliers = stream.outliers if stream.pending else -1
+        state = self.propagator.state
+        time_before, q_before = state.time, state.attitude_tuple()
+        outcome = stream.add(sec * NANOSECONDS_PER_SECOND + nanosec, rate)
+        if outliers >= 0 and stream.outliers != outliers:
+            self.warn('outlier_stamp',
+                      f'gyro: {REJECTION_DETAIL["outlier_stamp"]} (parameter `max_dt`)')
+        if outcome is INTEGRATED:
+            x, y, z = rate  # the step: its length as the propagator took it
+            self._after_step(q_before, (float(x), float(y), float(z)), state.time - time_before)
+        return self._outcome(outcome, sec, nanosec, imu)
+
+    def _outcome(self, outcome: Outcome, sec: int, nanosec: int, imu: bytes | None) -> bool:
+        """Publish the attitude when the state moved (as :meth:`gyro` does inline)."""
+        if outcome is not INTEGRATED:
+            if outcome.reason:
+                self._rejected(outcome)
+            if not outcome.moved:
+                return False
+        attitude = self.tracker.attitude(self.propagator)
+        if not math.isfinite(attitude[0] + attitude[1] + attitude[2] + attitude[3]):
+            return self._non_finite_result()
+        self.sink.attitude(sec, nanosec, attitude, imu)
+        self._output_sec, self._output_nanosec = sec, nanosec
+        self._fresh_output = True
+        return True
 
     @property
     def output_stamp(self) -> tuple[int, int]:
@@ -174,7 +227,7 @@ class GyroSession(Session):
                                       f'to the initial state of scene {self.scene.name!r}')
             return
         hint = _HINT.get(reason)
-        self.warn(reason, f'gyro: {_DETAIL[reason]}'
+        self.warn(reason, f'gyro: {REJECTION_DETAIL[reason]}'
                           + (f' (parameter `{hint}`)' if hint else ''))
 
     def _non_finite_result(self) -> bool:
@@ -197,13 +250,15 @@ class GyroSession(Session):
                                  self.propagator.energy(), (x, y, z))
 
     def reset(self) -> None:
-        """Back to the initial attitude; the next sample is a new baseline."""
+        """Back to the scene's initial attitude and level again (with levelling); the next
+        sample is a new baseline."""
+        self._restart_levelling()
         self.stream.reset()
         self._restart_uncertainty()
 
     def accepted_count(self) -> int:
-        """Gyro samples and poses used so far."""
-        return self.stream.accepted + self.poses_accepted
+        """Gyro samples (levelling included) and poses used so far."""
+        return self.stream.accepted + self.poses_accepted + self._align_samples
 
     def missed_count(self) -> int:
         """Samples lost upstream so far (from the stamp spacing)."""

@@ -27,7 +27,9 @@ class Parameter:
 
     Attributes:
         name: the ROS parameter name.
-        type: ``float``, ``bool`` or ``str``.
+        type: ``float``, ``bool``, ``str`` or ``tuple`` (a double array: a tuple of
+            :attr:`length` floats, or empty when ``may_be_empty``; ROS type
+            ``double_array``).
         default: the default value (of ``type``).
         description: one line, with the unit first for numbers (``'s: ...'``).
         low, high: bounds of a number (``None``: unbounded on that side).
@@ -35,7 +37,9 @@ class Parameter:
         read_only: fixed at start; otherwise it may be changed at run time.
         choices: the allowed values of a string (empty: any non-empty name, or any string
             when ``may_be_empty``).
-        may_be_empty: an empty string is allowed (it means "the scene's").
+        may_be_empty: an empty string or array is allowed (it means "the scene's" or "not
+            set").
+        length: the number of floats of a double array.
     """
 
     name: str
@@ -48,17 +52,23 @@ class Parameter:
     read_only: bool = True
     choices: tuple[str, ...] = ()
     may_be_empty: bool = False
+    length: int = 3
 
     @property
     def type_text(self) -> str:
         """The type as an error message names it."""
+        if self.type is tuple:
+            return (f'double array of {self.length} numbers with decimal points'
+                    + (' (or [] for none)' if self.may_be_empty else ''))
         return _TYPE_TEXT[self.type]
 
     def problem(self, value: Any) -> str:
         """Why ``value`` is not a valid value of this parameter, or ``''``."""
         if type(value) is not self.type:  # bool is not a float, 1 is not 1.0
-            return (f'Expected parameter `{self.name}` to be a {_TYPE_TEXT[self.type]}, '
+            return (f'Expected parameter `{self.name}` to be a {self.type_text}, '
                     f'got {_quoted(value)}')
+        if isinstance(value, tuple):
+            return self._array_problem(value)
         if isinstance(value, float):
             return self._number_problem(value)
         if isinstance(value, str):
@@ -73,6 +83,19 @@ class Parameter:
         return (f'Expected parameter `{self.name}` to be a finite number in '
                 f'{self.range_text()}, got {value!r}')
 
+    def _array_problem(self, value: tuple[Any, ...]) -> str:
+        if not value and self.may_be_empty:
+            return ''
+        if len(value) != self.length or any(type(item) is not float for item in value):
+            return (f'Expected parameter `{self.name}` to be a {self.type_text}, got '
+                    f'{_quoted(value)}')
+        for item in value:
+            if self._number_problem(item):
+                bounds = f' in {self.range_text()}' if self.range_text() else ''
+                return (f'Expected parameter `{self.name}` to hold finite numbers{bounds}, '
+                        f'got {_quoted(value)}')
+        return ''
+
     def _text_problem(self, value: str) -> str:
         if self.choices and value not in self.choices:
             return (f'Expected parameter `{self.name}` to be one of '
@@ -85,8 +108,10 @@ class Parameter:
         return ''
 
     def range_text(self) -> str:
-        """The bounds as an interval, e.g. ``(0, 1000]``; ``''`` for non-numbers."""
-        if self.type is not float:
+        """The bounds as an interval, e.g. ``(0, 1000]``; ``''`` for non-numbers and for
+        arrays without bounds."""
+        if self.type is not float and (self.type is not tuple or (
+                self.low is None and self.high is None)):
             return ''
         low = '-inf' if self.low is None else _number_text(self.low)
         high = 'inf' if self.high is None else _number_text(self.high)
@@ -148,6 +173,39 @@ PARAMETERS: tuple[Parameter, ...] = (
               '("" = the scene\'s)', may_be_empty=True),
     Parameter('step', float, 0.0,
               's: integration step of dynamics scenes (0 = the scene\'s)', 0.0, 10.0),
+    # A real IMU: mount, world axes, levelling, bias, calibration (gyro scenes).
+    Parameter('mount_rpy', tuple, (),
+              'rad: [roll, pitch, yaw] of the IMU (sensor) frame in body_frame, as '
+              'static_transform_publisher takes them ([] = from /tf_static when the Imu '
+              'frame_id differs from body_frame, else none)', may_be_empty=True),
+    Parameter('world_axes', str, 'enu',
+              'axes of world_frame for levelling: enu (REP-103), ned or nwu',
+              choices=('enu', 'ned', 'nwu')),
+    Parameter('align_seconds', float, 1.0,
+              's: rest averaged at start to level from gravity (Imu input with '
+              'accelerometer; 0 = no levelling: the scene\'s attitude)', 0.0, 60.0),
+    Parameter('align_timeout', float, 10.0,
+              's: a body not at rest by then is levelled from its quietest window', 0.0,
+              3600.0, low_open=True),
+    Parameter('initial_yaw', float, 0.0,
+              'rad: heading of the levelled attitude about the world z axis', -10.0, 10.0),
+    Parameter('refine_bias_at_rest', bool, False,
+              'after levelling, refine the gyro bias estimate whenever the body is at rest'),
+    Parameter('calibration_file', str, '',
+              'kalibr imu.yaml or imu-camera result, or a plain bias/scale/misalignment file, '
+              'applied to every sample ("" = none)', may_be_empty=True),
+    Parameter('calibration_imu_key', str, '',
+              'the IMU of a kalibr result holding several (e.g. imu0; "" = the only one)',
+              may_be_empty=True),
+    # TF: the transform world_frame -> body_frame out, the sensor's mount in.
+    Parameter('publish_tf', bool, False,
+              'publish world_frame -> body_frame on /tf at the output stamps'),
+    Parameter('tf_rate', float, 100.0,
+              'Hz: most transforms per second of stamps on /tf (0 = one per output)', 0.0,
+              1.0e6),
+    Parameter('tf_timeout', float, 5.0,
+              's: how long gyro samples wait for the mount body_frame -> sensor frame on '
+              '/tf_static before they are dropped', 0.0, 3600.0, low_open=True),
     # -- attitude uncertainty (gyro scenes; see docs/uncertainty.md) ---------------------
     Parameter('covariance', bool, True,
               'propagate the attitude-error covariance (imu/data orientation_covariance, '

@@ -11,7 +11,8 @@ report the input counts and rates.
   period (``integration_failed``, ``non_finite_result``).
 * WARN: a drift above :data:`DRIFT_WARN_THRESHOLD`; any rejection of :data:`WARN_REASONS` or
   missed samples in the last period; inputs that arrived with none accepted (the main reason
-  named); a gyro scene that received no input; a dynamics scene behind its clock.
+  named); a gyro scene that received no input, or that is still levelling (nothing
+  integrated yet: the message starts ``aligning: ...``); a dynamics scene behind its clock.
 
 Each problem names the parameter that governs it (:data:`GOVERNING_PARAMETER`). The period
 figures come from :class:`PeriodCounts`, which the sessions fill.
@@ -33,7 +34,8 @@ from rigid_body_attitude.session.stream import REASONS
 __all__ = [
     'DRIFT_ERROR_THRESHOLD', 'DRIFT_WARN_THRESHOLD', 'DiagnosticReport', 'GOVERNING_PARAMETER',
     'LEVEL_ERROR', 'LEVEL_OK', 'LEVEL_WARN', 'NOT_ALIGNED', 'PeriodCounts', 'REJECTION_KEYS',
-    'WARN_REASONS', 'alignment_state', 'body_frame_velocity', 'body_summary', 'body_values',
+    'StrapdownState', 'WARN_REASONS', 'alignment_state', 'body_frame_velocity', 'body_summary',
+    'body_values',
     'diagnostic_report', 'gyro_bias_text', 'rotation_from_initial_deg', 'stale_command_count',
     'state_summary', 'strapdown_summary', 'strapdown_values',
 ]
@@ -53,14 +55,16 @@ DRIFT_WARN_THRESHOLD = 1e-6
 DRIFT_ERROR_THRESHOLD = 1e-3
 
 #: Rejection counters reported, in order: the stream reasons, the session's own (malformed
-#: messages, invalid or zero stamps, poses), expired commands and refused integrations.
+#: messages, invalid or zero stamps, poses), expired commands, refused integrations, gyro
+#: samples dropped without a mount and commands superseded by a newer one before use.
 REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
                   'wrong_frame', 'stale_torque', 'integration_failed', 'non_finite_result',
-                  'internal_error')
+                  'internal_error', 'no_mount', 'superseded')
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
-                'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame')
+                'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame',
+                'no_mount')
 ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
 
 #: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).
@@ -71,7 +75,7 @@ GOVERNING_PARAMETER = {
     'invalid_pose': 'world_frame', 'wrong_frame': 'world_frame',
     'integration_failed': 'integrator', 'non_finite_result': 'integrator',
     'missed_samples': 'qos_overrides./imu.subscription.depth',
-    'no_input': 'use_header_stamps', 'behind': 'step',
+    'no_input': 'use_header_stamps', 'behind': 'step', 'no_mount': 'mount_rpy',
 }
 DYNAMICS_GOVERNING_PARAMETER = {
     **{key: value for key, value in GOVERNING_PARAMETER.items() if key != 'out_of_range'},
@@ -114,6 +118,22 @@ class PeriodCounts:
     real_time_factor: float = float('inf')
     lag: float = 0.0
     tick_period: float = 0.0
+
+
+@dataclass(frozen=True)
+class StrapdownState:
+    """What a strapdown session knows beyond its propagator (its start and bias).
+
+    Attributes:
+        alignment: the alignment state in words (levelling from gravity, or why not).
+        gyro_bias: the bias estimate in words (``None``: the scene's ``gyro_bias`` effect).
+        aligning: nothing is integrated yet: the session is levelling (the status is WARN
+            and its message starts with the alignment state).
+    """
+
+    alignment: str = NOT_ALIGNED
+    gyro_bias: str | None = None
+    aligning: bool = False
 
 
 @dataclass(frozen=True)
@@ -261,26 +281,34 @@ def gyro_bias_text(propagator: GyroPropagator) -> str:
     return 'none'
 
 
-def alignment_state(propagator: GyroPropagator) -> str:
-    """How the strapdown attitude was aligned to the world frame (:data:`NOT_ALIGNED`)."""
-    return NOT_ALIGNED
+def alignment_state(propagator: GyroPropagator, state: StrapdownState | None = None) -> str:
+    """How the strapdown attitude was aligned to the world frame (:data:`NOT_ALIGNED` when the
+    session says nothing)."""
+    return NOT_ALIGNED if state is None else state.alignment
 
 
-def strapdown_values(propagator: GyroPropagator) -> list[tuple[str, str]]:
-    """What a strapdown scene reports: rotation from the initial attitude, the gyro bias, the
-    alignment state."""
+def _bias_text(propagator: GyroPropagator, state: StrapdownState | None) -> str:
+    if state is None or state.gyro_bias is None:
+        return gyro_bias_text(propagator)
+    return state.gyro_bias
+
+
+def strapdown_values(propagator: GyroPropagator, state: StrapdownState | None = None
+                     ) -> list[tuple[str, str]]:
+    """What a strapdown scene reports: rotation from the initial (levelled) attitude, the gyro
+    bias, the alignment state."""
     return [
         ('rotation_from_initial [deg]', f'{rotation_from_initial_deg(propagator):.6f}'),
-        ('gyro_bias [rad/s]', gyro_bias_text(propagator)),
-        ('alignment', alignment_state(propagator)),
+        ('gyro_bias [rad/s]', _bias_text(propagator, state)),
+        ('alignment', alignment_state(propagator, state)),
     ]
 
 
-def strapdown_summary(propagator: GyroPropagator) -> str:
+def strapdown_summary(propagator: GyroPropagator, state: StrapdownState | None = None) -> str:
     """The scene-specific part of a strapdown session's INFO line."""
     return (f'rotation {rotation_from_initial_deg(propagator):.3f} deg from the initial '
-            f'attitude, gyro bias [rad/s] {gyro_bias_text(propagator)}, '
-            f'{alignment_state(propagator)}')
+            f'attitude, gyro bias [rad/s] {_bias_text(propagator, state)}, '
+            f'{alignment_state(propagator, state)}')
 
 
 def body_summary(propagator: DynamicsPropagator) -> str:
@@ -292,18 +320,22 @@ def body_summary(propagator: DynamicsPropagator) -> str:
             f'{momentum:.9g} N m s (drift {diagnostics.momentum_drift:.2e})')
 
 
-def state_summary(propagator: DynamicsPropagator | GyroPropagator) -> str:
+def state_summary(propagator: DynamicsPropagator | GyroPropagator,
+                  state: StrapdownState | None = None) -> str:
     """The scene-specific part of the node's INFO line (and the replay's summary)."""
     if isinstance(propagator, GyroPropagator):
-        return strapdown_summary(propagator)
+        return strapdown_summary(propagator, state)
     return body_summary(propagator)
 
 
 def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: PeriodCounts,
-                      step_text: str, time_s: float) -> DiagnosticReport:
+                      step_text: str, time_s: float, state: StrapdownState | None = None
+                      ) -> DiagnosticReport:
     """Level, message and values of a session's status (see the module docstring).
 
-    ``step_text`` describes the step; ``time_s`` is the propagated time shown [s].
+    ``step_text`` describes the step; ``time_s`` is the propagated time shown [s]; ``state``:
+    a strapdown session's alignment and bias (while it levels the message starts with its
+    ``aligning: ...`` status instead of ``propagating``).
     """
     parameters = GOVERNING_PARAMETER if counts.gyro_scene else DYNAMICS_GOVERNING_PARAMETER
     diagnostics = propagator.diagnostics()
@@ -319,7 +351,7 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
         ('integrator', scene.integrator),
         ('step [s]', step_text),
         ('time [s]', f'{time_s:.9f}'),
-        *(strapdown_values(propagator) if isinstance(propagator, GyroPropagator)
+        *(strapdown_values(propagator, state) if isinstance(propagator, GyroPropagator)
           else body_values(propagator)),
         ('quaternion_norm_error', f'{diagnostics.quaternion_norm_error:.3e}'),
         ('input_rate [Hz]', f'{counts.accepted / counts.elapsed:.1f}'),
@@ -336,5 +368,8 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
     values += [(f'malformed {topic}', str(count))
                for topic, count in sorted(counts.malformed_by_topic.items())]
     values += [(key, str(value)) for key, value in sorted(propagator.counters().items())]
+    if state is not None and state.aligning:  # nothing integrated yet: never OK
+        level = max(level, LEVEL_WARN)
+        problems.insert(0, state.alignment)
     message = '; '.join(problems) or 'propagating'
     return DiagnosticReport(level, message, tuple(values))

@@ -13,7 +13,8 @@ the row-major 3×3 attitude covariance at the last fold (every :data:`BATCH_SIZE
 so a read is free per sample); :func:`pose_covariance` the 6×6 of ``pose_with_covariance``
 with the position block marked unknown (:data:`UNKNOWN_POSITION_VARIANCE` on its diagonal).
 
-Noise from a kalibr calibration file overrides the parameters: :func:`error_model_from`.
+Noise from a kalibr calibration file (``calibration_file``) overrides the parameters:
+:func:`error_model_from`.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import numpy as np
 from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.gyro_error_model import GyroErrorModel
+from rigid_body_attitude.session.levelling import AlignmentResult
 
 __all__ = ['BATCH_SIZE', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE', 'Uncertainty',
            'error_model_from', 'orientation_block', 'pose_covariance']
@@ -126,13 +128,12 @@ class Uncertainty:
         self._pending = 0
         self._publish()
 
-    def aligned(self, result: Any) -> None:
-        """The session's ``on_aligned`` hook: levelling completed with ``result`` (its
-        ``window_seconds`` of rest, or None / not ``at_rest`` when levelled anyway)."""
-        window = getattr(result, 'window_seconds', None)
-        if not getattr(result, 'at_rest', True):
-            window = None
-        self.start(float(window) if window else None)
+    def aligned(self, result: AlignmentResult) -> None:
+        """The session's ``on_aligned`` hook: levelled over ``result.window_seconds`` of rest,
+        or unlevelled (not ``at_rest``: levelled from the quietest window after the timeout,
+        or a window of 0)."""
+        window = result.window_seconds if result.at_rest else 0.0
+        self.start(window if window > 0.0 else None)
 
     def step(self, q_before: Quaternion, rate_body: Vector, dt: float) -> bool:
         """One integrated step (attitude at its start, body rate held [rad/s], length [s]);

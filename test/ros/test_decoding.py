@@ -20,9 +20,10 @@ def test_stamps_are_passed_on_unnormalised(nanosec):
     imu = stamped(Imu(), 1_700_000_000, nanosec)
     imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z = 1.0, 2.0, 3.0
     data = serialize_message(imu)
-    sec, got, frame_id, rate, raw = DECODERS['imu'](data)
+    sec, got, frame_id, rate, raw, accel = DECODERS['imu'](data)
     assert (sec, got, frame_id, tuple(rate), raw) == (1_700_000_000, nanosec, 'imu_link',
                                                       (1.0, 2.0, 3.0), data)
+    assert tuple(accel) == (0.0, 0.0, 0.0)  # zeros: the session takes them for none
 
 
 def test_every_topic_decodes_its_type():

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -29,7 +30,8 @@ from std_srvs.srv import Trigger
 
 from rigid_body_attitude.msgs.decoders import decode_pose_stamped
 from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.core.errors import InputError, IntegratorError, SceneError
+from rigid_body_attitude.core.errors import (
+    CalibrationError, InputError, IntegratorError, SceneError)
 from rigid_body_attitude.session.reports import body_frame_velocity
 from rigid_body_attitude.session.uncertainty import BATCH_SIZE
 from rigid_body_attitude.session.times import TimeBase
@@ -59,7 +61,7 @@ def imu_message(at_ns: int, omega: tuple[float, float, float]) -> Imu:
     """An Imu with only the gyro filled in (orientation marked absent, as IMUs do)."""
     imu = Imu()
     imu.header.stamp = stamp(at_ns)
-    imu.header.frame_id = 'imu_link'
+    imu.header.frame_id = 'base_link'  # mounted in the body frame: no mount to look up
     imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z = omega
     imu.orientation_covariance[0] = -1.0
     return imu
@@ -122,6 +124,12 @@ def own_statuses(messages: list[DiagnosticArray], node: AttitudePropagatorNode
     ('max_dt', -1.0, InputError, 'Bad parameter `max_dt`: .*out of range'),
     ('max_dt', 0.0, InputError, '`max_dt` to be a finite number in \\(0, 3600\\], got 0.0'),
     ('integrator', 'no_such_method', IntegratorError, "Unknown strapdown method"),
+    ('mount_rpy', [0, 0, 1], InputError, 'Expected parameter `mount_rpy` to be a double array'),
+    ('mount_rpy', [0.0, 1.0], InputError, '`mount_rpy` to be a double array of 3 numbers'),
+    ('mount_rpy', [math.nan, 0.0, 1.0], InputError, '`mount_rpy` to hold finite numbers'),
+    ('world_axes', 'xyz', InputError, "`world_axes` to be one of 'enu', 'ned', 'nwu'"),
+    ('calibration_file', '/no/such/imu.yaml', CalibrationError,
+     "Calibration file '/no/such/imu.yaml' does not exist"),
 ])
 def test_node_refuses_bad_parameters_at_start(ros, request, name, value, error, match):
     overrides = {'scene': 'strapdown', name: value}
@@ -136,6 +144,17 @@ def test_main_prints_one_error_line_and_returns_2_for_a_bad_scene(capsys):
     stderr = capsys.readouterr().err
     assert code == 2
     assert stderr.startswith("error: Unknown scene 'no_such_scene'")
+    assert stderr.count('\n') == 1 and 'Traceback' not in stderr
+
+
+def test_main_prints_one_error_line_for_a_bad_calibration_file(capsys, tmp_path):
+    path = tmp_path / 'imu.yaml'
+    path.write_text('bias: [0.1, 0.0]\n')
+    code = main(['propagation_node', '--ros-args', '-p', 'scene:=strapdown', '-p',
+                 f'calibration_file:={path}'])
+    stderr = capsys.readouterr().err
+    assert code == 2
+    assert stderr.startswith(f"error: Calibration file '{path}': Expected bias to be")
     assert stderr.count('\n') == 1 and 'Traceback' not in stderr
 
 
@@ -228,7 +247,7 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
                for m in poses)
     last = imu_outputs[-1]
     assert nanoseconds(last.header.stamp) == stamps_ns[-1]
-    assert last.header.frame_id == 'imu_link'
+    assert last.header.frame_id == 'base_link'
     assert (last.orientation.w, last.orientation.x, last.orientation.y,
             last.orientation.z) == tuple(published[-1])
     assert (last.angular_velocity.x, last.angular_velocity.y, last.angular_velocity.z) == OMEGA
@@ -424,9 +443,15 @@ def test_a_gyro_scene_reports_what_a_strapdown_user_needs_and_no_energy(ros, req
         'accepted', 'missed_samples', 'tilt_stddev [deg]', 'yaw_stddev [deg]']
     assert float(values['rotation_from_initial [deg]']) == pytest.approx(0.9, abs=1e-9)
     assert values['gyro_bias [rad/s]'] == 'none'
-    assert values['alignment'].startswith('not aligned: no accelerometer levelling')
+    assert values['alignment'].startswith('not levelled: no accelerometer data')
     assert (values['accepted'], values['missed_samples']) == ('11', '0')
-    info = [line for line in capfd.readouterr().err.splitlines() if ' t=' in line]
+    err, deadline = '', time.monotonic() + 5.0  # the log thread writes it
+    while ' t=' not in err and time.monotonic() < deadline:
+        time.sleep(0.05)
+        err += capfd.readouterr().err
+    time.sleep(0.2)
+    err += capfd.readouterr().err
+    info = [line for line in err.splitlines() if ' t=' in line]
     assert len(info) == 1
     text = info[0].split(']: ', 1)[1]  # the namespace holds the test's name
     assert text.startswith('t=1700000000.133 s: rotation 0.900 deg from the initial attitude')

@@ -67,7 +67,7 @@ def gyro_message(topic: str, at_ns: int) -> Any:
         message = Vector3Stamped()
         message.vector.x, message.vector.y, message.vector.z = OMEGA
     message.header.stamp = stamp(at_ns)
-    message.header.frame_id = 'imu_link'
+    message.header.frame_id = 'base_link'  # mounted in the body frame: no mount to look up
     return message
 
 

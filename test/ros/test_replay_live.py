@@ -39,7 +39,7 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64
 
 from bag_fixtures import (
-    AnalyticCase, build_case, CASES, write_case_bag, write_records, write_scene)
+    AnalyticCase, build_case, CASES, GYRO_RATE, write_case_bag, write_records, write_scene)
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.bag import BagReader
 from rigid_body_attitude.msgs import (
@@ -118,14 +118,16 @@ class LiveRun:
     """Player and recorder around the in-process node, in lockstep with the node's counters."""
 
     def __init__(self, ros: RosContext, namespace: str, case: AnalyticCase,
-                 scene_path: Path) -> None:
-        """Start the node with the case's scene on sim time and connect the harness."""
+                 scene_path: Path, parameters: dict[str, Any] | None = None) -> None:
+        """Start the node with the case's scene (and ``parameters``) on sim time and connect
+        the harness."""
         self.harness = Harness(ros, namespace)
         self.node = self.harness.add_node(AttitudePropagatorNode(
             context=ros.context, namespace=namespace, parameter_overrides=[
                 Parameter('scene', value=str(scene_path)),
                 Parameter('publish_rate', value=PUBLISH_RATE),
-                Parameter('use_sim_time', value=True)]))
+                Parameter('use_sim_time', value=True),
+                *(Parameter(name, value=value) for name, value in (parameters or {}).items())]))
         self.is_gyro = case.rate_source == 'gyro'
         harness = self.harness
         self.clock = harness.publisher(Clock, '/clock')
@@ -167,7 +169,8 @@ class LiveRun:
         publish()
         self._until(lambda: self.node.session.received_count() >= expected, publish,
                     f'input {expected}')
-        self.fresh = self.fresh or self.is_gyro
+        # A sample the levelling takes publishes nothing, so the next tick publishes no energy.
+        self.fresh = self.fresh or (self.is_gyro and self.node.session.alignment_done)
 
     def tick(self, clock_ns: int) -> None:
         """Publish ``/clock = clock_ns`` and wait until the node's timer has run at it."""
@@ -315,23 +318,64 @@ def write_faulty_bag(case: AnalyticCase, path: Path) -> None:
     write_records(path, {'imu': IMU}, records)
 
 
-@pytest.mark.parametrize('name', [*CASES, 'constant_rate_faults'])
+#: Rest samples before the motion of the levelled variant, and the rest it averages [s].
+REST_SAMPLES = 500
+ALIGN_SECONDS = 0.2
+
+
+def write_levelled_bag(case: AnalyticCase, path: Path) -> float:
+    """The gyro case's Imu samples with the accelerometer's gravity at the case's initial
+    attitude, after :data:`REST_SAMPLES` of rest; returns that attitude's heading [rad]."""
+    q0 = case.attitude(np.zeros(1))[0]
+    gravity = tuple(quaternion.rotate_inverse(q0, [0.0, 0.0, 9.80665]).tolist())
+    period_ns = round(1e9 / GYRO_RATE)
+    first_ns = round(case.stamps[0] * 1e9)
+    records = [('imu', stamp_ns, encode_imu(stamp_ns, 'base_link', (0.0, 0.0, 0.0), gravity))
+               for stamp_ns in (first_ns - (REST_SAMPLES - k) * period_ns
+                                for k in range(REST_SAMPLES))]
+    for stamp, rate in zip(case.stamps.tolist(), case.rates.tolist()):
+        stamp_ns = round(stamp * 1e9)
+        records.append(('imu', stamp_ns, encode_imu(stamp_ns, 'base_link', rate, gravity)))
+    write_records(path, {'imu': IMU}, records)
+    w, x, y, z = q0.tolist()
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def levelled_closed_form_errors(case: AnalyticCase, orientation: dict[int, tuple[float, ...]]
+                                ) -> np.ndarray:
+    """Angles [rad] between the outputs and the closed form, the body at rest (``τ = 0``)
+    until the first moving sample: the case's ``exp_map`` holds each sample's rate over the
+    interval after it, so the last rest sample's zero rate covers the interval before it."""
+    assert case.scene['integrator'] == 'exp_map'
+    stamps = np.array(sorted(orientation), dtype=np.int64)
+    attitudes = np.array([orientation[stamp] for stamp in stamps.tolist()])
+    tau = np.maximum(stamps - round(case.stamps[0] * 1e9), 0) * 1e-9
+    return np.atleast_1d(quaternion.attitude_error(attitudes, case.attitude(tau)))
+
+
+@pytest.mark.parametrize('name', [*CASES, 'constant_rate_faults', 'constant_rate_levelled'])
 def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_path,
                                                                  request):
     faulty = name.endswith('_faults')
-    case = build_case(name.removesuffix('_faults'))
+    levelled = name.endswith('_levelled')
+    case = build_case(name.removesuffix('_faults').removesuffix('_levelled'))
     scene_path = write_scene(case, tmp_path)
     bag_path = tmp_path / 'input'
+    parameters: dict[str, Any] = {}
     if faulty:
         write_faulty_bag(case, bag_path)
+    elif levelled:  # levelled from gravity first: the accelerometer path, node and replay
+        yaw = write_levelled_bag(case, bag_path)
+        parameters = {'align_seconds': ALIGN_SECONDS, 'initial_yaw': yaw}
     else:
         write_case_bag(case, bag_path)
     offline_path = tmp_path / 'offline'
+    options = [f'--{key.replace("_", "-")}={value!r}' for key, value in parameters.items()]
     assert replay_main([str(bag_path), '-o', str(offline_path), '--scene', str(scene_path),
-                        '--publish-rate', str(PUBLISH_RATE), '--no-progress']) == 0
+                        '--publish-rate', str(PUBLISH_RATE), '--no-progress', *options]) == 0
     offline = offline_outputs(offline_path)
 
-    run = LiveRun(ros, unique_namespace(request), case, scene_path)
+    run = LiveRun(ros, unique_namespace(request), case, scene_path, parameters)
     play(run, bag_path)
     run.wait_for_outputs({name: len(offline[name]) for name in run.received})
     live = run.outputs()
@@ -340,9 +384,19 @@ def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_
     worst = max(differences.values())
     assert worst <= AGREEMENT, differences
     for outputs in (offline, live):
-        errors = closed_form_errors(case, outputs['orientation'])
+        errors = (levelled_closed_form_errors if levelled else closed_form_errors)(
+            case, outputs['orientation'])
         # The case's bound: the integrator's error at this step (see bag_fixtures).
         assert np.max(errors) <= case.tolerance, (case.tolerance_reason, np.max(errors))
+    if levelled:
+        alignment = run.node.session.alignment
+        assert alignment.at_rest and alignment.gyro_bias == (0.0, 0.0, 0.0)
+        stamps = sorted(offline['orientation'])
+        # Nothing before the rest window was averaged; every moving sample published.
+        assert stamps[0] > round(case.stamps[0] * 1e9) - round(1e9 / GYRO_RATE) * (
+            REST_SAMPLES - round(ALIGN_SECONDS * GYRO_RATE))
+        assert set(round(stamp * 1e9) for stamp in case.stamps.tolist()) <= set(stamps)
+        return
     assert len(offline['orientation']) == (
         case.stamps.size - len(FAULTS) * faulty if case.rate_source == 'gyro'
         else _tick_count(case.stamps))

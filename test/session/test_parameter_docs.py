@@ -47,8 +47,11 @@ def test_readme_gives_every_parameter_its_type_default_bounds_and_mutability():
     rows = readme_rows('Standard parameters') | readme_rows('Advanced parameters')
     for parameter in DOCUMENTED:
         type_default, run_time = rows[parameter.name]
-        type_name = {float: 'double', bool: 'bool', str: 'string'}[parameter.type]
+        type_name = {float: 'double', bool: 'bool', str: 'string',
+                     tuple: 'double array'}[parameter.type]
         default = str(parameter.default).lower() if parameter.default != '' else "''"
+        if parameter.type is tuple:
+            default = str(list(parameter.default))
         assert type_default.startswith(f'{type_name}, `{default}`'), parameter.name
         if parameter.range_text():
             assert type_default.endswith(parameter.range_text()), parameter.name
@@ -59,4 +62,5 @@ def test_params_yaml_holds_every_default():
     document = yaml.safe_load((REPO_ROOT / 'config' / 'params.yaml').read_text())
     values = document['/**/attitude_propagator']['ros__parameters']
     values.pop('use_sim_time')
-    assert values == {parameter.name: parameter.default for parameter in DOCUMENTED}
+    assert values == {parameter.name: list(parameter.default) if parameter.type is tuple
+                      else parameter.default for parameter in DOCUMENTED}

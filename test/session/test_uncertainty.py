@@ -7,7 +7,6 @@ reset, sets it from set_pose (with or without a covariance), refuses a bad one, 
 """
 
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -16,6 +15,7 @@ from conftest import BASE_NS, MS
 from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.session.levelling import FROM_GRAVITY, FROM_TIMEOUT, AlignmentResult
 from rigid_body_attitude.session.parameters import defaults
 from rigid_body_attitude.session.reports import LEVEL_WARN
 from rigid_body_attitude.session.uncertainty import (
@@ -111,12 +111,18 @@ def test_a_bad_covariance_refuses_the_pose_and_is_counted(open_scene, block, why
         orientation_block((0.0,) * 35)
 
 
+def aligned(window_seconds, at_rest, source):
+    return AlignmentResult(attitude=(1.0, 0.0, 0.0, 0.0), gyro_bias=(0.0, 0.0, 0.0),
+                           window_seconds=window_seconds, at_rest=at_rest, source=source,
+                           status=source)
+
+
 def test_levelling_starts_the_levelled_covariance(open_scene):
     session, sink = open_scene('strapdown')
-    session.on_aligned(SimpleNamespace(window_seconds=1.0, at_rest=True))
+    session.on_aligned(aligned(1.0, True, FROM_GRAVITY))
     expected = initial_covariance(GyroErrorModel(), 1.0)[:3, :3]
     assert sink.covariances[-1] == tuple(expected.reshape(9).tolist())
-    session.on_aligned(SimpleNamespace(window_seconds=1.0, at_rest=False))  # by timeout
+    session.on_aligned(aligned(1.0, False, FROM_TIMEOUT))
     assert sink.covariances[-1] == sink.covariances[0]
 
 
@@ -159,3 +165,43 @@ def test_the_pose_covariance_is_spd_with_the_position_unknown():
     full = pose_covariance(block)
     assert is_spd(full, 6) and np.reshape(full, (6, 6))[3:, 3:].reshape(9).tolist() == list(block)
     assert np.diag(np.reshape(full, (6, 6)))[:3].tolist() == [UNKNOWN_POSITION_VARIANCE] * 3
+
+
+def test_a_kalibr_imu_yaml_gives_the_session_its_gyro_noise(open_scene, tmp_path):
+    path = tmp_path / 'imu.yaml'
+    path.write_text('rostopic: /imu\nupdate_rate: 200.0\ngyroscope_noise_density: 2.0e-4\n'
+                    'gyroscope_random_walk: 3.0e-5\naccelerometer_noise_density: 1.0e-3\n')
+    session, _ = open_scene('strapdown', calibration_file=str(path),
+                            gyroscope_noise_density=1e-3, gyroscope_random_walk=1e-4)
+    model = session.uncertainty.model
+    assert (model.gyroscope_noise_density, model.gyroscope_random_walk) == (2e-4, 3e-5)
+    plain = tmp_path / 'plain.yaml'
+    plain.write_text('bias: [0.0, 0.0, 0.0]\n')
+    session, _ = open_scene('strapdown', calibration_file=str(plain),
+                            gyroscope_noise_density=1e-3)
+    assert session.uncertainty.model.gyroscope_noise_density == 1e-3
+
+
+def test_levelling_at_rest_starts_the_covariance_from_its_window(open_scene):
+    session, sink = open_scene('strapdown', align_seconds=0.5)
+    unlevelled = sink.covariances[-1]
+    rng = np.random.default_rng(1)
+    for k in range(2000):
+        rate = tuple(rng.normal(0.0, 0.003, 3).tolist())
+        accel = tuple((np.array([0.0, 0.0, 9.81]) + rng.normal(0.0, 0.03, 3)).tolist())
+        session.gyro(*divmod(BASE_NS + k * MS, 10**9), rate, None, accel)
+    assert session.alignment is not None and session.alignment.at_rest, session.alignment_text()
+    expected = AttitudeCovariance(GyroErrorModel(),
+                                  window_seconds=session.alignment.window_seconds,
+                                  batch_size=BATCH_SIZE).folded_attitude_covariance
+    levelled = np.reshape(sink.covariances[-1], (3, 3))
+    assert sink.covariances[-1] != unlevelled
+    assert levelled[0, 0] < 1e-3 and levelled[0, 0] == pytest.approx(expected[0, 0], rel=1e-3)
+
+
+def test_a_pose_set_before_the_first_sample_keeps_its_covariance(open_scene):
+    session, sink = open_scene('strapdown')
+    block = (4e-4, 0.0, 0.0, 0.0, 9e-4, 0.0, 0.0, 0.0, 0.25)
+    session.set_pose('world', (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), pose_cov(block))
+    feed(session, 2)  # no accelerometer: the integration starts from the pose at once
+    assert session.alignment_done and sink.covariances[-1] == block

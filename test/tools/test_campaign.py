@@ -20,8 +20,8 @@ from bag_fixtures import build_case, write_case_bag, write_scene
 from rigid_body_attitude.bag import write_bag
 from rigid_body_attitude.core.paths import config_folders
 from rigid_body_attitude.tools.campaign import (
-    FAILURE_REASONS, load_spec, main, read_runs, replay_fleet, run_campaign, run_chunk,
-    sample_runs, spec_from_mapping, SpecError)
+    FAILURE_REASONS, load_spec, local_cluster, main, read_runs, replay_fleet, run_campaign,
+    run_chunk, sample_runs, spec_from_mapping, SpecError)
 from rigid_body_attitude.tools.replay import ReplayOptions
 
 SCENE = {'name': 'box', 'rate_source': 'dynamics', 'integrator': 'rk4', 'step': 0.01,
@@ -256,3 +256,11 @@ def test_fleet_replay_cli_takes_a_folder_and_replay_options(tmp_path, capsys):
     assert 'No bag in' in capsys.readouterr().err
     assert main(['replay', str(bags), '--out', str(tmp_path / 'o3'), '--serial',
                  '--max-dt', 'x']) == 2
+
+
+def test_the_local_cluster_keeps_glibc_thresholds_and_rare_dask_sampling():
+    with local_cluster(1) as cluster, Client(cluster) as dask_client:
+        seen = dask_client.run(lambda: (
+            os.environ.get('MALLOC_TRIM_THRESHOLD_'),
+            __import__('dask').config.get('distributed.worker.profile.enabled')))
+    assert list(seen.values()) == [(None, False)]

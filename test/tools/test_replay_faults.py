@@ -179,3 +179,26 @@ def test_command_line_options_are_derived_from_the_parameter_table(tmp_path, cap
     args = parser().parse_args(['bag', '--max-dt', '0.5', '--no-header-stamps'])
     assert args.max_dt == 0.5 and args.use_header_stamps is False
     assert parser().parse_args(['bag']).use_header_stamps is None  # the table's default
+
+
+def test_double_array_options_and_a_bad_calibration_file(tmp_path, capsys):
+    """``--mount-rpy`` takes numbers separated by commas; a calibration file the session
+    cannot use is one ``error:`` line naming the key, and no output bag is left."""
+    args = parser().parse_args(['bag', '--mount-rpy', '[0.1, -0.2, 1.5]'])
+    assert args.mount_rpy == (0.1, -0.2, 1.5)
+    assert parser().parse_args(['bag', '--mount-rpy', '[]']).mount_rpy == ()
+    bag = tmp_path / 'input'
+    write_records(bag, {'imu': IMU}, imu_records(20, faults=False))
+    calibration = tmp_path / 'imu.yaml'
+    calibration.write_text('scale: [1.0, 1.0]\n')
+    output = tmp_path / 'out'
+    for options, expected in (
+            (['--calibration-file', str(calibration)],
+             f"error: Calibration file '{calibration}': Expected scale to be"),
+            (['--mount-rpy', '1.0,2.0'],
+             'error: Expected parameter `mount_rpy` to be a double array of 3 numbers')):
+        assert main([str(bag), '-o', str(output), '--scene', 'strapdown', '--no-progress',
+                     *options]) == 1
+        err = capsys.readouterr().err
+        assert err.startswith(expected) and err.count('\n') == 1, err
+        assert not output.exists()

@@ -21,7 +21,8 @@ Python API::
 
 from rigid_body_attitude.tools.campaign.cli import main
 from rigid_body_attitude.tools.campaign.engine import (
-    CampaignError, CampaignResult, chunk_runs, dask_client, read_runs, run_campaign)
+    CampaignError, CampaignResult, chunk_runs, dask_client, local_cluster,
+    LOCAL_CLUSTER_CONFIG, read_runs, run_campaign)
 from rigid_body_attitude.tools.campaign.fleet import find_bags, replay_fleet, replay_one
 from rigid_body_attitude.tools.campaign.runner import FAILURE_REASONS, run_chunk
 from rigid_body_attitude.tools.campaign.sampling import RunParameters, sample_runs
@@ -29,7 +30,8 @@ from rigid_body_attitude.tools.campaign.spec import (
     CampaignSpec, load_spec, spec_from_mapping, SpecError)
 from rigid_body_attitude.tools.campaign.statistics import METRICS
 
-__all__ = ['CampaignError', 'CampaignResult', 'CampaignSpec', 'FAILURE_REASONS', 'METRICS',
+__all__ = ['CampaignError', 'CampaignResult', 'CampaignSpec', 'FAILURE_REASONS',
+           'LOCAL_CLUSTER_CONFIG', 'METRICS',
            'RunParameters', 'SpecError', 'chunk_runs', 'dask_client', 'find_bags',
-           'load_spec', 'main', 'read_runs', 'replay_fleet', 'replay_one', 'run_campaign',
-           'run_chunk', 'sample_runs', 'spec_from_mapping']
+           'load_spec', 'local_cluster', 'main', 'read_runs', 'replay_fleet', 'replay_one',
+           'run_campaign', 'run_chunk', 'sample_runs', 'spec_from_mapping']

@@ -8,7 +8,8 @@ or one after the other in this process (``serial``). Each chunk's result comes b
 process, which writes it: workers need no shared file system, and a chunk is written once
 however often Dask ran it (a task whose worker died is run again elsewhere by the scheduler,
 so no run is lost, and a chunk written already is never written again, so none is
-duplicated). Then the runs are read back, checked (every run exactly once) and summarised:
+duplicated). Then the runs are gathered (the chunks this call computed from memory, the
+resumed ones read back), checked (every run exactly once) and summarised:
 ``statistics.csv``, ``summary.json``, ``summary.png`` (:mod:`.storage`).
 """
 
@@ -36,8 +37,8 @@ from rigid_body_attitude.tools.campaign.spec import CampaignSpec
 from rigid_body_attitude.tools.campaign.statistics import METRICS, percentile_table
 from rigid_body_attitude.tools.campaign.storage import ChunkStore, spec_digest
 
-__all__ = ['CampaignError', 'CampaignResult', 'chunk_runs', 'dask_client', 'default_workers',
-           'read_runs', 'run_campaign']
+__all__ = ['CampaignError', 'CampaignResult', 'LOCAL_CLUSTER_CONFIG', 'chunk_runs',
+           'dask_client', 'default_workers', 'local_cluster', 'read_runs', 'run_campaign']
 
 #: Failed runs listed in ``summary.json`` at most (all are in the chunk files).
 MAX_LISTED_FAILURES = 1000
@@ -88,7 +89,7 @@ def dask_client(scheduler: str = '', workers: int = 0) -> Iterator[Any]:
     """A ``distributed.Client``: of the scheduler at ``scheduler``, or of a local cluster of
     ``workers`` single-threaded worker processes (default :func:`default_workers`), closed
     on exit."""
-    from distributed import Client, LocalCluster
+    from distributed import Client
     if scheduler:
         try:
             client = Client(scheduler, timeout='5s')
@@ -98,10 +99,45 @@ def dask_client(scheduler: str = '', workers: int = 0) -> Iterator[Any]:
         with client:
             yield client
         return
-    with LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
-                      processes=True, dashboard_address=':0',
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    with local_cluster(workers) as cluster, Client(cluster) as client:
         yield client
+
+
+#: Dask settings of :func:`local_cluster`: glibc's adaptive allocation thresholds kept in the
+#: workers, and Dask's own sampling (the workers' statistical profiler, event-loop ticks,
+#: system and memory monitors) made rare: campaign tasks are few and long, and at Dask's
+#: defaults this sampling takes CPU from the chunks in every process of the cluster.
+LOCAL_CLUSTER_CONFIG = {
+    'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None,
+    'distributed.worker.profile.enabled': False,
+    'distributed.admin.tick.interval': '1s',
+    'distributed.admin.system-monitor.interval': '2s',
+    'distributed.worker.memory.monitor-interval': '1s',
+}
+
+
+def local_cluster(workers: int = 0) -> Any:
+    """A ``LocalCluster`` of ``workers`` single-threaded worker processes (default
+    :func:`default_workers`) with :data:`LOCAL_CLUSTER_CONFIG`.
+
+    Dask starts its workers with ``MALLOC_TRIM_THRESHOLD_`` set, which fixes glibc's
+    thresholds: every NumPy temporary of a chunk (a few hundred kB) is then mapped afresh and
+    faulted in page by page. These workers start without it (Dask's documented way, a
+    ``None`` in ``distributed.nanny.pre-spawn-environ``; the variable is also kept out of
+    this process's environment while they start, where an earlier Dask nanny leaves it).
+    """
+    import dask
+    from distributed import LocalCluster
+    variable = 'MALLOC_TRIM_THRESHOLD_'
+    inherited = os.environ.pop(variable, None)
+    try:
+        with dask.config.set(LOCAL_CLUSTER_CONFIG):
+            return LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
+                                processes=True, dashboard_address=':0',
+                                silence_logs=logging.ERROR)
+    finally:
+        if inherited is not None:
+            os.environ[variable] = inherited
 
 
 def _progress(enabled: bool | None, spec: CampaignSpec, done: int) -> Any:
@@ -127,28 +163,32 @@ def run_campaign(spec: CampaignSpec, out: str | Path, *, scheduler: str = '',
     done_runs = sum(chunks[index].shape[0] for index in range(len(chunks))
                     if index not in set(pending))
     bar = _progress(progress, spec, done_runs)
+    kept: dict[int, dict[str, NDArray[Any]]] = {}
     try:
         if serial:
             for index in pending:
-                store.write(index, run_chunk(spec, chunks[index]))
+                kept[index] = run_chunk(spec, chunks[index])
+                store.write(index, kept[index])
                 bar.update(chunks[index].shape[0])
         elif client is not None:
-            _run_on(client, spec, store, chunks, pending, bar)
+            _run_on(client, spec, store, chunks, pending, bar, kept)
         elif pending:
             with dask_client(scheduler, workers) as own:
-                _run_on(own, spec, store, chunks, pending, bar)
+                _run_on(own, spec, store, chunks, pending, bar, kept)
     finally:
         bar.close()
     compute = time.perf_counter() - begin
-    result = summarise(spec, store, len(chunks), plot)
+    result = summarise(spec, store, len(chunks), plot, kept)
     result.chunks_run, result.chunks_resumed = len(pending), len(chunks) - len(pending)
     result.compute_seconds, result.total_seconds = compute, time.perf_counter() - begin
     return result
 
 
 def _run_on(client: Any, spec: CampaignSpec, store: ChunkStore,
-            chunks: list[NDArray[np.int64]], pending: list[int], bar: Any) -> None:
-    """Submit the pending chunks; write each result as it arrives."""
+            chunks: list[NDArray[np.int64]], pending: list[int], bar: Any,
+            kept: dict[int, dict[str, NDArray[Any]]]) -> None:
+    """Submit the pending chunks; write each result as it arrives (and keep it in
+    ``kept``)."""
     from distributed import as_completed
     token = spec_digest(spec)[:16]
     shared = client.scatter(spec, broadcast=True)
@@ -165,29 +205,33 @@ def _run_on(client: Any, spec: CampaignSpec, store: ChunkStore,
                                 f'finished chunks are kept, run again to resume') from None
         if not store.done(index):
             store.write(index, columns)
+        kept[index] = columns
         bar.update(chunks[index].shape[0])
         future.release()
 
 
-def read_runs(folder: str | Path, spec: CampaignSpec) -> dict[str, NDArray[Any]]:
-    """Every run of a finished campaign, in run order (checked: each run exactly once)."""
+def read_runs(folder: str | Path, spec: CampaignSpec,
+              kept: dict[int, dict[str, NDArray[Any]]] | None = None) -> dict[str, NDArray[Any]]:
+    """Every run of a finished campaign, in run order (checked: each run exactly once); the
+    chunks in ``kept`` (chunk index: the arrays just written) are not read back."""
     store = ChunkStore(folder, spec)
     count = len(chunk_runs(spec))
     missing = [index for index in range(count) if not store.done(index)]
     if missing:
         raise CampaignError(f'{len(missing)} of {count} chunks are not finished (first: '
                             f'{missing[0]}); run the campaign again to resume')
-    arrays = store.read_all(count)
+    arrays = store.read_all(count, kept)
     if not np.array_equal(arrays['run'], np.arange(spec.runs)):
         raise CampaignError(f'The chunks of {folder} do not hold each run exactly once')
     return arrays
 
 
 def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
-              plot: bool = True) -> CampaignResult:
-    """Read every run back and write ``statistics.csv``, ``summary.json`` and (with
-    ``plot``) ``summary.png``."""
-    arrays = read_runs(store.folder, spec)
+              plot: bool = True, kept: dict[int, dict[str, NDArray[Any]]] | None = None
+              ) -> CampaignResult:
+    """Read every run back (but the chunks in ``kept``) and write ``statistics.csv``,
+    ``summary.json`` and (with ``plot``) ``summary.png``."""
+    arrays = read_runs(store.folder, spec, kept)
     failed = arrays['failed'].astype(bool)
     times = np.array((0.0,) + spec.output_times)
     table = percentile_table({name: arrays[name] for name in METRICS}, ~failed,

@@ -9,7 +9,8 @@ Layout of ``OUT``::
     summary.json         counts, failures (run, seed, reason, time), the statistics
     summary.png          dispersion envelopes over time
 
-Chunk files are uncompressed: random doubles hardly compress, and writing stays cheap. A
+Chunk files are uncompressed and plainly encoded (no dictionaries, no column statistics):
+random doubles hardly compress nor repeat, and writing stays cheap. A
 chunk file exists only once its chunk is complete (written to a temporary name, then
 renamed, which is atomic on one file system), so a campaign interrupted anywhere resumes by
 running the chunks without a file; the manifest must match the spec, or the folder belongs to
@@ -104,15 +105,23 @@ class ChunkStore:
         """Write chunk ``index`` whole (temporary file, then an atomic rename)."""
         target = self.path(index)
         temporary = target.with_suffix(f'.{os.getpid()}.tmp')
-        pq.write_table(table_of(columns), temporary, compression='none')
+        pq.write_table(table_of(columns), temporary, compression='none', use_dictionary=False,
+                       write_statistics=False)
         os.replace(temporary, target)
 
-    def read_all(self, chunk_count: int) -> dict[str, NDArray[Any]]:
-        """Every chunk's rows, concatenated in run order."""
-        tables = [pq.read_table(self.path(index)) for index in range(chunk_count)]
-        arrays = arrays_of(pa.concat_tables(tables))
-        order = np.argsort(arrays['run'], kind='stable')
-        return {name: array[order] for name, array in arrays.items()}
+    def read_all(self, chunk_count: int, kept: dict[int, dict[str, NDArray[Any]]] | None = None
+                 ) -> dict[str, NDArray[Any]]:
+        """Every chunk's rows, concatenated in run order; the chunks in ``kept`` (the arrays
+        this process wrote) are not read back."""
+        kept = kept or {}
+        parts = [kept[index] if index in kept else arrays_of(pq.read_table(self.path(index)))
+                 for index in range(chunk_count)]
+        arrays = {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}
+        runs = arrays['run']
+        if runs.shape[0] > 1 and not np.all(runs[1:] > runs[:-1]):
+            order = np.argsort(runs, kind='stable')
+            arrays = {name: array[order] for name, array in arrays.items()}
+        return arrays
 
 
 def _write_atomic(path: Path, data: bytes) -> None:

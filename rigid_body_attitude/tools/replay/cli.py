@@ -6,6 +6,11 @@ same name with dashes (``max_dt`` → ``--max-dt``; booleans ``--use-header-stam
 is kept as the documented short form. Values are checked by the table's own checks. User
 mistakes (bad options, bags, scenes, files) print one ``error: ...`` line and return 1
 (argparse usage errors exit with 2); the session's warnings go to stderr as ``[WARN]`` lines.
+
+A glob pattern, or a folder that is not itself a bag but holds bags, replays every bag as a
+Dask task (:mod:`rigid_body_attitude.tools.campaign.fleet`): one output bag each in the
+``--output`` folder, one table of their reports (and errors against ground truth where the
+bag has the topic), also written to ``OUTPUT/fleet.csv``.
 """
 
 from __future__ import annotations
@@ -43,17 +48,37 @@ def _help(parameter: Parameter) -> str:
     """The table's description, its unit moved to the end, with default and bounds."""
     text, unit = parameter.description, ''
     head, _, rest = text.partition(': ')
-    if parameter.type is float and rest and ' ' not in head:
+    if parameter.type in (float, tuple) and rest and ' ' not in head:
         text, unit = rest, f' [{head}]'
     default = repr(parameter.default) if parameter.type is str else str(parameter.default)
+    if parameter.type is tuple:
+        default = f'[{", ".join(map(str, parameter.default))}]'
     bounds = f', in {parameter.range_text()}' if parameter.range_text() else ''
     choices = f', one of {", ".join(parameter.choices)}' if parameter.choices else ''
     return f'{text}{unit} (default {default}{bounds}{choices})'.replace('%', '%%')
 
 
+def double_array(text: str) -> tuple[float, ...]:
+    """A double array option: numbers separated by commas, optionally in brackets
+    (``0,0,1.57`` or ``[0, 0, 1.57]``; ``[]`` or an empty string: none)."""
+    inner = text.strip()
+    if inner.startswith('[') and inner.endswith(']'):
+        inner = inner[1:-1]
+    if not inner.strip():
+        return ()
+    try:
+        return tuple(float(item) for item in inner.split(','))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected numbers separated by commas, got {text!r}'
+                                         ) from None
+
+
 def _add_node_parameters(group: Any) -> None:
     for parameter in NODE_PARAMETERS:
-        if parameter.type is bool:
+        if parameter.type is tuple:
+            group.add_argument(_option(parameter), type=double_array, default=None,
+                               dest=parameter.name, metavar='X,Y,Z', help=_help(parameter))
+        elif parameter.type is bool:
             group.add_argument(_option(parameter), action=argparse.BooleanOptionalAction,
                                default=None, help=_help(parameter))
         else:
@@ -73,9 +98,10 @@ def parser() -> argparse.ArgumentParser:
                     'session and write its outputs (orientation, pose, energy, '
                     'angular_momentum, /diagnostics, twist or imu/data) to a new bag.')
     result.add_argument('bag', help='input bag (directory with metadata.yaml, or a .db3/.mcap '
-                                    'file)')
+                                    'file), or many: a folder of bags or a glob pattern')
     result.add_argument('-o', '--output', help='output bag directory (must not exist; '
-                                               'default: BAG_replayed)')
+                                               'default: BAG_replayed); with many bags, the '
+                                               'folder of their output bags and fleet.csv')
     result.add_argument('--storage', choices=sorted(STORAGES), default='sqlite3',
                         help='storage of the output bag (default: %(default)s)')
     _add_node_parameters(result.add_argument_group(
@@ -105,7 +131,20 @@ def parser() -> argparse.ArgumentParser:
                         help='outputs as CSV (and FILE_error.csv with --ground-truth)')
     report.add_argument('--progress', action=argparse.BooleanOptionalAction, default=None,
                         help='progress bar (default: on a terminal)')
+    _add_fleet_options(result.add_argument_group(
+        'many bags (a folder of bags or a glob pattern: one Dask task per bag)'))
     return result
+
+
+def _add_fleet_options(group: Any) -> None:
+    where = group.add_mutually_exclusive_group()
+    where.add_argument('--scheduler', default='', metavar='ADDRESS',
+                       help='an existing dask.distributed scheduler (tcp://host:8786)')
+    where.add_argument('--workers', type=int, default=0, metavar='N',
+                       help='worker processes of the local cluster (default: one per bag, '
+                            'at most one per CPU)')
+    where.add_argument('--serial', action='store_true',
+                       help='replay the bags one after the other in this process')
 
 
 def options_from(args: argparse.Namespace) -> ReplayOptions:
@@ -161,17 +200,60 @@ def _report_files(args: argparse.Namespace, output: Path, result: ReplayResult) 
         print(f'wrote {plot}')
 
 
+_GLOB_CHARACTERS = frozenset('*?[')
+
+
+def is_many_bags(bag: str) -> bool:
+    """Whether ``bag`` names many bags: a glob pattern, or a folder without ``metadata.yaml``
+    (a folder of bags; one bag is a folder with ``metadata.yaml`` or a file)."""
+    path = Path(bag).expanduser()
+    if path.exists():
+        return path.is_dir() and not path.joinpath('metadata.yaml').is_file()
+    return bool(_GLOB_CHARACTERS & set(bag))
+
+
+def _fleet_output(args: argparse.Namespace) -> Path:
+    if args.output:
+        return Path(args.output)
+    if _GLOB_CHARACTERS & set(args.bag) and not Path(args.bag).exists():
+        raise _UsageError('-o/--output is required with a glob pattern (the folder of the '
+                          'output bags)')
+    return _default_output(args.bag)
+
+
+class _UsageError(Exception):
+    """An option that does not fit many bags (one ``error:`` line)."""
+
+
+def _replay_many(args: argparse.Namespace) -> int:
+    from rigid_body_attitude.tools.campaign.fleet import find_bags, format_table, replay_fleet
+    if args.csv or args.plot:
+        raise _UsageError('--csv and --plot are for one bag; many bags write OUTPUT/fleet.csv')
+    if args.workers < 0:
+        raise _UsageError('--workers must be at least 1')
+    output = _fleet_output(args)
+    bags = find_bags(args.bag)
+    rows = replay_fleet(bags, output, options_from(args), scheduler=args.scheduler,
+                        workers=args.workers, serial=args.serial, progress=args.progress)
+    print(format_table(rows))
+    failed = sum(row['status'] != 'ok' for row in rows)
+    print(f'{len(rows)} bags, {failed} not replayed; wrote {output / "fleet.csv"}')
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point: 0 on success, 1 with ``error: ...`` for unusable input."""
     args = parser().parse_args(argv)
-    output = Path(args.output) if args.output else _default_output(args.bag)
     try:
+        if is_many_bags(args.bag):
+            return _replay_many(args)
+        output = Path(args.output) if args.output else _default_output(args.bag)
         result = replay_bag(args.bag, output, options_from(args), progress=args.progress,
                             keep_series=bool(args.csv or args.plot),
                             scene_given=args.scene is not None, log=_StderrLog())
         print(summary(result))
         _report_files(args, output, result)
-    except (AttitudeError, OSError, UnicodeError) as err:
+    except (AttitudeError, OSError, UnicodeError, _UsageError) as err:
         # Bad options, scenes and bags (AttitudeError: InputError, SceneError, BagError, ...),
         # unreadable or unwritable files: the user's to fix, no traceback.
         print(f'error: {str(err).splitlines()[0] if str(err) else type(err).__name__}',

@@ -2,8 +2,8 @@
 replay's own (topics, ground truth, outputs, storage).
 
 The node's parameters are the entries of
-:data:`rigid_body_attitude.session.parameters.PARAMETERS`: the same names, defaults, bounds and
-checks (:func:`~rigid_body_attitude.session.parameters.check_values`).
+:data:`rigid_body_attitude.session.parameters.PARAMETERS` but the TF ones: the same names,
+defaults, bounds and checks (:func:`~rigid_body_attitude.session.parameters.check_values`).
 :class:`ReplayOptions` declares them as typed fields (so ``mypy`` and readers see them); the
 check at the end of this module fails at import when the fields and the table part ways.
 """
@@ -20,10 +20,14 @@ from rigid_body_attitude.session.parameters import PARAMETERS, Parameter, check_
 from rigid_body_attitude.session.settings import (
     OUTPUT_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC)
 
-__all__ = ['NODE_PARAMETERS', 'ReplayOptions', 'check_options']
+__all__ = ['NODE_PARAMETERS', 'ReplayOptions', 'TF_PARAMETERS', 'check_options']
 
-#: The node's parameters the replay takes: every one of the table.
-NODE_PARAMETERS: tuple[Parameter, ...] = PARAMETERS
+#: Node parameters about TF only (a bag has no ``/tf_static`` to wait for, the replay writes
+#: no ``/tf``): the replay does not take them.
+TF_PARAMETERS = ('publish_tf', 'tf_rate', 'tf_timeout')
+#: The node's parameters the replay takes: every one of the table but :data:`TF_PARAMETERS`.
+NODE_PARAMETERS: tuple[Parameter, ...] = tuple(
+    p for p in PARAMETERS if p.name not in TF_PARAMETERS)
 _DEFAULT = {p.name: p.default for p in NODE_PARAMETERS}
 
 
@@ -60,6 +64,14 @@ class ReplayOptions:
     torque_timeout: float = _DEFAULT['torque_timeout']
     integrator: str = _DEFAULT['integrator']
     step: float = _DEFAULT['step']
+    mount_rpy: tuple[float, ...] = _DEFAULT['mount_rpy']
+    world_axes: str = _DEFAULT['world_axes']
+    align_seconds: float = _DEFAULT['align_seconds']
+    align_timeout: float = _DEFAULT['align_timeout']
+    initial_yaw: float = _DEFAULT['initial_yaw']
+    refine_bias_at_rest: bool = _DEFAULT['refine_bias_at_rest']
+    calibration_file: str = _DEFAULT['calibration_file']
+    calibration_imu_key: str = _DEFAULT['calibration_imu_key']
     covariance: bool = _DEFAULT['covariance']
     gyroscope_noise_density: float = _DEFAULT['gyroscope_noise_density']
     gyroscope_random_walk: float = _DEFAULT['gyroscope_random_walk']
@@ -79,12 +91,15 @@ class ReplayOptions:
     storage: str = 'sqlite3'
 
     def parameters(self) -> dict[str, Any]:
-        """The node's parameters by name (an ``int`` given for a double becomes a float)."""
+        """The node's parameters by name (an ``int`` given for a double becomes a float, a
+        list for a double array a tuple)."""
         values = {}
         for parameter in NODE_PARAMETERS:
             value = getattr(self, parameter.name)
             if parameter.type is float and type(value) is int:  # Python callers write 50
                 value = float(value)
+            elif parameter.type is tuple and isinstance(value, list):
+                value = tuple(float(item) if type(item) is int else item for item in value)
             values[parameter.name] = value
         return values
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from rigid_body_attitude.bag import BagError, BagReader
 from rigid_body_attitude.core.errors import InputError
@@ -17,7 +18,7 @@ from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.msgs import (
     ATTITUDE_DECODERS, IMU, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED, VECTOR3_STAMPED,
     WRENCH_STAMPED)
-from rigid_body_attitude.session.decoding import RATE_DECODERS, Decoded
+from rigid_body_attitude.session.decoding import RATE_DECODERS
 from rigid_body_attitude.session.settings import (
     GYRO_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, SET_POSE_WITH_COVARIANCE_TOPIC,
     TORQUE_TOPIC, input_topics, output_topics)
@@ -25,7 +26,7 @@ from rigid_body_attitude.tools.replay.options import ReplayOptions
 
 __all__ = ['Plan', 'make_plan']
 
-Decoder = Callable[[bytes], Decoded]
+Decoder = Callable[[bytes], tuple[Any, ...]]
 
 
 @dataclass(frozen=True)

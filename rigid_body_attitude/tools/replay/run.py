@@ -258,4 +258,4 @@ def _result(input_path: Path, output_path: Path, scene: Scene, plan: Plan,
         final_attitude=sink.last_attitude, diagnostics=session.propagator.diagnostics(),
         series=series, errors=errors, alignment_stamp_ns=aligned_at,
         gyro_messages=run.gyro_messages, elapsed=run.elapsed, notes=notes,
-        final_state=state_summary(session.propagator))
+        final_state=state_summary(session.propagator, session.strapdown_state()))

@@ -1,0 +1,277 @@
+"""The start of a real IMU's strapdown run: mount, calibration, levelling, bias, diagnostics.
+
+:class:`ImuStart` is the part of :class:`~rigid_body_attitude.session.gyro.GyroSession` that
+takes a sample off the inline hot path: while the session levels from gravity, when the
+calibration's gyro correction takes the accelerometer, and with ``refine_bias_at_rest``
+(:mod:`~rigid_body_attitude.session.levelling` says what each step does). It also gives the
+ROS adapter the mount (:meth:`ImuStart.mount_needed`, :meth:`ImuStart.set_mount`) and the
+reports the alignment state and the bias estimate.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from rigid_body_attitude.core.calibration import load_calibration
+from rigid_body_attitude.core.propagator import GyroPropagator
+from rigid_body_attitude.session.base import LEVEL_INFO, Session
+from rigid_body_attitude.session.levelling import (
+    FROM_SCENE, AlignmentResult, Levelling, SampleMap, heading, rpy_quaternion)
+from rigid_body_attitude.session.reports import (
+    LEVEL_WARN, NOT_ALIGNED, StrapdownState, gyro_bias_text)
+from rigid_body_attitude.session.stream import GyroStream
+from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND
+
+__all__ = ['ImuStart', 'REJECTION_DETAIL']
+
+#: Why a gyro sample was ignored, by rejection reason (the warning texts).
+REJECTION_DETAIL = {
+    'non_finite': 'a non-finite rate (NaN or Inf); sample ignored',
+    'out_of_range': 'a rate above max_angular_rate; sample ignored',
+    'stale_stamp': 'a stamp not newer than the last one; sample ignored',
+    'outlier_stamp': 'a stamp off the time line that the next samples did not confirm; '
+                     'ignored',
+    'gap': 'a gap longer than max_dt, confirmed by the next samples; not integrated across, '
+           'attitude held',
+}
+_NO_ACCELEROMETER = ('not levelled: no accelerometer data (angular_velocity input or zero '
+                     'linear_acceleration); initial attitude from the scene or set_pose')
+_LEVELLING_OFF = ('not levelled: align_seconds is 0; initial attitude from the scene or '
+                  'set_pose')
+
+
+class ImuStart(Session):
+    """Calibration, mount, levelling and bias of a gyro session's samples.
+
+    Read-only parameters taken at start: ``mount_rpy``, ``world_axes``, ``align_seconds``,
+    ``align_timeout``, ``initial_yaw``, ``refine_bias_at_rest``, ``calibration_file`` and
+    ``calibration_imu_key`` (a bad calibration file raises
+    :class:`~rigid_body_attitude.core.errors.CalibrationError`).
+
+    Attributes:
+        on_aligned: called with the :class:`~.levelling.AlignmentResult` each time the
+            start of the integration is settled (levelled, or from the scene).
+        alignment: the last :class:`~.levelling.AlignmentResult` (``None`` while aligning).
+    """
+
+    propagator: GyroPropagator
+    stream: GyroStream
+    body_frame: str
+
+    def _start_imu(self, values: Mapping[str, Any]) -> None:
+        """Read the calibration file and set up mount and levelling from ``values``."""
+        calibration = (load_calibration(values['calibration_file'],
+                                        values['calibration_imu_key'])
+                       if values['calibration_file'] else None)
+        self._calibration = calibration
+        mount_rpy = values['mount_rpy']
+        self._mount_given = bool(mount_rpy)
+        self.sample_map = SampleMap(calibration, rpy_quaternion(*mount_rpy) if mount_rpy
+                                    else None)
+        gyro_noise = calibration.noise.gyro_sigma() if calibration is not None else None
+        self.levelling = (Levelling(values['align_seconds'], values['align_timeout'],
+                                    values['initial_yaw'], values['world_axes'],
+                                    gyro_noise or 0.0, values['refine_bias_at_rest'])
+                          if values['align_seconds'] > 0.0 else None)
+        self.on_aligned: Callable[[AlignmentResult], None] | None = None
+        self.alignment: AlignmentResult | None = None
+        self._aligning = True  # until the first sample says how to start
+        self._special = True  # aligning, or a sample map the inline path cannot do
+        self._affine: tuple[float, ...] | None = None
+        self._told_no_accelerometer = False
+        self._align_samples = 0
+
+    def calibration_noise(self) -> dict[str, float]:
+        """The noise densities the calibration file gives (kalibr names; empty without a
+        file or without a noise model)."""
+        if self._calibration is None:
+            return {}
+        noise = self._calibration.noise
+        given = {'gyroscope_noise_density': noise.gyroscope_noise_density,
+                 'gyroscope_random_walk': noise.gyroscope_random_walk}
+        return {key: value for key, value in given.items() if value is not None}
+
+    def _restart_levelling(self) -> None:
+        """``~/reset`` with levelling: the scene's attitude, no bias, level again."""
+        if self.levelling is None:
+            return
+        self.levelling.reset()
+        self.propagator.scene = self.scene
+        self.sample_map.set_gyro_bias((0.0, 0.0, 0.0))
+        self.alignment = None
+        self._aligning = True
+        self._update_paths()
+
+    # -- the mount and the alignment (the session API of the ROS adapter) -------------------
+
+    def mount_needed(self, sensor_frame: str) -> bool:
+        """Whether the mount must come from TF: ``mount_rpy`` is not set and the Imu's frame
+        ``sensor_frame`` (not empty) differs from ``body_frame``."""
+        return not self._mount_given and bool(sensor_frame) and sensor_frame != self.body_frame
+
+    def set_mount(self, q_body_sensor: tuple[float, float, float, float] | None) -> None:
+        """The rotation ``(w, x, y, z)`` mapping sensor-frame vectors into the body frame
+        (``None``: identity); raises :class:`~rigid_body_attitude.core.errors.InputError` for
+        a zero or non-finite quaternion."""
+        self.sample_map.set_mount(q_body_sensor)
+        self._update_paths()
+
+    @property
+    def alignment_done(self) -> bool:
+        """Whether the integration has started (levelled, or from the scene)."""
+        return not self._aligning
+
+    def _update_paths(self) -> None:
+        """Choose the per-sample path: inline affine map, or the general one."""
+        refine = (self.levelling is not None and self.levelling.refine_bias_at_rest
+                  and self.alignment is not None and self.alignment.source != FROM_SCENE)
+        self._special = self._aligning or self.sample_map.uses_accelerometer or refine
+        self._affine = None if self.sample_map.identity else self.sample_map.affine
+
+    # -- the general path: levelling, accelerometer-dependent calibration, bias at rest ----
+
+    def _special_sample(self, sec: int, nanosec: int, rate: Sequence[float],
+                        accel: Sequence[float] | None) -> Sequence[float] | None:
+        """The body rate less the bias of a sample off the inline path, or ``None`` when the
+        sample went to the levelling (or was refused there)."""
+        if accel is not None and accel[0] == 0.0 and accel[1] == 0.0 and accel[2] == 0.0:
+            accel = None  # an Imu without accelerometer data
+        if self._aligning:
+            if accel is None or self.levelling is None:
+                self._start_from_scene()
+            else:
+                return self._levelling_sample(sec * NANOSECONDS_PER_SECOND + nanosec, rate,
+                                              accel)
+        try:
+            body_rate, body_accel = self.sample_map.body_sample(rate, accel)
+        except (TypeError, ValueError):
+            return rate  # not 3 numbers: the stream refuses it
+        levelling = self.levelling
+        if levelling is not None and levelling.refine_bias_at_rest and body_accel is not None:
+            stream = self.stream
+            step_ns = sec * NANOSECONDS_PER_SECOND + nanosec - stream.last_ns
+            dt = step_ns * 1e-9 if 0 < step_ns <= stream.max_dt_ns else 0.0
+            if math.isfinite(sum(body_rate) + sum(body_accel)):
+                bias = levelling.refine(body_rate, body_accel, dt)
+                if bias is not None:
+                    self.sample_map.set_gyro_bias(bias)
+        b = self.sample_map.gyro_bias
+        return body_rate[0] - b[0], body_rate[1] - b[1], body_rate[2] - b[2]
+
+    def _levelling_sample(self, stamp_ns: int, rate: Sequence[float],
+                          accel: Sequence[float]) -> Sequence[float] | None:
+        """A sample while levelling: checked, then to the aligner; the one that completes
+        the levelling is returned (bias-corrected) as the integration's first sample."""
+        levelling = self.levelling
+        assert levelling is not None
+        reason = self._sample_problem(rate, accel)
+        if reason:
+            self.rejections[reason] += 1
+            self.warn(reason, f'gyro: {REJECTION_DETAIL[reason]} (while levelling)')
+            return None
+        stream = self.stream
+        dt = levelling.interval(stamp_ns, stream.max_dt_ns, stream.threshold_ns,
+                                stream.constant_dt)
+        if dt is None:
+            self.rejections['stale_stamp'] += 1
+            self.warn('stale_stamp', f'gyro: {REJECTION_DETAIL["stale_stamp"]} (while levelling)')
+            return None
+        body_rate, body_accel = self.sample_map.body_sample(rate, accel)
+        assert body_accel is not None
+        if not levelling.add(body_rate, body_accel, dt):
+            self._align_samples += 1
+            return None
+        self._aligned(levelling.result())
+        b = self.sample_map.gyro_bias
+        return body_rate[0] - b[0], body_rate[1] - b[1], body_rate[2] - b[2]
+
+    def _sample_problem(self, rate: Sequence[float], accel: Sequence[float]) -> str:
+        """``'non_finite'``, ``'out_of_range'`` or ``''`` for a sample to level with."""
+        try:
+            wx, wy, wz = (float(value) for value in rate)
+            ax, ay, az = (float(value) for value in accel)
+        except (TypeError, ValueError):
+            return 'non_finite'
+        if not math.isfinite(wx + wy + wz + ax + ay + az):
+            return 'non_finite'
+        if not wx * wx + wy * wy + wz * wz <= self.stream.max_rate_squared:
+            return 'out_of_range'
+        return ''
+
+    def _aligned(self, result: AlignmentResult) -> None:
+        """Levelling done: the levelled attitude is the initial state; the bias is set."""
+        self.alignment = result
+        self.sample_map.set_gyro_bias(result.gyro_bias)
+        self.propagator.scene = replace(self.scene,
+                                        initial_attitude=np.array(result.attitude))
+        self.stream.reset()
+        self._aligning = False
+        self._update_paths()
+        w, x, y, z = result.attitude
+        self.sink.log(LEVEL_INFO if result.at_rest else LEVEL_WARN,
+                      f'gyro: {result.status}; initial attitude (w, x, y, z) '
+                      f'({w:.6f}, {x:.6f}, {y:.6f}, {z:.6f}), gyro bias [rad/s] '
+                      f'{_vector_text(result.gyro_bias)}')
+        if self.on_aligned is not None:
+            self.on_aligned(result)
+
+    def _start_from_scene(self) -> None:
+        """No levelling: start at once from the scene's attitude (or set_pose's)."""
+        status = _LEVELLING_OFF if self.levelling is None else _NO_ACCELEROMETER
+        attitude = self.propagator.state.attitude_tuple()
+        self.alignment = AlignmentResult(attitude=attitude, gyro_bias=(0.0, 0.0, 0.0),
+                                         window_seconds=0.0, at_rest=False, source=FROM_SCENE,
+                                         status=status)
+        self._aligning = False
+        self._update_paths()
+        if self.levelling is not None and not self._told_no_accelerometer:
+            self._told_no_accelerometer = True
+            self.sink.log(LEVEL_INFO, f'gyro: {status}')
+        if self.on_aligned is not None:
+            self.on_aligned(self.alignment)
+
+    def set_pose(self, frame_id: str, attitude: tuple[float, float, float, float],
+                 position: tuple[float, float, float],
+                 covariance: Sequence[float] | None = None) -> None:
+        """Re-initialise the attitude (and its ``covariance``, as the base session does);
+        while levelling, its heading is the levelled yaw."""
+        accepted = self.poses_accepted
+        super().set_pose(frame_id, attitude, position, covariance)
+        if self._aligning and self.levelling is not None and self.poses_accepted > accepted:
+            self.levelling.set_yaw(heading(self.propagator.state.attitude_tuple()))
+
+    def alignment_text(self) -> str:
+        """The alignment state in words (the diagnostics' ``alignment`` value)."""
+        if self._aligning:
+            if self.levelling is None or not self.levelling.samples:
+                return 'not started: no gyro sample yet'
+            return f'aligning: {self.levelling.status}'
+        return self.alignment.status if self.alignment is not None else NOT_ALIGNED
+
+    def strapdown_state(self) -> StrapdownState:
+        """The alignment and the bias estimate for the reports (levelling: WARN, nothing is
+        integrated yet)."""
+        levelling = self._aligning and self.levelling is not None and self.levelling.samples > 0
+        return StrapdownState(self.alignment_text(), self.bias_text(), levelling)
+
+    def bias_text(self) -> str:
+        """The gyro bias estimate [rad/s, body frame] in words (the diagnostics' value)."""
+        scene_bias = gyro_bias_text(self.propagator)
+        alignment = self.alignment
+        if self._aligning and self.levelling is not None and self.levelling.samples:
+            return 'estimating (levelling)'
+        if alignment is None or alignment.source == FROM_SCENE:
+            return scene_bias
+        refined = ', refined at rest' if self.levelling and (
+            self.levelling.refine_bias_at_rest) else ''
+        text = f'{_vector_text(self.sample_map.gyro_bias)} (levelling{refined})'
+        return text if scene_bias == 'none' else f'{text}; scene gyro_bias {scene_bias}'
+
+
+def _vector_text(vector: Sequence[float]) -> str:
+    return ' '.join(f'{float(value):.9g}' for value in vector)
