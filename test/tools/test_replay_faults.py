@@ -16,9 +16,9 @@ from bag_fixtures import build_case, write_records, write_scene
 from rigid_body_attitude.bag import BagReader, deserialize, read_series
 from rigid_body_attitude.msgs import (
     IMU, POSE_STAMPED, WRENCH_STAMPED, encode_imu, encode_pose_stamped, encode_wrench_stamped)
-from rigid_body_attitude.session.parameters import PARAMETERS
 from rigid_body_attitude.tools.replay import main
 from rigid_body_attitude.tools.replay.cli import parser
+from rigid_body_attitude.tools.replay.options import NODE_PARAMETERS
 
 OMEGA = (0.4, -1.1, 2.3)
 START_NS = 10_000_000_000
@@ -172,9 +172,10 @@ def test_warnings_are_throttled_on_bag_time(tmp_path, capsys):
 
 def test_command_line_options_are_derived_from_the_parameter_table(tmp_path, capsys):
     text = parser().format_help()
-    for parameter in PARAMETERS:
+    for parameter in NODE_PARAMETERS:
         option = '--' + parameter.name.replace('_', '-')
         assert option in text, option
+    assert '--publish-tf' not in text  # a bag has no TF to publish to
     assert '--no-header-stamps' in text and '--no-use-header-stamps' in text
     args = parser().parse_args(['bag', '--max-dt', '0.5', '--no-header-stamps'])
     assert args.max_dt == 0.5 and args.use_header_stamps is False
