@@ -11,6 +11,8 @@ without interference from other load, the median is printed beside it:
   each sample (a fold per sample);
 * ``step + folded covariance read every sample``: ``folded_attitude_covariance`` read after each
   sample (the value at the last fold, at most a batch old);
+* ``step + covariance (batch 256, the node's)``: as the gyro session folds
+  (:data:`rigid_body_attitude.session.uncertainty.BATCH_SIZE`);
 * ``step + covariance, batch 1``: a fold per sample, read at the end.
 
 Usage: ``python bench/attitude_covariance_cost.py [--steps 20000] [--repeats 5] [--json PATH]``.
@@ -31,6 +33,7 @@ import numpy as np
 
 from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance, DEFAULT_BATCH_SIZE
 from rigid_body_attitude.core.quaternion import scalar_exp_step
+from rigid_body_attitude.session.uncertainty import BATCH_SIZE
 
 DT = 0.001
 
@@ -89,6 +92,7 @@ def main() -> None:
     contenders = {
         'scalar_exp_step': strapdown,
         f'step + covariance (batch {DEFAULT_BATCH_SIZE})': with_covariance(DEFAULT_BATCH_SIZE),
+        f'step + covariance (batch {BATCH_SIZE}, the node\'s)': with_covariance(BATCH_SIZE),
         'step + covariance read every sample': with_covariance(DEFAULT_BATCH_SIZE,
                                                                'attitude_covariance'),
         'step + folded covariance read every sample': with_covariance(

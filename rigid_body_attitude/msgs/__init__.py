@@ -6,7 +6,8 @@ messages with these, as the replay tool does with a bag's records.
 * :mod:`~rigid_body_attitude.msgs.types`: the message type names and the table of fixed
   layouts (a header, then float64 fields) the codecs are built from.
 * :mod:`~rigid_body_attitude.msgs.decoders`: checked decoders of the fixed-layout messages
-  (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped, Float64)
+  (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped,
+  PoseWithCovarianceStamped, Float64)
   to plain values, raising :class:`MalformedMessage` for any bytes that are not one.
 * :mod:`~rigid_body_attitude.msgs.cdr`: fast ``struct`` encoders of those messages and the
   float-stamp decoders of bag readers.
@@ -26,6 +27,7 @@ from rigid_body_attitude.msgs.cdr import (
     encode_float64,
     encode_imu,
     encode_pose_stamped,
+    encode_pose_with_covariance_stamped,
     encode_quaternion_stamped,
     encode_twist_stamped,
     encode_vector3_stamped,
@@ -39,6 +41,7 @@ from rigid_body_attitude.msgs.cdr import (
     pose_orientation,
     pose_position,
     pose_stamped_encoder,
+    pose_with_covariance_stamped_encoder,
     quaternion_stamped,
     quaternion_stamped_encoder,
     stamp_to_ns,
@@ -59,6 +62,7 @@ from rigid_body_attitude.msgs.decoders import (
     decode_imu_motion,
     decode_imu_rate,
     decode_pose_stamped,
+    decode_pose_with_covariance_stamped,
     decode_quaternion_stamped,
     decode_twist_angular,
     decode_twist_stamped,
@@ -74,6 +78,7 @@ from rigid_body_attitude.msgs.types import (
     IMU,
     MESSAGE_TYPES,
     POSE_STAMPED,
+    POSE_WITH_COVARIANCE_STAMPED,
     QUATERNION_STAMPED,
     TWIST_STAMPED,
     VECTOR3_STAMPED,
@@ -91,6 +96,7 @@ __all__ = [
     'IMU',
     'MESSAGE_TYPES',
     'POSE_STAMPED',
+    'POSE_WITH_COVARIANCE_STAMPED',
     'QUATERNION_STAMPED',
     'RATE_DECODERS',
     'TORQUE_DECODERS',
@@ -108,6 +114,7 @@ __all__ = [
     'decode_imu_motion',
     'decode_imu_rate',
     'decode_pose_stamped',
+    'decode_pose_with_covariance_stamped',
     'decode_quaternion_stamped',
     'decode_twist_angular',
     'decode_twist_stamped',
@@ -117,6 +124,7 @@ __all__ = [
     'encode_float64',
     'encode_imu',
     'encode_pose_stamped',
+    'encode_pose_with_covariance_stamped',
     'encode_quaternion_stamped',
     'encode_twist_stamped',
     'encode_vector3_stamped',
@@ -130,6 +138,7 @@ __all__ = [
     'pose_orientation',
     'pose_position',
     'pose_stamped_encoder',
+    'pose_with_covariance_stamped_encoder',
     'quaternion_stamped',
     'quaternion_stamped_encoder',
     'stamp_to_ns',

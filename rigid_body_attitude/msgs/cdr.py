@@ -71,6 +71,7 @@ __all__ = [
     'encode_float64',
     'encode_imu',
     'encode_pose_stamped',
+    'encode_pose_with_covariance_stamped',
     'encode_quaternion_stamped',
     'encode_twist_stamped',
     'encode_vector3_stamped',
@@ -84,6 +85,7 @@ __all__ = [
     'pose_orientation',
     'pose_position',
     'pose_stamped_encoder',
+    'pose_with_covariance_stamped_encoder',
     'quaternion_stamped',
     'quaternion_stamped_encoder',
     'stamp_to_ns',
@@ -220,16 +222,18 @@ def stamp_to_ns(stamp_s: float) -> int:
     return whole * _NS_PER_S + round((stamp_s - whole) * _NS_PER_S)
 
 
-_IMU_ORIENTATION = {True: Struct('<4d72x'), False: Struct('>4d72x')}  # quaternion, zero cov
+_IMU_ORIENTATION = {True: Struct('<4d9d'), False: Struct('>4d9d')}  # quaternion, covariance
 _IMU_ORIENTATION_SIZE = 13 * 8
 
 
 def imu_with_orientation(data: bytes, attitude: Sequence[float],
-                         stamp: tuple[int, int] | None = None) -> bytes:
-    """The ``sensor_msgs/msg/Imu`` ``data`` with orientation ``(w, x, y, z)``, covariance zero.
+                         stamp: tuple[int, int] | None = None,
+                         covariance: Sequence[float] = _UNKNOWN_COVARIANCE) -> bytes:
+    """The ``sensor_msgs/msg/Imu`` ``data`` with orientation ``(w, x, y, z)`` and its covariance.
 
     What the node publishes on ``imu/data``: the input message with the propagated attitude
-    and an all-zero (unknown) orientation covariance, and with the header stamp ``stamp``
+    and ``covariance`` (9 row-major values, rad², about fixed world axes; default all zero,
+    REP-145's "unknown"), and with the header stamp ``stamp``
     ``(sec, nanosec)`` when given (the receive time the node used instead of the message's);
     everything else, the encapsulation and byte order included, as it came. ``data`` is checked as
     :func:`~rigid_body_attitude.msgs.decoders.decode_imu` checks it
@@ -237,7 +241,7 @@ def imu_with_orientation(data: bytes, attitude: Sequence[float],
     """
     offset, little_endian = body_offset(data, IMU, IMU_COUNT)
     w, x, y, z = attitude
-    orientation = _IMU_ORIENTATION[little_endian].pack(x, y, z, w)
+    orientation = _IMU_ORIENTATION[little_endian].pack(x, y, z, w, *covariance)
     head = data[:offset]
     if stamp is not None:
         head = _STAMP[little_endian].pack(*stamp).join((head[:4], head[12:]))
@@ -399,6 +403,41 @@ def pose_stamped_encoder(frame_id: str
         except struct.error as err:
             raise _stamp_error(sec, nanosec) from err
     return encode
+
+
+def pose_with_covariance_stamped_encoder(
+        frame_id: str) -> Callable[[int, int, Sequence[float], Sequence[float], Sequence[float]],
+                                   bytes]:
+    """``encode(sec, nanosec, position, (w, x, y, z), covariance)``: a
+    ``geometry_msgs/msg/PoseWithCovarianceStamped`` of one frame (covariance: 36 row-major
+    values); the header bytes of ``frame_id`` are packed once, each call is one ``struct`` call.
+    """
+    pack, constant = _header_struct(frame_id, '43d')
+
+    def encode(sec: int, nanosec: int, position: Sequence[float], attitude: Sequence[float],
+               covariance: Sequence[float]) -> bytes:
+        px, py, pz = position
+        w, x, y, z = attitude
+        if len(covariance) != 36:
+            raise InputError(f'Expected `covariance` to have 36 values, got {len(covariance)}')
+        try:
+            return pack(_ENCAPSULATION_LE, sec, nanosec, constant, px, py, pz, x, y, z, w,
+                        *covariance)
+        except struct.error as err:
+            raise _stamp_error(sec, nanosec) from err
+    return encode
+
+
+def encode_pose_with_covariance_stamped(stamp_ns: int, frame_id: str,
+                                        position: Sequence[float], attitude: Sequence[float],
+                                        covariance: Sequence[float]) -> bytes:
+    """CDR bytes of a ``geometry_msgs/msg/PoseWithCovarianceStamped`` (position m, attitude
+    (w, x, y, z), covariance the 36 row-major values)."""
+    values = tuple(covariance)
+    if len(values) != 36:
+        raise InputError(f'Expected `covariance` to have 36 values, got {len(values)}')
+    return _pack(frame_id, stamp_ns, _vector(position, 'position')
+                 + _ros_quaternion(attitude, 'attitude') + values)
 
 
 def stamped_floats_encoder(frame_id: str, count: int

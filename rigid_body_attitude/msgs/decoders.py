@@ -14,6 +14,7 @@ they are (physical bounds are the session's job).
 ``decode_twist_angular(data)``      ``(sec, nanosec, frame_id, (ωx, ωy, ωz))`` of a TwistStamped
 ``decode_wrench_stamped(data)``     ``(sec, nanosec, frame_id, force, torque)``
 ``decode_pose_stamped(data)``       ``(sec, nanosec, frame_id, position, (w, x, y, z))``
+``decode_pose_with_covariance_stamped(data)`` the same and the row-major 6×6 covariance (36)
 ``decode_quaternion_stamped(data)`` ``(sec, nanosec, frame_id, (w, x, y, z))``
 ``decode_twist_stamped(data)``      ``(sec, nanosec, frame_id, linear, angular)``
 ``decode_imu(data)``                ``(sec, nanosec, frame_id, (w, x, y, z), ω, a)``
@@ -72,6 +73,7 @@ from rigid_body_attitude.msgs.types import (
     FLOAT64,
     IMU,
     POSE_STAMPED,
+    POSE_WITH_COVARIANCE_STAMPED,
     QUATERNION_STAMPED,
     TWIST_STAMPED,
     VECTOR3_STAMPED,
@@ -90,6 +92,7 @@ __all__ = [
     'decode_imu_motion',
     'decode_imu_rate',
     'decode_pose_stamped',
+    'decode_pose_with_covariance_stamped',
     'decode_quaternion_stamped',
     'decode_twist_angular',
     'decode_twist_stamped',
@@ -429,6 +432,7 @@ def _whole(msgtype: str) -> GyroDecoder:
 _wrench = _whole(WRENCH_STAMPED)
 _twist = _whole(TWIST_STAMPED)
 _pose = _whole(POSE_STAMPED)
+_pose_with_covariance = _whole(POSE_WITH_COVARIANCE_STAMPED)
 _quaternion = _whole(QUATERNION_STAMPED)
 
 #: Rate decoders by gyro message type (TwistStamped: its angular part).
@@ -455,6 +459,15 @@ def decode_pose_stamped(data: bytes) -> tuple[int, int, str, Floats, Floats]:
     """``(sec, nanosec, frame_id, position, (w, x, y, z))`` of a ``PoseStamped``."""
     sec, nanosec, frame_id, (px, py, pz, x, y, z, w) = _pose(data)
     return sec, nanosec, frame_id, (px, py, pz), (w, x, y, z)
+
+
+def decode_pose_with_covariance_stamped(
+        data: bytes) -> tuple[int, int, str, Floats, Floats, Floats]:
+    """``(sec, nanosec, frame_id, position, (w, x, y, z), covariance)`` of a
+    ``geometry_msgs/msg/PoseWithCovarianceStamped`` (covariance: the 36 row-major values)."""
+    sec, nanosec, frame_id, values = _pose_with_covariance(data)
+    px, py, pz, x, y, z, w = values[:7]
+    return sec, nanosec, frame_id, (px, py, pz), (w, x, y, z), values[7:]
 
 
 def decode_quaternion_stamped(data: bytes) -> tuple[int, int, str, Floats]:

@@ -20,6 +20,7 @@ __all__ = [
     'IMU',
     'MESSAGE_TYPES',
     'POSE_STAMPED',
+    'POSE_WITH_COVARIANCE_STAMPED',
     'QUATERNION_STAMPED',
     'TWIST_STAMPED',
     'VECTOR3_STAMPED',
@@ -32,6 +33,7 @@ VECTOR3_STAMPED = 'geometry_msgs/msg/Vector3Stamped'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
 QUATERNION_STAMPED = 'geometry_msgs/msg/QuaternionStamped'
 POSE_STAMPED = 'geometry_msgs/msg/PoseStamped'
+POSE_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/PoseWithCovarianceStamped'
 TWIST_STAMPED = 'geometry_msgs/msg/TwistStamped'
 FLOAT64 = 'std_msgs/msg/Float64'
 DIAGNOSTIC_ARRAY = 'diagnostic_msgs/msg/DiagnosticArray'
@@ -76,6 +78,9 @@ FIXED_LAYOUTS: dict[str, Layout] = {
     TWIST_STAMPED: Layout(True, _vector('twist.linear') + _vector('twist.angular')),
     QUATERNION_STAMPED: Layout(True, _quaternion('quaternion')),
     POSE_STAMPED: Layout(True, _vector('pose.position') + _quaternion('pose.orientation')),
+    POSE_WITH_COVARIANCE_STAMPED: Layout(
+        True, _vector('pose.pose.position') + _quaternion('pose.pose.orientation')
+        + tuple(f'pose.covariance[{index}]' for index in range(36))),
     FLOAT64: Layout(False, ('data',)),
 }
 

@@ -9,22 +9,20 @@ topic, warned about. Nothing here integrates or decides about time; the replay t
 same session, so a replayed bag gives the same numbers.
 
 * Gyro scenes advance on each ``imu`` (sensor_msgs/Imu) or ``angular_velocity``
-  (geometry_msgs/Vector3Stamped) message and publish ``orientation``, ``pose`` and (for Imu
-  input) ``imu/data`` per message. Spun in-process by any executor the node works as usual,
+  (geometry_msgs/Vector3Stamped) message and publish ``orientation``, ``pose``,
+  ``pose_with_covariance`` (parameter ``covariance``) and (for Imu input) ``imu/data`` per
+  message. Spun in-process by any executor the node works as usual,
   one message per callback; :func:`~.serve.main` serves the gyro subscriptions and timers with
   a :class:`~.gyro_loop.GyroLoop` (every queued message per wake-up).
 * Dynamics scenes advance on a timer of the node clock (``use_sim_time`` works) at
   ``publish_rate``, served by the same gyro loop (timers only); commands arrive on
   ``torque`` (WrenchStamped) and ``rotor_torque`` (Vector3Stamped) when the scene takes them.
-* Dynamics scenes also publish ``twist``, ``energy`` and ``angular_momentum`` per tick (a gyro
-  scene simulates no body); ``/diagnostics`` once a second,
-  with an INFO log line every 5 s; ``set_pose`` re-initialises the attitude (and position);
   ``~/reset`` restores the scene's initial state.
-* Commands (``set_pose``, ``torque``, ``rotor_torque``) are coalesced: only the newest of
-  each topic matters, so each callback takes every message queued behind its own and hands
-  the newest to the session once (the others counted ``superseded``). Log lines go through a
-  queue with a thread of its own (:mod:`~.log_queue`), never written while the state lock is
-  held.
+* Commands (``set_pose``, ``set_pose_with_covariance``, ``torque``, ``rotor_torque``) are
+  coalesced: only the newest of each topic matters, so each callback takes every message queued
+  behind its own and hands the newest to the session once (the others counted ``superseded``). Log
+  lines go through a queue with a thread of its own (:mod:`~.log_queue`), never written while the
+  state lock is held.
 * Gyro scenes read the sensor's mount from ``/tf_static`` when the samples' frame is not
   ``body_frame`` and ``mount_rpy`` is not set (:mod:`~.tf_lookup`); with ``publish_tf`` the
   attitude also goes to ``/tf``.
@@ -40,7 +38,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from geometry_msgs.msg import PoseStamped, Vector3Stamped, WrenchStamped
+from geometry_msgs.msg import (
+    PoseStamped, PoseWithCovarianceStamped, Vector3Stamped, WrenchStamped)
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import (
     InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
@@ -73,7 +72,8 @@ LOG_EVERY_PERIODS = 5
 
 _GYRO_TOPICS = ('imu', 'angular_velocity')
 _MESSAGE_TYPES = {'imu': Imu, 'angular_velocity': Vector3Stamped, 'torque': WrenchStamped,
-                  'rotor_torque': Vector3Stamped, 'set_pose': PoseStamped}
+                  'rotor_torque': Vector3Stamped, 'set_pose': PoseStamped,
+                  'set_pose_with_covariance': PoseWithCovarianceStamped}
 
 
 def parameter_descriptor(parameter: Parameter) -> ParameterDescriptor:
@@ -123,7 +123,8 @@ class AttitudePropagatorNode(Node):
         self.scene = load_node_scene(values['scene'], values['integrator'], values['step'],
                                      values['torque_timeout'])
         self.publish_rate: float = values['publish_rate']
-        self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro')
+        self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro',
+                                  values['covariance'])
         self.outputs.hardware_id = self.scene.name
         self.session: AnySession = open_session(
             self.scene, values, self.outputs, self.clock_ns, time.monotonic)

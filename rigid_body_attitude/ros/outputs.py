@@ -5,13 +5,16 @@ Every per-sample and per-tick output (``orientation``, ``pose``, ``imu/data``; d
 ``twist``, ``energy``, ``angular_momentum``) is written as CDR bytes with the header packed once
 (:mod:`rigid_body_attitude.msgs.cdr`, the replay tool's codecs) and only when a subscription is
 matched (:class:`RawOutput`); ``/diagnostics`` (once a second) is an ordinary message.
-``imu/data`` is the input Imu with the orientation filled in (REP-145: orientation covariance
-all zeros = known, unknown covariance) and the stamp the session used. With ``publish_tf``
-(:meth:`RosOutputs.enable_tf`) the attitude also goes to ``/tf`` as the transform
-``world_frame`` -> ``body_frame`` (``tf2_msgs/msg/TFMessage``, CDR bytes too) at the output
-stamps, at most ``tf_rate`` transforms per second of stamps. Log lines go through a
-:class:`~.log_queue.LogQueue`: the session logs from the gyro path, which must never wait for
-a slow console.
+``imu/data`` is the input Imu with the orientation filled in and the stamp the session used;
+its ``orientation_covariance`` is the session's attitude covariance about fixed world axes
+(REP-145), or all zeros (REP-145: unknown) with the parameter ``covariance`` off.
+``pose_with_covariance`` carries the same attitude block in its 6×6 covariance, the position block
+marked unknown (:data:`~rigid_body_attitude.session.uncertainty.UNKNOWN_POSITION_VARIANCE`). With
+``publish_tf`` (:meth:`RosOutputs.enable_tf`) the attitude also goes to ``/tf`` as the transform
+``world_frame`` -> ``body_frame`` (``tf2_msgs/msg/TFMessage``, CDR bytes too) at the output stamps,
+at most ``tf_rate`` transforms per second of stamps. Log lines go through a
+:class:`~.log_queue.LogQueue`: the session logs from the gyro path, which must never wait for a
+slow console.
 """
 
 from __future__ import annotations
@@ -20,7 +23,8 @@ from collections.abc import Callable
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import PoseStamped, QuaternionStamped, TwistStamped, Vector3Stamped
+from geometry_msgs.msg import (
+    PoseStamped, PoseWithCovarianceStamped, QuaternionStamped, TwistStamped, Vector3Stamped)
 from rclpy.node import Node
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import Imu
@@ -28,12 +32,14 @@ from std_msgs.msg import Float64
 from tf2_msgs.msg import TFMessage
 
 from rigid_body_attitude.msgs.cdr import (
-    encode_float64, imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder,
-    stamped_floats_encoder, transform_encoder)
+    encode_float64, imu_with_orientation, pose_stamped_encoder,
+    pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
+    transform_encoder)
 from rigid_body_attitude.ros.log_queue import LogQueue
 from rigid_body_attitude.ros.qos import OUTPUT_QOS, TF_QOS
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
+from rigid_body_attitude.session.uncertainty import pose_covariance
 
 __all__ = ['RawOutput', 'RosOutputs']
 
@@ -43,6 +49,7 @@ Vector = tuple[float, float, float]
 _LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN,
                 LEVEL_ERROR: DiagnosticStatus.ERROR}
 _ZERO_POSITION = (0.0, 0.0, 0.0)
+_UNKNOWN = (0.0,) * 9
 
 
 class RawOutput:
@@ -71,8 +78,9 @@ class RawOutput:
 class RosOutputs:
     """Publishers of one node and the messages they reuse; the session's sink."""
 
-    def __init__(self, node: Node, gyro_scene: bool) -> None:
-        """Create the publishers of a gyro or a dynamics scene on ``node``."""
+    def __init__(self, node: Node, gyro_scene: bool, covariance: bool = False) -> None:
+        """Create the publishers of a gyro or a dynamics scene on ``node``
+        (``pose_with_covariance`` for a gyro scene with ``covariance``)."""
         self.node = node
         self.orientation = self._publisher(QuaternionStamped, 'orientation')
         self.pose = self._publisher(PoseStamped, 'pose')
@@ -83,6 +91,11 @@ class RosOutputs:
         if gyro_scene:
             self.imu = self._publisher(Imu, 'imu/data')
             self.imu_raw = RawOutput(self.imu)
+            self.pose_covariance_raw: RawOutput | None = None
+            if covariance:
+                self.pose_with_covariance = self._publisher(PoseWithCovarianceStamped,
+                                                            'pose_with_covariance')
+                self.pose_covariance_raw = RawOutput(self.pose_with_covariance)
         else:
             self.twist = self._publisher(TwistStamped, 'twist')
             self.twist_raw = RawOutput(self.twist)
@@ -91,6 +104,10 @@ class RosOutputs:
             self.momentum = self._publisher(Vector3Stamped, 'angular_momentum')
             self.energy_raw = RawOutput(self.energy)
             self.momentum_raw = RawOutput(self.momentum)
+        #: Row-major 3×3 ``imu/data`` orientation covariance and 6×6 ``pose_with_covariance``
+        #: covariance (:meth:`attitude_covariance`).
+        self.orientation_covariance: tuple[float, ...] = _UNKNOWN
+        self.pose_covariance = pose_covariance(_UNKNOWN)
         #: Set by the session: outputs carry the inputs' stamps (else the receive time).
         self.use_header_stamps = True
         #: Frame of ``orientation``, ``pose`` and ``angular_momentum`` (:meth:`set_frames`).
@@ -132,6 +149,7 @@ class RosOutputs:
         self.world_frame, self.body_frame = world_frame, body_frame
         self.encode_orientation = quaternion_stamped_encoder(world_frame)
         self.encode_pose = pose_stamped_encoder(world_frame)
+        self.encode_pose_covariance = pose_with_covariance_stamped_encoder(world_frame)
         self.encode_momentum = stamped_floats_encoder(world_frame, 3)
         self.encode_twist = stamped_floats_encoder(body_frame, 6)
         self.encode_tf = transform_encoder(world_frame, body_frame)
@@ -148,9 +166,20 @@ class RosOutputs:
             pose.publish(self.encode_pose(sec, nanosec, _ZERO_POSITION, attitude))
         if imu is not None and self.imu_raw.subscription_count():
             stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
-            self.imu_raw.publish(imu_with_orientation(imu, attitude, stamp))
+            self.imu_raw.publish(imu_with_orientation(imu, attitude, stamp,
+                                                      self.orientation_covariance))
+        with_covariance = self.pose_covariance_raw
+        if with_covariance is not None and with_covariance.subscription_count():
+            with_covariance.publish(self.encode_pose_covariance(
+                sec, nanosec, _ZERO_POSITION, attitude, self.pose_covariance))
         if self.tf_raw is not None:
             self._publish_tf(sec, nanosec, attitude)
+
+    def attitude_covariance(self, covariance: tuple[float, ...]) -> None:
+        """The attitude covariance of the following ``imu/data`` and ``pose_with_covariance``
+        messages (row-major 3×3 about fixed world axes [rad²])."""
+        self.orientation_covariance = covariance
+        self.pose_covariance = pose_covariance(covariance)
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:

@@ -20,11 +20,11 @@ KEEP_LAST :data:`INPUT_DEPTH` (5 000).
   for the samples it missed and the writer resends them from its history; it then matches
   reliable publishers only).
 
-**Commands** (:data:`COMMAND_QOS`: ``torque``, ``rotor_torque``, ``set_pose``): RELIABLE,
-VOLATILE, KEEP_LAST :data:`INPUT_DEPTH`. A command is sent once and must arrive: a lost
-``set_pose`` leaves the attitude where it was, a lost torque command leaves the old torque
-applied until ``torque_timeout``. Command publishers (a controller, ``ros2 topic pub``) are
-reliable by default.
+**Commands** (:data:`COMMAND_QOS`: ``torque``, ``rotor_torque``, ``set_pose``,
+``set_pose_with_covariance``): RELIABLE, VOLATILE, KEEP_LAST :data:`INPUT_DEPTH`. A command is sent
+once and must arrive: a lost ``set_pose`` leaves the attitude where it was, a lost torque command
+leaves the old torque applied until ``torque_timeout``. Command publishers (a controller, ``ros2
+topic pub``) are reliable by default.
 
 **Outputs** (:data:`OUTPUT_QOS`): RELIABLE, VOLATILE, KEEP_LAST :data:`OUTPUT_DEPTH` (5 000,
 as deep as the inputs). A reliable publisher matches reliable and best-effort subscribers; the

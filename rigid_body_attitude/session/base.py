@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from collections import Counter
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol
 
 from rigid_body_attitude.core.errors import InputError
@@ -23,6 +23,7 @@ from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagat
 from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.session.outputs import OutputSample, OutputTracker
 from rigid_body_attitude.session.parameters import check_values
+from rigid_body_attitude.session.uncertainty import orientation_block
 from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, StrapdownState, diagnostic_report,
     stale_command_count, state_summary)
@@ -53,6 +54,10 @@ class OutputSink(Protocol):
                  imu: bytes | None) -> None:
         """A gyro sample's attitude (w, x, y, z) stamped ``(sec, nanosec)``; ``imu``: the
         serialized Imu the sample came from (``imu/data`` is it with the attitude), or None."""
+
+    def attitude_covariance(self, covariance: tuple[float, ...]) -> None:
+        """The row-major 3×3 attitude covariance [rad²] about fixed world axes that goes with
+        the following attitudes (given when it changes; gyro scenes with ``covariance`` on)."""
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:
@@ -124,9 +129,22 @@ class Session(ABC):
         self.warn('internal_error', f'{topic}: internal error {type(err).__name__}: '
                                     f'{str(err)[:200]}; input ignored')
 
-    def set_pose(self, frame_id: str, attitude: Quaternion, position: Vector) -> None:
-        """Re-initialise the attitude (w, x, y, z) (and the position, with translation)."""
+    def set_pose(self, frame_id: str, attitude: Quaternion, position: Vector,
+                 covariance: Sequence[float] | None = None) -> None:
+        """Re-initialise the attitude (w, x, y, z) (and the position, with translation).
+
+        ``covariance``: the 36 row-major values of a ``PoseWithCovarianceStamped``, whose
+        orientation block (about fixed world axes, rad²) becomes the attitude covariance of a
+        gyro scene; it must be finite, symmetric and positive semi-definite (else the pose is
+        refused as ``invalid_pose``). None: the covariance resets to ``set_pose_stddev``.
+        """
         reason, detail = self._pose_problem(frame_id, attitude, position)
+        block = None
+        if not reason and covariance is not None:
+            try:
+                block = orientation_block(covariance)
+            except InputError as err:
+                reason, detail = 'invalid_pose', str(err)
         if reason:
             self.rejections[reason] += 1
             self.warn(reason, f'set_pose rejected ({reason}): {detail}')
@@ -141,9 +159,13 @@ class Session(ABC):
             self.warn('invalid_pose', f'set_pose rejected (invalid_pose): {err}')
             return
         self.poses_accepted += 1
+        self._pose_set(block)
         where = f', position {position}' if propagator.has_translation else ''
         self.note('set_pose', f'set_pose: attitude (w, x, y, z) {attitude}{where}',
                   self.poses_accepted)
+
+    def _pose_set(self, orientation_covariance: tuple[float, ...] | None) -> None:
+        """A pose was set, with the row-major 3×3 orientation covariance given (or None)."""
 
     def _pose_problem(self, frame_id: str, attitude: Quaternion,
                       position: Vector) -> tuple[str, str]:

@@ -10,7 +10,8 @@ and no bag library.
 
 Each decoder returns ``(sec, nanosec, frame_id, first, second)``: the header stamp as sent
 (not normalised: the session judges it) and frame, and the message's values (force and
-torque; a vector; attitude (w, x, y, z) and position). The gyro decoders return
+torque; a vector; attitude (w, x, y, z) and position, or attitude and (position,
+covariance)). The gyro decoders return
 ``(sec, nanosec, frame_id, rate, imu, accel)`` (:data:`GyroDecoded`): the rate [rad/s], the
 Imu bytes (for ``imu/data``; ``None`` for other types) and the specific force [m/s²] (``None``
 unless an Imu provides it), sensor frame. Bytes that are not a valid message of the topic's
@@ -25,7 +26,7 @@ from typing import Any
 
 from rigid_body_attitude.msgs.decoders import (
     GYRO_DECODERS, Floats, GyroDecoder, decode_imu_motion, decode_pose_stamped,
-    decode_vector3_stamped, decode_wrench_stamped)
+    decode_pose_with_covariance_stamped, decode_vector3_stamped, decode_wrench_stamped)
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.types import IMU
 from rigid_body_attitude.session.dynamics import DynamicsSession
@@ -82,10 +83,19 @@ def pose(data: bytes) -> Decoded:
     return sec, nanosec, frame_id, attitude, position
 
 
+def pose_with_covariance(data: bytes) -> Decoded:
+    """PoseWithCovarianceStamped: attitude (w, x, y, z) and (position [m], the 36 row-major
+    covariance values)."""
+    sec, nanosec, frame_id, position, attitude, covariance = (
+        decode_pose_with_covariance_stamped(data))
+    return sec, nanosec, frame_id, attitude, (position, covariance)
+
+
 #: The node's input topics → decoder (the gyro topics': :data:`GyroDecoded`).
 DECODERS: dict[str, Callable[[bytes], tuple[Any, ...]]] = {
     'imu': imu, 'angular_velocity': angular_velocity, 'torque': wrench,
     'rotor_torque': vector, 'set_pose': pose,
+    'set_pose_with_covariance': pose_with_covariance,
 }
 #: Gyro message types → decoder (the replay tool's gyro topic may carry any of them:
 #: Imu, Vector3Stamped, TwistStamped's angular part).
@@ -152,6 +162,8 @@ def _delivery(session: AnySession, topic: str) -> Callable[[Decoded], object]:
     """The session method of ``topic`` (other than the gyro topics) applied to the values."""
     if topic == 'set_pose':
         return lambda values: session.set_pose(values[2], values[3], values[4])
+    if topic == 'set_pose_with_covariance':
+        return lambda values: session.set_pose(values[2], values[3], *values[4])
     assert isinstance(session, DynamicsSession), topic  # commands: dynamics scenes only
     if topic == 'torque':
         return lambda values: session.wrench(values[0], values[1], values[3], values[4])

@@ -26,8 +26,10 @@ from rigid_body_attitude.core.propagator import GyroPropagator
 from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.imu_start import REJECTION_DETAIL, ImuStart
-from rigid_body_attitude.session.reports import LEVEL_WARN
+from rigid_body_attitude.session.levelling import FROM_SCENE, AlignmentResult
+from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.stream import GyroStream, INTEGRATED, Outcome
+from rigid_body_attitude.session.uncertainty import Uncertainty
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns, stamp_problem
 
 __all__ = ['GyroSession']
@@ -51,13 +53,15 @@ class GyroSession(ImuStart):
         self.stream = GyroStream(self.propagator, values['max_dt'],
                                  values['time_jump_threshold'])
         self._output_sec = self._output_nanosec = 0
+        #: The attitude covariance (parameter ``covariance``), or None.
+        self.uncertainty: Uncertainty | None = None
         self._start_imu(values)
         super().__init__(scene, values, sink, clock_ns, monotonic)
-
-    def _after_step(self, q_before: tuple[float, float, float, float],
-                    rate_body: tuple[float, float, float], dt: float) -> None:
-        """After each integrated sample when :attr:`wants_steps`: the attitude at the start
-        of the step, the bias-corrected body rate held over it [rad/s] and its length [s]."""
+        if values['covariance']:
+            self.uncertainty = Uncertainty(values, self.calibration_noise())
+            self.wants_steps = True
+            self.on_aligned = self._covariance_aligned
+            sink.attitude_covariance(self.uncertainty.published)
 
     def apply(self, values: Mapping[str, Any]) -> None:
         """Take the run-time parameters."""
@@ -69,6 +73,9 @@ class GyroSession(ImuStart):
         stream.max_angular_rate = values['max_angular_rate']
         stream.count_missed = values['use_header_stamps']
         self.body_frame: str = values['body_frame']
+        uncertainty = getattr(self, 'uncertainty', None)
+        if uncertainty is not None:
+            uncertainty.apply(values)
 
     def gyro(self, sec: int, nanosec: int, rate: Sequence[float],
              imu: bytes | None = None, accel: Sequence[float] | None = None) -> bool:
@@ -117,22 +124,63 @@ class GyroSession(ImuStart):
         self._output_sec, self._output_nanosec = sec, nanosec
         return True
 
+    def _after_step(self, q_before: tuple[float, float, float, float],
+                    rate_body: tuple[float, float, float], dt: float) -> None:
+        """One integrated step: attitude at its start, the corrected body rate of the sample
+        that ends it [rad/s] (held over the step), its length [s]; grows the covariance."""
+        uncertainty = self.uncertainty
+        if uncertainty is not None and uncertainty.step(q_before, rate_body, dt):
+            self.sink.attitude_covariance(uncertainty.published)
+
+    def _covariance_aligned(self, result: AlignmentResult) -> None:
+        """The integration's start is settled (``on_aligned``): levelled, the covariance
+        starts from the levelling's uncertainty (the sink hears of it when it changed); from
+        the scene it stays as it is (the unlevelled prior, or a ``set_pose``'s)."""
+        uncertainty = self.uncertainty
+        if uncertainty is not None and result.source != FROM_SCENE:
+            before = uncertainty.published
+            uncertainty.aligned(result)
+            if uncertainty.published != before:
+                self.sink.attitude_covariance(uncertainty.published)
+
+    def _restart_uncertainty(self) -> None:
+        """Back to the unlevelled prior (reset, a backward time jump)."""
+        if self.uncertainty is not None:
+            self.uncertainty.start(None)
+            self.sink.attitude_covariance(self.uncertainty.published)
+
+    def _pose_set(self, orientation_covariance: tuple[float, ...] | None) -> None:
+        """``set_pose``: the message's orientation covariance, or ``set_pose_stddev``."""
+        if self.uncertainty is not None:
+            self.uncertainty.set_pose(orientation_covariance)
+            self.sink.attitude_covariance(self.uncertainty.published)
+
+    def report(self) -> DiagnosticReport:
+        """The diagnostics report, with the 1σ tilt and yaw (WARN past ``tilt_stddev_warn``)."""
+        report = super().report()
+        if self.uncertainty is None:
+            return report
+        problem, values = self.uncertainty.diagnostic()
+        level, message = report.level, report.message
+        if problem:
+            level = max(level, LEVEL_WARN)
+            message = problem if message == 'propagating' else f'{message}; {problem}'
+        return DiagnosticReport(level, message, report.values + tuple(values))
+
     def _stepped(self, sec: int, nanosec: int, rate: Sequence[float],
                  imu: bytes | None) -> bool:
         """:meth:`gyro`'s integration with :meth:`_after_step` after each integrated step."""
         stream = self.stream
         outliers = stream.outliers if stream.pending else -1
-        q_before = self.propagator.state.attitude_tuple()
-        last_ns = stream.last_ns
-        stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
-        outcome = stream.add(stamp_ns, rate)
+        state = self.propagator.state
+        time_before, q_before = state.time, state.attitude_tuple()
+        outcome = stream.add(sec * NANOSECONDS_PER_SECOND + nanosec, rate)
         if outliers >= 0 and stream.outliers != outliers:
             self.warn('outlier_stamp',
                       f'gyro: {REJECTION_DETAIL["outlier_stamp"]} (parameter `max_dt`)')
         if outcome is INTEGRATED:
-            x, y, z = rate
-            dt = stream.constant_dt if stream.constant_dt > 0.0 else (stamp_ns - last_ns) * 1e-9
-            self._after_step(q_before, (float(x), float(y), float(z)), dt)
+            x, y, z = rate  # the step: its length as the propagator took it
+            self._after_step(q_before, (float(x), float(y), float(z)), state.time - time_before)
         return self._outcome(outcome, sec, nanosec, imu)
 
     def _outcome(self, outcome: Outcome, sec: int, nanosec: int, imu: bytes | None) -> bool:
@@ -169,6 +217,7 @@ class GyroSession(ImuStart):
     def _rejected(self, outcome: Outcome) -> None:
         reason = outcome.reason
         if outcome.reset:  # once per jump, never throttled
+            self._restart_uncertainty()
             self.sink.log(LEVEL_WARN, f'gyro: stamps jumped back by more than '
                                       f'time_jump_threshold ({self.stream.time_jump_threshold:g}'
                                       f' s; looping bag?), confirmed by the next samples; reset '
@@ -184,6 +233,7 @@ class GyroSession(ImuStart):
         self.error(f'gyro: integration gave a non-finite attitude; reset to the initial state '
                    f'of scene {self.scene.name!r} (parameter `integrator`)')
         self.stream.reset()
+        self._restart_uncertainty()
         return False
 
     def reset(self) -> None:
@@ -191,6 +241,7 @@ class GyroSession(ImuStart):
         sample is a new baseline."""
         self._restart_levelling()
         self.stream.reset()
+        self._restart_uncertainty()
 
     def accepted_count(self) -> int:
         """Gyro samples (levelling included) and poses used so far."""

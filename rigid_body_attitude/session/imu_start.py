@@ -68,6 +68,7 @@ class ImuStart(Session):
         calibration = (load_calibration(values['calibration_file'],
                                         values['calibration_imu_key'])
                        if values['calibration_file'] else None)
+        self._calibration = calibration
         mount_rpy = values['mount_rpy']
         self._mount_given = bool(mount_rpy)
         self.sample_map = SampleMap(calibration, rpy_quaternion(*mount_rpy) if mount_rpy
@@ -84,6 +85,16 @@ class ImuStart(Session):
         self._affine: tuple[float, ...] | None = None
         self._told_no_accelerometer = False
         self._align_samples = 0
+
+    def calibration_noise(self) -> dict[str, float]:
+        """The noise densities the calibration file gives (kalibr names; empty without a
+        file or without a noise model)."""
+        if self._calibration is None:
+            return {}
+        noise = self._calibration.noise
+        given = {'gyroscope_noise_density': noise.gyroscope_noise_density,
+                 'gyroscope_random_walk': noise.gyroscope_random_walk}
+        return {key: value for key, value in given.items() if value is not None}
 
     def _restart_levelling(self) -> None:
         """``~/reset`` with levelling: the scene's attitude, no bias, level again."""
@@ -225,10 +236,12 @@ class ImuStart(Session):
             self.on_aligned(self.alignment)
 
     def set_pose(self, frame_id: str, attitude: tuple[float, float, float, float],
-                 position: tuple[float, float, float]) -> None:
-        """Re-initialise the attitude; while levelling, its heading is the levelled yaw."""
+                 position: tuple[float, float, float],
+                 covariance: Sequence[float] | None = None) -> None:
+        """Re-initialise the attitude (and its ``covariance``, as the base session does);
+        while levelling, its heading is the levelled yaw."""
         accepted = self.poses_accepted
-        super().set_pose(frame_id, attitude, position)
+        super().set_pose(frame_id, attitude, position, covariance)
         if self._aligning and self.levelling is not None and self.poses_accepted > accepted:
             self.levelling.set_yaw(heading(self.propagator.state.attitude_tuple()))
 

@@ -16,6 +16,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from rigid_body_attitude.core.gyro_error_model import GyroErrorModel
+
 __all__ = ['PARAMETERS', 'Parameter', 'check_values', 'defaults']
 
 
@@ -134,6 +136,8 @@ def _quoted(value: Any) -> str:
     return text if len(text) <= 100 else text[:97] + '...'
 
 
+_GYRO_DEFAULTS = GyroErrorModel()
+
 #: Every parameter, in the order the README and ``--help`` list them.
 PARAMETERS: tuple[Parameter, ...] = (
     Parameter('scene', str, 'torque_free_box',
@@ -202,6 +206,30 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter('tf_timeout', float, 5.0,
               's: how long gyro samples wait for the mount body_frame -> sensor frame on '
               '/tf_static before they are dropped', 0.0, 3600.0, low_open=True),
+    # -- attitude uncertainty (gyro scenes; see docs/uncertainty.md) ---------------------
+    Parameter('covariance', bool, True,
+              'propagate the attitude-error covariance (imu/data orientation_covariance, '
+              'pose_with_covariance, 1-sigma tilt and yaw in /diagnostics)'),
+    Parameter('gyroscope_noise_density', float, _GYRO_DEFAULTS.gyroscope_noise_density,
+              'rad/s/sqrt(Hz): gyro white noise (kalibr name; default BMI088 typical)',
+              0.0, 1.0),
+    Parameter('gyroscope_random_walk', float, _GYRO_DEFAULTS.gyroscope_random_walk,
+              'rad/s^2/sqrt(Hz): gyro bias random walk (kalibr name)', 0.0, 1.0),
+    Parameter('gyroscope_turn_on_bias', float, _GYRO_DEFAULTS.gyroscope_turn_on_bias,
+              'rad/s: 1-sigma gyro bias when no rest window estimates it', 0.0, 1.0),
+    Parameter('gyroscope_scale_stddev', float, _GYRO_DEFAULTS.gyroscope_scale_stddev,
+              '1: 1-sigma scale-factor error of each gyro axis', 0.0, 0.5),
+    Parameter('gyroscope_misalignment_stddev', float,
+              _GYRO_DEFAULTS.gyroscope_misalignment_stddev,
+              '1: 1-sigma cross-axis (misalignment) error of each gyro axis pair', 0.0, 0.5),
+    Parameter('initial_yaw_stddev', float, _GYRO_DEFAULTS.initial_yaw_stddev,
+              'rad: 1-sigma of the initial heading (pi = unknown)', 0.0, 10.0),
+    Parameter('set_pose_stddev', float, 0.01,
+              'rad: 1-sigma per axis of the attitude after a set_pose without covariance',
+              0.0, 10.0, low_open=True, read_only=False),
+    Parameter('tilt_stddev_warn', float, 0.1745,
+              'rad: /diagnostics warns while the 1-sigma tilt exceeds this (0 = never)',
+              0.0, 10.0, read_only=False),
 )
 
 _BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}

@@ -18,15 +18,16 @@ from typing import Any
 
 from rigid_body_attitude.core.scene import Scene, load_scene
 from rigid_body_attitude.msgs.types import (
-    DIAGNOSTIC_ARRAY, FLOAT64, IMU, POSE_STAMPED, QUATERNION_STAMPED, TWIST_STAMPED,
-    VECTOR3_STAMPED, WRENCH_STAMPED)
+    DIAGNOSTIC_ARRAY, FLOAT64, IMU, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED,
+    QUATERNION_STAMPED, TWIST_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED)
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
 
 __all__ = [
     'AnySession', 'COMMAND_EFFECTS', 'DIAGNOSTICS_PERIOD', 'DIAGNOSTICS_TOPIC', 'GYRO_TOPICS',
-    'NODE_NAME', 'OUTPUT_TOPICS', 'ROTOR_TORQUE_TOPIC', 'SET_POSE_TOPIC', 'TORQUE_TOPIC',
+    'NODE_NAME', 'OUTPUT_TOPICS', 'ROTOR_TORQUE_TOPIC', 'SET_POSE_TOPIC',
+    'SET_POSE_WITH_COVARIANCE_TOPIC', 'TORQUE_TOPIC',
     'input_topics',
     'load_node_scene', 'open_session', 'output_topics', 'timer_period_ns',
 ]
@@ -41,12 +42,15 @@ TORQUE_TOPIC = 'torque'
 ROTOR_TORQUE_TOPIC = 'rotor_torque'
 #: Re-initialisation of the attitude (and position) (``geometry_msgs/msg/PoseStamped``).
 SET_POSE_TOPIC = 'set_pose'
+#: The same with the attitude's covariance (``geometry_msgs/msg/PoseWithCovarianceStamped``).
+SET_POSE_WITH_COVARIANCE_TOPIC = 'set_pose_with_covariance'
 #: Diagnostics (absolute name, as every ROS node publishes it).
 DIAGNOSTICS_TOPIC = '/diagnostics'
 #: Output topics (relative names) → message type.
 OUTPUT_TOPICS = {
     'orientation': QUATERNION_STAMPED,
     'pose': POSE_STAMPED,
+    'pose_with_covariance': POSE_WITH_COVARIANCE_STAMPED,
     'energy': FLOAT64,
     'angular_momentum': VECTOR3_STAMPED,
     'twist': TWIST_STAMPED,
@@ -72,15 +76,19 @@ def input_topics(scene: Scene, input_names: frozenset[str]) -> dict[str, str]:
     if 'rotor_torque' in input_names:
         topics[ROTOR_TORQUE_TOPIC] = VECTOR3_STAMPED
     topics[SET_POSE_TOPIC] = POSE_STAMPED
+    topics[SET_POSE_WITH_COVARIANCE_TOPIC] = POSE_WITH_COVARIANCE_STAMPED
     return topics
 
 
-def output_topics(scene: Scene, imu_input: bool = True) -> tuple[str, ...]:
+def output_topics(scene: Scene, imu_input: bool = True,
+                  covariance: bool = True) -> tuple[str, ...]:
     """Output topics of a scene, in the order they are listed; ``imu/data`` for gyro scenes
-    fed by ``sensor_msgs/Imu`` (``imu_input``); ``twist``, ``energy`` and
-    ``angular_momentum`` for dynamics scenes (the only ones that simulate a body)."""
+    fed by ``sensor_msgs/Imu`` (``imu_input``), ``pose_with_covariance`` for gyro scenes with
+    the ``covariance`` on; ``twist``, ``energy`` and ``angular_momentum`` for dynamics scenes
+    (the only ones that simulate a body)."""
     if scene.rate_source == 'gyro':
-        return ('orientation', 'pose', *(('imu/data',) if imu_input else ()),
+        pose = ('pose', 'pose_with_covariance') if covariance else ('pose',)
+        return ('orientation', *pose, *(('imu/data',) if imu_input else ()),
                 DIAGNOSTICS_TOPIC)
     return ('orientation', 'pose', 'twist', 'energy', 'angular_momentum', DIAGNOSTICS_TOPIC)
 

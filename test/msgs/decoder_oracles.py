@@ -23,7 +23,8 @@ import struct
 from typing import Any, NamedTuple
 
 from geometry_msgs.msg import (
-    PoseStamped, QuaternionStamped, TwistStamped, Vector3Stamped, WrenchStamped)
+    PoseStamped, PoseWithCovarianceStamped, QuaternionStamped, TwistStamped, Vector3Stamped,
+    WrenchStamped)
 from rclpy.serialization import deserialize_message
 from rosbags.serde import SerdeError
 from sensor_msgs.msg import Imu
@@ -79,6 +80,11 @@ KINDS: dict[str, Kind] = {
     'pose_stamped': Kind(decoders.decode_pose_stamped, msgs.POSE_STAMPED, PoseStamped,
                          lambda m: (*_head(m), _xyz(m.pose.position),
                                     _wxyz(m.pose.orientation)), 7),
+    'pose_with_covariance_stamped': Kind(
+        decoders.decode_pose_with_covariance_stamped, msgs.POSE_WITH_COVARIANCE_STAMPED,
+        PoseWithCovarianceStamped,
+        lambda m: (*_head(m), _xyz(m.pose.pose.position), _wxyz(m.pose.pose.orientation),
+                   tuple(float(v) for v in m.pose.covariance)), 43),
     'quaternion_stamped': Kind(decoders.decode_quaternion_stamped, msgs.QUATERNION_STAMPED,
                                QuaternionStamped,
                                lambda m: (*_head(m), _wxyz(m.quaternion)), 4),

@@ -265,3 +265,23 @@ def test_encoders_reject_bad_arguments():
         cdr.encode_vector3_stamped(0, 'a\x00b', [1.0, 2.0, 3.0])
     with pytest.raises(InputError, match='`value` to be a float'):
         cdr.encode_float64('one')
+
+
+def test_pose_with_covariance_encoders_match_rosbags_and_the_decoder():
+    from rigid_body_attitude.msgs.cdr import (
+        encode_pose_with_covariance_stamped, pose_with_covariance_stamped_encoder)
+    from rigid_body_attitude.msgs.decoders import decode_pose_with_covariance_stamped
+    covariance = tuple(float(k) for k in range(36))
+    store = bag.typestore()
+    for frame in ('w', 'world', 'odom_frame'):
+        fast = pose_with_covariance_stamped_encoder(frame)(
+            1_700_000_000, 5, (1.0, 2.0, 3.0), (0.5, 0.5, 0.5, 0.5), covariance)
+        slow = encode_pose_with_covariance_stamped(
+            1_700_000_000 * 10**9 + 5, frame, (1.0, 2.0, 3.0), (0.5, 0.5, 0.5, 0.5), covariance)
+        message = store.deserialize_cdr(fast, msgs.POSE_WITH_COVARIANCE_STAMPED)
+        assert fast == slow == bytes(store.serialize_cdr(message,
+                                                         msgs.POSE_WITH_COVARIANCE_STAMPED))
+        assert decode_pose_with_covariance_stamped(fast) == (
+            1_700_000_000, 5, frame, (1.0, 2.0, 3.0), (0.5, 0.5, 0.5, 0.5), covariance)
+    with pytest.raises(InputError):
+        encode_pose_with_covariance_stamped(0, 'w', (0.0,) * 3, (1.0, 0.0, 0.0, 0.0), (0.0,) * 35)

@@ -16,6 +16,7 @@ from typing import Any
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import (
+    PoseWithCovarianceStamped,
     PoseStamped, QuaternionStamped, TwistStamped, Vector3Stamped, WrenchStamped)
 import numpy as np
 import pytest
@@ -32,6 +33,7 @@ from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import (
     CalibrationError, InputError, IntegratorError, SceneError)
 from rigid_body_attitude.session.reports import body_frame_velocity
+from rigid_body_attitude.session.uncertainty import BATCH_SIZE
 from rigid_body_attitude.session.times import TimeBase
 from rigid_body_attitude.ros.node import AttitudePropagatorNode, LOG_EVERY_PERIODS
 from rigid_body_attitude.ros.serve import main
@@ -175,12 +177,15 @@ def test_runtime_parameter_changes_are_checked_and_applied(ros, request):
     assert decode_pose_stamped(pose)[2] == 'map'
 
 
+SET_POSE = ('set_pose', 'set_pose_with_covariance')
+
+
 @pytest.mark.parametrize('scene, inputs, outputs', [
-    ('strapdown', {'imu', 'angular_velocity', 'set_pose'}, {'imu/data'}),
-    ('torque_free_box', {'set_pose'}, {'twist', 'energy', 'angular_momentum'}),
-    ('commanded_torque', {'torque', 'set_pose'}, {'twist', 'energy', 'angular_momentum'}),
-    ('free_flyer', {'torque', 'set_pose'}, {'twist', 'energy', 'angular_momentum'}),
-    ('gyrostat', {'rotor_torque', 'set_pose'}, {'twist', 'energy', 'angular_momentum'}),
+    ('strapdown', {'imu', 'angular_velocity', *SET_POSE}, {'imu/data', 'pose_with_covariance'}),
+    ('torque_free_box', {*SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
+    ('commanded_torque', {'torque', *SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
+    ('free_flyer', {'torque', *SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
+    ('gyrostat', {'rotor_torque', *SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
 ])
 def test_subscriptions_exist_only_for_the_inputs_the_scene_uses(ros, request, scene, inputs,
                                                                 outputs):
@@ -245,7 +250,11 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
     assert (last.orientation.w, last.orientation.x, last.orientation.y,
             last.orientation.z) == tuple(published[-1])
     assert (last.angular_velocity.x, last.angular_velocity.y, last.angular_velocity.z) == OMEGA
-    assert not np.any(last.orientation_covariance)  # all zeros: covariance unknown
+    # The attitude covariance about world axes (REP-145), as the session holds it after the
+    # last fold (1000 steps: 3 folds of 256, 232 steps pending).
+    assert tuple(last.orientation_covariance) == node.session.uncertainty.published
+    covariance = np.reshape(last.orientation_covariance, (3, 3))
+    assert np.array_equal(covariance, covariance.T) and np.linalg.eigvalsh(covariance)[0] > 0.0
     assert node.session.stream.accepted == count and not node.session.stream.rejected
 
 
@@ -431,7 +440,7 @@ def test_a_gyro_scene_reports_what_a_strapdown_user_needs_and_no_energy(ros, req
         'scene', 'rate_source', 'integrator', 'step [s]', 'time [s]',
         'rotation_from_initial [deg]', 'gyro_bias [rad/s]', 'alignment',
         'quaternion_norm_error', 'input_rate [Hz]', 'received_rate [Hz]', 'received',
-        'accepted', 'missed_samples']
+        'accepted', 'missed_samples', 'tilt_stddev [deg]', 'yaw_stddev [deg]']
     assert float(values['rotation_from_initial [deg]']) == pytest.approx(0.9, abs=1e-9)
     assert values['gyro_bias [rad/s]'] == 'none'
     assert values['alignment'].startswith('not levelled: no accelerometer data')
@@ -447,6 +456,47 @@ def test_a_gyro_scene_reports_what_a_strapdown_user_needs_and_no_energy(ros, req
     text = info[0].split(']: ', 1)[1]  # the namespace holds the test's name
     assert text.startswith('t=1700000000.133 s: rotation 0.900 deg from the initial attitude')
     assert 'energy' not in text and ' J' not in text and text.endswith('missed 0')
+
+
+def test_the_published_covariance_is_about_fixed_world_axes_on_a_rotating_body(ros, request):
+    """REP-145: ``imu/data``'s orientation_covariance and ``pose_with_covariance``'s
+    orientation block are about the world's axes. An uncertainty about world x only (set with
+    set_pose_with_covariance), a gyro with no error, a quarter turn about the vertical: the
+    uncertainty stays about world x (in body axes it would now be about y)."""
+    namespace = unique_namespace(request)
+    harness = Harness(ros, namespace)
+    node = start_node(harness, scene='strapdown', gyroscope_noise_density=0.0,
+                      gyroscope_random_walk=0.0, gyroscope_turn_on_bias=0.0,
+                      gyroscope_scale_stddev=0.0, gyroscope_misalignment_stddev=0.0,
+                      **deep_qos(namespace, {'imu': 'subscription', 'imu/data': 'publisher',
+                                             'pose_with_covariance': 'publisher'}))
+    harness.publisher(Imu, 'imu')
+    harness.publisher(PoseWithCovarianceStamped, 'set_pose_with_covariance')
+    imu_outputs = harness.record(Imu, 'imu/data')
+    poses = harness.record(PoseWithCovarianceStamped, 'pose_with_covariance')
+    harness.wait_for_connections()
+    start = PoseWithCovarianceStamped()
+    start.header.frame_id = 'world'
+    start.pose.pose.orientation.w = 1.0
+    covariance = np.zeros((6, 6))
+    covariance[3:, 3:] = np.diag([1e-2, 1e-6, 1e-6])  # about world x (east)
+    start.pose.covariance = covariance.reshape(36).tolist()
+    publish_and_wait(harness, node, 'set_pose_with_covariance', start)
+    count = 1 + 2 * BATCH_SIZE  # whole batches: the last output carries every step
+    rate = (0.0, 0.0, math.pi / 2 / ((count - 1) * 1e-3))
+    for k in range(count):
+        harness.publishers['imu'].publish(imu_message(BASE_NS + k * MS, rate))
+    assert harness.spin_until(lambda: min(len(imu_outputs), len(poses)) >= count, 30.0)
+    assert quaternion.attitude_error(scalar_first([poses[-1].pose])[0],
+                                     quaternion.exp(np.array([0.0, 0.0, math.pi / 2]))) < 1e-9
+    published = np.reshape(imu_outputs[-1].orientation_covariance, (3, 3))
+    assert published[0, 0] == pytest.approx(1e-2, rel=1e-9)
+    assert published[1, 1] == pytest.approx(1e-6, rel=1e-6)
+    assert np.max(np.abs(published - np.diag(np.diag(published)))) < 1e-12
+    full = np.reshape(poses[-1].pose.covariance, (6, 6))
+    assert np.array_equal(full[3:, 3:], published) and np.array_equal(full, full.T)
+    assert np.linalg.eigvalsh(full)[0] > 0.0 and np.all(np.diag(full)[:3] == 1e9)
+    assert {m.header.frame_id for m in poses} == {'world'}
 
 
 def test_non_finite_inputs_are_rejected_and_outputs_stay_finite(ros, request):

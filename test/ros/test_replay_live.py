@@ -29,7 +29,8 @@ from typing import Any
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import (
-    PoseStamped, QuaternionStamped, TwistStamped, Vector3Stamped, WrenchStamped)
+    PoseStamped, PoseWithCovarianceStamped, QuaternionStamped, TwistStamped, Vector3Stamped,
+    WrenchStamped)
 import numpy as np
 import pytest
 from rclpy.parameter import Parameter
@@ -43,6 +44,7 @@ from bag_fixtures import (
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.bag import BagReader
 from rigid_body_attitude.msgs import (
+    decode_pose_with_covariance_stamped,
     encode_imu, float64_value, header_stamp_ns, IMU, pose_orientation, pose_position,
     quaternion_stamped, twist_angular, twist_linear, vector3_stamped)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
@@ -84,6 +86,7 @@ def offline_outputs(path: Path) -> dict[str, Any]:
         '/pose': lambda data: pose_position(data)[1] + pose_orientation(data)[1],
         '/twist': lambda data: twist_angular(data)[1] + twist_linear(data)[1],
         '/imu/data': _imu_orientation,
+        '/pose_with_covariance': lambda data: decode_pose_with_covariance_stamped(data)[3:],
         '/angular_momentum': lambda data: vector3_stamped(data)[1],
     }
     outputs: dict[str, Any] = {name.lstrip('/'): {} for name in decoders}
@@ -103,10 +106,11 @@ def offline_outputs(path: Path) -> dict[str, Any]:
 
 
 def _imu_orientation(data: bytes) -> tuple[float, ...]:
-    """(w, x, y, z) of a little-endian CDR Imu (the body starts with x, y, z, w)."""
+    """(w, x, y, z) and the orientation covariance of a little-endian CDR Imu (the body starts
+    with x, y, z, w and the 9 covariance values)."""
     offset = 4 + ((12 + int.from_bytes(data[12:16], 'little') + 7) & -8)
-    x, y, z, w = struct.unpack_from('<4d', data, offset)
-    return (w, x, y, z)
+    x, y, z, w, *covariance = struct.unpack_from('<13d', data, offset)
+    return (w, x, y, z, *covariance)
 
 
 # -- the live run ------------------------------------------------------------------------------
@@ -134,6 +138,8 @@ class LiveRun:
         }
         if self.is_gyro:
             self.received['imu/data'] = harness.record(Imu, 'imu/data')
+            self.received['pose_with_covariance'] = harness.record(PoseWithCovarianceStamped,
+                                                                   'pose_with_covariance')
             self.input = harness.publisher(Imu, 'imu')
         else:
             self.received['twist'] = harness.record(TwistStamped, 'twist')
@@ -198,14 +204,19 @@ class LiveRun:
                                  for m in received['angular_momentum']},
             'momentum_order': [_ns(m.header.stamp) for m in received['angular_momentum']],
             'energy': [m.data for m in received['energy']],
-            'twist': {}, 'imu/data': {},
+            'twist': {}, 'imu/data': {}, 'pose_with_covariance': {},
         }
         if 'twist' in received:
             outputs['twist'] = {_ns(m.header.stamp): _xyz(m.twist.angular) + _xyz(m.twist.linear)
                                 for m in received['twist']}
         if 'imu/data' in received:
-            outputs['imu/data'] = {_ns(m.header.stamp): _wxyz(m.orientation)
-                                   for m in received['imu/data']}
+            outputs['imu/data'] = {
+                _ns(m.header.stamp): _wxyz(m.orientation) + tuple(m.orientation_covariance)
+                for m in received['imu/data']}
+            outputs['pose_with_covariance'] = {
+                _ns(m.header.stamp): (_xyz(m.pose.pose.position), _wxyz(m.pose.pose.orientation),
+                                      tuple(m.pose.covariance))
+                for m in received['pose_with_covariance']}
         return outputs
 
 
@@ -267,6 +278,15 @@ def compare(offline: dict[str, Any], live: dict[str, Any]) -> dict[str, float]:
     if offline['energy']:
         differences['energy'] = float(np.max(np.abs(np.subtract(offline['energy'],
                                                                 live['energy']))))
+    if offline['imu/data']:  # the covariances: bit for bit, symmetric positive definite
+        assert {stamp: values[4:] for stamp, values in offline['imu/data'].items()} == \
+            {stamp: values[4:] for stamp, values in live['imu/data'].items()}
+        assert offline['pose_with_covariance'] == live['pose_with_covariance']
+        for _, _, covariance in offline['pose_with_covariance'].values():
+            matrix = np.reshape(covariance, (6, 6))
+            assert np.array_equal(matrix, matrix.T) and np.linalg.eigvalsh(matrix)[0] > 0.0
+        grown = [values[4] for _, values in sorted(offline['imu/data'].items())]
+        assert grown[-1] > grown[0]  # the covariance grows along the run
     return differences
 
 

@@ -27,6 +27,10 @@ class RecordingSink:
     use_header_stamps: bool = True
 
     imus: list[bytes | None] = field(default_factory=list)
+    covariances: list[tuple[float, ...]] = field(default_factory=list)
+
+    def attitude_covariance(self, covariance):
+        self.covariances.append(covariance)
 
     def attitude(self, sec, nanosec, attitude, imu):
         self.attitudes.append((sec, nanosec, attitude))

@@ -70,8 +70,10 @@ def test_main_writes_the_node_outputs_and_a_summary(tmp_path, capsys, storage):
     with BagReader(out) as reader:
         topics, counts = reader.topics, reader.message_counts
     assert topics == {name: OUTPUT_TOPICS[name] for name in
-                      ('orientation', 'pose', 'imu/data', '/diagnostics')}
+                      ('orientation', 'pose', 'pose_with_covariance', 'imu/data',
+                       '/diagnostics')}
     assert counts['orientation'] == counts['pose'] == counts['imu/data'] == 200
+    assert counts['pose_with_covariance'] == 200
     # A gyro scene simulates no body: no energy or angular momentum; diagnostics once, at the
     # second after the first sample (the bag spans 0.2 s).
     assert counts['/diagnostics'] == 1
@@ -80,7 +82,8 @@ def test_main_writes_the_node_outputs_and_a_summary(tmp_path, capsys, storage):
     expected = quaternion.exp(np.multiply.outer(np.arange(200) / RATE, OMEGA))
     assert np.max(np.abs(series.values - expected)) < 1e-13
     for expected_text in ('read: imu 200', 'used: 200; rejected: none',
-                          'written: orientation 200, pose 200, imu/data 200, /diagnostics 1',
+                          'written: orientation 200, pose 200, pose_with_covariance 200, '
+                          'imu/data 200, /diagnostics 1',
                           'final attitude (w, x, y, z) at stamp 10.199000000 s',
                           'final state: rotation ', 'gyro messages in'):
         assert expected_text in text
@@ -121,7 +124,9 @@ def test_imu_data_is_the_input_with_the_propagated_orientation(tmp_path, capsys)
         assert message.header.frame_id == 'imu_link'
         assert (message.orientation.w, message.orientation.x, message.orientation.y,
                 message.orientation.z) == tuple(q)
-        assert np.all(message.orientation_covariance == 0.0)
+        # Unlevelled, before the first fold: the prior, tilt and yaw unknown (1σ π rad).
+        assert message.orientation_covariance.tolist() == (np.eye(3) * np.pi ** 2).reshape(
+            9).tolist()
         assert message.linear_acceleration.y == -9.8
         assert message.linear_acceleration_covariance[0] == 0.0  # given, so not -1
         assert message.angular_velocity.z == OMEGA[2]

@@ -43,7 +43,8 @@ class ReplayOptions:
         gyro_topic: gyro topic (``''``: ``imu`` or else ``angular_velocity``, as the node).
         torque_topic: WrenchStamped commands.
         rotor_torque_topic: Vector3Stamped rotor motor torque commands.
-        set_pose_topic: PoseStamped re-initialisations of the attitude (and position).
+        set_pose_topic: PoseStamped re-initialisations of the attitude (and position); a
+            ``set_pose_with_covariance`` topic (PoseWithCovarianceStamped) is read as well.
         ground_truth_topic: QuaternionStamped or PoseStamped attitude to compare with.
         start_from_ground_truth: stamp [s] from which on the attitude starts from the ground
             truth (at the first output at or after it); ``None``: the scene's.
@@ -71,6 +72,15 @@ class ReplayOptions:
     refine_bias_at_rest: bool = _DEFAULT['refine_bias_at_rest']
     calibration_file: str = _DEFAULT['calibration_file']
     calibration_imu_key: str = _DEFAULT['calibration_imu_key']
+    covariance: bool = _DEFAULT['covariance']
+    gyroscope_noise_density: float = _DEFAULT['gyroscope_noise_density']
+    gyroscope_random_walk: float = _DEFAULT['gyroscope_random_walk']
+    gyroscope_turn_on_bias: float = _DEFAULT['gyroscope_turn_on_bias']
+    gyroscope_scale_stddev: float = _DEFAULT['gyroscope_scale_stddev']
+    gyroscope_misalignment_stddev: float = _DEFAULT['gyroscope_misalignment_stddev']
+    initial_yaw_stddev: float = _DEFAULT['initial_yaw_stddev']
+    set_pose_stddev: float = _DEFAULT['set_pose_stddev']
+    tilt_stddev_warn: float = _DEFAULT['tilt_stddev_warn']
     gyro_topic: str = ''
     torque_topic: str = TORQUE_TOPIC
     rotor_torque_topic: str = ROTOR_TORQUE_TOPIC

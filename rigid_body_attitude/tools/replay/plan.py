@@ -16,11 +16,12 @@ from rigid_body_attitude.bag import BagError, BagReader
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.msgs import (
-    ATTITUDE_DECODERS, IMU, POSE_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED)
+    ATTITUDE_DECODERS, IMU, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED, VECTOR3_STAMPED,
+    WRENCH_STAMPED)
 from rigid_body_attitude.session.decoding import RATE_DECODERS
 from rigid_body_attitude.session.settings import (
-    GYRO_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC, input_topics,
-    output_topics)
+    GYRO_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, SET_POSE_WITH_COVARIANCE_TOPIC,
+    TORQUE_TOPIC, input_topics, output_topics)
 from rigid_body_attitude.tools.replay.options import ReplayOptions
 
 __all__ = ['Plan', 'make_plan']
@@ -151,11 +152,16 @@ def make_plan(reader: BagReader, scene: Scene, input_names: frozenset[str],
                            (POSE_STAMPED,), [])
     if found:
         inputs[found] = SET_POSE_TOPIC
+    found = _command_topic(reader, SET_POSE_WITH_COVARIANCE_TOPIC,
+                           SET_POSE_WITH_COVARIANCE_TOPIC, True, (POSE_WITH_COVARIANCE_STAMPED,),
+                           [])
+    if found:
+        inputs[found] = SET_POSE_WITH_COVARIANCE_TOPIC
     truth_topic = ''
     if options.ground_truth_topic:
         truth_topic = _required(reader, options.ground_truth_topic, 'Ground-truth')
         reader.decoder(truth_topic, ATTITUDE_DECODERS)
-    available = output_topics(scene, imu_input=is_imu)
+    available = output_topics(scene, imu_input=is_imu, covariance=options.covariance)
     outputs = options.outputs or available
     missing = [name for name in outputs if name not in available]
     if missing:

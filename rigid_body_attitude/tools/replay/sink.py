@@ -23,13 +23,15 @@ from rigid_body_attitude.bag import BagWriter, Record
 from rigid_body_attitude.msgs import (
     DiagnosticStatus, encode_diagnostic_array, encode_float64, encode_pose_stamped,
     encode_quaternion_stamped, encode_twist_stamped, encode_vector3_stamped,
-    imu_with_orientation, pose_stamped_encoder, quaternion_stamped_encoder)
+    imu_with_orientation, pose_stamped_encoder, pose_with_covariance_stamped_encoder,
+    quaternion_stamped_encoder)
 from rigid_body_attitude.session.base import Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, body_frame_velocity)
 from rigid_body_attitude.session.settings import DIAGNOSTICS_TOPIC, NODE_NAME, OUTPUT_TOPICS
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND
+from rigid_body_attitude.session.uncertainty import pose_covariance
 from rigid_body_attitude.tools.replay.truth import GroundTruthStart
 
 __all__ = ['BagSink', 'LogHandler', 'OutputSeries']
@@ -108,6 +110,9 @@ class BagSink:
         self._orientation = self.ids.get('orientation')
         self._pose = self.ids.get('pose')
         self._imu = self.ids.get('imu/data')
+        self._pose_covariance = self.ids.get('pose_with_covariance')
+        self.orientation_covariance: tuple[float, ...] = (0.0,) * 9
+        self.pose_covariance = pose_covariance(self.orientation_covariance)
         self.set_frames('world', 'base_link')
 
     def set_frames(self, world_frame: str, body_frame: str) -> None:
@@ -115,6 +120,7 @@ class BagSink:
         self.world_frame, self.body_frame = world_frame, body_frame
         self.encode_orientation = quaternion_stamped_encoder(world_frame)
         self.encode_pose = pose_stamped_encoder(world_frame)
+        self.encode_pose_covariance = pose_with_covariance_stamped_encoder(world_frame)
 
     def start_from(self, start: GroundTruthStart, session: Session) -> None:
         """Set ``session``'s attitude from the ground truth at the first output due."""
@@ -129,7 +135,7 @@ class BagSink:
     def written(self) -> dict[str, int]:
         """Messages written per output topic."""
         counts = dict(self.counts)
-        for name in ('orientation', 'pose', 'imu/data'):
+        for name in ('orientation', 'pose', 'pose_with_covariance', 'imu/data'):
             if name in counts:
                 counts[name] += self.attitude_outputs
         return counts
@@ -152,9 +158,13 @@ class BagSink:
             append((self._orientation, now, self.encode_orientation(sec, nanosec, attitude)))
         if self._pose is not None:
             append((self._pose, now, self.encode_pose(sec, nanosec, _ZERO, attitude)))
+        if self._pose_covariance is not None:
+            append((self._pose_covariance, now, self.encode_pose_covariance(
+                sec, nanosec, _ZERO, attitude, self.pose_covariance)))
         if imu is not None and self._imu is not None:
             stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
-            append((self._imu, now, imu_with_orientation(imu, attitude, stamp)))
+            append((self._imu, now, imu_with_orientation(imu, attitude, stamp,
+                                                         self.orientation_covariance)))
         self.attitude_outputs += 1
         self.last_attitude = attitude
         series = self.series
@@ -162,6 +172,12 @@ class BagSink:
             series.attitude_stamps_ns.append(sec * NANOSECONDS_PER_SECOND + nanosec)
             series.attitudes.extend(attitude)
             series.positions.extend(_ZERO)
+
+    def attitude_covariance(self, covariance: tuple[float, ...]) -> None:
+        """The attitude covariance of the following ``imu/data`` and ``pose_with_covariance``
+        records (row-major 3×3 about fixed world axes [rad²])."""
+        self.orientation_covariance = covariance
+        self.pose_covariance = pose_covariance(covariance)
 
     def _started(self, stamp_ns: int, attitude: Quaternion) -> Quaternion:
         """The attitude of the output at ``stamp_ns``, from the ground truth when it is due."""

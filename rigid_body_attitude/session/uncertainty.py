@@ -1,0 +1,182 @@
+"""The attitude uncertainty of a gyro session: the covariance carried with the attitude.
+
+:class:`Uncertainty` owns a :class:`~rigid_body_attitude.core.attitude_covariance.
+AttitudeCovariance` and feeds it each integrated strapdown step (the session's
+``_after_step``). It starts from the levelling's uncertainty when levelling completes
+(:meth:`Uncertainty.aligned`), or, without levelling, from the scene's attitude with the
+unlevelled prior (tilt and yaw 1σ ``initial_yaw_stddev``, bias 1σ ``gyroscope_turn_on_bias``);
+``~/reset`` starts it again; ``set_pose`` replaces the attitude block (the message's covariance,
+or ``set_pose_stddev`` on each axis).
+
+Published values (REP-145: about fixed **world** axes, rad²): :attr:`Uncertainty.published` is
+the row-major 3×3 attitude covariance at the last fold (every :data:`BATCH_SIZE` samples,
+so a read is free per sample); :func:`pose_covariance` the 6×6 of ``pose_with_covariance``
+with the position block marked unknown (:data:`UNKNOWN_POSITION_VARIANCE` on its diagonal).
+
+Noise from a kalibr calibration file (``calibration_file``) overrides the parameters:
+:func:`error_model_from`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
+from rigid_body_attitude.core.errors import InputError
+from rigid_body_attitude.core.gyro_error_model import GyroErrorModel
+from rigid_body_attitude.session.levelling import AlignmentResult
+
+__all__ = ['BATCH_SIZE', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE', 'Uncertainty',
+           'error_model_from', 'orientation_block', 'pose_covariance']
+
+#: Variance [m²] on the diagonal of the position block of ``pose_with_covariance``: the
+#: position is not estimated. Large and finite, so the 6×6 stays symmetric positive definite
+#: (fuse refuses anything else) and a filter that fuses it anyway gives it no weight; a
+#: robot_localization user excludes the position with ``pose0_config``.
+UNKNOWN_POSITION_VARIANCE = 1e9
+#: Integrated steps gathered before a fold (the transition is exact for any batch): 256 costs
+#: about a sixth of 64 per sample (docs/performance.md); the published covariance is at most
+#: 255 samples old.
+BATCH_SIZE = 256
+#: Node parameters that are fields of :class:`GyroErrorModel` (same names).
+MODEL_PARAMETERS = ('gyroscope_noise_density', 'gyroscope_random_walk',
+                    'gyroscope_turn_on_bias', 'gyroscope_scale_stddev',
+                    'gyroscope_misalignment_stddev', 'initial_yaw_stddev')
+#: Keys of a kalibr ``imu.yaml`` that override the parameters of the same name.
+CALIBRATION_KEYS = ('gyroscope_noise_density', 'gyroscope_random_walk')
+
+Quaternion = tuple[float, float, float, float]
+Vector = tuple[float, float, float]
+
+
+def error_model_from(values: Mapping[str, Any],
+                     calibration: Mapping[str, Any] | None = None) -> GyroErrorModel:
+    """The gyro error model of the parameters ``values``; the gyro noise of a kalibr
+    ``calibration`` (an ``imu.yaml`` mapping: ``gyroscope_noise_density``,
+    ``gyroscope_random_walk``) overrides the parameters. Raises InputError naming the key."""
+    fields = {name: values[name] for name in MODEL_PARAMETERS if name in values}
+    for key in CALIBRATION_KEYS:
+        if calibration is not None and key in calibration:
+            value = calibration[key]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+                    math.isfinite(value) and value >= 0.0):
+                raise InputError(f'Expected calibration `{key}` to be a finite number >= 0, '
+                                 f'got {value!r}')
+            fields[key] = float(value)
+    return GyroErrorModel(**fields)
+
+
+def orientation_block(covariance: Sequence[float]) -> tuple[float, ...]:
+    """The row-major 3×3 orientation block (rows and columns 3-5) of the 36 row-major values
+    of a ``PoseWithCovariance``, checked: finite, symmetric, positive semi-definite (else
+    InputError saying which)."""
+    values = tuple(covariance)
+    if len(values) != 36:
+        raise InputError(f'Expected a covariance of 36 values, got {len(values)}')
+    block = np.array(values, dtype=np.float64).reshape(6, 6)[3:, 3:]
+    if not np.all(np.isfinite(block)):
+        raise InputError('Expected the orientation covariance to be finite')
+    scale = max(float(np.abs(block).max()), 1e-300)
+    if np.abs(block - block.T).max() > 1e-9 * scale:
+        raise InputError('Expected the orientation covariance to be symmetric')
+    if float(np.linalg.eigvalsh(block)[0]) < -1e-12 * scale:
+        raise InputError('Expected the orientation covariance to be positive semi-definite')
+    return tuple(block.reshape(9).tolist())
+
+
+def pose_covariance(attitude: Sequence[float]) -> tuple[float, ...]:
+    """The row-major 6×6 of a ``PoseWithCovariance`` from the row-major 3×3 attitude block:
+    position block diagonal :data:`UNKNOWN_POSITION_VARIANCE`, no cross terms."""
+    unknown = UNKNOWN_POSITION_VARIANCE
+    a = attitude
+    return (unknown, 0.0, 0.0, 0.0, 0.0, 0.0,
+            0.0, unknown, 0.0, 0.0, 0.0, 0.0,
+            0.0, 0.0, unknown, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, a[0], a[1], a[2],
+            0.0, 0.0, 0.0, a[3], a[4], a[5],
+            0.0, 0.0, 0.0, a[6], a[7], a[8])
+
+
+class Uncertainty:
+    """The attitude-error covariance of one gyro session (see the module docstring).
+
+    Args:
+        values: the node parameters (:mod:`~rigid_body_attitude.session.parameters`).
+        calibration: a kalibr ``imu.yaml`` mapping whose noise overrides the parameters.
+    """
+
+    def __init__(self, values: Mapping[str, Any],
+                 calibration: Mapping[str, Any] | None = None) -> None:
+        """The model of ``values``; the covariance starts unlevelled (:meth:`start`)."""
+        self.model = error_model_from(values, calibration)
+        self.apply(values)
+        self.start(None)
+
+    def apply(self, values: Mapping[str, Any]) -> None:
+        """Take the run-time parameters (``set_pose_stddev``, ``tilt_stddev_warn``)."""
+        self.set_pose_stddev: float = values['set_pose_stddev']
+        self.tilt_stddev_warn: float = values['tilt_stddev_warn']
+
+    def start(self, window_seconds: float | None) -> None:
+        """A new covariance: levelled over ``window_seconds`` of rest, or unlevelled (None)."""
+        self.covariance = AttitudeCovariance(self.model, window_seconds=window_seconds,
+                                             batch_size=BATCH_SIZE)
+        self._pending = 0
+        self._publish()
+
+    def aligned(self, result: AlignmentResult) -> None:
+        """The session's ``on_aligned`` hook: levelled over ``result.window_seconds`` of rest,
+        or unlevelled (not ``at_rest``: levelled from the quietest window after the timeout,
+        or a window of 0)."""
+        window = result.window_seconds if result.at_rest else 0.0
+        self.start(window if window > 0.0 else None)
+
+    def step(self, q_before: Quaternion, rate_body: Vector, dt: float) -> bool:
+        """One integrated step (attitude at its start, body rate held [rad/s], length [s]);
+        returns whether :attr:`published` changed (a fold)."""
+        self.covariance.add_sample(q_before, rate_body, dt)
+        self._pending += 1
+        if self._pending < BATCH_SIZE:
+            return False
+        self._pending = 0
+        self._publish()
+        return True
+
+    def set_pose(self, covariance: Sequence[float] | None = None) -> None:
+        """After ``set_pose``: the row-major 3×3 world-frame ``covariance`` [rad²] of the
+        message, or ``set_pose_stddev`` on each axis (None). Raises InputError for a matrix
+        that is not a finite symmetric positive semi-definite 3×3."""
+        if covariance is None:
+            self.covariance.set_pose(stddev=self.set_pose_stddev)
+        else:
+            self.covariance.set_pose(covariance=np.reshape(np.array(covariance, dtype=float),
+                                                           (3, 3)))
+        self._pending = 0
+        self._publish()
+
+    def _publish(self) -> None:
+        block = self.covariance.attitude_covariance
+        #: Row-major 3×3 attitude covariance [rad²] about fixed world axes, as published.
+        self.published: tuple[float, ...] = tuple(block.reshape(9).tolist())
+
+    def stddev_deg(self) -> tuple[float, float]:
+        """1σ tilt (worst horizontal axis) and yaw [deg] of :attr:`published` (read without
+        folding, so reading never changes when the folds happen)."""
+        xx, xy, _, _, yy, _, _, _, zz = self.published
+        half_trace, half_gap = 0.5 * (xx + yy), math.hypot(0.5 * (xx - yy), xy)
+        return math.degrees(math.sqrt(half_trace + half_gap)), math.degrees(math.sqrt(zz))
+
+    def diagnostic(self) -> tuple[str, list[tuple[str, str]]]:
+        """The WARN problem (``''`` when none) and the values of ``/diagnostics``."""
+        tilt, yaw = self.stddev_deg()
+        values = [('tilt_stddev [deg]', f'{tilt:.3f}'), ('yaw_stddev [deg]', f'{yaw:.3f}')]
+        bound = math.degrees(self.tilt_stddev_warn)
+        problem = ''
+        if self.tilt_stddev_warn > 0.0 and tilt > bound:
+            problem = (f'1-sigma tilt {tilt:.2f} deg above {bound:.2f} deg '
+                       f'(parameter `tilt_stddev_warn`)')
+        return problem, values

@@ -1,0 +1,207 @@
+"""The gyro session's attitude covariance: what goes to the sink, when, and what moves it.
+
+The covariance's consistency (NEES, BROAD) is tested in test/core and test/tools; here: the
+session feeds it every integrated step, hands it to the sink at each fold, starts it again on
+reset, sets it from set_pose (with or without a covariance), refuses a bad one, reports the
+1-sigma tilt and yaw and warns past ``tilt_stddev_warn``.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import BASE_NS, MS
+
+from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
+from rigid_body_attitude.core.errors import InputError
+from rigid_body_attitude.core.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.session.levelling import FROM_GRAVITY, FROM_TIMEOUT, AlignmentResult
+from rigid_body_attitude.session.parameters import defaults
+from rigid_body_attitude.session.reports import LEVEL_WARN
+from rigid_body_attitude.session.uncertainty import (
+    BATCH_SIZE, UNKNOWN_POSITION_VARIANCE, error_model_from, orientation_block, pose_covariance)
+
+OMEGA = (0.3, -0.2, 1.0)
+
+
+def feed(session, count, start_ns=BASE_NS, rate=OMEGA):
+    for k in range(count):
+        session.gyro(*divmod(start_ns + k * MS, 10**9), rate)
+
+
+def pose_cov(block):
+    full = np.zeros((6, 6))
+    full[:3, :3] = np.eye(3)
+    full[3:, 3:] = np.reshape(block, (3, 3))
+    return tuple(full.reshape(36).tolist())
+
+
+def is_spd(values, size):
+    matrix = np.reshape(values, (size, size))
+    return (np.all(np.isfinite(matrix)) and np.array_equal(matrix, matrix.T)
+            and np.linalg.eigvalsh(matrix)[0] > 0.0)
+
+
+def test_the_sink_gets_the_unlevelled_prior_then_one_covariance_per_fold(open_scene):
+    session, sink = open_scene('strapdown')
+    model = GyroErrorModel()
+    prior = initial_covariance(model, None)[:3, :3]
+    assert sink.covariances == [tuple(prior.reshape(9).tolist())]
+    feed(session, 1 + 3 * BATCH_SIZE)  # a baseline, then 3 batches of steps
+    assert len(sink.covariances) == 4
+    state = session.propagator.state
+    grown = np.reshape(sink.covariances[-1], (3, 3))
+    assert np.all(np.diag(grown) > np.diag(prior)) and is_spd(sink.covariances[-1], 3)
+    assert state.time == pytest.approx(3 * BATCH_SIZE * 1e-3)
+
+
+def test_the_session_feeds_the_core_exactly_its_steps(open_scene):
+    session, sink = open_scene('strapdown', integrator='exp_map')
+    reference = AttitudeCovariance(GyroErrorModel(), window_seconds=None,
+                                   batch_size=BATCH_SIZE)
+    state = session.propagator.state
+    session.gyro(*divmod(BASE_NS, 10**9), OMEGA)
+    for k in range(1, 2 * BATCH_SIZE + 1):
+        q_before, time_before = state.attitude_tuple(), state.time
+        session.gyro(*divmod(BASE_NS + k * MS, 10**9), OMEGA)
+        assert state.time - time_before == pytest.approx(1e-3, abs=1e-12)
+        reference.add_sample(q_before, OMEGA, state.time - time_before)
+    folded = tuple(reference.folded_attitude_covariance.reshape(9).tolist())
+    assert sink.covariances[-1] == folded and len(sink.covariances) == 3
+
+
+def test_reset_and_a_backward_jump_start_the_covariance_again(open_scene):
+    session, sink = open_scene('strapdown')
+    feed(session, 2 * BATCH_SIZE + 1)
+    start = sink.covariances[0]
+    assert sink.covariances[-1] != start
+    session.reset()
+    assert sink.covariances[-1] == start
+    feed(session, 2 * BATCH_SIZE + 1)
+    feed(session, 5, start_ns=BASE_NS - 10**10)  # back 10 s, confirmed: reset
+    assert sink.covariances[-1] == start
+
+
+def test_set_pose_resets_to_set_pose_stddev_or_takes_the_message_covariance(open_scene):
+    session, sink = open_scene('strapdown', set_pose_stddev=0.02)
+    feed(session, 10)
+    session.set_pose('world', (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    assert sink.covariances[-1] == tuple((np.eye(3) * 0.02 ** 2).reshape(9).tolist())
+    block = (4e-4, 1e-5, 0.0, 1e-5, 9e-4, 0.0, 0.0, 0.0, 0.25)
+    session.set_pose('world', (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), pose_cov(block))
+    assert sink.covariances[-1] == block
+    assert session.poses_accepted == 2
+
+
+@pytest.mark.parametrize('block, why', [
+    ((1.0, 0.5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0), 'symmetric'),
+    ((1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0), 'positive semi-definite'),
+    ((math.nan,) + (0.0,) * 8, 'finite'),
+    ((math.inf,) + (0.0,) * 8, 'finite'),
+])
+def test_a_bad_covariance_refuses_the_pose_and_is_counted(open_scene, block, why):
+    session, sink = open_scene('strapdown')
+    feed(session, 10)
+    before = (session.propagator.state.attitude_tuple(), len(sink.covariances))
+    session.set_pose('world', (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 0.0), pose_cov(block))
+    assert (session.propagator.state.attitude_tuple(), len(sink.covariances)) == before
+    assert session.rejection_counts()['invalid_pose'] == 1
+    assert why in sink.logs[-1][1]
+    with pytest.raises(InputError):
+        orientation_block((0.0,) * 35)
+
+
+def aligned(window_seconds, at_rest, source):
+    return AlignmentResult(attitude=(1.0, 0.0, 0.0, 0.0), gyro_bias=(0.0, 0.0, 0.0),
+                           window_seconds=window_seconds, at_rest=at_rest, source=source,
+                           status=source)
+
+
+def test_levelling_starts_the_levelled_covariance(open_scene):
+    session, sink = open_scene('strapdown')
+    session.on_aligned(aligned(1.0, True, FROM_GRAVITY))
+    expected = initial_covariance(GyroErrorModel(), 1.0)[:3, :3]
+    assert sink.covariances[-1] == tuple(expected.reshape(9).tolist())
+    session.on_aligned(aligned(1.0, False, FROM_TIMEOUT))
+    assert sink.covariances[-1] == sink.covariances[0]
+
+
+def test_diagnostics_show_tilt_and_yaw_and_warn_past_the_bound(open_scene, clocks):
+    session, sink = open_scene('strapdown', set_pose_stddev=0.01, tilt_stddev_warn=0.02)
+    feed(session, 10)
+    clocks.monotonic = 1.0
+    unlevelled = session.report()
+    assert unlevelled.level == LEVEL_WARN and 'tilt_stddev_warn' in unlevelled.message
+    assert dict(unlevelled.values)['tilt_stddev [deg]'] == '180.000'
+    session.set_pose('world', (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    clocks.monotonic = 2.0
+    report = session.report()
+    values = dict(report.values)
+    assert report.level == 0 and report.message == 'propagating'
+    assert values['tilt_stddev [deg]'] == values['yaw_stddev [deg]'] == \
+        f'{math.degrees(0.01):.3f}'
+
+
+def test_covariance_off_gives_no_uncertainty_and_no_covariance(open_scene):
+    session, sink = open_scene('strapdown', covariance=False)
+    feed(session, 200)
+    assert session.uncertainty is None and sink.covariances == []
+    assert 'tilt_stddev [deg]' not in dict(session.report().values)
+
+
+def test_calibration_noise_overrides_the_parameters_and_bad_values_name_the_key():
+    values = defaults() | {'gyroscope_noise_density': 1e-3}
+    assert error_model_from(values).gyroscope_noise_density == 1e-3
+    calibrated = error_model_from(values, {'gyroscope_noise_density': 2e-4,
+                                           'gyroscope_random_walk': 3e-5, 'update_rate': 200})
+    assert (calibrated.gyroscope_noise_density, calibrated.gyroscope_random_walk) == (2e-4, 3e-5)
+    for bad in (-1.0, math.nan, 'x', True):
+        with pytest.raises(InputError, match='gyroscope_random_walk'):
+            error_model_from(values, {'gyroscope_random_walk': bad})
+
+
+def test_the_pose_covariance_is_spd_with_the_position_unknown():
+    block = (4e-4, 1e-5, 0.0, 1e-5, 9e-4, 0.0, 0.0, 0.0, 0.25)
+    full = pose_covariance(block)
+    assert is_spd(full, 6) and np.reshape(full, (6, 6))[3:, 3:].reshape(9).tolist() == list(block)
+    assert np.diag(np.reshape(full, (6, 6)))[:3].tolist() == [UNKNOWN_POSITION_VARIANCE] * 3
+
+
+def test_a_kalibr_imu_yaml_gives_the_session_its_gyro_noise(open_scene, tmp_path):
+    path = tmp_path / 'imu.yaml'
+    path.write_text('rostopic: /imu\nupdate_rate: 200.0\ngyroscope_noise_density: 2.0e-4\n'
+                    'gyroscope_random_walk: 3.0e-5\naccelerometer_noise_density: 1.0e-3\n')
+    session, _ = open_scene('strapdown', calibration_file=str(path),
+                            gyroscope_noise_density=1e-3, gyroscope_random_walk=1e-4)
+    model = session.uncertainty.model
+    assert (model.gyroscope_noise_density, model.gyroscope_random_walk) == (2e-4, 3e-5)
+    plain = tmp_path / 'plain.yaml'
+    plain.write_text('bias: [0.0, 0.0, 0.0]\n')
+    session, _ = open_scene('strapdown', calibration_file=str(plain),
+                            gyroscope_noise_density=1e-3)
+    assert session.uncertainty.model.gyroscope_noise_density == 1e-3
+
+
+def test_levelling_at_rest_starts_the_covariance_from_its_window(open_scene):
+    session, sink = open_scene('strapdown', align_seconds=0.5)
+    unlevelled = sink.covariances[-1]
+    rng = np.random.default_rng(1)
+    for k in range(2000):
+        rate = tuple(rng.normal(0.0, 0.003, 3).tolist())
+        accel = tuple((np.array([0.0, 0.0, 9.81]) + rng.normal(0.0, 0.03, 3)).tolist())
+        session.gyro(*divmod(BASE_NS + k * MS, 10**9), rate, None, accel)
+    assert session.alignment is not None and session.alignment.at_rest, session.alignment_text()
+    expected = AttitudeCovariance(GyroErrorModel(),
+                                  window_seconds=session.alignment.window_seconds,
+                                  batch_size=BATCH_SIZE).folded_attitude_covariance
+    levelled = np.reshape(sink.covariances[-1], (3, 3))
+    assert sink.covariances[-1] != unlevelled
+    assert levelled[0, 0] < 1e-3 and levelled[0, 0] == pytest.approx(expected[0, 0], rel=1e-3)
+
+
+def test_a_pose_set_before_the_first_sample_keeps_its_covariance(open_scene):
+    session, sink = open_scene('strapdown')
+    block = (4e-4, 0.0, 0.0, 0.0, 9e-4, 0.0, 0.0, 0.0, 0.25)
+    session.set_pose('world', (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), pose_cov(block))
+    feed(session, 2)  # no accelerometer: the integration starts from the pose at once
+    assert session.alignment_done and sink.covariances[-1] == block
