@@ -147,7 +147,8 @@ def paced_run(ros, request, processes, publisher_qos: QoSProfile, rate: float, c
     assert missing == [], (
         f'{len(missing)} samples not integrated (first {missing[:5]}); the node received '
         f'{diagnostics_value(statuses, "received")}, missed '
-        f'{diagnostics_value(statuses, "missed_samples")}; poses {len(poses)}; node log:\n{stderr}')
+        f'{diagnostics_value(statuses, "missed_samples")}; poses {len(poses)}; '
+        f'node log:\n{stderr}')
     return missing
 
 
