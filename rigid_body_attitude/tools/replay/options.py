@@ -6,6 +6,10 @@ The node's parameters are the entries of
 defaults, bounds and checks (:func:`~rigid_body_attitude.session.parameters.check_values`).
 :class:`ReplayOptions` declares them as typed fields (so ``mypy`` and readers see them); the
 check at the end of this module fails at import when the fields and the table part ways.
+
+``start_from_ground_truth`` is an explicit initial attitude: it wins over levelling, so the
+replay then runs with ``align_seconds`` 0 (no levelling; the gyro bias, if any, comes from the
+scene's ``gyro_bias`` effect and every sample is integrated from the first).
 """
 
 from __future__ import annotations
@@ -122,6 +126,8 @@ def check_options(options: ReplayOptions) -> dict[str, Any]:
         if not math.isfinite(start):
             raise InputError(f'Expected `start_from_ground_truth` to be a finite stamp [s], '
                              f'got {start!r}')
+        # The ground truth gives the initial attitude: no levelling (module docstring).
+        values['align_seconds'] = 0.0
     unknown = sorted(set(options.outputs) - set(OUTPUT_TOPICS))
     if unknown:
         raise InputError(f'Unknown output topic {unknown[0]!r}; valid choices: '
