@@ -85,7 +85,7 @@ def rate_message(stamp_ns, rate):
     message = Vector3Stamped()
     sec, nanosec = divmod(stamp_ns, 10**9)
     message.header.stamp = Time(sec=sec, nanosec=nanosec)
-    message.header.frame_id = 'imu_link'
+    message.header.frame_id = 'base_link'
     message.vector.x, message.vector.y, message.vector.z = rate
     return message
 
