@@ -42,8 +42,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.effects.base import real
-from rigid_body_attitude.core.errors import CalibrationError, SceneError
-from rigid_body_attitude.core.scene import _bounded, _parse_yaml, _read_text, quote
+from rigid_body_attitude.core.errors import CalibrationError
+from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml
 
 __all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'ImuNoise', 'ORTHONORMAL_TOLERANCE',
            'calibration_from_mapping', 'load_calibration']
@@ -209,14 +209,7 @@ def load_calibration(path: str | Path, imu_key: str = '') -> ImuCalibration:
     where = f'Calibration file {str(path)!r}'
     if not path.is_file():
         raise CalibrationError(f'{where} does not exist')
-    try:
-        text = _read_text(path, where)
-        if text.startswith('%YAML'):  # OpenCV's '%YAML:1.0' directive; keep the line numbers
-            text = '\n' + text.split('\n', 1)[1] if '\n' in text else ''
-        data = _parse_yaml(text, where)
-    except SceneError as err:  # the scene reader's checks, re-typed
-        raise CalibrationError(_bounded(str(err).replace('scene files', 'calibration files'))
-                               ) from None
+    data = read_yaml(path, where, CalibrationError, 'calibration files', skip_directive=True)
     try:
         return calibration_from_mapping(data, imu_key=imu_key, source=str(path))
     except CalibrationError as err:

@@ -6,7 +6,7 @@ the effects; only the effects it names are constructed. Format::
     name: torque_free_box
     description: a free box tumbling about no principal axis
     rate_source: dynamics          # or gyro (strapdown from measured rates)
-    integrator: rk4
+    integrator: rk4                # default rk4; gyro scenes: delta_single
     step: 0.001                    # [s]; for gyro scenes the input stamps set the step
     body:
       mass: 2.0                    # [kg]
@@ -23,13 +23,11 @@ Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`sce
 
 Hostile or broken files are refused at load with one :class:`SceneError` naming the file and
 the key path (``initial_state.attitude``), or the line and column of a YAML syntax error; error
-texts quote at most :data:`QUOTE_LIMIT` characters of a bad value. Limits:
+texts quote at most 100 characters of a bad value. Limits:
 
-* size: at most :data:`MAX_FILE_BYTES` (64 KiB; the shipped scenes are under 1 KiB; the limit
-  is small because the pure-Python YAML parser that the alias and depth checks need is slow);
-* UTF-8 only; YAML aliases (``*name``) are refused (an alias bomb of a few hundred bytes
-  expands to gigabytes), anchors alone are harmless; nesting at most :data:`MAX_DEPTH` levels;
-* every integer must fit a float (a 400-digit mass is refused, not overflowed);
+* the file checks of :mod:`~rigid_body_attitude.core.yaml_files`: at most 64 KiB (the shipped
+  scenes are under 1 KiB), UTF-8, no YAML aliases, nesting at most 32 levels, every integer
+  fits a float;
 * ``name`` at most :data:`MAX_NAME_CHARS` characters, ``description`` at most
   :data:`MAX_DESCRIPTION_CHARS`;
 * physics that stays finite: mass, principal moments and their inverses, ``|omega_body|``,
@@ -44,14 +42,12 @@ from __future__ import annotations
 
 import math
 import os
-import reprlib
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core import quaternion
@@ -60,10 +56,10 @@ from rigid_body_attitude.core.effects.base import MAGNITUDE_LIMIT, real
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.inertia import Inertia
 from rigid_body_attitude.core.paths import config_folders
+from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml
 
-__all__ = ['MAX_DEPTH', 'MAX_DESCRIPTION_CHARS', 'MAX_FILE_BYTES', 'MAX_NAME_CHARS',
-           'QUOTE_LIMIT', 'RATE_SOURCES', 'SCALE_LIMIT', 'Scene', 'builtin_scenes',
-           'load_scene', 'scene_from_mapping', 'scene_path']
+__all__ = ['MAX_DESCRIPTION_CHARS', 'MAX_NAME_CHARS', 'RATE_SOURCES', 'SCALE_LIMIT', 'Scene',
+           'builtin_scenes', 'load_scene', 'scene_from_mapping', 'scene_path']
 
 FloatArray = NDArray[np.float64]
 
@@ -74,33 +70,14 @@ _REQUIRED_TOP_KEYS = ('rate_source', 'body')
 _BODY_KEYS = {'mass', 'inertia'}
 _STATE_KEYS = {'attitude', 'omega_body'}
 _SHAPES = ('tensor', 'moments', 'box', 'cylinder', 'sphere')
-_DEFAULT_INTEGRATOR = {'dynamics': 'rk4', 'gyro': 'exp_map'}
+_DEFAULT_INTEGRATOR = {'dynamics': 'rk4', 'gyro': 'delta_single'}
 
-#: Largest scene file read [bytes].
-MAX_FILE_BYTES = 64 * 1024
-#: Deepest nesting of YAML collections.
-MAX_DEPTH = 32
 #: Longest ``name`` and ``description`` [characters].
 MAX_NAME_CHARS = 256
 MAX_DESCRIPTION_CHARS = 1024
-#: Most characters of a bad value quoted in an error; a whole error text is at most
-#: :data:`MAX_ERROR_CHARS`.
-QUOTE_LIMIT = 100
-MAX_ERROR_CHARS = 600
 #: Bound on every physical magnitude of a scene (SI units), and 1/bound on the positive ones
 #: (the effects' parameters share it).
 SCALE_LIMIT = MAGNITUDE_LIMIT
-_FLOAT_MAX = 1.7976931348623157e308
-_QUOTE = reprlib.Repr()
-_QUOTE.maxstring = _QUOTE.maxother = _QUOTE.maxlong = QUOTE_LIMIT
-_QUOTE.maxlist = _QUOTE.maxtuple = _QUOTE.maxdict = _QUOTE.maxset = 6
-_QUOTE.maxlevel = 3
-
-
-def quote(value: Any) -> str:
-    """``repr(value)`` of at most about :data:`QUOTE_LIMIT` characters (for error texts)."""
-    text = _QUOTE.repr(value)
-    return text if len(text) <= QUOTE_LIMIT else text[:QUOTE_LIMIT - 3] + '...'
 
 
 @dataclass(frozen=True)
@@ -189,108 +166,18 @@ def load_scene(name_or_path: str) -> Scene:
     """
     path = scene_path(name_or_path)
     where = f'Scene file {str(path)!r}'
-    data = _parse_yaml(_read_text(path, where), where)
+    data = read_yaml(path, where, SceneError, 'scene files')
     try:
         return scene_from_mapping(data, default_name=path.stem, source=str(path))
     except SceneError as err:
         raise SceneError(_bounded(f'{where}: {err}')) from None
 
 
-def _bounded(text: str, limit: int = MAX_ERROR_CHARS) -> str:
-    """``text`` on one line, at most ``limit`` characters."""
-    text = ' '.join(text[:limit + 1].splitlines())
-    return text if len(text) <= limit else text[:limit - 3] + '...'
-
-
-def _clip(text: str) -> str:
-    return _bounded(text, QUOTE_LIMIT)
-
-
-def _read_text(path: Path, where: str) -> str:
-    """The file's text: at most :data:`MAX_FILE_BYTES`, UTF-8."""
-    try:
-        with path.open('rb') as file:
-            raw = file.read(MAX_FILE_BYTES + 1)
-    except OSError as err:
-        raise SceneError(f'{where} cannot be read: {quote(err.strerror)}') from None
-    if len(raw) > MAX_FILE_BYTES:
-        raise SceneError(f'{where} is larger than the limit of {MAX_FILE_BYTES} bytes')
-    try:
-        return raw.decode('utf-8')
-    except UnicodeDecodeError as err:
-        line = raw.count(b'\n', 0, err.start) + 1
-        column = err.start - raw.rfind(b'\n', 0, err.start)
-        raise SceneError(f'{where}, line {line}, column {column}: not UTF-8 (byte '
-                         f'0x{raw[err.start]:02x})') from None
-
-
-class _SceneLoader(yaml.SafeLoader):
-    """PyYAML's safe loader without aliases and with a nesting limit."""
-
-    def __init__(self, stream: str) -> None:
-        super().__init__(stream)
-        self.depth = 0
-
-    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node | None:
-        """Refuse an alias, or a collection nested deeper than :data:`MAX_DEPTH`."""
-        event = self.peek_event()  # type: ignore[no-untyped-call]
-        mark = event.start_mark
-        if isinstance(event, yaml.AliasEvent):
-            raise yaml.composer.ComposerError(
-                None, None, 'aliases (*name) are not allowed in scene files', mark)
-        if self.depth >= MAX_DEPTH:
-            raise yaml.composer.ComposerError(
-                None, None, f'nesting deeper than {MAX_DEPTH} levels', mark)
-        self.depth += 1
-        try:
-            return super().compose_node(parent, index)
-        finally:
-            self.depth -= 1
-
-
-def _parse_yaml(text: str, where: str) -> Any:
-    loader = None
-    try:
-        loader = _SceneLoader(text)
-        data = loader.get_single_data()
-    except yaml.MarkedYAMLError as err:
-        mark = err.problem_mark or err.context_mark
-        position = f', line {mark.line + 1}, column {mark.column + 1}' if mark else ''
-        raise SceneError(f'{where}{position}: not valid YAML: '
-                         f'{_clip(err.problem or err.context or "")}') from None
-    except (yaml.YAMLError, ValueError, TypeError, OverflowError) as err:
-        raise SceneError(f'{where}: not valid YAML: {_clip(str(err))}') from None
-    finally:
-        if loader is not None:
-            loader.dispose()
-    for key_path, value in _numbers(data, ''):
-        if abs(value) > _FLOAT_MAX:
-            raise SceneError(f'{where}: {key_path or "scene"}: an integer of '
-                             f'{len(str(abs(value)))} digits is too large for a float')
-    return data
-
-
-def _numbers(data: Any, key_path: str) -> Iterator[tuple[str, int]]:
-    """``(key path, integer)`` of every integer in the parsed file (nesting is bounded)."""
-    if isinstance(data, bool):
-        return
-    if isinstance(data, int):
-        yield key_path, data
-    elif isinstance(data, Mapping):
-        for key, value in data.items():
-            yield from _numbers(key, key_path)
-            name = key if isinstance(key, str) else quote(key)
-            yield from _numbers(value, f'{key_path}.{name}' if key_path else name)
-    elif isinstance(data, list):
-        for index, value in enumerate(data):
-            yield from _numbers(value, f'{key_path}[{index}]')
-
-
 def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '') -> Scene:
     """Validate a scene given as a mapping (the parsed YAML).
 
     Errors name the key path (``body.mass``, ``initial_state.attitude``) and quote at most
-    :data:`QUOTE_LIMIT` characters of the bad value.
+    100 characters of the bad value.
     """
     if not isinstance(data, Mapping):
         raise SceneError(f'Expected a scene to be a mapping with keys '

@@ -13,7 +13,7 @@ import pytest
 from rigid_body_attitude.core.calibration import (
     calibration_from_mapping, ImuCalibration, load_calibration)
 from rigid_body_attitude.core.errors import CalibrationError
-from rigid_body_attitude.core.scene import MAX_ERROR_CHARS, MAX_FILE_BYTES
+from rigid_body_attitude.core.yaml_files import MAX_ERROR_CHARS, MAX_FILE_BYTES
 
 # kalibr imu-camera result, worked by hand (kalibr's model, IccScaledMisalignedImu):
 #   w_measured = M C w_i + A C a_i + b,   a_measured = M_a a_i

@@ -29,7 +29,9 @@ def dynamics_scene(inertia, omega_body, effects=(), step=0.001, attitude=(1.0, 0
 
 
 def gyro_scene(effects=()):
-    return scene_from_mapping({'rate_source': 'gyro', 'body': {'inertia': {'moments': [1, 1, 1]}},
+    """A gyro scene integrated with ``exp_map`` (the rate held over each step)."""
+    return scene_from_mapping({'rate_source': 'gyro', 'integrator': 'exp_map',
+                               'body': {'inertia': {'moments': [1, 1, 1]}},
                                'effects': list(effects)})
 
 

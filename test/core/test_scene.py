@@ -151,7 +151,7 @@ def test_scene_defaults_and_normalised_attitude():
     assert scene.effects == ()
     gyro = scene_from_mapping({'rate_source': 'gyro',
                                'body': {'inertia': {'sphere': {'radius': 1}}}, 'effects': None})
-    assert gyro.integrator == 'exp_map'
+    assert gyro.integrator == 'delta_single'
     np.testing.assert_allclose(gyro.inertia.tensor, 0.4 * np.eye(3), rtol=1e-15)
 
 

@@ -21,8 +21,8 @@ import pytest
 
 from rigid_body_attitude.bag import write_bag
 from rigid_body_attitude.core.errors import SceneError
-from rigid_body_attitude.core.scene import (
-    load_scene, MAX_DEPTH, MAX_ERROR_CHARS, MAX_FILE_BYTES, scene_from_mapping)
+from rigid_body_attitude.core.scene import load_scene, scene_from_mapping
+from rigid_body_attitude.core.yaml_files import MAX_DEPTH, MAX_ERROR_CHARS, MAX_FILE_BYTES
 
 BODY = 'body: {mass: 2.0, inertia: {moments: [1.0, 2.0, 2.5]}}'
 GOOD = f'rate_source: dynamics\n{BODY}\n'

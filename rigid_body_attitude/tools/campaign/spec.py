@@ -45,8 +45,8 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
-from rigid_body_attitude.core.scene import (
-    _parse_yaml, _read_text, load_scene, quote, Scene, scene_from_mapping)
+from rigid_body_attitude.core.scene import load_scene, Scene, scene_from_mapping
+from rigid_body_attitude.core.yaml_files import quote, read_yaml
 
 __all__ = ['CampaignSpec', 'CommandDispersion', 'InertiaDispersion', 'MAX_OUTPUT_TIMES',
            'MAX_RUNS', 'Spread', 'SpecError', 'load_spec', 'spec_from_mapping']
@@ -128,8 +128,8 @@ def load_spec(path: str | Path) -> CampaignSpec:
     text starts ``Campaign file '<path>'``."""
     path = Path(path).expanduser()
     where = f'Campaign file {str(path)!r}'
+    data = read_yaml(path, where, SpecError, 'campaign files')
     try:
-        data = _parse_yaml(_read_text(path, where), where)
         return spec_from_mapping(data, default_name=path.stem, base=path.parent,
                                  source=str(path))
     except SpecError as err:

@@ -32,7 +32,8 @@ def test_given_bias_is_subtracted():
 
 
 def stream_with_estimate(seconds):
-    scene = scene_from_mapping({'rate_source': 'gyro', 'body': {'inertia': {'moments': [1, 1, 1]}},
+    scene = scene_from_mapping({'rate_source': 'gyro', 'integrator': 'exp_map',
+                                'body': {'inertia': {'moments': [1, 1, 1]}},
                                 'initial_state': {'attitude': Q0.tolist()},
                                 'effects': [{'gyro_bias': {'estimate_seconds': seconds}}]})
     propagator = GyroPropagator(scene)

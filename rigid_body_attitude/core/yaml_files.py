@@ -1,0 +1,154 @@
+"""Checked reading of the package's YAML files: scenes, calibration files, campaign specs.
+
+Every file is hostile until checked. :func:`read_yaml` refuses, with one error of the caller's
+type whose text starts with the caller's ``where`` (``Scene file '<path>'``):
+
+* a file that cannot be read, or one larger than :data:`MAX_FILE_BYTES` (64 KiB);
+* bytes that are not UTF-8 (line, column and byte named);
+* YAML syntax errors (line and column named), aliases (``*name``: an alias bomb of a few
+  hundred bytes expands to gigabytes; anchors alone are harmless) and nesting deeper than
+  :data:`MAX_DEPTH` levels;
+* an integer too large for a float (a 400-digit mass is refused, not overflowed).
+
+Error texts quote at most :data:`QUOTE_LIMIT` characters of a bad value (:func:`quote`) and
+are at most :data:`MAX_ERROR_CHARS` long, on one line (:func:`bounded`).
+"""
+
+from __future__ import annotations
+
+import reprlib
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+__all__ = ['MAX_DEPTH', 'MAX_ERROR_CHARS', 'MAX_FILE_BYTES', 'QUOTE_LIMIT', 'bounded', 'quote',
+           'read_yaml']
+
+#: Largest file read [bytes] (the shipped files are a few KiB at most; the limit is small
+#: because the pure-Python YAML parser that the alias and depth checks need is slow).
+MAX_FILE_BYTES = 64 * 1024
+#: Deepest nesting of YAML collections.
+MAX_DEPTH = 32
+#: Most characters of a bad value quoted in an error; a whole error text is at most
+#: :data:`MAX_ERROR_CHARS`.
+QUOTE_LIMIT = 100
+MAX_ERROR_CHARS = 600
+_FLOAT_MAX = 1.7976931348623157e308
+_QUOTE = reprlib.Repr()
+_QUOTE.maxstring = _QUOTE.maxother = _QUOTE.maxlong = QUOTE_LIMIT
+_QUOTE.maxlist = _QUOTE.maxtuple = _QUOTE.maxdict = _QUOTE.maxset = 6
+_QUOTE.maxlevel = 3
+
+
+def quote(value: Any) -> str:
+    """``repr(value)`` of at most about :data:`QUOTE_LIMIT` characters (for error texts)."""
+    text = _QUOTE.repr(value)
+    return text if len(text) <= QUOTE_LIMIT else text[:QUOTE_LIMIT - 3] + '...'
+
+
+def bounded(text: str, limit: int = MAX_ERROR_CHARS) -> str:
+    """``text`` on one line, at most ``limit`` characters."""
+    text = ' '.join(text[:limit + 1].splitlines())
+    return text if len(text) <= limit else text[:limit - 3] + '...'
+
+
+def read_yaml(path: Path, where: str, error: type[Exception], kind: str,
+              skip_directive: bool = False) -> Any:
+    """The parsed content of the YAML file ``path``, checked (module docstring).
+
+    ``where`` starts every error text, ``error`` is the type raised, ``kind`` names the files
+    in texts (``'scene files'``). ``skip_directive``: a first line ``%YAML...`` (OpenCV's
+    ``%YAML:1.0``) is read as empty, keeping the line numbers.
+    """
+    try:
+        text = _read_text(path, where, error)
+        if skip_directive and text.startswith('%YAML'):
+            text = '\n' + text.split('\n', 1)[1] if '\n' in text else ''
+        return _parse_yaml(text, where, error, kind)
+    except error as err:
+        raise error(bounded(str(err))) from None
+
+
+def _read_text(path: Path, where: str, error: type[Exception]) -> str:
+    """The file's text: at most :data:`MAX_FILE_BYTES`, UTF-8."""
+    try:
+        with path.open('rb') as file:
+            raw = file.read(MAX_FILE_BYTES + 1)
+    except OSError as err:
+        raise error(f'{where} cannot be read: {quote(err.strerror)}') from None
+    if len(raw) > MAX_FILE_BYTES:
+        raise error(f'{where} is larger than the limit of {MAX_FILE_BYTES} bytes')
+    try:
+        return raw.decode('utf-8')
+    except UnicodeDecodeError as err:
+        line = raw.count(b'\n', 0, err.start) + 1
+        column = err.start - raw.rfind(b'\n', 0, err.start)
+        raise error(f'{where}, line {line}, column {column}: not UTF-8 (byte '
+                    f'0x{raw[err.start]:02x})') from None
+
+
+class _CheckedLoader(yaml.SafeLoader):
+    """PyYAML's safe loader without aliases and with a nesting limit."""
+
+    kind = 'these files'
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self.depth = 0
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node | None:
+        """Refuse an alias, or a collection nested deeper than :data:`MAX_DEPTH`."""
+        event = self.peek_event()  # type: ignore[no-untyped-call]
+        mark = event.start_mark
+        if isinstance(event, yaml.AliasEvent):
+            raise yaml.composer.ComposerError(
+                None, None, f'aliases (*name) are not allowed in {self.kind}', mark)
+        if self.depth >= MAX_DEPTH:
+            raise yaml.composer.ComposerError(
+                None, None, f'nesting deeper than {MAX_DEPTH} levels', mark)
+        self.depth += 1
+        try:
+            return super().compose_node(parent, index)
+        finally:
+            self.depth -= 1
+
+
+def _parse_yaml(text: str, where: str, error: type[Exception], kind: str) -> Any:
+    loader = None
+    try:
+        loader = _CheckedLoader(text)
+        loader.kind = kind
+        data = loader.get_single_data()
+    except yaml.MarkedYAMLError as err:
+        mark = err.problem_mark or err.context_mark
+        position = f', line {mark.line + 1}, column {mark.column + 1}' if mark else ''
+        raise error(f'{where}{position}: not valid YAML: '
+                    f'{bounded(err.problem or err.context or "", QUOTE_LIMIT)}') from None
+    except (yaml.YAMLError, ValueError, TypeError, OverflowError) as err:
+        raise error(f'{where}: not valid YAML: {bounded(str(err), QUOTE_LIMIT)}') from None
+    finally:
+        if loader is not None:
+            loader.dispose()
+    for key_path, value in _integers(data, ''):
+        if abs(value) > _FLOAT_MAX:
+            raise error(f'{where}: {key_path or "file"}: an integer of '
+                        f'{len(str(abs(value)))} digits is too large for a float')
+    return data
+
+
+def _integers(data: Any, key_path: str) -> Iterator[tuple[str, int]]:
+    """``(key path, integer)`` of every integer in the parsed file (nesting is bounded)."""
+    if isinstance(data, bool):
+        return
+    if isinstance(data, int):
+        yield key_path, data
+    elif isinstance(data, Mapping):
+        for key, value in data.items():
+            yield from _integers(key, key_path)
+            name = key if isinstance(key, str) else quote(key)
+            yield from _integers(value, f'{key_path}.{name}' if key_path else name)
+    elif isinstance(data, list):
+        for index, value in enumerate(data):
+            yield from _integers(value, f'{key_path}[{index}]')
