@@ -57,6 +57,9 @@ class NullSink:
     def attitude(self, *args: Any) -> None:
         """Nothing."""
 
+    def sensor_mount(self, *args: Any) -> None:
+        """Nothing."""
+
     def dynamics(self, *args: Any) -> None:
         """Nothing."""
 

@@ -27,7 +27,7 @@ from rigid_body_attitude import bag
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.msgs.cdr import transform_encoder
 from rigid_body_attitude.ros.qos import TF_STATIC_QOS
-from rigid_body_attitude.ros.tf_lookup import StaticTransforms
+from rigid_body_attitude.session.mount import StaticTransforms
 
 
 def _axis(angle: float, axis: int) -> tuple[float, float, float, float]:
@@ -69,9 +69,9 @@ def test_a_chain_of_static_transforms_is_composed_up_and_down_the_tree():
     down to imu_link."""
     yaw, pitch, roll = _axis(math.pi / 2, 2), _axis(math.pi / 6, 1), _axis(math.pi, 0)
     transforms = StaticTransforms()
-    assert transforms.add('base_footprint', 'base_link', _xyzw(yaw)) == ''
-    assert transforms.add('base_footprint', 'torso', _xyzw(pitch)) == ''
-    assert transforms.add('torso', 'imu_link', _xyzw(roll)) == ''
+    assert transforms.add('base_footprint', 'base_link', yaw) == ''
+    assert transforms.add('base_footprint', 'torso', pitch) == ''
+    assert transforms.add('torso', 'imu_link', roll) == ''
     expected = quaternion.multiply(quaternion.conjugate(yaw), quaternion.multiply(pitch, roll))
     found = transforms.rotation('base_link', 'imu_link')
     assert found is not None
@@ -82,9 +82,9 @@ def test_a_chain_of_static_transforms_is_composed_up_and_down_the_tree():
 def test_hostile_static_transforms_are_refused():
     """Non-finite or zero rotations and self-loops are refused, never stored."""
     transforms = StaticTransforms()
-    assert transforms.add('a', 'b', (math.nan, 0.0, 0.0, 1.0))
+    assert transforms.add('a', 'b', (1.0, math.nan, 0.0, 0.0))
     assert transforms.add('a', 'b', (0.0, 0.0, 0.0, 0.0))
-    assert transforms.add('a', 'a', (0.0, 0.0, 0.0, 1.0))
+    assert transforms.add('a', 'a', (1.0, 0.0, 0.0, 0.0))
     assert transforms.rotation('a', 'b') is None
 
 
