@@ -60,6 +60,9 @@ class NullSink:
     def sensor_mount(self, *args: Any) -> None:
         """Nothing."""
 
+    def attitude_covariance(self, *args: Any) -> None:
+        """Nothing."""
+
     def dynamics(self, *args: Any) -> None:
         """Nothing."""
 
