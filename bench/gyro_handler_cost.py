@@ -57,6 +57,12 @@ class NullSink:
     def attitude(self, *args: Any) -> None:
         """Nothing."""
 
+    def sensor_mount(self, *args: Any) -> None:
+        """Nothing."""
+
+    def attitude_covariance(self, *args: Any) -> None:
+        """Nothing."""
+
     def dynamics(self, *args: Any) -> None:
         """Nothing."""
 

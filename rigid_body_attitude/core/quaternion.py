@@ -58,6 +58,7 @@ __all__ = [
     'identity',
     'log',
     'multiply',
+    'multiply_floats',
     'norm_error',
     'normalize',
     'rotate',
@@ -120,6 +121,15 @@ def multiply(p: ArrayLike, q: ArrayLike) -> FloatArray:
         pw * qy - px * qz + py * qw + pz * qx,
         pw * qz + px * qy - py * qx + pz * qw,
     ], axis=-1)
+
+
+def multiply_floats(p: Sequence[float],
+                    q: Sequence[float]) -> tuple[float, float, float, float]:
+    """:func:`multiply` for two plain-float quaternions (no NumPy: hot paths)."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return (pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw)
 
 
 def conjugate(q: ArrayLike) -> FloatArray:

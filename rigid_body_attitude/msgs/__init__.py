@@ -9,6 +9,8 @@ messages with these, as the replay tool does with a bag's records.
   (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped,
   PoseWithCovarianceStamped, Float64)
   to plain values, raising :class:`MalformedMessage` for any bytes that are not one.
+* :mod:`~rigid_body_attitude.msgs.tf_message`: the checked decoder of ``tf2_msgs/TFMessage``
+  (the static transforms of a bag's ``/tf_static``).
 * :mod:`~rigid_body_attitude.msgs.cdr`: fast ``struct`` encoders of those messages and the
   float-stamp decoders of bag readers.
 * :mod:`~rigid_body_attitude.msgs.diagnostics`: the ``DiagnosticArray`` encoder.
@@ -69,6 +71,7 @@ from rigid_body_attitude.msgs.decoders import (
     decode_vector3_stamped,
     decode_wrench_stamped,
 )
+from rigid_body_attitude.msgs.tf_message import TF_MESSAGE, Transform, decode_tf_message
 from rigid_body_attitude.msgs.diagnostics import DiagnosticStatus, encode_diagnostic_array
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.types import (
@@ -99,6 +102,7 @@ __all__ = [
     'POSE_WITH_COVARIANCE_STAMPED',
     'QUATERNION_STAMPED',
     'RATE_DECODERS',
+    'TF_MESSAGE',
     'TORQUE_DECODERS',
     'TWIST_STAMPED',
     'VECTOR3_STAMPED',
@@ -108,6 +112,7 @@ __all__ = [
     'GyroDecoder',
     'Layout',
     'MalformedMessage',
+    'Transform',
     'decode_float64',
     'decode_header',
     'decode_imu',
@@ -117,6 +122,7 @@ __all__ = [
     'decode_pose_with_covariance_stamped',
     'decode_quaternion_stamped',
     'decode_twist_angular',
+    'decode_tf_message',
     'decode_twist_stamped',
     'decode_vector3_stamped',
     'decode_wrench_stamped',

@@ -62,6 +62,7 @@ from rigid_body_attitude.msgs.types import (
     WRENCH_STAMPED,
 )
 from rigid_body_attitude.core.errors import InputError
+from rigid_body_attitude.core.quaternion import multiply_floats
 
 __all__ = [
     'ATTITUDE_DECODERS',
@@ -228,19 +229,25 @@ _IMU_ORIENTATION_SIZE = 13 * 8
 
 def imu_with_orientation(data: bytes, attitude: Sequence[float],
                          stamp: tuple[int, int] | None = None,
-                         covariance: Sequence[float] = _UNKNOWN_COVARIANCE) -> bytes:
+                         covariance: Sequence[float] = _UNKNOWN_COVARIANCE,
+                         mount: Sequence[float] | None = None) -> bytes:
     """The ``sensor_msgs/msg/Imu`` ``data`` with orientation ``(w, x, y, z)`` and its covariance.
 
     What the node publishes on ``imu/data``: the input message with the propagated attitude
     and ``covariance`` (9 row-major values, rad², about fixed world axes; default all zero,
     REP-145's "unknown"), and with the header stamp ``stamp``
     ``(sec, nanosec)`` when given (the receive time the node used instead of the message's);
-    everything else, the encapsulation and byte order included, as it came. ``data`` is checked as
+    everything else, the encapsulation and byte order included, as it came. With ``mount``,
+    the rotation ``q_body_sensor`` of the message's frame in the body frame, the orientation
+    written is the sensor frame's, ``attitude ⊗ mount`` (REP-145: the orientation of the
+    header's frame; its rates and accelerations stay in that frame too). ``covariance`` is
+    written as given: a constant mount moves no world axis, so the error about fixed world
+    axes of the sensor's orientation is the body's. ``data`` is checked as
     :func:`~rigid_body_attitude.msgs.decoders.decode_imu` checks it
     (:class:`~rigid_body_attitude.msgs.errors.MalformedMessage`).
     """
     offset, little_endian = body_offset(data, IMU, IMU_COUNT)
-    w, x, y, z = attitude
+    w, x, y, z = attitude if mount is None else multiply_floats(attitude, mount)
     orientation = _IMU_ORIENTATION[little_endian].pack(x, y, z, w, *covariance)
     head = data[:offset]
     if stamp is not None:

@@ -245,8 +245,8 @@ class AttitudePropagatorNode(Node):
             return
         gate.add_transforms(
             (t.header.frame_id, t.child_frame_id,
-             (t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z,
-              t.transform.rotation.w))
+             (t.transform.rotation.w, t.transform.rotation.x, t.transform.rotation.y,
+              t.transform.rotation.z))
             for t in message.transforms)
 
     def _create_timers(self) -> None:

@@ -5,9 +5,12 @@ Every per-sample and per-tick output (``orientation``, ``pose``, ``imu/data``; d
 ``twist``, ``energy``, ``angular_momentum``) is written as CDR bytes with the header packed once
 (:mod:`rigid_body_attitude.msgs.cdr`, the replay tool's codecs) and only when a subscription is
 matched (:class:`RawOutput`); ``/diagnostics`` (once a second) is an ordinary message.
-``imu/data`` is the input Imu with the orientation filled in and the stamp the session used;
-its ``orientation_covariance`` is the session's attitude covariance about fixed world axes
-(REP-145), or all zeros (REP-145: unknown) with the parameter ``covariance`` off.
+``imu/data`` is the input Imu (its frame, rates and accelerations: the sensor's, REP-145) with
+the stamp the session used and the orientation of the sensor frame in ``world_frame``, the
+body's attitude composed with the mount (:meth:`RosOutputs.sensor_mount`, only when a
+subscription is matched); its ``orientation_covariance`` is the session's attitude covariance
+about fixed world axes (REP-145; the same for the sensor frame: a constant mount turns no world
+axis), or all zeros (REP-145: unknown) with the parameter ``covariance`` off.
 ``pose_with_covariance`` carries the same attitude block in its 6×6 covariance, the position block
 marked unknown (:data:`~rigid_body_attitude.session.uncertainty.UNKNOWN_POSITION_VARIANCE`). With
 ``publish_tf`` (:meth:`RosOutputs.enable_tf`) the attitude also goes to ``/tf`` as the transform
@@ -108,6 +111,9 @@ class RosOutputs:
         #: covariance (:meth:`attitude_covariance`).
         self.orientation_covariance: tuple[float, ...] = _UNKNOWN
         self.pose_covariance = pose_covariance(_UNKNOWN)
+        #: Rotation (w, x, y, z) of the IMU's frame in the body frame for ``imu/data``
+        #: (:meth:`sensor_mount`; ``None``: identity).
+        self.imu_mount: Quaternion | None = None
         #: Set by the session: outputs carry the inputs' stamps (else the receive time).
         self.use_header_stamps = True
         #: Frame of ``orientation``, ``pose`` and ``angular_momentum`` (:meth:`set_frames`).
@@ -167,13 +173,19 @@ class RosOutputs:
         if imu is not None and self.imu_raw.subscription_count():
             stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
             self.imu_raw.publish(imu_with_orientation(imu, attitude, stamp,
-                                                      self.orientation_covariance))
+                                                      self.orientation_covariance,
+                                                      self.imu_mount))
         with_covariance = self.pose_covariance_raw
         if with_covariance is not None and with_covariance.subscription_count():
             with_covariance.publish(self.encode_pose_covariance(
                 sec, nanosec, _ZERO_POSITION, attitude, self.pose_covariance))
         if self.tf_raw is not None:
             self._publish_tf(sec, nanosec, attitude)
+
+    def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
+        """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``
+        and the others the body's (``None``: identity, nothing composed per sample)."""
+        self.imu_mount = q_body_sensor
 
     def attitude_covariance(self, covariance: tuple[float, ...]) -> None:
         """The attitude covariance of the following ``imu/data`` and ``pose_with_covariance``

@@ -14,7 +14,8 @@ most :data:`HELD_SAMPLES`, the oldest dropped beyond that and counted as ``no_mo
 integrated in order once it arrives, so a robot_state_publisher started a moment after the
 node costs nothing. After ``tf_timeout`` seconds without it, the held samples and every later
 one are dropped and counted as ``no_mount`` (``/diagnostics`` WARN), with an error line
-naming the frames and the remedy (throttled), until the transform arrives.
+naming the frames and the remedy (throttled), until the transform arrives. The table and the
+chain composition are :mod:`rigid_body_attitude.session.mount`'s, shared with the replay.
 """
 
 from __future__ import annotations
@@ -27,73 +28,17 @@ import threading
 from rigid_body_attitude.msgs.cdr import header_frame_id
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.ros.qos import INPUT_DEPTH
-from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.mount import StaticTransforms, drop_no_mount, set_found_mount
 
-__all__ = ['HELD_SAMPLES', 'MAX_TRANSFORMS', 'MountGate', 'StaticTransforms', 'multiply']
-
-Quaternion = tuple[float, float, float, float]
+__all__ = ['HELD_SAMPLES', 'MountGate']
 
 #: Gyro samples held while the mount is awaited (5 s at 1 kHz).
 HELD_SAMPLES = INPUT_DEPTH
 
-#: Static transforms kept (a hostile publisher cannot grow the table without bound).
-MAX_TRANSFORMS = 10_000
-
-
-def multiply(p: Quaternion, q: Quaternion) -> Quaternion:
-    """Hamilton product ``p q`` of (w, x, y, z) quaternions."""
-    pw, px, py, pz = p
-    qw, qx, qy, qz = q
-    return (pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw)
-
-
-def _conjugate(q: Quaternion) -> Quaternion:
-    return q[0], -q[1], -q[2], -q[3]
-
-
-class StaticTransforms:
-    """The rotations of the static transforms received, as an undirected tree of frames."""
-
-    def __init__(self) -> None:
-        """No transforms yet."""
-        #: frame -> neighbour frame -> rotation mapping the neighbour's vectors into frame.
-        self.edges: dict[str, dict[str, Quaternion]] = {}
-        self.count = 0
-
-    def add(self, parent: str, child: str, xyzw: Iterable[float]) -> str:
-        """Add ``parent`` -> ``child`` with the message-order rotation ``xyzw``; why it was
-        refused, or ``''``."""
-        x, y, z, w = xyzw
-        norm = math.sqrt(w * w + x * x + y * y + z * z)
-        if not parent or not child or parent == child:
-            return f'frames {parent[:100]!r} -> {child[:100]!r}'
-        if not math.isfinite(norm) or norm < 1e-6:
-            return f'rotation {(x, y, z, w)} of {parent[:100]!r} -> {child[:100]!r}'
-        if self.count >= MAX_TRANSFORMS and child not in self.edges.get(parent, {}):
-            return f'more than {MAX_TRANSFORMS} transforms'
-        q = (w / norm, x / norm, y / norm, z / norm)
-        if child not in self.edges.get(parent, {}):
-            self.count += 1
-        self.edges.setdefault(parent, {})[child] = q
-        self.edges.setdefault(child, {})[parent] = _conjugate(q)
-        return ''
-
-    def rotation(self, parent: str, child: str) -> Quaternion | None:
-        """The rotation mapping ``child``-frame vectors into ``parent``'s (the chain between
-        them composed), or None when they are not connected."""
-        found: dict[str, Quaternion] = {parent: (1.0, 0.0, 0.0, 0.0)}
-        frontier = deque([parent])
-        while frontier:
-            frame = frontier.popleft()
-            if frame == child:
-                return found[frame]
-            for neighbour, q in self.edges.get(frame, {}).items():
-                if neighbour not in found:
-                    found[neighbour] = multiply(found[frame], q)
-                    frontier.append(neighbour)
-        return None
+#: Where the remedy of a missing mount is said.
+_REMEDY = ('set the parameter `mount_rpy`, or publish the transform, e.g. '
+           'robot_state_publisher or static_transform_publisher')
 
 
 class MountGate:
@@ -117,11 +62,9 @@ class MountGate:
         self._refused = 0
 
     def add_transforms(self, transforms: Iterable[tuple[str, str, Iterable[float]]]) -> None:
-        """Static transforms (parent, child, rotation x, y, z, w) from ``/tf_static``."""
+        """Static transforms (parent, child, rotation w, x, y, z) from ``/tf_static``."""
         with self._lock:
-            for parent, child, xyzw in transforms:
-                if self.transforms.add(parent, child, xyzw):
-                    self._refused += 1
+            self._refused += self.transforms.add_all(transforms)
 
     def sample(self, data: bytes, handle: Callable[[bytes], None]) -> None:
         """A gyro sample's bytes while the gate is closed (state lock held)."""
@@ -139,10 +82,7 @@ class MountGate:
         with self._lock:
             q = self.transforms.rotation(self.session.body_frame, self.sensor_frame)
         if q is not None:
-            self.session.set_mount(q)
-            self.session.sink.log(LEVEL_INFO, f'mount {self.session.body_frame!r} -> '
-                                              f'{self.sensor_frame!r} from /tf_static: '
-                                              f'(w, x, y, z) {_rounded(q)}')
+            set_found_mount(self.session, self.sensor_frame, q, '/tf_static')
             self._open(data, handle)
             return
         self._held.append(data)
@@ -162,14 +102,5 @@ class MountGate:
         handle(data)
 
     def _drop(self, count: int) -> None:
-        session = self.session
-        session.rejections['no_mount'] += count
-        session.warn('no_mount', f'no static transform {session.body_frame!r} -> '
-                                 f'{self.sensor_frame!r} on /tf_static after tf_timeout '
-                                 f'{self.timeout_s:g} s: gyro samples dropped (set the '
-                                 f'parameter `mount_rpy`, or publish the transform, e.g. '
-                                 f'robot_state_publisher or static_transform_publisher)')
-
-
-def _rounded(q: Quaternion) -> tuple[float, ...]:
-    return tuple(round(value, 6) for value in q)
+        drop_no_mount(self.session, count, str(self.sensor_frame),
+                      f'on /tf_static after tf_timeout {self.timeout_s:g} s', _REMEDY)

@@ -52,8 +52,14 @@ class OutputSink(Protocol):
 
     def attitude(self, sec: int, nanosec: int, attitude: Quaternion,
                  imu: bytes | None) -> None:
-        """A gyro sample's attitude (w, x, y, z) stamped ``(sec, nanosec)``; ``imu``: the
-        serialized Imu the sample came from (``imu/data`` is it with the attitude), or None."""
+        """A gyro sample's body attitude (w, x, y, z) stamped ``(sec, nanosec)``; ``imu``: the
+        serialized Imu the sample came from (``imu/data`` is it with the sensor frame's
+        attitude, :meth:`sensor_mount`), or None."""
+
+    def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
+        """The rotation (w, x, y, z) of the IMU's frame in the body frame (``None``: identity):
+        ``imu/data`` carries the sensor frame's attitude ``attitude ⊗ q_body_sensor``
+        (REP-145), the other outputs the body's. Given at start and when the mount changes."""
 
     def attitude_covariance(self, covariance: tuple[float, ...]) -> None:
         """The row-major 3×3 attitude covariance [rad²] about fixed world axes that goes with

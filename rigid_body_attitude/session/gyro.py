@@ -57,6 +57,8 @@ class GyroSession(ImuStart):
         self.uncertainty: Uncertainty | None = None
         self._start_imu(values)
         super().__init__(scene, values, sink, clock_ns, monotonic)
+        if self._mount_given:
+            self._tell_mount()
         if values['covariance']:
             self.uncertainty = Uncertainty(values, self.calibration_noise())
             self.wants_steps = True

@@ -120,6 +120,12 @@ class ImuStart(Session):
         a zero or non-finite quaternion."""
         self.sample_map.set_mount(q_body_sensor)
         self._update_paths()
+        self._tell_mount()
+
+    def _tell_mount(self) -> None:
+        """Give the sink the mount for ``imu/data`` (``None``: identity, nothing to compose)."""
+        mount = self.sample_map.mount
+        self.sink.sensor_mount(None if mount == (1.0, 0.0, 0.0, 0.0) else mount)
 
     @property
     def alignment_done(self) -> bool:

@@ -181,12 +181,14 @@ def attribution(trial: BroadTrial) -> dict[str, str]:
 
 def trial_to_bag(trial: BroadTrial, path: str | Path, *, storage: str = 'sqlite3',
                  imu_topic: str = 'imu', ground_truth_topic: str = 'ground_truth',
-                 frame_id: str = 'imu', world_frame: str = 'world') -> dict[str, int]:
+                 frame_id: str = 'base_link', world_frame: str = 'world') -> dict[str, int]:
     """Write ``trial`` as a bag; returns the message count per topic.
 
     ``sensor_msgs/msg/Imu`` (raw gyro and accelerometer, bias *not* removed) on ``imu_topic``
     and ``geometry_msgs/msg/QuaternionStamped`` on ``ground_truth_topic`` (lost samples
-    skipped), with header stamps and bag times ``i / sampling_rate``. The citation, licence and
+    skipped), with header stamps and bag times ``i / sampling_rate``. The Imu's ``frame_id``
+    defaults to ``base_link``, the node's ``body_frame``: the optical truth is the attitude of
+    the IMU itself, so the IMU is the body and no mount is needed. The citation, licence and
     the rest-phase bias estimate go into the bag's ``custom_data`` (:func:`attribution`).
     """
     return write_bag(path, stamps=trial.stamps, rates=trial.gyro, accelerations=trial.acc,
@@ -205,7 +207,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--storage', choices=sorted(STORAGES), default='sqlite3')
     parser.add_argument('--imu-topic', default='imu')
     parser.add_argument('--ground-truth-topic', default='ground_truth')
-    parser.add_argument('--frame-id', default='imu')
+    parser.add_argument('--frame-id', default='base_link')
     parser.add_argument('--world-frame', default='world')
     return parser
 

@@ -42,12 +42,14 @@ from std_msgs.msg import Float64
 from bag_fixtures import (
     AnalyticCase, build_case, CASES, GYRO_RATE, write_case_bag, write_records, write_scene)
 from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.bag import BagReader
+from rigid_body_attitude.bag import BagReader, typestore
 from rigid_body_attitude.msgs import (
     decode_pose_with_covariance_stamped,
-    encode_imu, float64_value, header_stamp_ns, IMU, pose_orientation, pose_position,
+    encode_imu, float64_value, header_stamp_ns, IMU, pose_orientation, pose_position, TF_MESSAGE,
     quaternion_stamped, twist_angular, twist_linear, vector3_stamped)
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
+from rigid_body_attitude.ros.qos import TF_STATIC_QOS
+from tf2_msgs.msg import TFMessage
 from rigid_body_attitude.tools.replay import main as replay_main
 from rigid_body_attitude.session.settings import timer_period_ns
 
@@ -334,6 +336,44 @@ def write_levelled_bag(case: AnalyticCase, path: Path) -> float:
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
+#: The mounted variant: base_link -> torso (yaw 90°) -> the sensor frame (roll 60°) on
+#: /tf_static, the samples measured in the sensor frame.
+MOUNT_CHAIN = (quaternion.exp([0.0, 0.0, math.pi / 2]), quaternion.exp([math.pi / 3, 0.0, 0.0]))
+
+
+def write_mounted_bag(case: AnalyticCase, path: Path, sensor: str) -> tuple[bytes, np.ndarray]:
+    """The gyro case's body rates measured in ``sensor`` (mounted by :data:`MOUNT_CHAIN`) and
+    the chain on ``/tf_static`` as robot_state_publisher records it; returns the TFMessage
+    bytes and the mount (w, x, y, z)."""
+    yaw, roll = MOUNT_CHAIN
+    tf_static = bytes(typestore().serialize_cdr(_tf_message(
+        ('base_link', f'{sensor}_torso', yaw), (f'{sensor}_torso', sensor, roll)), TF_MESSAGE))
+    mount = quaternion.multiply(yaw, roll)
+    first_ns = round(case.stamps[0] * 1e9)
+    records = [('/tf_static', first_ns - 1, tf_static)]
+    for stamp, rate in zip(case.stamps.tolist(), case.rates.tolist()):
+        stamp_ns = round(stamp * 1e9)
+        rate_sensor = tuple(quaternion.rotate_inverse(mount, rate).tolist())
+        records.append(('imu', stamp_ns, encode_imu(stamp_ns, sensor, rate_sensor)))
+    write_records(path, {'imu': IMU, '/tf_static': TF_MESSAGE}, records)
+    return tf_static, mount
+
+
+def _tf_message(*chain: tuple[str, str, np.ndarray]) -> Any:
+    store = typestore()
+    header, stamped = store.types['std_msgs/msg/Header'], store.types[
+        'geometry_msgs/msg/TransformStamped']
+    time, transform = store.types['builtin_interfaces/msg/Time'], store.types[
+        'geometry_msgs/msg/Transform']
+    vector, rotation = store.types['geometry_msgs/msg/Vector3'], store.types[
+        'geometry_msgs/msg/Quaternion']
+    return store.types[TF_MESSAGE](transforms=[stamped(
+        header=header(stamp=time(sec=0, nanosec=0), frame_id=parent), child_frame_id=child,
+        transform=transform(translation=vector(x=0.0, y=0.0, z=0.0), rotation=rotation(
+            x=float(q[1]), y=float(q[2]), z=float(q[3]), w=float(q[0]))))
+        for parent, child, q in chain])
+
+
 def levelled_closed_form_errors(case: AnalyticCase, orientation: dict[int, tuple[float, ...]]
                                 ) -> np.ndarray:
     """Angles [rad] between the outputs and the closed form, the body at rest (``τ = 0``)
@@ -346,17 +386,23 @@ def levelled_closed_form_errors(case: AnalyticCase, orientation: dict[int, tuple
     return np.atleast_1d(quaternion.attitude_error(attitudes, case.attitude(tau)))
 
 
-@pytest.mark.parametrize('name', [*CASES, 'constant_rate_faults', 'constant_rate_levelled'])
+@pytest.mark.parametrize('name', [*CASES, 'constant_rate_faults', 'constant_rate_levelled',
+                                  'generic_rate_mounted'])
 def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_path,
                                                                  request):
     faulty = name.endswith('_faults')
     levelled = name.endswith('_levelled')
-    case = build_case(name.removesuffix('_faults').removesuffix('_levelled'))
+    mounted = name.endswith('_mounted')
+    case = build_case(name.removesuffix('_faults').removesuffix('_levelled').removesuffix(
+        '_mounted'))
     scene_path = write_scene(case, tmp_path)
     bag_path = tmp_path / 'input'
     parameters: dict[str, Any] = {}
+    namespace = unique_namespace(request)
     if faulty:
         write_faulty_bag(case, bag_path)
+    elif mounted:  # the mount from the bag's /tf_static offline, from /tf_static live
+        tf_static, mount = write_mounted_bag(case, bag_path, f'{namespace[1:]}_imu')
     elif levelled:  # levelled from gravity first: the accelerometer path, node and replay
         yaw = write_levelled_bag(case, bag_path)
         parameters = {'align_seconds': ALIGN_SECONDS, 'initial_yaw': yaw}
@@ -371,7 +417,12 @@ def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_
     assert bool(offline['energy']) == bool(offline['angular_momentum']) == (
         case.rate_source == 'dynamics')
 
-    run = LiveRun(ros, unique_namespace(request), case, scene_path, parameters)
+    run = LiveRun(ros, namespace, case, scene_path, parameters)
+    if mounted:
+        run.harness.node.create_publisher(TFMessage, '/tf_static', TF_STATIC_QOS).publish(
+            tf_static)
+        gate = run.node.mount_gate
+        assert run.harness.spin_until(lambda: gate.transforms.count == 2, 10.0)
     play(run, bag_path)
     run.wait_for_outputs({name: len(offline[name]) for name in run.received})
     live = run.outputs()
@@ -384,6 +435,10 @@ def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_
             case, outputs['orientation'])
         # The case's bound: the integrator's error at this step (see bag_fixtures).
         assert np.max(errors) <= case.tolerance, (case.tolerance_reason, np.max(errors))
+    if mounted:  # imu/data: the sensor frame's orientation, body ⊗ mount
+        for stamp, body in offline['orientation'].items():
+            sensor = quaternion.multiply(body, mount)
+            assert quaternion.attitude_error(offline['imu/data'][stamp][:4], sensor) < 1e-12
     if levelled:
         alignment = run.node.session.alignment
         assert alignment.at_rest and alignment.gyro_bias == (0.0, 0.0, 0.0)

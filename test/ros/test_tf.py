@@ -12,11 +12,13 @@ import math
 import re
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import TransformStamped
+from geometry_msgs.msg import QuaternionStamped, TransformStamped
 import numpy as np
 import pytest
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.serialization import deserialize_message, serialize_message
+from scipy.spatial.transform import Rotation
+from sensor_msgs.msg import Imu
 from tf2_msgs.msg import TFMessage
 from ros_helpers import unique_namespace
 from test_input_qos import (
@@ -27,7 +29,7 @@ from rigid_body_attitude import bag
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.msgs.cdr import transform_encoder
 from rigid_body_attitude.ros.qos import TF_STATIC_QOS
-from rigid_body_attitude.ros.tf_lookup import StaticTransforms
+from rigid_body_attitude.session.mount import StaticTransforms
 
 
 def _axis(angle: float, axis: int) -> tuple[float, float, float, float]:
@@ -69,9 +71,9 @@ def test_a_chain_of_static_transforms_is_composed_up_and_down_the_tree():
     down to imu_link."""
     yaw, pitch, roll = _axis(math.pi / 2, 2), _axis(math.pi / 6, 1), _axis(math.pi, 0)
     transforms = StaticTransforms()
-    assert transforms.add('base_footprint', 'base_link', _xyzw(yaw)) == ''
-    assert transforms.add('base_footprint', 'torso', _xyzw(pitch)) == ''
-    assert transforms.add('torso', 'imu_link', _xyzw(roll)) == ''
+    assert transforms.add('base_footprint', 'base_link', yaw) == ''
+    assert transforms.add('base_footprint', 'torso', pitch) == ''
+    assert transforms.add('torso', 'imu_link', roll) == ''
     expected = quaternion.multiply(quaternion.conjugate(yaw), quaternion.multiply(pitch, roll))
     found = transforms.rotation('base_link', 'imu_link')
     assert found is not None
@@ -82,9 +84,9 @@ def test_a_chain_of_static_transforms_is_composed_up_and_down_the_tree():
 def test_hostile_static_transforms_are_refused():
     """Non-finite or zero rotations and self-loops are refused, never stored."""
     transforms = StaticTransforms()
-    assert transforms.add('a', 'b', (math.nan, 0.0, 0.0, 1.0))
+    assert transforms.add('a', 'b', (1.0, math.nan, 0.0, 0.0))
     assert transforms.add('a', 'b', (0.0, 0.0, 0.0, 0.0))
-    assert transforms.add('a', 'a', (0.0, 0.0, 0.0, 1.0))
+    assert transforms.add('a', 'a', (1.0, 0.0, 0.0, 0.0))
     assert transforms.rotation('a', 'b') is None
 
 
@@ -202,3 +204,54 @@ def test_publish_tf_sends_world_to_body_at_the_output_stamps(
         assert (t.transform.translation.x, t.transform.translation.y,
                 t.transform.translation.z) == (0.0, 0.0, 0.0)
     assert stamps[0] == BASE_NS
+
+
+def _wxyz(q) -> np.ndarray:
+    return np.array([q.w, q.x, q.y, q.z])
+
+
+@pytest.mark.parametrize('source', ['mount_rpy', 'tf_static'])
+def test_imu_data_carries_the_sensor_frames_orientation_under_a_mount(
+        ros, request, processes, source):
+    """REP-145: with the mount from ``mount_rpy`` or from a chain on /tf_static, a subscriber
+    in this process receives ``imu/data`` in the sensor frame with the input's rates and the
+    orientation ``orientation ⊗ mount`` (scipy's composition), while ``orientation`` keeps the
+    body's attitude in ``world``."""
+    namespace = unique_namespace(request)
+    if source == 'mount_rpy':
+        sensor, mount = 'imu_link', Rotation.from_euler('xyz', [0.4, -0.7, 2.0])
+        node = start_node(processes, namespace, 'mount_rpy:=[0.4,-0.7,2.0]')
+    else:
+        sensor, torso = f'{namespace[1:]}_imu', f'{namespace[1:]}_torso'
+        yaw, roll = _axis(math.pi / 2, 2), _axis(math.pi / 3, 0)
+        mount = Rotation.from_quat(_xyzw(yaw)) * Rotation.from_quat(_xyzw(roll))
+        node = start_node(processes, namespace)
+    harness, sender, poses = connect(ros, namespace, qos_profile_sensor_data, sensor)
+    imu_data = harness.record(Imu, 'imu/data', RECORD_QOS)
+    orientations = harness.record(QuaternionStamped, 'orientation', RECORD_QOS)
+    harness.wait_for_connections()
+    if source == 'tf_static':
+        tf_static = harness.node.create_publisher(TFMessage, '/tf_static', TF_STATIC_QOS)
+        tf_static.publish(static_transforms(('base_link', torso, yaw), (torso, sensor, roll)))
+        harness.spin_for(0.5)
+    count = 200
+    sender.paced(500.0, count)
+    harness.spin_until(lambda: len(imu_data) >= count and len(orientations) >= count, 10.0)
+    code, stderr = stop_with_sigint(node)
+    assert code == 0, stderr
+    body = {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in orientations}
+    assert len(imu_data) == count and set(body) == {
+        (m.header.stamp.sec, m.header.stamp.nanosec) for m in imu_data}
+    for message in imu_data:
+        q = _wxyz(body[(message.header.stamp.sec, message.header.stamp.nanosec)].quaternion)
+        assert body[(message.header.stamp.sec, message.header.stamp.nanosec)
+                    ].header.frame_id == 'world'
+        expected = (Rotation.from_quat(_xyzw(q)) * mount).as_quat()
+        got = message.orientation
+        assert abs(np.dot(expected, [got.x, got.y, got.z, got.w])) > 1.0 - 1e-14
+        assert message.header.frame_id == sensor
+        assert (message.angular_velocity.x, message.angular_velocity.y,
+                message.angular_velocity.z) == (0.3, 0.0, -0.2)
+    turned = [quaternion.attitude_error(_wxyz(m.orientation), _wxyz(body[
+        (m.header.stamp.sec, m.header.stamp.nanosec)].quaternion)) for m in imu_data]
+    assert min(turned) > 0.1  # imu/data is not the body's attitude

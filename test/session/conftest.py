@@ -28,6 +28,10 @@ class RecordingSink:
 
     imus: list[bytes | None] = field(default_factory=list)
     covariances: list[tuple[float, ...]] = field(default_factory=list)
+    mounts: list[tuple[float, ...] | None] = field(default_factory=list)
+
+    def sensor_mount(self, q_body_sensor):
+        self.mounts.append(q_body_sensor)
 
     def attitude_covariance(self, covariance):
         self.covariances.append(covariance)

@@ -12,6 +12,7 @@ import re
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from bag_fixtures import build_case, write_case_bag, write_scene
 from rigid_body_attitude.core import quaternion
@@ -110,26 +111,44 @@ def test_series_are_kept_when_asked_or_needed_and_change_nothing_else(tmp_path):
     assert len(truth.series.attitude_stamps_ns) == 200 and truth.errors.count == 200
 
 
-def test_imu_data_is_the_input_with_the_propagated_orientation(tmp_path, capsys):
+MOUNT_RPY = (0.3, -0.2, 1.2)
+
+
+@pytest.mark.parametrize('frame_id, mount_rpy', [('base_link', None), ('imu_link', MOUNT_RPY)])
+def test_imu_data_is_the_input_with_the_sensor_frames_orientation(tmp_path, capsys, frame_id,
+                                                                  mount_rpy):
+    """``imu/data`` keeps the input's frame, rates and accelerations (the sensor's, REP-145);
+    its orientation is the sensor frame's, the body's composed with the mount (scipy's
+    product here), its covariance the body's (about fixed world axes: the mount turns none)."""
     stamps = 3.0 + np.arange(5) / RATE
     acceleration = np.array([[0.1, -9.8, 0.3]] * 5)
     bag = tmp_path / 'in'
     write_bag(bag, stamps=stamps, rates=np.tile(OMEGA, (5, 1)), accelerations=acceleration,
-              frame_id='imu_link')
-    assert run([str(bag), '-o', str(tmp_path / 'out'), '--scene', GYRO_SCENE], capsys)[0] == 0
+              frame_id=frame_id)
+    mount = ['--mount-rpy', str(list(mount_rpy))] if mount_rpy else []
+    assert run([str(bag), '-o', str(tmp_path / 'out'), '--scene', GYRO_SCENE, '--align-seconds',
+                '0', *mount],
+               capsys)[0] == 0
     with BagReader(tmp_path / 'out') as reader:
         imu_data = [deserialize(data, IMU) for _, _, _, data in reader.messages(['imu/data'])]
     orientations = read_series(tmp_path / 'out', 'orientation').values
+    assert len(imu_data) == len(orientations) == 5
+    q_body_sensor = Rotation.from_euler('xyz', mount_rpy or (0.0, 0.0, 0.0))
     for message, q in zip(imu_data, orientations):
-        assert message.header.frame_id == 'imu_link'
-        assert (message.orientation.w, message.orientation.x, message.orientation.y,
-                message.orientation.z) == tuple(q)
+        assert message.header.frame_id == frame_id
+        w, x, y, z = q
+        expected = (Rotation.from_quat([x, y, z, w]) * q_body_sensor).as_quat()
+        got = message.orientation
+        assert abs(np.dot(expected, [got.x, got.y, got.z, got.w])) > 1.0 - 1e-15
+        if mount_rpy is None:
+            assert (got.w, got.x, got.y, got.z) == tuple(q)
         # Unlevelled, before the first fold: the prior, tilt and yaw unknown (1σ π rad).
         assert message.orientation_covariance.tolist() == (np.eye(3) * np.pi ** 2).reshape(
             9).tolist()
         assert message.linear_acceleration.y == -9.8
         assert message.linear_acceleration_covariance[0] == 0.0  # given, so not -1
-        assert message.angular_velocity.z == OMEGA[2]
+        assert (message.angular_velocity.x, message.angular_velocity.y,
+                message.angular_velocity.z) == tuple(OMEGA)
 
 
 def test_rejections_follow_the_stream_rules_and_are_counted(tmp_path, capsys):

@@ -43,7 +43,7 @@ def imu_records(count: int, faults: bool) -> list[tuple[str, int, bytes]]:
     records = []
     for index in range(count):
         stamp_ns = START_NS + index * PERIOD_NS
-        data = encode_imu(stamp_ns, 'imu_link', OMEGA)
+        data = encode_imu(stamp_ns, 'base_link', OMEGA)
         if faults and index == TRUNCATED:
             data = data[:-9]
         elif faults and index == HEADER_ONLY:
@@ -51,7 +51,7 @@ def imu_records(count: int, faults: bool) -> list[tuple[str, int, bytes]]:
         elif faults and index == BAD_ENCAPSULATION:
             data = b'\x07\x07' + data[2:]
         elif faults and index == ABSURD_RATE:
-            data = encode_imu(stamp_ns, 'imu_link', (1e200, 0.0, 0.0))
+            data = encode_imu(stamp_ns, 'base_link', (1e200, 0.0, 0.0))
         records.append(('imu', stamp_ns, data))
     return records
 
@@ -158,7 +158,7 @@ def test_replay_runs_on_bag_time_so_it_is_deterministic(tmp_path, capsys):
 def test_warnings_are_throttled_on_bag_time(tmp_path, capsys):
     # 12 s at 100 Hz, every sample above --max-angular-rate: one warning per 5 s of bag time.
     records = [('imu', START_NS + i * 10_000_000, encode_imu(START_NS + i * 10_000_000,
-                                                             'imu_link', OMEGA))
+                                                             'base_link', OMEGA))
                for i in range(1200)]
     write_records(tmp_path / 'in', {'imu': IMU}, records)
     code, text, err = run([str(tmp_path / 'in'), '-o', str(tmp_path / 'out'), '--scene',

@@ -28,6 +28,7 @@ from rigid_body_attitude.session.settings import (
     AnySession, load_node_scene, open_session, timer_period_ns)
 from rigid_body_attitude.session.times import seconds_to_ns, to_ns
 from rigid_body_attitude.tools.replay.loop import EventLoop, Progress
+from rigid_body_attitude.tools.replay.mount import read_bag_mount
 from rigid_body_attitude.tools.replay.options import ReplayOptions, check_options
 from rigid_body_attitude.tools.replay.plan import Plan, make_plan
 from rigid_body_attitude.tools.replay.sink import BagSink, LogHandler, OutputSeries
@@ -133,6 +134,7 @@ class _Run:
     gyro_messages: int
     elapsed: float
     publish_rate: float
+    notes: list[str]
 
 
 def replay_bag(input_path: str | Path, output_path: str | Path,
@@ -170,8 +172,8 @@ def replay_bag(input_path: str | Path, output_path: str | Path,
             with BagWriter(output_path, storage=options.storage, custom_data=custom) as bag:
                 sink = BagSink(bag, plan.outputs, keep_series or truth is not None,
                                scene.name, log)
-                run = _replay(reader.messages(topics), sink, scene, values, plan, truth,
-                              options, _progress_bar(progress, total))
+                run = _replay(reader, sink, scene, values, plan, truth, options,
+                              _progress_bar(progress, total))
             if sink.start is not None and sink.start.aligned_at_ns is None:
                 raise InputError(f'Expected an output at or after stamp '
                                  f'{sink.start.stamp_ns * 1e-9:.9f} s to start from the '
@@ -183,9 +185,12 @@ def replay_bag(input_path: str | Path, output_path: str | Path,
     return _result(input_path, output_path, scene, plan, truth, run)
 
 
-def _replay(messages: Any, sink: BagSink, scene: Scene, values: dict[str, Any], plan: Plan,
+def _replay(reader: BagReader, sink: BagSink, scene: Scene, values: dict[str, Any], plan: Plan,
             truth: GroundTruth | None, options: ReplayOptions, bar: Progress) -> _Run:
-    """Build the session on the bag's clock and run the event loop over ``messages``."""
+    """Build the session on the bag's clock, mount its sensor and run the event loop over the
+    bag's messages."""
+    mount = read_bag_mount(reader, plan.gyro_topic)
+    messages = reader.messages(plan.read_topics(reader.topics))
     first = next(messages, None)
     if first is not None:
         sink.now_ns = first[1]  # the session's period starts at the first message
@@ -204,18 +209,22 @@ def _replay(messages: Any, sink: BagSink, scene: Scene, values: dict[str, Any], 
     if truth is not None and options.start_from_ground_truth is not None:
         sink.start_from(GroundTruthStart(truth, seconds_to_ns(options.start_from_ground_truth)),
                         session)
+    if isinstance(session, GyroSession):
+        mount.apply(session)
     loop, count = None, 0
     begin = time.perf_counter()
     try:
         if first is not None:
             loop = EventLoop(session, sink, plan, timer_period_ns(values['publish_rate']),
                              first[1])
+            if isinstance(session, GyroSession) and loop.gyro_handler is not None:
+                loop.gyro_handler = mount.gate(session, loop.gyro_handler)
             count = loop.run(chain([first], messages), bar)
         sink.flush()
     finally:
         bar.close()
     return _Run(session, sink, loop, count, time.perf_counter() - begin,
-                values['publish_rate'])
+                values['publish_rate'], mount.notes)
 
 
 def _final_stamp_ns(run: _Run) -> int | None:
@@ -237,7 +246,7 @@ def _result(input_path: Path, output_path: Path, scene: Scene, plan: Plan,
     stamps, attitudes, _ = series.attitude_array()
     aligned_at = sink.start.aligned_at_ns if sink.start is not None else None
     errors = None
-    notes = list(plan.notes)
+    notes = list(plan.notes) + run.notes
     if truth is not None:
         errors = attitude_errors(stamps, attitudes, truth.stamps_ns, truth.attitudes)
         if truth.malformed:

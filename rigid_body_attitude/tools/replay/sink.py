@@ -111,6 +111,9 @@ class BagSink:
         self._pose = self.ids.get('pose')
         self._imu = self.ids.get('imu/data')
         self._pose_covariance = self.ids.get('pose_with_covariance')
+        #: Rotation (w, x, y, z) of the IMU's frame in the body frame for ``imu/data``
+        #: (:meth:`sensor_mount`; ``None``: identity).
+        self.imu_mount: Quaternion | None = None
         self.orientation_covariance: tuple[float, ...] = (0.0,) * 9
         self.pose_covariance = pose_covariance(self.orientation_covariance)
         self.set_frames('world', 'base_link')
@@ -164,7 +167,8 @@ class BagSink:
         if imu is not None and self._imu is not None:
             stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
             append((self._imu, now, imu_with_orientation(imu, attitude, stamp,
-                                                         self.orientation_covariance)))
+                                                         self.orientation_covariance,
+                                                         self.imu_mount)))
         self.attitude_outputs += 1
         self.last_attitude = attitude
         series = self.series
@@ -172,6 +176,11 @@ class BagSink:
             series.attitude_stamps_ns.append(sec * NANOSECONDS_PER_SECOND + nanosec)
             series.attitudes.extend(attitude)
             series.positions.extend(_ZERO)
+
+    def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
+        """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``
+        and the others the body's (``None``: identity, nothing composed per sample)."""
+        self.imu_mount = q_body_sensor
 
     def attitude_covariance(self, covariance: tuple[float, ...]) -> None:
         """The attitude covariance of the following ``imu/data`` and ``pose_with_covariance``

@@ -1,0 +1,132 @@
+"""The sensor's mount in a replay: from ``mount_rpy``, or from the bag's ``/tf_static``.
+
+As the node does (:mod:`rigid_body_attitude.ros.tf_lookup`): when ``mount_rpy`` is not given
+and the first decodable gyro sample's frame (the sensor frame, REP-145) differs from
+``body_frame``, the mount is the static transform ``body_frame`` -> sensor frame, a chain
+composed if need be (:class:`~rigid_body_attitude.session.mount.StaticTransforms`, the node's
+table), here from every ``tf2_msgs/msg/TFMessage`` recorded on ``/tf_static`` (the node
+receives them whenever they were published: transient local). Malformed records and refused
+transforms are counted and said in a note. Without such a transform the replay behaves as the
+node after ``tf_timeout``: every gyro sample from the first decodable one on is dropped and
+counted ``no_mount`` (:class:`NoMountGate`), with a warning and a note naming both frames.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rigid_body_attitude.bag import BagReader
+from rigid_body_attitude.msgs.cdr import header_frame_id
+from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.tf_message import TF_MESSAGE, decode_tf_message
+from rigid_body_attitude.session.decoding import Handler
+from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.mount import StaticTransforms, drop_no_mount, set_found_mount
+
+__all__ = ['BagMount', 'NoMountGate', 'TF_STATIC', 'read_bag_mount']
+
+#: The topic of static transforms (REP-105; robot_state_publisher, static_transform_publisher).
+TF_STATIC = '/tf_static'
+_WHERE = "in the bag's /tf_static"
+_REMEDY = 'give --mount-rpy, or record /tf_static with the bag'
+
+
+@dataclass
+class BagMount:
+    """The bag's sensor frame and static transforms, and how the replay's samples are mounted.
+
+    Attributes:
+        sensor_frame: the first decodable gyro record's frame (``''``: none).
+        transforms: the bag's ``/tf_static`` transforms.
+        notes: remarks for the user (malformed or refused ``/tf_static`` records, a
+            missing transform).
+        missing_frame: set by :meth:`apply`: the sensor frame whose transform the bag lacks
+            (``''``: none lacking).
+    """
+
+    sensor_frame: str
+    transforms: StaticTransforms
+    notes: list[str]
+    missing_frame: str = ''
+
+    def apply(self, session: GyroSession) -> None:
+        """Set ``session``'s mount from the transforms when the node would wait for it."""
+        frame = self.sensor_frame
+        if not session.mount_needed(frame):
+            return
+        q = self.transforms.rotation(session.body_frame, frame)
+        if q is None:
+            self.missing_frame = frame
+            self.notes.append(f'no static transform {session.body_frame!r} -> {frame!r} '
+                              f'{_WHERE}: gyro samples dropped, counted no_mount ({_REMEDY})')
+            return
+        set_found_mount(session, frame, q, "the bag's /tf_static")
+
+    def gate(self, session: GyroSession, handle: Handler) -> Handler:
+        """The gyro handler: ``handle``, or a :class:`NoMountGate` when the mount is missing."""
+        return NoMountGate(session, handle, self.missing_frame) if self.missing_frame else handle
+
+
+def read_bag_mount(reader: BagReader, gyro_topic: str) -> BagMount:
+    """The sensor frame of ``gyro_topic`` and, if it has one, the bag's static transforms."""
+    frame = _first_frame(reader, gyro_topic) if gyro_topic else None
+    if frame is None:
+        return BagMount('', StaticTransforms(), [])
+    transforms, notes = _static_transforms(reader)
+    return BagMount(frame, transforms, notes)
+
+
+def _first_frame(reader: BagReader, gyro_topic: str) -> str | None:
+    """The header frame of the first gyro record that has a decodable one."""
+    for _, _, _, data in reader.messages([gyro_topic]):
+        try:
+            return header_frame_id(data)
+        except MalformedMessage:
+            continue
+    return None
+
+
+def _static_transforms(reader: BagReader) -> tuple[StaticTransforms, list[str]]:
+    """The bag's static transforms and notes on what was refused."""
+    transforms = StaticTransforms()
+    msgtype = reader.topics.get(TF_STATIC)
+    if msgtype is None:
+        return transforms, []
+    if msgtype != TF_MESSAGE:
+        return transforms, [f'topic {TF_STATIC} ignored: type {msgtype!r}, not {TF_MESSAGE!r}']
+    malformed = refused = 0
+    for _, _, _, data in reader.messages([TF_STATIC]):
+        try:
+            decoded = decode_tf_message(data)
+        except MalformedMessage:
+            malformed += 1
+            continue
+        refused += transforms.add_all((t.parent_frame, t.child_frame, t.rotation)
+                                      for t in decoded)
+    notes = [f'{malformed} malformed {TF_STATIC} records ignored'] if malformed else []
+    if refused:
+        notes.append(f'{refused} {TF_STATIC} transforms refused (empty or equal frames, a '
+                     f'zero or non-finite rotation, or beyond the table size)')
+    return transforms, notes
+
+
+class NoMountGate:
+    """The gyro handler of a replay whose bag lacks the mount: samples dropped (``no_mount``),
+    as the node drops them after ``tf_timeout``; those before the first with a decodable
+    header go to the handler (counted malformed there)."""
+
+    def __init__(self, session: GyroSession, handle: Handler, sensor_frame: str) -> None:
+        """Drop ``session``'s samples of ``sensor_frame``; ``handle``: the gyro handler."""
+        self.session, self.handle, self.sensor_frame = session, handle, sensor_frame
+        self.seen = False
+
+    def __call__(self, data: bytes) -> None:
+        """One gyro record's bytes."""
+        if not self.seen:
+            try:
+                header_frame_id(data)
+            except MalformedMessage:
+                self.handle(data)
+                return
+            self.seen = True
+        drop_no_mount(self.session, 1, self.sensor_frame, _WHERE, _REMEDY)
