@@ -15,7 +15,8 @@ mean over the window (noise and bias), yaw from ``initial_yaw_stddev``, the bias
 window's gyro mean.
 
 Defaults for a consumer MEMS gyro when the user gives none, 1σ taken as the datasheet's
-typical figure:
+typical figure (Bosch Sensortec states its typical values as 1σ of the production spread,
+min/max as 3σ):
 
 * ``gyroscope_noise_density`` 2.44·10⁻⁴ rad/s/√Hz: 0.014 °/s/√Hz, Bosch BMI088 data sheet
   (BST-BMI088-DS001), gyroscope rate noise density.

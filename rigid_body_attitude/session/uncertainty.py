@@ -35,8 +35,8 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.gyro_error_model import GyroErrorModel, initial_covariance
 from rigid_body_attitude.session.levelling import AlignmentResult
 
-__all__ = ['BATCH_SIZE', 'FOLD_SECONDS', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE', 'Uncertainty',
-           'error_model_from', 'orientation_block', 'pose_covariance']
+__all__ = ['BATCH_SIZE', 'FOLD_SECONDS', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE',
+           'Uncertainty', 'error_model_from', 'orientation_block', 'pose_covariance']
 
 #: Variance [m²] on the diagonal of the position block of ``pose_with_covariance``: the
 #: position is not estimated. Large and finite, so the 6×6 stays symmetric positive definite
