@@ -1,8 +1,9 @@
 """Per-sample cost of the attitude covariance against the exp-map strapdown step, in one run.
 
 Each contender runs over the same ``--steps`` gyro samples (a body turning at several rad/s),
-timeit-style with the garbage collector off, ``--repeats`` repetitions; the minimum is the cost
-without interference from other load, the median is printed beside it:
+timeit-style with the garbage collector off, ``--repeats`` rounds in which every contender runs
+once (so that all see the same load); the minimum is the cost with the least interference from
+other load, the median is printed beside it:
 
 * ``scalar_exp_step``: the strapdown step alone (``q ← q ⊗ exp(h ω)``, plain floats);
 * ``step + covariance``: the step, then ``AttitudeCovariance.add_sample`` with the default batch
@@ -123,8 +124,10 @@ def main() -> None:
             DEFAULT_BATCH_SIZE, 'folded_attitude_covariance'),
         'step + covariance, batch 1': with_covariance(1),
     }
-    figures = {name: timed(function, samples, args.repeats)
-               for name, function in contenders.items()}
+    figures: dict[str, list[float]] = {name: [] for name in contenders}
+    for _ in range(args.repeats):  # round-robin: every contender sees the same load
+        for name, function in contenders.items():
+            figures[name] += timed(function, samples, 1)
     base = min(figures['scalar_exp_step'])
     print('| contender | µs/sample (min) | median | ratio to the step alone |')
     print('|---|---|---|---|')
