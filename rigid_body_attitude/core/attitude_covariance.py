@@ -205,9 +205,11 @@ class AttitudeCovariance:
 
     def _apply(self, q: FloatArray, rates: FloatArray, dt: FloatArray) -> None:
         """``P ← Φ P Φᵀ + Q`` for the steps given; non-finite or non-positive steps dropped."""
-        good = (np.isfinite(q).all(axis=1) & np.isfinite(rates).all(axis=1) & np.isfinite(dt)
-                & (dt > 0.0) & (np.abs(q).sum(axis=1) > 0.0))
-        if not good.all():
+        if dt.size == 0:
+            return
+        if not _all_good(q, rates, dt):
+            good = (np.isfinite(q).all(axis=1) & np.isfinite(rates).all(axis=1)
+                    & np.isfinite(dt) & (dt > 0.0) & (np.abs(q).sum(axis=1) > 0.0))
             self.rejected_samples += int((~good).sum())
             q, rates, dt = q[good], rates[good], dt[good]
             if dt.size == 0:
@@ -259,6 +261,13 @@ class AttitudeCovariance:
         self._p[:3, 3:] = 0.0
         self._p[3:, :3] = 0.0
         self._p[:3, :3] = block
+
+
+def _all_good(q: FloatArray, rates: FloatArray, dt: FloatArray) -> bool:
+    """Whether every step is finite with ``dt > 0`` and a non-zero ``q`` (a few whole-array
+    reductions: the common case of a fold)."""
+    return bool(np.isfinite(q.sum() + rates.sum()) and float(dt.min()) > 0.0
+                and np.isfinite(dt.sum()) and float(np.abs(q).sum(axis=1).min()) > 0.0)
 
 
 def _propagated(p: FloatArray, coupling: FloatArray, duration: float,

@@ -15,7 +15,8 @@ mean over the window (noise and bias), yaw from ``initial_yaw_stddev``, the bias
 window's gyro mean.
 
 Defaults for a consumer MEMS gyro when the user gives none, 1σ taken as the datasheet's
-typical figure:
+typical figure (Bosch Sensortec states its typical values as 1σ of the production spread,
+min/max as 3σ):
 
 * ``gyroscope_noise_density`` 2.44·10⁻⁴ rad/s/√Hz: 0.014 °/s/√Hz, Bosch BMI088 data sheet
   (BST-BMI088-DS001), gyroscope rate noise density.
@@ -115,15 +116,16 @@ def initial_covariance(model: GyroErrorModel, window_seconds: float | None,
 
     With ``window_seconds`` (a levelling over that rest window): tilt from
     :func:`levelled_tilt_stddev`, bias 1σ ``N/√T`` (the window's mean gyro rate). Without
-    (``None``: no levelling): tilt 1σ as the yaw's, bias 1σ ``gyroscope_turn_on_bias``. Yaw
-    1σ is ``yaw_stddev`` or else ``model.initial_yaw_stddev``. Intrinsic errors from the
-    model's priors; all blocks uncorrelated.
+    (``None``: no levelling): tilt 1σ ``initial_yaw_stddev`` (as unknown as the heading), bias
+    1σ ``gyroscope_turn_on_bias``. Yaw 1σ is ``yaw_stddev`` (a heading given by ``set_pose``)
+    or else ``model.initial_yaw_stddev``. Intrinsic errors from the model's priors; all blocks
+    uncorrelated.
     """
     yaw = model.initial_yaw_stddev if yaw_stddev is None else float(yaw_stddev)
     if not math.isfinite(yaw) or yaw < 0.0:
         raise InputError(f'Expected `initial_yaw_stddev` to be finite and >= 0, got {yaw!r}')
     if window_seconds is None:
-        tilt, bias = yaw, model.gyroscope_turn_on_bias
+        tilt, bias = model.initial_yaw_stddev, model.gyroscope_turn_on_bias
     else:
         tilt = levelled_tilt_stddev(model, window_seconds)
         bias = model.gyroscope_noise_density / math.sqrt(window_seconds)

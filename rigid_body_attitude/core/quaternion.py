@@ -66,6 +66,7 @@ __all__ = [
     'rotate_inverse',
     'rotate_inverse_floats',
     'rotate_rows',
+    'scalar_step_rate',
     'to_matrix',
     'to_ros',
 ]
@@ -435,3 +436,26 @@ def scalar_exp_step(q: Any, omega: Any, dt: float) -> tuple[float, float, float,
         raise InputError(f'Expected `q` to be a finite non-zero quaternion, got {tuple(q)!r}')
     inv = 1.0 / math.sqrt(norm_squared)
     return w * inv, x * inv, y * inv, z * inv
+
+
+def scalar_step_rate(q_before: Sequence[float], q_after: Sequence[float],
+                     dt: float) -> tuple[float, float, float]:
+    """The body rate [rad/s] held over ``dt`` that turns ``q_before`` into ``q_after``:
+    ``log(q_before* ⊗ q_after) / dt`` (the shorter way round), in plain float math.
+
+    The inverse of :func:`scalar_exp_step`; the two (non-zero) quaternions need not be of
+    norm 1. ``dt`` must be > 0.
+    """
+    w0, x0, y0, z0 = q_before
+    w1, x1, y1, z1 = q_after
+    w = w0 * w1 + x0 * x1 + y0 * y1 + z0 * z1
+    x = w0 * x1 - x0 * w1 - y0 * z1 + z0 * y1
+    y = w0 * y1 + x0 * z1 - y0 * w1 - z0 * x1
+    z = w0 * z1 - x0 * y1 + y0 * x1 - z0 * w1
+    sine = math.sqrt(x * x + y * y + z * z)  # |q| sin(angle / 2)
+    if sine > SERIES_THRESHOLD * abs(w):
+        k = 2.0 * math.atan2(sine, abs(w)) / sine
+    else:  # 2 atan(s/w)/s = 2/w (1 − (s/w)²/3 + (s/w)⁴/5 ...): last term below 3e-17
+        k = 2.0 / abs(w) * (1.0 - sine * sine / (3.0 * w * w))
+    k = math.copysign(k, w) / dt
+    return k * x, k * y, k * z

@@ -22,7 +22,9 @@ from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
+from rigid_body_attitude.core.integrators.strapdown import DeltaSingle, ExpMap
 from rigid_body_attitude.core.propagator import GyroPropagator
+from rigid_body_attitude.core.quaternion import scalar_step_rate
 from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.imu_start import REJECTION_DETAIL, ImuStart
@@ -128,8 +130,10 @@ class GyroSession(ImuStart):
 
     def _after_step(self, q_before: tuple[float, float, float, float],
                     rate_body: tuple[float, float, float], dt: float) -> None:
-        """One integrated step: attitude at its start, the corrected body rate of the sample
-        that ends it [rad/s] (held over the step), its length [s]; grows the covariance."""
+        """One integrated step: attitude at its start, the body rate [rad/s] that, held over
+        the step, makes the rotation the strapdown method made (``exp_map``: the corrected rate
+        of the sample that starts it; ``delta_single``: of the sample that ends it; any other
+        method: ``log(q_before* ⊗ q_after) / dt``), its length [s]; grows the covariance."""
         uncertainty = self.uncertainty
         if uncertainty is not None and uncertainty.step(q_before, rate_body, dt):
             self.sink.attitude_covariance(uncertainty.published)
@@ -176,13 +180,21 @@ class GyroSession(ImuStart):
         outliers = stream.outliers if stream.pending else -1
         state = self.propagator.state
         time_before, q_before = state.time, state.attitude_tuple()
+        omega_before = state.omega_tuple()
         outcome = stream.add(sec * NANOSECONDS_PER_SECOND + nanosec, rate)
         if outliers >= 0 and stream.outliers != outliers:
             self.warn('outlier_stamp',
                       f'gyro: {REJECTION_DETAIL["outlier_stamp"]} (parameter `max_dt`)')
-        if outcome is INTEGRATED:
-            x, y, z = rate  # the step: its length as the propagator took it
-            self._after_step(q_before, (float(x), float(y), float(z)), state.time - time_before)
+        if outcome is INTEGRATED:  # the step as the propagator took it: length, rotation
+            dt = state.time - time_before
+            kind = type(self.propagator.method)
+            if kind is ExpMap:  # q ⊗ exp(ω dt) with the previous sample's rate
+                self._after_step(q_before, omega_before, dt)
+            elif kind is DeltaSingle:  # with this sample's
+                self._after_step(q_before, state.omega_tuple(), dt)
+            else:
+                self._after_step(q_before, scalar_step_rate(q_before, state.attitude_tuple(),
+                                                            dt), dt)
         return self._outcome(outcome, sec, nanosec, imu)
 
     def _outcome(self, outcome: Outcome, sec: int, nanosec: int, imu: bytes | None) -> bool:

@@ -9,9 +9,14 @@ unlevelled prior (tilt and yaw 1σ ``initial_yaw_stddev``, bias 1σ ``gyroscope_
 or ``set_pose_stddev`` on each axis).
 
 Published values (REP-145: about fixed **world** axes, rad²): :attr:`Uncertainty.published` is
-the row-major 3×3 attitude covariance at the last fold (every :data:`BATCH_SIZE` samples,
-so a read is free per sample); :func:`pose_covariance` the 6×6 of ``pose_with_covariance``
-with the position block marked unknown (:data:`UNKNOWN_POSITION_VARIANCE` on its diagonal).
+the row-major 3×3 attitude covariance at the last fold (every :data:`BATCH_SIZE` samples or
+:data:`FOLD_SECONDS` of steps, whichever comes first, so a read is free per sample and the
+value is less than :data:`FOLD_SECONDS` of stamp time behind the attitude);
+:func:`pose_covariance` the 6×6 of ``pose_with_covariance`` with the position block marked
+unknown (:data:`UNKNOWN_POSITION_VARIANCE` on its diagonal).
+
+A ``set_pose`` during levelling gives the heading: when levelling completes, the covariance
+starts with the levelling's tilt and the pose's yaw variance.
 
 Noise from a kalibr calibration file (``calibration_file``) overrides the parameters:
 :func:`error_model_from`.
@@ -27,21 +32,25 @@ import numpy as np
 
 from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.gyro_error_model import GyroErrorModel
+from rigid_body_attitude.core.gyro_error_model import GyroErrorModel, initial_covariance
 from rigid_body_attitude.session.levelling import AlignmentResult
 
-__all__ = ['BATCH_SIZE', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE', 'Uncertainty',
-           'error_model_from', 'orientation_block', 'pose_covariance']
+__all__ = ['BATCH_SIZE', 'FOLD_SECONDS', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE',
+           'Uncertainty', 'error_model_from', 'orientation_block', 'pose_covariance']
 
 #: Variance [m²] on the diagonal of the position block of ``pose_with_covariance``: the
 #: position is not estimated. Large and finite, so the 6×6 stays symmetric positive definite
 #: (fuse refuses anything else) and a filter that fuses it anyway gives it no weight; a
 #: robot_localization user excludes the position with ``pose0_config``.
 UNKNOWN_POSITION_VARIANCE = 1e9
-#: Integrated steps gathered before a fold (the transition is exact for any batch): 256 costs
-#: about a sixth of 64 per sample (docs/performance.md); the published covariance is at most
-#: 255 samples old.
+#: Integrated steps gathered before a fold (the transition is exact for any batch): a fold
+#: costs about as much as 100-200 strapdown steps, whatever the batch (docs/performance.md).
 BATCH_SIZE = 256
+#: Stamp time [s] of steps gathered before a fold, if :data:`BATCH_SIZE` is not reached first:
+#: the published covariance is always less than this behind the attitude (at 1 kHz a fold every
+#: 50 samples, at 100 Hz every 5).
+FOLD_SECONDS = 0.05
+_FOLD_AFTER = FOLD_SECONDS - 1e-9  # steps sum stamp differences: 50 × 1 ms may come out short
 #: Node parameters that are fields of :class:`GyroErrorModel` (same names).
 MODEL_PARAMETERS = ('gyroscope_noise_density', 'gyroscope_random_walk',
                     'gyroscope_turn_on_bias', 'gyroscope_scale_stddev',
@@ -114,6 +123,7 @@ class Uncertainty:
         """The model of ``values``; the covariance starts unlevelled (:meth:`start`)."""
         self.model = error_model_from(values, calibration)
         self.apply(values)
+        self._pose_yaw_variance: float | None = None
         self.start(None)
 
     def apply(self, values: Mapping[str, Any]) -> None:
@@ -122,27 +132,40 @@ class Uncertainty:
         self.tilt_stddev_warn: float = values['tilt_stddev_warn']
 
     def start(self, window_seconds: float | None) -> None:
-        """A new covariance: levelled over ``window_seconds`` of rest, or unlevelled (None)."""
-        self.covariance = AttitudeCovariance(self.model, window_seconds=window_seconds,
+        """A new covariance: levelled over ``window_seconds`` of rest, or unlevelled (None);
+        yaw 1σ ``initial_yaw_stddev`` (a ``set_pose``'s heading is forgotten)."""
+        self._pose_yaw_variance = None
+        self._restart(window_seconds)
+
+    def _restart(self, window_seconds: float | None) -> None:
+        yaw = self._pose_yaw_variance
+        start = initial_covariance(self.model, window_seconds,
+                                   None if yaw is None else math.sqrt(yaw))
+        self.covariance = AttitudeCovariance(self.model, covariance=start,
                                              batch_size=BATCH_SIZE)
         self._pending = 0
+        self._elapsed = 0.0
         self._publish()
 
     def aligned(self, result: AlignmentResult) -> None:
         """The session's ``on_aligned`` hook: levelled over ``result.window_seconds`` of rest,
         or unlevelled (not ``at_rest``: levelled from the quietest window after the timeout,
-        or a window of 0)."""
+        or a window of 0). The yaw variance of a ``set_pose`` received since the last start
+        (the levelling's heading came from it) is kept."""
         window = result.window_seconds if result.at_rest else 0.0
-        self.start(window if window > 0.0 else None)
+        self._restart(window if window > 0.0 else None)
 
     def step(self, q_before: Quaternion, rate_body: Vector, dt: float) -> bool:
         """One integrated step (attitude at its start, body rate held [rad/s], length [s]);
-        returns whether :attr:`published` changed (a fold)."""
+        returns whether :attr:`published` changed (a fold: every :data:`BATCH_SIZE` steps or
+        :data:`FOLD_SECONDS` of them)."""
         self.covariance.add_sample(q_before, rate_body, dt)
         self._pending += 1
-        if self._pending < BATCH_SIZE:
+        self._elapsed += dt
+        if self._pending < BATCH_SIZE and self._elapsed < _FOLD_AFTER:
             return False
         self._pending = 0
+        self._elapsed = 0.0
         self._publish()
         return True
 
@@ -156,7 +179,9 @@ class Uncertainty:
             self.covariance.set_pose(covariance=np.reshape(np.array(covariance, dtype=float),
                                                            (3, 3)))
         self._pending = 0
+        self._elapsed = 0.0
         self._publish()
+        self._pose_yaw_variance = self.published[8]
 
     def _publish(self) -> None:
         block = self.covariance.attitude_covariance

@@ -49,6 +49,30 @@ def test_a_scale_error_grows_with_the_angle_turned_about_a_fixed_axis():
         0.01 * angle, rel=1e-9)
 
 
+def test_scale_and_misalignment_errors_cancel_when_the_body_turns_back():
+    """The transition uses the signed rates: turning by θ about a tilted axis and back leaves
+    no scale or misalignment error (as in the sensor: the same errors, opposite angles), while
+    the same turns in one direction leave one that grows with the angle."""
+    model = GyroErrorModel(gyroscope_noise_density=0.0, gyroscope_random_walk=0.0,
+                           gyroscope_scale_stddev=0.01, gyroscope_misalignment_stddev=0.01,
+                           initial_yaw_stddev=0.0)
+    dt, steps = 0.002, 400
+    axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    start = initial_covariance(model, 1e6)[:3, :3]
+
+    def turned(signs: np.ndarray) -> np.ndarray:
+        rates = np.outer(signs * 3.0, axis)
+        angles = np.concatenate([[0.0], np.cumsum(signs * 3.0 * dt)[:-1]])
+        covariance = AttitudeCovariance(model, window_seconds=1e6)
+        covariance.add_samples(quaternion.exp(np.outer(angles, axis)), rates, dt)
+        return covariance.attitude_covariance - start
+
+    back = turned(np.concatenate([np.ones(steps), -np.ones(steps)]))
+    on = turned(np.ones(2 * steps))
+    assert np.abs(back).max() < 1e-12 * np.abs(on).max()
+    assert np.trace(on) > (0.01 * 3.0 * 2 * steps * dt) ** 2
+
+
 def test_batches_of_any_size_give_the_transition_of_single_steps():
     rng = np.random.default_rng(3)
     steps = 96

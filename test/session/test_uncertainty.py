@@ -15,11 +15,13 @@ from conftest import BASE_NS, MS
 from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.core.quaternion import scalar_exp_step, scalar_step_rate
 from rigid_body_attitude.session.levelling import FROM_GRAVITY, FROM_TIMEOUT, AlignmentResult
 from rigid_body_attitude.session.parameters import defaults
 from rigid_body_attitude.session.reports import LEVEL_WARN
 from rigid_body_attitude.session.uncertainty import (
-    BATCH_SIZE, UNKNOWN_POSITION_VARIANCE, error_model_from, orientation_block, pose_covariance)
+    BATCH_SIZE, FOLD_SECONDS, UNKNOWN_POSITION_VARIANCE, error_model_from, orientation_block,
+    pose_covariance)
 
 OMEGA = (0.3, -0.2, 1.0)
 
@@ -47,27 +49,83 @@ def test_the_sink_gets_the_unlevelled_prior_then_one_covariance_per_fold(open_sc
     model = GyroErrorModel()
     prior = initial_covariance(model, None)[:3, :3]
     assert sink.covariances == [tuple(prior.reshape(9).tolist())]
-    feed(session, 1 + 3 * BATCH_SIZE)  # a baseline, then 3 batches of steps
+    per_fold = round(FOLD_SECONDS / 1e-3)  # at 1 kHz the time bound comes first
+    assert per_fold < BATCH_SIZE
+    feed(session, 1 + 3 * per_fold)  # a baseline, then 3 folds of steps
     assert len(sink.covariances) == 4
     state = session.propagator.state
     grown = np.reshape(sink.covariances[-1], (3, 3))
     assert np.all(np.diag(grown) > np.diag(prior)) and is_spd(sink.covariances[-1], 3)
-    assert state.time == pytest.approx(3 * BATCH_SIZE * 1e-3)
+    assert state.time == pytest.approx(3 * per_fold * 1e-3)
 
 
-def test_the_session_feeds_the_core_exactly_its_steps(open_scene):
-    session, sink = open_scene('strapdown', integrator='exp_map')
+def published_ages(session, sink, period_ns, count):
+    """Feed ``count`` samples ``period_ns`` apart; after each, the stamp time [s] since the
+    step the published covariance was folded at; and the number of folds."""
+    state = session.propagator.state
+    session.gyro(*divmod(BASE_NS, 10**9), OMEGA)  # the baseline: the prior is of its time
+    folded_at, seen, ages = state.time, len(sink.covariances), []
+    for k in range(1, count):
+        session.gyro(*divmod(BASE_NS + k * period_ns, 10**9), OMEGA)
+        if len(sink.covariances) != seen:
+            folded_at, seen = state.time, len(sink.covariances)
+        ages.append(state.time - folded_at)
+    return ages, seen
+
+
+@pytest.mark.parametrize('rate_hz, steps_per_fold', [
+    (100, 5), (1000, 50), (20000, BATCH_SIZE)])
+def test_the_published_covariance_is_never_older_than_the_fold_period(
+        open_scene, rate_hz, steps_per_fold):
+    session, sink = open_scene('strapdown', max_dt=1.0)
+    before = len(sink.covariances)
+    ages, folds = published_ages(session, sink, 10**9 // rate_hz, 1 + 4 * steps_per_fold)
+    assert max(ages) < FOLD_SECONDS
+    assert max(ages) == pytest.approx((steps_per_fold - 1) / rate_hz)
+    assert folds - before == 4
+
+
+def moving_rates(count):
+    t = np.arange(count) * 1e-3
+    return [tuple(row) for row in np.stack(
+        [2.0 * np.sin(3.0 * t), 1.5 * np.cos(2.0 * t), 3.0 * np.sin(1.3 * t + 1.0)],
+        axis=1).tolist()]
+
+
+@pytest.mark.parametrize('integrator', ['exp_map', 'delta_single', 'rk4_quaternion'])
+def test_the_session_feeds_the_core_exactly_the_steps_its_method_made(open_scene, integrator):
+    """exp_map holds the previous sample's rate, delta_single the current one; any other
+    method: the rate that makes the rotation it made (``log(q_before* ⊗ q_after)/dt``)."""
+    session, sink = open_scene('strapdown', integrator=integrator)
     reference = AttitudeCovariance(GyroErrorModel(), window_seconds=None,
                                    batch_size=BATCH_SIZE)
     state = session.propagator.state
-    session.gyro(*divmod(BASE_NS, 10**9), OMEGA)
-    for k in range(1, 2 * BATCH_SIZE + 1):
+    rates = moving_rates(4 * BATCH_SIZE + 1)
+    session.gyro(*divmod(BASE_NS, 10**9), rates[0])
+    seen, folded = len(sink.covariances), []
+    for k in range(1, len(rates)):
         q_before, time_before = state.attitude_tuple(), state.time
-        session.gyro(*divmod(BASE_NS + k * MS, 10**9), OMEGA)
-        assert state.time - time_before == pytest.approx(1e-3, abs=1e-12)
-        reference.add_sample(q_before, OMEGA, state.time - time_before)
-    folded = tuple(reference.folded_attitude_covariance.reshape(9).tolist())
-    assert sink.covariances[-1] == folded and len(sink.covariances) == 3
+        session.gyro(*divmod(BASE_NS + k * MS, 10**9), rates[k])
+        dt = state.time - time_before
+        held = {'exp_map': rates[k - 1], 'delta_single': rates[k]}.get(
+            integrator, scalar_step_rate(q_before, state.attitude_tuple(), dt))
+        if integrator != 'rk4_quaternion':
+            made = scalar_step_rate(q_before, state.attitude_tuple(), dt)
+            assert np.allclose(made, held, rtol=1e-9, atol=1e-9)
+        reference.add_sample(q_before, held, dt)
+        if len(sink.covariances) != seen:
+            seen = len(sink.covariances)
+            folded.append(tuple(reference.attitude_covariance.reshape(9).tolist()))
+    assert len(folded) > 4 and sink.covariances[-len(folded):] == folded
+
+
+def test_the_step_rate_inverts_the_exp_step():
+    q = (0.6, -0.3, 0.5, 0.548)
+    for omega in [(0.3, -2.0, 1.0), (1e-9, 0.0, -2e-9), (0.0, 0.0, 0.0), (300.0, 10.0, 5.0)]:
+        after = scalar_exp_step(q, omega, 1e-3)
+        assert np.allclose(scalar_step_rate(q, after, 1e-3), omega, rtol=1e-9, atol=1e-12)
+        flipped = tuple(-c for c in after)  # the same rotation: the shorter way round
+        assert np.allclose(scalar_step_rate(q, flipped, 1e-3), omega, rtol=1e-9, atol=1e-12)
 
 
 def test_reset_and_a_backward_jump_start_the_covariance_again(open_scene):
@@ -205,3 +263,39 @@ def test_a_pose_set_before_the_first_sample_keeps_its_covariance(open_scene):
     session.set_pose('world', (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), pose_cov(block))
     feed(session, 2)  # no accelerometer: the integration starts from the pose at once
     assert session.alignment_done and sink.covariances[-1] == block
+
+
+def level_at_rest(session, count, start=0, seed=1):
+    rng = np.random.default_rng(seed)
+    for k in range(start, start + count):
+        rate = tuple(rng.normal(0.0, 0.003, 3).tolist())
+        accel = tuple((np.array([0.0, 0.0, 9.81]) + rng.normal(0.0, 0.03, 3)).tolist())
+        session.gyro(*divmod(BASE_NS + k * MS, 10**9), rate, None, accel)
+
+
+@pytest.mark.parametrize('with_covariance', [True, False])
+def test_a_pose_set_while_levelling_keeps_its_yaw_variance_when_levelling_completes(
+        open_scene, with_covariance):
+    session, sink = open_scene('strapdown', align_seconds=0.5, set_pose_stddev=0.03)
+    level_at_rest(session, 100)
+    assert not session.alignment_done
+    block = (4e-4, 1e-5, 2e-5, 1e-5, 9e-4, 3e-5, 2e-5, 3e-5, 0.0025)
+    session.set_pose('world', (0.9, 0.0, 0.0, 0.4359), (0.0, 0.0, 0.0),
+                     pose_cov(block) if with_covariance else None)
+    level_at_rest(session, 1900, start=100)
+    assert session.alignment is not None and session.alignment.at_rest, session.alignment_text()
+    window = session.alignment.window_seconds
+    yaw_variance = block[8] if with_covariance else 0.03 ** 2
+    model = GyroErrorModel()
+    expected = initial_covariance(model, window, math.sqrt(yaw_variance))
+    levelled = AttitudeCovariance(model, covariance=expected, batch_size=BATCH_SIZE)
+    published = np.reshape(sink.covariances[-1], (3, 3))
+    # folded since levelling: the yaw grew by the gyro noise only, the tilt is the levelling's
+    assert published[2, 2] == pytest.approx(yaw_variance, rel=1e-3)
+    assert published[0, 0] == pytest.approx(levelled.folded_attitude_covariance[0, 0], rel=1e-3)
+    assert published[0, 0] < 1e-3 and published[0, 1] == pytest.approx(0.0, abs=1e-9)
+    session.reset()  # forgets the pose: the heading and its variance are the defaults again
+    level_at_rest(session, 2000, start=3000, seed=2)
+    assert session.alignment is not None and session.alignment.at_rest
+    assert np.reshape(sink.covariances[-1], (3, 3))[2, 2] == pytest.approx(
+        model.initial_yaw_stddev ** 2, rel=1e-6)
