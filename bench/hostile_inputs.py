@@ -69,7 +69,7 @@ def stamp(nanoseconds: int) -> Any:
 def imu(at_ns: int, rate: tuple[float, float, float] = OMEGA) -> Any:
     from sensor_msgs.msg import Imu
     message = Imu()
-    message.header.stamp, message.header.frame_id = stamp(at_ns), 'imu_link'
+    message.header.stamp, message.header.frame_id = stamp(at_ns), 'base_link'
     message.angular_velocity.x, message.angular_velocity.y, message.angular_velocity.z = rate
     return message
 
@@ -229,11 +229,13 @@ def gyro_classes(seed: int) -> Iterator[tuple[str, list[tuple[str, Any]], str]]:
     good_imu = serialize_message(imu(BASE_NS))
     # A length field that still fits may decode as another, well-formed frame_id: then the
     # message is judged as such (set_pose: wrong_frame; imu: the first stamp again, stale).
+    # Decodable set_pose messages queued behind a newer one are counted superseded.
     for name, payloads in malformed_cases(good_imu, seed).items():
         yield f'imu: {name}', [('imu', p) for p in payloads], 'malformed|stale_stamp'
     good_pose = serialize_message(PoseStamped())
     for name, payloads in malformed_cases(good_pose, seed + 1).items():
-        yield f'set_pose: {name}', [('set_pose', p) for p in payloads], 'malformed|wrong_frame'
+        yield (f'set_pose: {name}', [('set_pose', p) for p in payloads],
+               'malformed|wrong_frame|superseded')
     absurd = [(1e200, 0.0, 0.0), (1e308, 1e308, 1e308), (-1e308, 0.0, 0.0), (1e10, 0.0, 0.0),
               (0.0, 0.0, 1000.1), (600.0, 600.0, 600.0)]
     yield 'imu: rates finite but absurd', [
@@ -255,7 +257,7 @@ def gyro_classes(seed: int) -> Iterator[tuple[str, list[tuple[str, Any]], str]]:
         pose = PoseStamped()
         pose.header.frame_id, pose.pose.orientation.w = frame, w
         poses.append(('set_pose', pose))
-    yield 'set_pose: wrong frame or zero quaternion', poses, 'wrong_frame|invalid_pose'
+    yield 'set_pose: wrong frame or zero quaternion', poses, 'wrong_frame|invalid_pose|superseded'
 
 
 def _bad_stamp(sec: int, nanosec: int) -> Any:
