@@ -70,8 +70,10 @@ def header_cdr(frame_id: str) -> bytes:
     return head + b'\x00' * (_body_start(len(text)) - len(head))
 
 
-def imu_cdr(omega_body: Tuple[float, float, float], frame_id: str = 'imu') -> bytearray:
-    """Return a serialized ``sensor_msgs/Imu`` with zero stamp and the given angular velocity.
+def imu_cdr(omega_body: Tuple[float, float, float], frame_id: str = 'imu',
+            accel: Tuple[float, float, float] = (0.0, 0.0, 0.0)) -> bytearray:
+    """Return a serialized ``sensor_msgs/Imu`` with zero stamp, the given angular velocity and
+    linear acceleration (zeros: no accelerometer data).
 
     The orientation is the identity with covariance ``-1`` in element 0 (REP-145: "no
     orientation estimate"); all other fields are zero.
@@ -79,7 +81,7 @@ def imu_cdr(omega_body: Tuple[float, float, float], frame_id: str = 'imu') -> by
     orientation = struct.pack('<4d', 0.0, 0.0, 0.0, 1.0)
     orientation_covariance = struct.pack('<9d', -1.0, *([0.0] * 8))
     body = (orientation + orientation_covariance + _VEC3.pack(*omega_body)
-            + bytes(9 * 8) + _VEC3.pack(0.0, 0.0, 0.0) + bytes(9 * 8))
+            + bytes(9 * 8) + _VEC3.pack(*accel) + bytes(9 * 8))
     return bytearray(header_cdr(frame_id) + body)
 
 

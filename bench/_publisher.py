@@ -7,6 +7,12 @@ message costs a few microseconds of Python. Pacing is against absolute due times
 (``t0 + i / rate``): the loop sleeps only when it is ahead and otherwise publishes every
 message that is due, so short stalls are caught up in a burst instead of lowering the rate.
 
+``--gyro`` and ``--accel`` set the message's ``angular_velocity`` [rad/s] and
+``linear_acceleration`` [m/s²]; all zero acceleration (the default) means "no accelerometer
+data", so the node does not level. Gravity there (``--accel 0.3,-0.4,9.79``) with a rate under
+the rest detector's 0.05 rad/s (``--gyro 0.01,-0.02,0.03``) is a body at rest: the node levels
+during the warm-up, takes the window's mean rate as its gyro bias, then integrates.
+
 Protocol (one JSON object per stdout line): ``{"event": "matched"}`` once a subscription is
 matched, ``{"event": "start", ...}`` when the measured window begins, ``{"event": "end", ...}``
 with the counts when it ends. The process then keeps its writer alive (so RELIABLE resends can
@@ -23,8 +29,21 @@ import rclpy
 from sensor_msgs.msg import Imu
 
 
+#: The message's frame: the node's default ``body_frame``, so the rates are body rates and the
+#: node waits for no mount on ``/tf_static`` (targets with ``mount_rpy`` take that instead).
+BODY_FRAME = 'base_link'
+
+
 def _emit(**fields) -> None:
     print(json.dumps(fields), flush=True)
+
+
+def _vector(text: str) -> tuple:
+    """Three comma-separated numbers."""
+    values = tuple(float(value) for value in text.split(','))
+    if len(values) != 3:
+        raise argparse.ArgumentTypeError(f'expected X,Y,Z, got {text!r}')
+    return values
 
 
 def _paced_publish(publish_raw, message: bytearray, rate_hz: float, count: int) -> dict:
@@ -63,6 +82,11 @@ def main() -> int:
     parser.add_argument('--rate', type=float, required=True, help='messages per second')
     parser.add_argument('--duration', type=float, default=4.0, help='measured seconds')
     parser.add_argument('--warmup', type=float, default=0.5, help='unmeasured seconds first')
+    parser.add_argument('--gyro', type=_vector, default=(0.1, -0.2, 0.3),
+                        help='angular_velocity WX,WY,WZ [rad/s] (default %(default)s)')
+    parser.add_argument('--accel', type=_vector, default=(0.0, 0.0, 0.0),
+                        help='linear_acceleration AX,AY,AZ [m/s^2] (default: zeros, i.e. no '
+                             'accelerometer data)')
     parser.add_argument('--settle', type=float, default=0.5,
                         help='seconds to wait after the first match before publishing')
     parser.add_argument('--match-timeout', type=float, default=20.0)
@@ -80,7 +104,7 @@ def main() -> int:
             time.sleep(0.01)
         _emit(event='matched')
         time.sleep(args.settle)
-        message = imu_cdr((0.1, -0.2, 0.3))
+        message = imu_cdr(args.gyro, BODY_FRAME, args.accel)
         publish_raw = publisher.handle.publish_raw
         _paced_publish(publish_raw, message, args.rate, max(1, int(args.warmup * args.rate)))
         _emit(event='start', wall_ns=time.time_ns())

@@ -66,6 +66,17 @@ if TYPE_CHECKING:
 
 DEFAULT_RATES = [200, 500, 1000, 2000, 5000, 10000, 15000, 20000]
 NODE_ARGS = ['--ros-args', '-p', 'scene:=strapdown']
+#: The targets measured when ``--targets`` is not given.
+DEFAULT_TARGETS = ('node', 'relay', 'fast_relay')
+#: ``node_full``: the node with the whole real-IMU front end besides levelling (which needs
+#: ``--imu-accel``): a mount and a calibration file (``{calibration}``: :data:`CALIBRATION`,
+#: written to a temporary folder); ``node_nocov`` is the same without the covariance.
+FULL_NODE_ARGS = ['-p', 'mount_rpy:=[0.02, -0.03, 1.5707963]',
+                  '-p', 'calibration_file:={calibration}']
+#: A plain calibration file (``rigid_body_attitude.core.calibration``): gyro bias, scale and
+#: misalignment, applied by the node's inline affine map.
+CALIBRATION = ('bias: [0.001, -0.002, 0.0005]\nscale: [1.01, 0.99, 1.0]\n'
+               'misalignment: [[1.0, 0.002, 0.0], [0.0, 1.0, -0.001], [0.0, 0.0, 1.0]]\n')
 CLOCK_TICKS = os.sysconf('SC_CLK_TCK')
 
 
@@ -152,14 +163,22 @@ class Process:
         return problem
 
 
-def default_targets() -> Dict[str, List[str]]:
-    """Return the built-in targets: the node (when it exists), the relay and the fast relay."""
+def default_targets(calibration: Path) -> Dict[str, List[str]]:
+    """Return the built-in targets: the node, ``node_full`` and ``node_nocov`` (when the node
+    exists; their calibration file is written to ``calibration``), the relay and the fast
+    relay."""
     python = sys.executable
     targets = {}
+    node = None
     if shutil.which('propagation_node'):
-        targets['node'] = ['propagation_node'] + NODE_ARGS
+        node = ['propagation_node'] + NODE_ARGS
     elif (REPO / 'rigid_body_attitude' / 'ros' / 'serve.py').exists():
-        targets['node'] = [python, '-m', 'rigid_body_attitude.ros.serve'] + NODE_ARGS
+        node = [python, '-m', 'rigid_body_attitude.ros.serve'] + NODE_ARGS
+    if node is not None:
+        calibration.write_text(CALIBRATION)
+        full = node + [word.format(calibration=calibration) for word in FULL_NODE_ARGS]
+        targets.update(node=node, node_full=full,
+                       node_nocov=full + ['-p', 'covariance:=false'])
     targets['relay'] = [python, str(BENCH / 'relay.py')]
     targets['fast_relay'] = [python, str(BENCH / 'fast_relay.py')]
     return targets
@@ -227,7 +246,8 @@ def start_processes(session: Session, target_argv: List[str], rate: float, durat
     subscriber.wait_event('matched', args.match_timeout, watch=[target])
     publisher = session.start('publisher', [
         python, str(BENCH / '_publisher.py'), '--rate', str(rate), '--duration', str(duration),
-        '--warmup', str(warmup)], json_stdout=True, extra_env=endpoint_env)
+        '--warmup', str(warmup), '--gyro', args.imu_gyro, '--accel', args.imu_accel],
+        json_stdout=True, extra_env=endpoint_env)
     publisher.wait_event('matched', args.match_timeout, watch=[target])
     return {'target': target, 'publisher': publisher, 'subscriber': subscriber}
 
@@ -425,14 +445,22 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         help='seconds after the last publish a pose may still arrive '
                              '(default %(default)s)')
     parser.add_argument('--targets', default=None,
-                        help='comma-separated built-in targets: node, relay, fast_relay '
-                             '(default: all available; "none": only the --target ones)')
+                        help='comma-separated built-in targets: node, node_full, node_nocov, '
+                             'relay, fast_relay (default: node, relay, fast_relay; "none": '
+                             'only the --target ones)')
     parser.add_argument('--target', action='append', default=[], metavar='LABEL=COMMAND',
                         help='an extra target command line (repeatable)')
     parser.add_argument('--node-cmd', default=None,
                         help='command line of the node target (default: propagation_node '
                              'or python -m rigid_body_attitude.ros.serve, with '
                              f'{" ".join(NODE_ARGS)})')
+    parser.add_argument('--imu-gyro', default='0.1,-0.2,0.3',
+                        help='angular_velocity of the published Imu [rad/s] (default '
+                             '%(default)s)')
+    parser.add_argument('--imu-accel', default='0,0,0',
+                        help='linear_acceleration of the published Imu [m/s^2]; zeros (the '
+                             'default) = no accelerometer data, gravity = the node levels '
+                             'in the warm-up (with --imu-gyro under 0.05 rad/s)')
     parser.add_argument('--depth', type=int, default=QUEUE_DEPTH,
                         help='KEEP_LAST depth of the publisher, subscriber and relays '
                              '(default %(default)s)')
@@ -451,15 +479,17 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
     return args
 
 
-def select_targets(args: argparse.Namespace) -> Dict[str, List[str]]:
-    """Return the targets to measure, in order, from the built-ins and ``--target``."""
-    available = default_targets()
+def select_targets(args: argparse.Namespace, folder: Path) -> Dict[str, List[str]]:
+    """Return the targets to measure, in order, from the built-ins (files they need go to
+    ``folder``) and ``--target``."""
+    available = default_targets(folder / 'calibration.yaml')
     if args.node_cmd:
         available['node'] = shlex.split(args.node_cmd)
     if args.targets == 'none':
         names = []
     else:
-        names = args.targets.split(',') if args.targets else list(available)
+        names = (args.targets.split(',') if args.targets
+                 else [name for name in DEFAULT_TARGETS if name in available])
     missing = [name for name in names if name not in available]
     if missing:
         raise SystemExit(f'error: targets {missing} not available; have {list(available)}')
@@ -475,12 +505,13 @@ def select_targets(args: argparse.Namespace) -> Dict[str, List[str]]:
 def main(argv: Optional[List[str]] = None) -> int:
     """Run the sweep and write its summary (stdout or ``--report``) and, if asked, its JSON."""
     args = parse_args(argv)
-    targets = select_targets(args)
-    try:
-        result = run_throughput(targets, args)
-    except ProcessCrashed as err:
-        print(f'error: {err}', file=sys.stderr)
-        return 1
+    with tempfile.TemporaryDirectory(prefix='bench_targets_') as folder:
+        targets = select_targets(args, Path(folder))
+        try:
+            result = run_throughput(targets, args)
+        except ProcessCrashed as err:
+            print(f'error: {err}', file=sys.stderr)
+            return 1
     if args.json is not None:
         args.json.write_text(json.dumps(result, indent=1))
     _report.write(result, args.report)
