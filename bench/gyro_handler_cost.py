@@ -66,9 +66,6 @@ class NullSink:
     def dynamics(self, *args: Any) -> None:
         """Nothing."""
 
-    def attitude_covariance(self, *args: Any) -> None:
-        """Nothing."""
-
     def wants_invariants(self) -> bool:
         """No."""
         return False
