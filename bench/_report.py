@@ -144,8 +144,8 @@ def _node_verdict(targets: dict) -> List[str]:
     lines = []
     relay_1khz = relay and _row_at(relay['rows'], 1000.0)
     for label, factor in CPU_FACTOR_1KHZ.items():
-        node_1khz = label in targets and _row_at(targets[label]['rows'], 1000.0)
-        if node_1khz and relay_1khz:
+        node_1khz = _row_at(targets[label]['rows'], 1000.0) if label in targets else None
+        if node_1khz is not None and relay_1khz:
             ratio = node_1khz['cpu_percent'] / relay_1khz['cpu_percent']
             lines.append(f'- {label}: CPU at 1 kHz ≤ {factor:g}× the fast relay\'s: '
                          f'{node_1khz["cpu_percent"]:.1f} / {relay_1khz["cpu_percent"]:.1f} % '

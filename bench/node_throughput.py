@@ -69,10 +69,9 @@ NODE_ARGS = ['--ros-args', '-p', 'scene:=strapdown']
 #: The targets measured when ``--targets`` is not given.
 DEFAULT_TARGETS = ('node', 'relay', 'fast_relay')
 #: ``node_full``: the node with the whole real-IMU front end besides levelling (which needs
-#: ``--imu-accel``): a mount and a calibration file (``{calibration}``: :data:`CALIBRATION`,
-#: written to a temporary folder); ``node_nocov`` is the same without the covariance.
-FULL_NODE_ARGS = ['-p', 'mount_rpy:=[0.02, -0.03, 1.5707963]',
-                  '-p', 'calibration_file:={calibration}']
+#: ``--imu-accel``): this mount and a calibration file (:data:`CALIBRATION`, written to a
+#: temporary folder); ``node_nocov`` is the same without the covariance.
+FULL_NODE_MOUNT_RPY = '[0.02, -0.03, 1.5707963]'
 #: A plain calibration file (``rigid_body_attitude.core.calibration``): gyro bias, scale and
 #: misalignment, applied by the node's inline affine map.
 CALIBRATION = ('bias: [0.001, -0.002, 0.0005]\nscale: [1.01, 0.99, 1.0]\n'
@@ -176,7 +175,8 @@ def default_targets(calibration: Path) -> Dict[str, List[str]]:
         node = [python, '-m', 'rigid_body_attitude.ros.serve'] + NODE_ARGS
     if node is not None:
         calibration.write_text(CALIBRATION)
-        full = node + [word.format(calibration=calibration) for word in FULL_NODE_ARGS]
+        full = node + ['-p', f'mount_rpy:={FULL_NODE_MOUNT_RPY}',
+                       '-p', f'calibration_file:={calibration}']
         targets.update(node=node, node_full=full,
                        node_nocov=full + ['-p', 'covariance:=false'])
     targets['relay'] = [python, str(BENCH / 'relay.py')]
