@@ -40,7 +40,7 @@ from rigid_body_attitude.msgs.cdr import (
     transform_encoder)
 from rigid_body_attitude.ros.log_queue import LogQueue
 from rigid_body_attitude.ros.qos import OUTPUT_QOS, TF_QOS
-from rigid_body_attitude.session.outputs import OutputSample
+from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
 from rigid_body_attitude.session.uncertainty import pose_covariance
 
@@ -123,8 +123,7 @@ class RosOutputs:
         self.hardware_id = ''
         #: ``/tf`` (:meth:`enable_tf`), or None.
         self.tf_raw: RawOutput | None = None
-        self.tf_period_ns = 0
-        self._tf_due_ns = self._tf_last_ns = 0
+        self.tf_limiter = StampRateLimiter(0.0)
         #: Where :meth:`log` puts its lines (started by the node).
         self.log_queue = LogQueue(node.get_logger())
 
@@ -133,17 +132,14 @@ class RosOutputs:
         second of stamps (0: with every output)."""
         self.tf = self.node.create_publisher(TFMessage, '/tf', TF_QOS)
         self.tf_raw = RawOutput(self.tf)
-        self.tf_period_ns = round(1e9 / tf_rate) if tf_rate > 0.0 else 0
+        self.tf_limiter = StampRateLimiter(tf_rate)
 
     def _publish_tf(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
-        """The transform at ``(sec, nanosec)`` if one is due (or the stamps went back)."""
-        stamp_ns = sec * 1_000_000_000 + nanosec
-        if stamp_ns < self._tf_due_ns and stamp_ns >= self._tf_last_ns:
-            return
+        """The transform at ``(sec, nanosec)`` if one is due (:class:`StampRateLimiter`)."""
         tf = self.tf_raw
-        if tf is not None and tf.subscription_count():
+        if (tf is not None and tf.subscription_count()
+                and self.tf_limiter.due(sec * 1_000_000_000 + nanosec)):
             tf.publish(self.encode_tf(sec, nanosec, attitude))
-            self._tf_due_ns, self._tf_last_ns = stamp_ns + self.tf_period_ns, stamp_ns
 
     def _publisher(self, message_type: Any, topic: str) -> Any:
         return self.node.create_publisher(

@@ -20,6 +20,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import uninstall_signal_handlers
 
+from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
@@ -131,6 +132,7 @@ def spin(node: AttitudePropagatorNode) -> None:
         raise rest.failures[0]
 
 
+@closed_pipe_safe
 def main(args: list[str] | None = None) -> int:
     """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2.
 

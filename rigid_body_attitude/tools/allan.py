@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.bag import BagReader
 from rigid_body_attitude.msgs import IMU, imu_acceleration, imu_rates
 from rigid_body_attitude.core.errors import AttitudeError, InputError
@@ -238,6 +239,7 @@ def _parse(argv: Sequence[str] | None) -> argparse.Namespace:
     return parser.parse_args(argv)
 
 
+@closed_pipe_safe
 def main(argv: Sequence[str] | None = None) -> int:
     """Console entry point; returns 0, or 2 with one ``error:`` line."""
     try:

@@ -14,6 +14,7 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
+from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.tools.campaign.engine import CampaignResult, run_campaign
 from rigid_body_attitude.tools.campaign.fleet import find_bags, format_table, replay_fleet
@@ -112,6 +113,7 @@ def _fleet(argv: list[str]) -> int:
     return 0
 
 
+@closed_pipe_safe
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point: 0 on success, 2 with ``error: ...`` for unusable input."""
     try:

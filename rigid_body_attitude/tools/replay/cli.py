@@ -21,6 +21,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.bag import STORAGES
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.session.parameters import Parameter
@@ -242,6 +243,7 @@ def _replay_many(args: argparse.Namespace) -> int:
     return 0
 
 
+@closed_pipe_safe
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry point: 0 on success, 1 with ``error: ...`` for unusable input."""
     args = parser().parse_args(argv)

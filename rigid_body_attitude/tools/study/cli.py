@@ -14,6 +14,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.tools.study.cases import CASES, TARGETS, case_jobs
 from rigid_body_attitude.tools.study.figure import write_figure
 from rigid_body_attitude.tools.study.report import target_costs, write_csv, write_markdown
@@ -54,6 +55,7 @@ def _summary(rows: Sequence[Row], case: str) -> str:
             f'scipy DOP853 {1e3 * scipy_cost:.3g} ms/s{ratio}')
 
 
+@closed_pipe_safe
 def main(argv: Sequence[str] | None = None) -> int:
     """Console entry point; returns 0, or 2 with an ``error:`` line for bad arguments."""
     try:
