@@ -1,7 +1,7 @@
 # rigid_body_attitude: set-up, run and test without a ROS install.
 #
 #   make run    create/update .venv, then start the propagation node with the default scene
-#   make test   create/update .venv, then run the whole test suite
+#   make test   the same, plus the test tools (requirements-test.txt), then run the whole suite
 #
 # .venv holds Python 3.12 or 3.11 (the versions the ROS 2 Jazzy wheels are built for), the
 # pinned ROS 2 Jazzy wheels and tools (requirements.txt), tf2_msgs built from its interface
@@ -46,6 +46,8 @@ VENV_MARKER := $(VENV)/.python-$(PYTHON_VERSION)
 VENV_PYTHON := $(VENV)/bin/python
 REQUIREMENTS := requirements.txt requirements-build.txt
 REQUIREMENTS_STAMP := $(VENV)/.requirements.stamp
+TEST_REQUIREMENTS := requirements-test.txt
+TEST_REQUIREMENTS_STAMP := $(VENV)/.test-requirements.stamp
 PACKAGE_STAMP := $(VENV)/.package.stamp
 STAGE_DIR := $(VENV)/.stage
 PACKAGE := rigid_body_attitude
@@ -101,11 +103,11 @@ run: install
 # -P: the working directory is not put on sys.path, so the tests import the installed package.
 # A subset: make test TESTS=test/test_packaging.py ARGS='-x -q'.
 TESTS ?= test
-test: install
+test: install $(TEST_REQUIREMENTS_STAMP)
 	$(VENV_PYTHON) -P -m pytest $(TESTS) $(ARGS)
 
 # The same paths as test/test_flake8.py.
-lint: install
+lint: install $(TEST_REQUIREMENTS_STAMP)
 	$(VENV_PYTHON) -m flake8 $(PACKAGE) test $(wildcard bench) setup.py scripts/ros2run
 
 install: $(TF2_MSGS_STAMP) $(PACKAGE_STAMP)
@@ -123,6 +125,11 @@ $(VENV_MARKER):
 
 $(REQUIREMENTS_STAMP): $(REQUIREMENTS) $(VENV_MARKER)
 	$(PIP_INSTALL) $(addprefix -r ,$(REQUIREMENTS))
+	touch $@
+
+# The test tools, on top of what running needs (make test, make lint).
+$(TEST_REQUIREMENTS_STAMP): $(TEST_REQUIREMENTS) $(REQUIREMENTS_STAMP)
+	$(PIP_INSTALL) -r $(TEST_REQUIREMENTS) -c requirements.txt
 	touch $@
 
 # The project include drops the include folders of the wheels' build machine from the imported

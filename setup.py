@@ -94,7 +94,7 @@ setup(
     ],
     install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags', 'apsw', 'matplotlib', 'tqdm',
                       'allantools', 'dask[distributed]', 'pyarrow'],
-    python_requires='>=3.10',
+    python_requires='>=3.11, <3.13',
     zip_safe=True,
     maintainer='rigid_body_attitude developers',
     maintainer_email='dev@rigid-body-attitude.invalid',

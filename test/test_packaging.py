@@ -47,14 +47,15 @@ SHELL_PACKAGES = {'ros'}
 REQUIRED_EXEC_DEPENDS = {
     'rclpy', 'rcl_interfaces', 'geometry_msgs', 'sensor_msgs', 'std_msgs', 'diagnostic_msgs',
     'std_srvs', 'python3-numpy', 'python3-yaml', 'python3-scipy', 'python3-matplotlib',
-    'python3-tqdm',
+    'python3-tqdm', 'python3-rosbags-pip',
 }
 #: Third-party modules → the rosdep key that provides them (a ROS package: its own name).
 ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'python3-yaml',
-               'matplotlib': 'python3-matplotlib', 'tqdm': 'python3-tqdm'}
+               'matplotlib': 'python3-matplotlib', 'tqdm': 'python3-tqdm',
+               'rosbags': 'python3-rosbags-pip'}
 #: Modules that rosdistro's rosdep/python.yaml has no key for → their pip distribution: pinned
-#: in requirements.txt and named in a comment of package.xml.
-WITHOUT_ROSDEP_KEY = {'rosbags': 'rosbags', 'apsw': 'apsw', 'dask': 'dask',
+#: in requirements.txt, named in a comment of package.xml and in docs/setup.md's pip line.
+WITHOUT_ROSDEP_KEY = {'apsw': 'apsw', 'dask': 'dask',
                       'distributed': 'distributed', 'pyarrow': 'pyarrow',
                       'allantools': 'allantools'}
 REQUIRED_TEST_DEPENDS = {'python3-pytest'}
@@ -316,14 +317,28 @@ def test_every_import_of_the_package_is_a_declared_dependency():
     assert missing == []
 
 
+def test_the_ros_install_pip_line_pins_every_module_without_a_rosdep_key():
+    """docs/setup.md's one pip line, after ``rosdep install``, installs the rest, at the
+    versions requirements.txt pins."""
+    setup_md = (REPO_ROOT / 'docs' / 'setup.md').read_text()
+    lines = [line for line in setup_md.splitlines() if 'pip install' in line and '==' in line]
+    assert len(lines) == 1, lines
+    named = dict(word.split('==') for word in lines[0].split() if '==' in word)
+    pinned = dict(line.split('==') for line in
+                  (REPO_ROOT / 'requirements.txt').read_text().splitlines()
+                  if '==' in line and not line.startswith('#'))
+    assert set(named) == set(WITHOUT_ROSDEP_KEY.values())
+    assert all(named[name] == pinned[name] for name in named)
+
+
 def test_an_undeclared_import_is_reported():
     package_xml = ('<package><exec_depend>python3-numpy</exec_depend>'
-                   '<exec_depend>rclpy</exec_depend><!-- rosbags: pip --></package>')
+                   '<exec_depend>rclpy</exec_depend><!-- apsw: pip --></package>')
     imports = {'numpy': {'a.py'}, 'rclpy': {'b.py'}, 'rosbags': {'c.py'}, 'apsw': {'c.py'},
-               'pandas': {'d.py'}, 'std_srvs': {'e.py'}}
-    missing = undeclared_imports(imports, package_xml, 'rosbags==1.0\napsw==2.0\n',
+               'dask': {'f.py'}, 'pandas': {'d.py'}, 'std_srvs': {'e.py'}}
+    missing = undeclared_imports(imports, package_xml, 'apsw==2.0\ndask==1.0\n',
                                  lambda name: name in {'rclpy', 'std_srvs'})
-    assert [entry.split(' ')[0] for entry in missing] == ['apsw', 'pandas', 'std_srvs']
+    assert [entry.split(' ')[0] for entry in missing] == ['dask', 'pandas', 'rosbags', 'std_srvs']
 
 
 def test_core_module_discovery_finds_the_core_and_leaves_out_shells():
