@@ -40,7 +40,7 @@ def rest_imus(count, rng, start=0):
 
 
 @pytest.mark.parametrize('absurd', [(1e200, 0.0, 0.0), (0.0, -1e155, 0.0),
-                                    (0.0, 0.0, 1.5 * SPECIFIC_FORCE_LIMIT)])
+                                    (0.0, 0.0, 1e154), (0.0, 0.0, 1.5 * SPECIFIC_FORCE_LIMIT)])
 def test_one_absurd_specific_force_is_refused_and_levelling_keeps_the_tilt(open_scene, clocks,
                                                                            absurd):
     session, sink = open_scene('strapdown')
@@ -53,8 +53,9 @@ def test_one_absurd_specific_force_is_refused_and_levelling_keeps_the_tilt(open_
     assert rejected['accel_out_of_range'] == 1
     assert rejected['internal_error'] == 0
     assert session.alignment_done and session.alignment.at_rest
-    # The clean samples' tilt: σ 0.03 m/s² over 200 samples gives ~1e-4 rad.
-    assert math.degrees(tilt_angle(session.alignment.attitude, TRUTH)) < 0.02
+    # The clean samples' tilt: σ 0.03 m/s² over 200 samples, 2.2e-4 rad per axis; 0.05 deg is
+    # 4 σ.
+    assert math.degrees(tilt_angle(session.alignment.attitude, TRUTH)) < 0.05
     assert sink.attitudes
     assert any('accelerometer' in text and 'out of range' in text for _, text in sink.logs)
 
@@ -66,7 +67,7 @@ def test_non_finite_specific_force_is_refused_as_non_finite(open_scene):
         handle(encode_imu(stamp, 'imu_link', rate, (math.nan, 0.0, G) if k == 30 else acc))
     rejected = session.rejection_counts()
     assert rejected['non_finite'] == 1 and rejected['internal_error'] == 0
-    assert math.degrees(tilt_angle(session.alignment.attitude, TRUTH)) < 0.02
+    assert math.degrees(tilt_angle(session.alignment.attitude, TRUTH)) < 0.05
 
 
 def test_a_stream_of_absurd_samples_says_why_nothing_levels(open_scene, clocks):
@@ -89,7 +90,7 @@ def test_a_stream_of_absurd_samples_says_why_nothing_levels(open_scene, clocks):
     for stamp, rate, acc in rest_imus(400, random.Random(10), start=1000):
         handle(encode_imu(stamp, 'imu_link', rate, acc))
     assert session.alignment_done and session.alignment.at_rest
-    assert math.degrees(tilt_angle(session.alignment.attitude, TRUTH)) < 0.02
+    assert math.degrees(tilt_angle(session.alignment.attitude, TRUTH)) < 0.05
     assert session.rejection_counts()['internal_error'] == 0
 
 

@@ -138,8 +138,11 @@ def test_missed_samples_are_counted_from_the_learnt_period():
     stream.settle()  # now its median is the period
     assert stream.missed_samples == 6
     last += 14.0
-    feed(stream, [last + 80.0, last + 81.0, last + 82.0])  # a confirmed gap of 80 periods
+    feed(stream, [last + 80.0, last + 81.0, last + 82.0])  # a step of 80 periods
+    stream.settle()
     assert stream.missed_samples == 6 + 79
+    feed(stream, [last + 300.0, last + 301.0, last + 302.0])  # a confirmed gap (> max_dt)
+    assert stream.missed_samples == 6 + 79 + 217
 
 
 def test_receive_times_count_no_missed_samples():
