@@ -255,7 +255,8 @@ class Session(ABC):
             accepted=accepted - accepted0, accepted_total=accepted, received_total=received,
             rejections=rejections,
             new_rejections=rejections - rejections0, missed=missed - missed0,
-            missed_total=missed, missed_cause=self.missed_cause(), malformed_by_topic=Counter(self.malformed_by_topic),
+            missed_total=missed, missed_cause=self.missed_cause(),
+            malformed_by_topic=Counter(self.malformed_by_topic),
             gyro_scene=isinstance(self.propagator, GyroPropagator))
         self._timing(counts)
         self.last_input_rate = counts.accepted / counts.elapsed

@@ -263,8 +263,7 @@ class GyroSession(ImuStart):
         return self.stream.accepted + self.poses_accepted + self._align_samples
 
     def missed_count(self) -> int:
-        """Samples lost upstream so far (from the stamp spacing; the steps since the last
-        batch are counted when they agree with the period)."""
+        """Samples lost upstream so far (from the stamp spacing, :meth:`GyroStream.settle`)."""
         self.stream.settle()
         return self.stream.missed_samples
 
@@ -273,10 +272,9 @@ class GyroSession(ImuStart):
         return self.stream.period.gaps_text()
 
     def malformed(self, topic: str, reason: str) -> None:
-        """A message that could not be decoded: a gyro sample received, never missed."""
+        """An undecodable message: on a gyro topic, a sample received (never missed)."""
         super().malformed(topic, reason)
-        if topic in ('imu', 'angular_velocity'):
-            self.stream.refused_samples += 1
+        self.stream.refused_samples += topic in ('imu', 'angular_velocity')
 
     def step_text(self) -> str:
         """``constant_dt`` when set, else the stamps."""

@@ -188,7 +188,7 @@ class ImuStart(Session):
         the levelling is returned (bias-corrected) as the integration's first sample."""
         levelling = self.levelling
         assert levelling is not None
-        reason = self._sample_problem(rate, accel)
+        reason = _sample_problem(rate, accel, self.stream.max_rate_squared)
         if reason:
             self._refused_levelling += 1
             self._refuse(reason, ' (while levelling)')
@@ -215,22 +215,6 @@ class ImuStart(Session):
         self.rejections[reason] += 1
         self.stream.refused_samples += 1
         self.warn(reason, f'gyro: {REJECTION_DETAIL[reason]}{context}')
-
-    def _sample_problem(self, rate: Sequence[float], accel: Sequence[float]) -> str:
-        """``'non_finite'``, ``'out_of_range'`` (rate), ``'accel_out_of_range'`` or ``''``
-        for a sample to level with."""
-        try:
-            wx, wy, wz = (float(value) for value in rate)
-        except (TypeError, ValueError):
-            return 'non_finite'
-        if not math.isfinite(wx + wy + wz):
-            return 'non_finite'
-        reason = _accel_problem(accel)
-        if reason:
-            return reason
-        if not wx * wx + wy * wy + wz * wz <= self.stream.max_rate_squared:
-            return 'out_of_range'
-        return ''
 
     def _aligned(self, result: AlignmentResult) -> None:
         """Levelling done: the levelled attitude is the initial state; the bias is set."""
@@ -305,6 +289,24 @@ class ImuStart(Session):
             self.levelling.refine_bias_at_rest) else ''
         text = f'{_vector_text(self.sample_map.gyro_bias)} (levelling{refined})'
         return text if scene_bias == 'none' else f'{text}; scene gyro_bias {scene_bias}'
+
+
+def _sample_problem(rate: Sequence[float], accel: Sequence[float],
+                    max_rate_squared: float) -> str:
+    """``'non_finite'``, ``'out_of_range'`` (rate), ``'accel_out_of_range'`` or ``''`` for a
+    sample to level with."""
+    try:
+        wx, wy, wz = (float(value) for value in rate)
+    except (TypeError, ValueError):
+        return 'non_finite'
+    if not math.isfinite(wx + wy + wz):
+        return 'non_finite'
+    reason = _accel_problem(accel)
+    if reason:
+        return reason
+    if not wx * wx + wy * wy + wz * wz <= max_rate_squared:
+        return 'out_of_range'
+    return ''
 
 
 def _accel_problem(accel: Sequence[float]) -> str:

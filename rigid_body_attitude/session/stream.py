@@ -37,8 +37,9 @@ Gyro samples (:class:`GyroStream`)
       disagree on the median by more than 25 %, or whose period differs from the last by as
       much (the driver restarted at another rate), re-learns the period and drops its own and
       the last batch's counts: the period always comes from the latest steps, so it can never
-      stay locked on a wrong value. A confirmed forward gap counts at once. :meth:`GyroStream.settle` counts
-      a partial batch (at each diagnostics report) when its median agrees with the period.
+      stay locked on a wrong value. A confirmed forward gap counts at once.
+      :meth:`GyroStream.settle` counts a partial batch (at each diagnostics report) when its
+      median agrees with the period.
       They are counted in :attr:`GyroStream.missed_samples`.
 
 Commanded inputs (:class:`CommandStream`): not 3 finite numbers → ``non_finite``; a
