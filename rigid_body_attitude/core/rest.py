@@ -22,6 +22,14 @@ above its floor for a whole window, so neither the tap nor the window after it i
 confirms: it is fed :attr:`RestDetector.delayed_gyro`, the oldest sample of a quiet window
 (quiet samples on both sides of it), so the first samples of a motion never enter the
 estimate even though the detector notices the motion a few samples late.
+
+Bounded arithmetic: :meth:`RestDetector.update` takes a sample only when its rate is at most
+:data:`RATE_LIMIT` and its specific force at most :data:`SPECIFIC_FORCE_LIMIT` in magnitude
+(finite, so); any other is not added to the windowed sums and counts in
+:attr:`RestDetector.refused`. The sums of squares of a window then stay below ``n × 10¹²``
+and a sample dropped from the window leaves a round-off below ``10⁻⁴`` (rad/s)² or (m/s²)² in
+them, far below the noise floors the thresholds come from. Sessions refuse such samples before
+(counted by reason); the detector's own check keeps any other caller's sums finite.
 """
 
 from __future__ import annotations
@@ -31,8 +39,8 @@ from collections import deque
 
 from rigid_body_attitude.core.errors import InputError
 
-__all__ = ['DEFAULT_BIAS_TIME_CONSTANT', 'REFINE_BIAS_AT_REST', 'RestBiasEstimator',
-           'RestDetector', 'STANDARD_GRAVITY']
+__all__ = ['DEFAULT_BIAS_TIME_CONSTANT', 'RATE_LIMIT', 'REFINE_BIAS_AT_REST',
+           'RestBiasEstimator', 'RestDetector', 'SPECIFIC_FORCE_LIMIT', 'STANDARD_GRAVITY']
 
 Vec = tuple[float, float, float]
 #: [m/s²]
@@ -43,10 +51,19 @@ STANDARD_GRAVITY = 9.80665
 #: 2.022 deg, but over the four trials the mean errors add up to 9.39 deg against 8.87 deg
 #: with the alignment window's bias, so it is off by default.
 REFINE_BIAS_AT_REST = False
+#: Largest specific-force magnitude of a sample [m/s²], about 1020 g: far above the full scale
+#: of any IMU accelerometer (MEMS parts end at ±16 g to ±400 g, e.g. the ADXL375's ±200 g),
+#: far below values whose square could lose the rest of a window's sums.
+SPECIFIC_FORCE_LIMIT = 1.0e4
+#: Largest rate magnitude the rest detector takes [rad/s] (the upper bound of the
+#: ``max_angular_rate`` parameter).
+RATE_LIMIT = 1.0e6
 #: Time constant of :class:`RestBiasEstimator` [s].
 DEFAULT_BIAS_TIME_CONSTANT = 60.0
 #: Samples between two recomputations of the running sums from the window (round-off).
 _RESUM_INTERVAL = 4096
+_RATE_LIMIT_SQUARED = RATE_LIMIT * RATE_LIMIT
+_SPECIFIC_FORCE_LIMIT_SQUARED = SPECIFIC_FORCE_LIMIT * SPECIFIC_FORCE_LIMIT
 
 
 def _positive(name: str, value: float) -> float:
@@ -86,6 +103,9 @@ class RestDetector:
         self._accel_bounds = (math.sqrt(3.0) * _positive('min_accel_noise', min_accel_noise),
                               math.sqrt(3.0) * _positive('max_accel_noise', max_accel_noise))
         self._bias: Vec = (0.0, 0.0, 0.0)
+        #: Samples not taken: non-finite or beyond :data:`RATE_LIMIT` /
+        #: :data:`SPECIFIC_FORCE_LIMIT` (module docstring).
+        self.refused = 0
         self.reset()
 
     def reset(self) -> None:
@@ -133,7 +153,12 @@ class RestDetector:
     def update(self, wx: float, wy: float, wz: float, ax: float, ay: float, az: float,
                dt: float) -> bool:
         """Add one sample (rates [rad/s], specific force [m/s²], its interval [s]); returns
-        :attr:`at_rest`."""
+        :attr:`at_rest` (unchanged for a refused sample, see :attr:`refused`)."""
+        if not (wx * wx + wy * wy + wz * wz <= _RATE_LIMIT_SQUARED
+                and ax * ax + ay * ay + az * az <= _SPECIFIC_FORCE_LIMIT_SQUARED
+                and 0.0 <= dt < math.inf):  # NaN and Inf fail too
+            self.refused += 1
+            return self.at_rest
         window, s = self._window, self._sums
         window.append((wx, wy, wz, ax, ay, az, dt))
         self._duration += dt

@@ -235,6 +235,10 @@ class Session(ABC):
         """Samples lost upstream so far."""
         return 0
 
+    def missed_cause(self) -> str:
+        """What the samples missed since the last call look like, and their likely cause."""
+        return ''
+
     def publish_diagnostics(self) -> None:
         """Hand the period's report to the sink and start a new period."""
         self.sink.diagnostics(self.report())
@@ -251,7 +255,8 @@ class Session(ABC):
             accepted=accepted - accepted0, accepted_total=accepted, received_total=received,
             rejections=rejections,
             new_rejections=rejections - rejections0, missed=missed - missed0,
-            missed_total=missed, malformed_by_topic=Counter(self.malformed_by_topic),
+            missed_total=missed, missed_cause=self.missed_cause(),
+            malformed_by_topic=Counter(self.malformed_by_topic),
             gyro_scene=isinstance(self.propagator, GyroPropagator))
         self._timing(counts)
         self.last_input_rate = counts.accepted / counts.elapsed

@@ -217,6 +217,7 @@ class GyroSession(ImuStart):
         return self._output_sec, self._output_nanosec
 
     def _bad_stamp(self, sec: int, nanosec: int) -> bool:
+        self.stream.refused_samples += 1  # received: never counted as missed
         if sec == 0 and nanosec == 0:
             self.rejections['zero_stamp'] += 1
             self.warn('zero_stamp', 'gyro: a zero header stamp; sample ignored (unstamped '
@@ -262,8 +263,18 @@ class GyroSession(ImuStart):
         return self.stream.accepted + self.poses_accepted + self._align_samples
 
     def missed_count(self) -> int:
-        """Samples lost upstream so far (from the stamp spacing)."""
+        """Samples lost upstream so far (from the stamp spacing, :meth:`GyroStream.settle`)."""
+        self.stream.settle()
         return self.stream.missed_samples
+
+    def missed_cause(self) -> str:
+        """The gaps counted since the last call, with their likely cause."""
+        return self.stream.period.gaps_text()
+
+    def malformed(self, topic: str, reason: str) -> None:
+        """An undecodable message: on a gyro topic, a sample received (never missed)."""
+        super().malformed(topic, reason)
+        self.stream.refused_samples += topic in ('imu', 'angular_velocity')
 
     def step_text(self) -> str:
         """``constant_dt`` when set, else the stamps."""

@@ -19,6 +19,7 @@ import numpy as np
 
 from rigid_body_attitude.core.calibration import load_calibration
 from rigid_body_attitude.core.propagator import GyroPropagator
+from rigid_body_attitude.core.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
 from rigid_body_attitude.session.levelling import (
     FROM_SCENE, AlignmentResult, Levelling, SampleMap, heading, rpy_quaternion)
@@ -31,8 +32,11 @@ __all__ = ['ImuStart', 'REJECTION_DETAIL']
 
 #: Why a gyro sample was ignored, by rejection reason (the warning texts).
 REJECTION_DETAIL = {
-    'non_finite': 'a non-finite rate (NaN or Inf); sample ignored',
+    'non_finite': 'a non-finite rate or specific force (NaN or Inf); sample ignored',
     'out_of_range': 'a rate above max_angular_rate; sample ignored',
+    'accel_out_of_range': f'an accelerometer specific force out of range (above '
+                          f'{SPECIFIC_FORCE_LIMIT:g} m/s², beyond any accelerometer); sample '
+                          f'ignored',
     'stale_stamp': 'a stamp not newer than the last one; sample ignored',
     'outlier_stamp': 'a stamp off the time line that the next samples did not confirm; '
                      'ignored',
@@ -41,6 +45,7 @@ REJECTION_DETAIL = {
 }
 _NO_ACCELEROMETER = ('not levelled: no accelerometer data (angular_velocity input or zero '
                      'linear_acceleration); initial attitude from the scene or set_pose')
+_SPECIFIC_FORCE_LIMIT_SQUARED = SPECIFIC_FORCE_LIMIT * SPECIFIC_FORCE_LIMIT
 _LEVELLING_OFF = ('not levelled: align_seconds is 0; initial attitude from the scene or '
                   'set_pose')
 
@@ -85,6 +90,7 @@ class ImuStart(Session):
         self._affine: tuple[float, ...] | None = None
         self._told_no_accelerometer = False
         self._align_samples = 0
+        self._refused_levelling = 0
 
     def calibration_noise(self) -> dict[str, float]:
         """The noise densities the calibration file gives (kalibr names; empty without a
@@ -101,6 +107,7 @@ class ImuStart(Session):
         if self.levelling is None:
             return
         self.levelling.reset()
+        self._refused_levelling = 0
         self.propagator.scene = self.scene
         self.sample_map.set_gyro_bias((0.0, 0.0, 0.0))
         self.alignment = None
@@ -153,6 +160,12 @@ class ImuStart(Session):
             else:
                 return self._levelling_sample(sec * NANOSECONDS_PER_SECOND + nanosec, rate,
                                               accel)
+        if accel is not None and (self.sample_map.uses_accelerometer or (
+                self.levelling is not None and self.levelling.refine_bias_at_rest)):
+            reason = _accel_problem(accel)
+            if reason:  # the accelerometer takes part: refused before it changes anything
+                self._refuse(reason, '')
+                return None
         try:
             body_rate, body_accel = self.sample_map.body_sample(rate, accel)
         except (TypeError, ValueError):
@@ -175,17 +188,17 @@ class ImuStart(Session):
         the levelling is returned (bias-corrected) as the integration's first sample."""
         levelling = self.levelling
         assert levelling is not None
-        reason = self._sample_problem(rate, accel)
+        reason = _sample_problem(rate, accel, self.stream.max_rate_squared)
         if reason:
-            self.rejections[reason] += 1
-            self.warn(reason, f'gyro: {REJECTION_DETAIL[reason]} (while levelling)')
+            self._refused_levelling += 1
+            self._refuse(reason, ' (while levelling)')
             return None
         stream = self.stream
         dt = levelling.interval(stamp_ns, stream.max_dt_ns, stream.threshold_ns,
                                 stream.constant_dt)
         if dt is None:
-            self.rejections['stale_stamp'] += 1
-            self.warn('stale_stamp', f'gyro: {REJECTION_DETAIL["stale_stamp"]} (while levelling)')
+            self._refused_levelling += 1
+            self._refuse('stale_stamp', ' (while levelling)')
             return None
         body_rate, body_accel = self.sample_map.body_sample(rate, accel)
         assert body_accel is not None
@@ -196,18 +209,12 @@ class ImuStart(Session):
         b = self.sample_map.gyro_bias
         return body_rate[0] - b[0], body_rate[1] - b[1], body_rate[2] - b[2]
 
-    def _sample_problem(self, rate: Sequence[float], accel: Sequence[float]) -> str:
-        """``'non_finite'``, ``'out_of_range'`` or ``''`` for a sample to level with."""
-        try:
-            wx, wy, wz = (float(value) for value in rate)
-            ax, ay, az = (float(value) for value in accel)
-        except (TypeError, ValueError):
-            return 'non_finite'
-        if not math.isfinite(wx + wy + wz + ax + ay + az):
-            return 'non_finite'
-        if not wx * wx + wy * wy + wz * wz <= self.stream.max_rate_squared:
-            return 'out_of_range'
-        return ''
+    def _refuse(self, reason: str, context: str) -> None:
+        """A sample refused by the session before the stream saw it: counted by ``reason``,
+        warned about (throttled), and told to the stream (never counted as missed)."""
+        self.rejections[reason] += 1
+        self.stream.refused_samples += 1
+        self.warn(reason, f'gyro: {REJECTION_DETAIL[reason]}{context}')
 
     def _aligned(self, result: AlignmentResult) -> None:
         """Levelling done: the levelled attitude is the initial state; the bias is set."""
@@ -254,6 +261,10 @@ class ImuStart(Session):
     def alignment_text(self) -> str:
         """The alignment state in words (the diagnostics' ``alignment`` value)."""
         if self._aligning:
+            if self.levelling is not None and not self.levelling.samples and (
+                    self._refused_levelling):
+                return (f'aligning: no usable sample yet ({self._refused_levelling} refused, '
+                        f'see the rejected counts)')
             if self.levelling is None or not self.levelling.samples:
                 return 'not started: no gyro sample yet'
             return f'aligning: {self.levelling.status}'
@@ -262,7 +273,8 @@ class ImuStart(Session):
     def strapdown_state(self) -> StrapdownState:
         """The alignment and the bias estimate for the reports (levelling: WARN, nothing is
         integrated yet)."""
-        levelling = self._aligning and self.levelling is not None and self.levelling.samples > 0
+        levelling = self._aligning and self.levelling is not None and (
+            self.levelling.samples > 0 or self._refused_levelling > 0)
         return StrapdownState(self.alignment_text(), self.bias_text(), levelling)
 
     def bias_text(self) -> str:
@@ -277,6 +289,42 @@ class ImuStart(Session):
             self.levelling.refine_bias_at_rest) else ''
         text = f'{_vector_text(self.sample_map.gyro_bias)} (levelling{refined})'
         return text if scene_bias == 'none' else f'{text}; scene gyro_bias {scene_bias}'
+
+
+def _sample_problem(rate: Sequence[float], accel: Sequence[float],
+                    max_rate_squared: float) -> str:
+    """``'non_finite'``, ``'out_of_range'`` (rate), ``'accel_out_of_range'`` or ``''`` for a
+    sample to level with."""
+    try:
+        wx, wy, wz = (float(value) for value in rate)
+    except (TypeError, ValueError):
+        return 'non_finite'
+    if not math.isfinite(wx + wy + wz):
+        return 'non_finite'
+    reason = _accel_problem(accel)
+    if reason:
+        return reason
+    if not wx * wx + wy * wy + wz * wz <= max_rate_squared:
+        return 'out_of_range'
+    return ''
+
+
+def _accel_problem(accel: Sequence[float]) -> str:
+    """``'non_finite'``, ``'accel_out_of_range'`` (a magnitude above
+    :data:`~rigid_body_attitude.core.rest.SPECIFIC_FORCE_LIMIT`) or ``''`` for a specific
+    force [m/s²]."""
+    try:
+        ax, ay, az = (float(value) for value in accel)
+    except (TypeError, ValueError):
+        return 'non_finite'
+    if not math.isfinite(ax + ay + az):
+        return 'non_finite'
+    # Each component first: a square that overflows is out of range, never NaN.
+    if not (abs(ax) <= SPECIFIC_FORCE_LIMIT and abs(ay) <= SPECIFIC_FORCE_LIMIT
+            and abs(az) <= SPECIFIC_FORCE_LIMIT
+            and ax * ax + ay * ay + az * az <= _SPECIFIC_FORCE_LIMIT_SQUARED):
+        return 'accel_out_of_range'
+    return ''
 
 
 def _vector_text(vector: Sequence[float]) -> str:

@@ -56,15 +56,16 @@ DRIFT_ERROR_THRESHOLD = 1e-3
 
 #: Rejection counters reported, in order: the stream reasons, the session's own (malformed
 #: messages, invalid or zero stamps, poses), expired commands, refused integrations, gyro
-#: samples dropped without a mount and commands superseded by a newer one before use.
+#: samples dropped without a mount, commands superseded by a newer one before use and
+#: Imu samples whose specific force is beyond any accelerometer's range.
 REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
                   'wrong_frame', 'stale_torque', 'integration_failed', 'non_finite_result',
-                  'internal_error', 'no_mount', 'superseded')
+                  'internal_error', 'no_mount', 'superseded', 'accel_out_of_range')
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
                 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame',
-                'no_mount')
+                'no_mount', 'accel_out_of_range')
 ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
 
 #: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).
@@ -74,7 +75,6 @@ GOVERNING_PARAMETER = {
     'invalid_stamp': 'use_header_stamps', 'zero_stamp': 'use_header_stamps',
     'invalid_pose': 'world_frame', 'wrong_frame': 'world_frame',
     'integration_failed': 'integrator', 'non_finite_result': 'integrator',
-    'missed_samples': 'qos_overrides./imu.subscription.depth',
     'no_input': 'use_header_stamps', 'behind': 'step', 'no_mount': 'mount_rpy',
 }
 DYNAMICS_GOVERNING_PARAMETER = {
@@ -96,6 +96,7 @@ class PeriodCounts:
         new_rejections: rejections in the period by reason.
         missed: samples lost upstream in the period (gyro).
         missed_total: samples lost upstream so far.
+        missed_cause: what the gaps of the period look like and their likely cause.
         malformed_by_topic: malformed messages so far by topic.
         gyro_scene: the session integrates gyro samples (no input is then a problem).
         real_time_factor: dynamics: simulated seconds per second of work in the period
@@ -113,6 +114,7 @@ class PeriodCounts:
     received_total: int = 0
     missed: int = 0
     missed_total: int = 0
+    missed_cause: str = ''
     malformed_by_topic: Counter[str] = field(default_factory=Counter)
     gyro_scene: bool = False
     real_time_factor: float = float('inf')
@@ -218,10 +220,10 @@ def _input_problems(counts: PeriodCounts, parameters: Mapping[str, str]
                 problems.append(_governed(
                     f'{counts.new_rejections[reason]} {reason} in the last period', reason,
                     parameters))
-    if counts.missed:
+    if counts.missed:  # the cause (and the parameter, when one helps) in the session's words
         level = max(level, LEVEL_WARN)
-        problems.append(_governed(f'{counts.missed} samples missed upstream in the last '
-                                  f'period', 'missed_samples', parameters))
+        text = f'{counts.missed} samples missed upstream in the last period'
+        problems.append(f'{text}: {counts.missed_cause}' if counts.missed_cause else text)
     if counts.received and not counts.accepted:
         main = max(counts.new_rejections.items(), key=lambda item: item[1], default=('', 0))
         if main[0] not in WARN_REASONS + ERROR_REASONS:  # not named above already

@@ -85,8 +85,10 @@ def test_a_gyro_scene_without_input_warns_and_missed_samples_warn():
     assert silent.level == LEVEL_WARN and silent.message.startswith('no gyro input')
     missed = diagnostic_report(propagator, counts(gyro=True, missed=7, missed_total=9), '', 0.0)
     assert missed.level == LEVEL_WARN and missed.message == (
-        '7 samples missed upstream in the last period (parameter '
-        '`qos_overrides./imu.subscription.depth`)')
+        '7 samples missed upstream in the last period')
+    burst = diagnostic_report(propagator, counts(gyro=True, missed=7, missed_total=9,
+                                                 missed_cause='bursts'), '', 0.0)
+    assert burst.message == '7 samples missed upstream in the last period: bursts'
     assert report_values(missed)['missed_samples'] == '9'
 
 

@@ -133,11 +133,16 @@ def test_no_input_and_nothing_accepted_are_not_ok(open_scene, clocks):
 def test_missed_samples_raise_warn(open_scene, clocks):
     session, _ = open_scene('strapdown')
     feed(session, 100)
-    feed(session, 100, BASE_NS + 100 * MS, 2 * MS)  # then every other sample lost upstream
+    # Then 100 samples with every tenth lost upstream (a stream at the same rate, with holes).
+    stamps = [BASE_NS + (100 + k) * MS for k in range(111) if k % 10 != 9]
+    for stamp in stamps:
+        session.gyro(*split(stamp), OMEGA)
     clocks.monotonic = 1.0
     report = session.report()
-    assert dict(report.values)['missed_samples'] == '99'  # 99 steps of 2 ms
-    assert '99 samples missed upstream' in report.message
+    assert dict(report.values)['missed_samples'] == '11'
+    assert report.message.startswith('11 samples missed upstream in the last period: 11 gaps '
+                                     'of at most 1 samples'), report.message
+    assert 'a deeper input queue would not help' in report.message
 
 
 def test_receive_times_replace_stamps_and_reach_the_sink(open_scene, clocks):

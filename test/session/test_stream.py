@@ -15,7 +15,7 @@ from rigid_body_attitude.core import quaternion as quat
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
 from rigid_body_attitude.core.scene import scene_from_mapping
 from rigid_body_attitude.session.stream import (
-    ClockDriver, COMMAND_LIMIT, CommandStream, GyroStream, JUMP_CONFIRMATIONS, PERIOD_SAMPLES)
+    ClockDriver, COMMAND_LIMIT, CommandStream, GyroStream, JUMP_CONFIRMATIONS, PERIOD_BATCH)
 
 MAX_DT = 0.1
 JUMP = 1.0
@@ -126,17 +126,23 @@ def test_rates_above_the_bound_are_out_of_range_even_if_squaring_overflows():
 
 def test_missed_samples_are_counted_from_the_learnt_period():
     stream = gyro_stream()
-    offsets = [k * 1.0 for k in range(PERIOD_SAMPLES + 1)]  # 1 kHz: the period is learnt
-    feed(stream, offsets + [offsets[-1] + 0.9, offsets[-1] + 1.9])  # jitter: nothing missed
-    # The median of the first steps, then 1/64 of each later step's difference: 0.9 ms moves
-    # it by at most 0.1 ms / 64 per step.
-    assert stream.missed_samples == 0 and abs(stream.period.period_ns - MS) <= 2 * MS // 640
-    last = offsets[-1] + 1.9
+    offsets = [k * 1.0 for k in range(PERIOD_BATCH + 1)]  # 1 kHz: one batch learns the period
+    feed(stream, offsets)
+    assert stream.missed_samples == 0 and stream.period.period_ns == MS
+    last = offsets[-1]
     feed(stream, [last + 3.0])  # 2 lost
     feed(stream, [last + 4.0, last + 9.0])  # 4 lost
+    stream.settle()  # a partial batch of gaps alone: its median is not the period, it waits
+    assert stream.missed_samples == 0
+    feed(stream, [last + 10.0 + k for k in range(5)])
+    stream.settle()  # now its median is the period
     assert stream.missed_samples == 6
-    feed(stream, [last + 80.0, last + 81.0, last + 82.0])  # a confirmed gap of 71 periods
-    assert stream.missed_samples == 6 + 70
+    last += 14.0
+    feed(stream, [last + 80.0, last + 81.0, last + 82.0])  # a step of 80 periods
+    stream.settle()
+    assert stream.missed_samples == 6 + 79
+    feed(stream, [last + 300.0, last + 301.0, last + 302.0])  # a confirmed gap (> max_dt)
+    assert stream.missed_samples == 6 + 79 + 217
 
 
 def test_receive_times_count_no_missed_samples():
