@@ -22,7 +22,8 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import ParameterException, ParameterUninitializedException
+from rclpy.exceptions import (
+    InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
@@ -91,9 +92,11 @@ class AttitudeControllerNode(Node):
             try:
                 values[parameter.name] = ros_value(parameter, self.declare_parameter(
                     parameter.name, default, parameter_descriptor(parameter)).value)
-            except ParameterException as err:
+            except InvalidParameterTypeException as err:
                 raise InputError(f'Expected parameter `{parameter.name}` to be a '
                                  f'{parameter.type_text}: {str(err)[:200]}') from err
+            except ParameterException as err:
+                raise InputError(f'Bad parameter `{parameter.name}`: {str(err)[:200]}') from err
         return values
 
     def parameter_values(self) -> dict[str, Any]:
