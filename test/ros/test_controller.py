@@ -124,7 +124,7 @@ def test_controller_answers_a_pair_and_counts_hostile_inputs(ros, request, proce
     q = good.quaternion
     q.w, q.x, q.y, q.z = attitude
     twist_message = TwistStamped()
-    twist_message.header = good.header
+    twist_message.header.stamp.sec, twist_message.header.stamp.nanosec = 12, 340_000_000
     twist_message.header.frame_id = 'base_link'
     angular = twist_message.twist.angular
     angular.x, angular.y, angular.z = rate
