@@ -158,3 +158,32 @@ def test_closed_loop_on_the_propagator_converges_and_v_decreases():
     assert np.linalg.norm(propagator.state.omega_body) < 1e-3
     assert np.all(np.diff(values) < 0.0)
     assert values[-1] < 1e-5 * values[0]
+
+
+@pytest.mark.parametrize('delay_ticks, settled', [(0, 3.63), (1, 3.61), (2, 3.58)])
+def test_the_commanded_torque_box_settles_from_60_degrees(delay_ticks, settled):
+    # the reference of the closed-loop docs and of test/ros/test_controller.py: the shipped
+    # scene's box at rest 60° off, default gains, each 10 ms tick's torque held over a tick
+    # (applied ``delay_ticks`` ticks late); the last tick with an error ≥ 1° is just before
+    # ``settled``, and the largest torque component is kp · sin(30°) · 2/3 = 0.0333 N m
+    axis = np.array([1.0, 2.0, -2.0]) / 3.0
+    scene = scene_from_mapping({
+        'name': 'slew', 'rate_source': 'dynamics', 'integrator': 'rk4', 'step': 0.001,
+        'body': {'mass': 2.0, 'inertia': {'box': {'edges': [0.1, 0.2, 0.3], 'about': 'centre'}}},
+        'initial_state': {'attitude': quat.exp(math.radians(60.0) * axis).tolist(),
+                          'omega_body': [0.0, 0.0, 0.0]},
+        'effects': [{'commanded_torque': {'timeout': 0.5}}]})
+    propagator = DynamicsPropagator(scene)
+    queue, last_above, peak = [], 0.0, 0.0
+    for k in range(600):
+        state = propagator.state
+        if math.degrees(quat.attitude_error(state.attitude, IDENTITY)) >= 1.0:
+            last_above = k * 0.01
+        torque = pd_torque_body(state.attitude, state.omega_body, IDENTITY, 0.1, 0.04, 0.0)
+        peak = max(peak, float(np.max(np.abs(torque))))
+        queue.append(torque)
+        if len(queue) > delay_ticks:
+            propagator.command('torque', k * 0.01, queue.pop(0))
+        propagator.advance_to((k + 1) * 0.01)
+    assert last_above == pytest.approx(settled - 0.01, abs=1e-9)
+    assert peak == pytest.approx(0.1 * 0.5 * 2.0 / 3.0, rel=1e-12)
