@@ -49,6 +49,7 @@ EXECUTABLES = {
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
     'imu_noise': 'rigid_body_attitude.tools.allan:main',
     'campaign': 'rigid_body_attitude.tools.campaign:main',
+    'attitude_controller': 'rigid_body_attitude.ros.controller:main',
 }
 
 # Names that say what they belong to, for <prefix>/bin on a shared PATH.
@@ -58,6 +59,7 @@ ALIASES = {
     'rigid-body-attitude-study': 'rigid_body_attitude.tools.study:main',
     'rigid-body-attitude-imu-noise': 'rigid_body_attitude.tools.allan:main',
     'rigid-body-attitude-campaign': 'rigid_body_attitude.tools.campaign:main',
+    'rigid-body-attitude-controller': 'rigid_body_attitude.ros.controller:main',
 }
 
 

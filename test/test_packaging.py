@@ -38,6 +38,7 @@ EXECUTABLES = {
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
     'imu_noise': 'rigid_body_attitude.tools.allan:main',
     'campaign': 'rigid_body_attitude.tools.campaign:main',
+    'attitude_controller': 'rigid_body_attitude.ros.controller:main',
 }
 
 # rclpy is imported in one subpackage only: every other module must import without rclpy.

@@ -1,0 +1,231 @@
+"""The ``attitude_controller`` node: quaternion-feedback PD over ROS, an rclpy adapter.
+
+Subscribes (raw CDR, decoded by the package's checked decoders) to ``orientation``
+(geometry_msgs/QuaternionStamped, world_frame), ``twist`` (geometry_msgs/TwistStamped, the
+angular part in body_frame) and ``target`` (geometry_msgs/QuaternionStamped, world_frame), and
+publishes ``torque`` (geometry_msgs/WrenchStamped, body_frame, zero force) and
+``/diagnostics``. Remap ``orientation`` and ``twist`` to read an estimator instead of the
+plant's truth. Everything else (pairing by stamp, sample and hold, checks, counts) is
+:class:`~rigid_body_attitude.session.controller.ControllerSession`'s. QoS: inputs as the
+propagation node's commands, ``torque`` as its outputs (reliable, keep last;
+:mod:`~rigid_body_attitude.ros.qos`), so the two connect either way round.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from typing import Any
+
+import rclpy
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import (
+    InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.parameter import Parameter as RosParameter
+from rcl_interfaces.msg import SetParametersResult
+
+from rigid_body_attitude.core.errors import AttitudeError, InputError
+from rigid_body_attitude.msgs.cdr import encode_wrench_stamped
+from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_twist_stamped
+from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow, wants_help
+from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
+from rigid_body_attitude.ros.node import parameter_descriptor, ros_value
+from rigid_body_attitude.ros.serve import SERVING_LINE
+from rigid_body_attitude.ros.qos import COMMAND_QOS, OUTPUT_QOS
+from rigid_body_attitude.session.controller import ControllerSession
+from rigid_body_attitude.session.controller_parameters import (
+    CONTROLLER_PARAMETERS, check_controller_values)
+from rigid_body_attitude.session.reports import LEVEL_WARN
+from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD
+
+__all__ = ['AttitudeControllerNode', 'CONTROLLER_NODE_NAME', 'controller_usage', 'main']
+
+CONTROLLER_NODE_NAME = 'attitude_controller'
+_ZERO_FORCE = (0.0, 0.0, 0.0)
+_LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN}
+
+
+class AttitudeControllerNode(Node):
+    """Answers each tick's ``orientation`` and ``twist`` with a ``torque`` of the same stamp.
+
+    Keyword arguments go to :class:`rclpy.node.Node` (``context``, ``namespace``,
+    ``parameter_overrides``, ``cli_args``, ...), e.g.
+    ``AttitudeControllerNode(parameter_overrides=[Parameter('kp', value=0.2)])``. Bad parameter
+    values raise :class:`InputError`.
+    """
+
+    def __init__(self, **node_options: Any) -> None:
+        """Declare and check the parameters, create the session, topics and timer."""
+        super().__init__(CONTROLLER_NODE_NAME, **node_options)
+        values = self._declare_parameters()
+        problem = check_controller_values(values)
+        if problem:
+            raise InputError(problem)
+        self.session = ControllerSession(values, self, time.monotonic)
+        self.torque_publisher = self.create_publisher(WrenchStamped, 'torque', OUTPUT_QOS)
+        self.diagnostics_publisher = self.create_publisher(
+            DiagnosticArray, '/diagnostics', OUTPUT_QOS)
+        self.inputs = [
+            self.create_subscription(QuaternionStamped, 'orientation', self.orientation_callback,
+                                     COMMAND_QOS, raw=True),
+            self.create_subscription(TwistStamped, 'twist', self.twist_callback, COMMAND_QOS,
+                                     raw=True),
+            self.create_subscription(QuaternionStamped, 'target', self.target_callback,
+                                     COMMAND_QOS, raw=True)]
+        self.diagnostics_timer = self.create_timer(
+            DIAGNOSTICS_PERIOD, self.session.publish_diagnostics,
+            clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.add_on_set_parameters_callback(self.parameters_callback)
+        self.add_post_set_parameters_callback(self.parameters_set_callback)
+
+    def _declare_parameters(self) -> dict[str, Any]:
+        values = {}
+        for parameter in CONTROLLER_PARAMETERS:
+            default = (RosParameter.Type.DOUBLE_ARRAY if parameter.type is tuple
+                       else parameter.default)
+            try:
+                values[parameter.name] = ros_value(parameter, self.declare_parameter(
+                    parameter.name, default, parameter_descriptor(parameter)).value)
+            except InvalidParameterTypeException as err:
+                raise InputError(f'Expected parameter `{parameter.name}` to be a '
+                                 f'{parameter.type_text}: {str(err)[:200]}') from err
+            except ParameterException as err:
+                raise InputError(f'Bad parameter `{parameter.name}`: {str(err)[:200]}') from err
+        return values
+
+    def parameter_values(self) -> dict[str, Any]:
+        """Current values of the controller's parameters by name."""
+        values = {}
+        for parameter in CONTROLLER_PARAMETERS:
+            try:
+                value = self.get_parameter(parameter.name).value
+            except ParameterUninitializedException:  # a double array not set
+                value = None
+            values[parameter.name] = ros_value(parameter, value)
+        return values
+
+    def parameters_callback(self, parameters: list[RosParameter]) -> SetParametersResult:
+        """Refuse run-time values the parameter table finds unusable."""
+        values = self.parameter_values()
+        by_name = {p.name: p for p in CONTROLLER_PARAMETERS}
+        values.update({p.name: ros_value(by_name[p.name], p.value) for p in parameters
+                       if p.name in by_name})
+        reason = check_controller_values(values)
+        return SetParametersResult(successful=not reason, reason=reason)
+
+    def parameters_set_callback(self, parameters: list[RosParameter]) -> None:
+        """Apply accepted run-time changes (frames, target, gains, limit, period)."""
+        self.session.apply(self.parameter_values())
+
+    # -- inputs (raw CDR) -------------------------------------------------------------------
+
+    def orientation_callback(self, data: bytes) -> None:
+        """``orientation``: the plant's attitude."""
+        try:
+            sec, nanosec, frame_id, attitude = decode_quaternion_stamped(data)
+        except MalformedMessage as err:
+            self.session.malformed('orientation', err.reason)
+            return
+        self.session.orientation(sec, nanosec, frame_id, attitude)
+
+    def twist_callback(self, data: bytes) -> None:
+        """``twist``: the plant's body rate (the angular part)."""
+        try:
+            sec, nanosec, frame_id, _, angular = decode_twist_stamped(data)
+        except MalformedMessage as err:
+            self.session.malformed('twist', err.reason)
+            return
+        self.session.twist(sec, nanosec, frame_id, angular)
+
+    def target_callback(self, data: bytes) -> None:
+        """``target``: a new target attitude."""
+        try:
+            sec, nanosec, frame_id, attitude = decode_quaternion_stamped(data)
+        except MalformedMessage as err:
+            self.session.malformed('target', err.reason)
+            return
+        self.session.target_message(sec, nanosec, frame_id, attitude)
+
+    # -- the session's sink -----------------------------------------------------------------
+
+    def torque(self, sec: int, nanosec: int, torque_body: tuple[float, float, float]) -> None:
+        """Publish ``torque`` stamped ``(sec, nanosec)`` in body_frame."""
+        self.torque_publisher.publish(encode_wrench_stamped(
+            sec * 1_000_000_000 + nanosec, self.session.body_frame, _ZERO_FORCE, torque_body))
+
+    def diagnostics(self, report: Any) -> None:
+        """Publish one ``/diagnostics`` status, stamped with the node clock."""
+        status = DiagnosticStatus(
+            level=_LEVEL_BYTES[report.level], name=self.get_fully_qualified_name(),
+            message=report.message, hardware_id=CONTROLLER_NODE_NAME,
+            values=[KeyValue(key=key, value=value) for key, value in report.values])
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self.diagnostics_publisher.publish(array)
+
+    def log(self, level: int, text: str) -> None:
+        """A log line of the session."""
+        logger = self.get_logger()
+        (logger.warning if level == LEVEL_WARN else logger.info)(text)
+
+
+def _first_line(err: BaseException) -> str:
+    """The first line of an error, without rcl's source locations."""
+    return str(err).splitlines()[0].split(', at /')[0] if str(err) else type(err).__name__
+
+
+def controller_usage() -> str:
+    """``attitude_controller --help``: the parameters, from the one table."""
+    rows = [ParameterRow(p.name, 'double array' if p.type is tuple else
+                         {float: 'double', str: 'string'}[p.type], p.default, p.range_text(),
+                         p.description, p.read_only) for p in CONTROLLER_PARAMETERS]
+    return '\n'.join([
+        'usage: attitude_controller [-h] [--ros-args -p NAME:=VALUE ... [-r FROM:=TO] ...]',
+        '',
+        'Quaternion-feedback PD attitude control: reads orientation and twist, publishes',
+        'torque stamped like the tick it answers. See docs/closed-loop.md.',
+        '',
+        'options:',
+        '  -h, --help  print this text and exit (ROS is not started)',
+        '',
+        'parameters (--ros-args -p NAME:=VALUE; run-time ones also with ros2 param set):',
+        format_parameter_help(rows)])
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the controller until SIGINT (exit 0); bad parameters: ``error: ...``, exit 2."""
+    arguments = sys.argv if args is None else args
+    if wants_help(arguments[1:]):
+        print(controller_usage())
+        return 0
+    use_packaged_fastdds_profile()
+    try:
+        rclpy.init(args=arguments)
+    except RuntimeError as err:  # rcl could not parse the ROS arguments
+        print(f'error: {_first_line(err)}', file=sys.stderr)
+        return 2
+    node = None
+    try:
+        node = AttitudeControllerNode()
+        node.get_logger().info(SERVING_LINE)
+        rclpy.spin(node)
+    except (AttitudeError, ParameterException) as err:
+        print(f'error: {_first_line(err)}', file=sys.stderr)
+        return 2
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,251 @@
+"""The attitude controller without ROS: pairing of stamped inputs, sample and hold, checks.
+
+The plant publishes ``orientation`` (world_frame) and ``twist`` (body_frame, the body rate)
+for each tick ``k`` stamped ``t_k``. :class:`ControllerSession` answers each tick with one
+torque stamped ``t_k`` exactly, once it holds both inputs of that stamp; so its output depends
+on the stamped inputs only, never on when they arrive. With a ``control_period`` ``P > 0`` the
+torque is recomputed only at the first tick of each interval ``[n P, (n+1) P)`` of stamps
+(integer nanoseconds, so the choice is exact) and otherwise the held torque is sent again,
+stamped ``t_k`` (sample and hold). The law is
+:func:`rigid_body_attitude.core.control.pd_torque_floats`.
+
+Every input is checked: decodable (``malformed``), a valid stamp (``invalid_stamp``), finite
+(``non_finite``), quaternions of unit norm within
+:data:`~.controller_parameters.UNIT_TOLERANCE` (``non_unit``), the expected frame
+(``wrong_frame``), a stamp not older than the last answered tick (``stale_stamp``; equal:
+``duplicate_stamp``) and an input whose partner of the same stamp never came (``unpaired``).
+Rejections are counted by reason and warned about, at most every
+:data:`~.base.WARNING_INTERVAL` seconds per reason. A complete pair stamped before the last
+answered tick means the plant's time went back (a reset): the hold is cleared and the pair
+answered (counted as ``time_jumps_back``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, Protocol
+
+from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.control import as_axis_gains, pd_torque_floats
+from rigid_body_attitude.session.base import LEVEL_INFO, WARNING_INTERVAL
+from rigid_body_attitude.session.controller_parameters import UNIT_TOLERANCE
+from rigid_body_attitude.session.levelling import rpy_quaternion
+from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_OK, LEVEL_WARN
+from rigid_body_attitude.session.times import seconds_to_ns, stamp_problem, to_ns
+
+__all__ = ['ControllerSession', 'MAX_PENDING', 'TorqueSink', 'target_from_values']
+
+Quaternion = tuple[float, float, float, float]
+Vector = tuple[float, float, float]
+
+#: Inputs of each topic kept while waiting for their partner of the same stamp.
+MAX_PENDING = 64
+
+_IDENTITY: Quaternion = (1.0, 0.0, 0.0, 0.0)
+
+
+class TorqueSink(Protocol):
+    """Where the controller's outputs go (a publisher, a list in a test)."""
+
+    def torque(self, sec: int, nanosec: int, torque_body: Vector) -> None:
+        """The torque [N m, body axes] answering the tick stamped ``(sec, nanosec)``."""
+
+    def diagnostics(self, report: DiagnosticReport) -> None:
+        """One diagnostics report."""
+
+    def log(self, level: int, text: str) -> None:
+        """A log line (``LEVEL_INFO``, ``LEVEL_WARN``)."""
+
+
+def target_from_values(values: Mapping[str, Any]) -> Quaternion:
+    """The target (w, x, y, z) of checked parameter values: ``target_quaternion``
+    (normalised), else ``target_rpy``, else the identity."""
+    if values['target_quaternion']:
+        x, y, z, w = values['target_quaternion']
+        norm = math.sqrt(w * w + x * x + y * y + z * z)
+        return w / norm, x / norm, y / norm, z / norm
+    if values['target_rpy']:
+        return rpy_quaternion(*values['target_rpy'])
+    return _IDENTITY
+
+
+class ControllerSession:
+    """Answers each tick's stamped orientation and twist with one torque of the same stamp."""
+
+    def __init__(self, values: Mapping[str, Any], sink: TorqueSink,
+                 monotonic: Callable[[], float]) -> None:
+        """``values``: checked parameters (:mod:`.controller_parameters`)."""
+        self.sink, self.monotonic = sink, monotonic
+        self.rejections: Counter[str] = Counter()
+        self.pending: dict[str, dict[int, tuple[float, ...]]] = {'orientation': {}, 'twist': {}}
+        self._targets: list[tuple[int, Quaternion]] = []
+        self._target_stamp = -1
+        self._last_warning: dict[str, float] = {}
+        self.answered = self.computed = self.time_jumps_back = 0
+        self._period_answered = 0
+        self._period_rejections: Counter[str] = Counter()
+        self.last_stamp: int | None = None
+        self.held: tuple[int, Vector] | None = None  # (control interval, torque)
+        self.pointing_error = math.nan
+        self.apply(values)
+
+    def apply(self, values: Mapping[str, Any]) -> None:
+        """Take (run-time) parameters; a new target or gain acts from the next tick on (the
+        hold is cleared)."""
+        self.world_frame: str = values['world_frame']
+        self.body_frame: str = values['body_frame']
+        self.kp = tuple(as_axis_gains(values['kp'], 'kp').tolist())
+        self.kd = tuple(as_axis_gains(values['kd'], 'kd').tolist())
+        self.limit = tuple(as_axis_gains(values['torque_limit'], 'torque_limit', True).tolist())
+        self.period_ns = seconds_to_ns(values['control_period'])
+        self.target: Quaternion = target_from_values(values)
+        self.held = None
+
+    # -- inputs -----------------------------------------------------------------------------
+
+    def orientation(self, sec: int, nanosec: int, frame_id: str,
+                    attitude: Sequence[float]) -> None:
+        """The plant's attitude (w, x, y, z), body → world_frame, stamped ``(sec, nanosec)``."""
+        stamp_ns = self._checked('orientation', sec, nanosec, frame_id, self.world_frame,
+                                 attitude)
+        if stamp_ns is not None:
+            self._pend('orientation', stamp_ns, tuple(attitude))
+
+    def twist(self, sec: int, nanosec: int, frame_id: str, angular: Sequence[float]) -> None:
+        """The plant's body rate [rad/s] in body_frame stamped ``(sec, nanosec)``."""
+        stamp_ns = self._checked('twist', sec, nanosec, frame_id, self.body_frame, angular)
+        if stamp_ns is not None:
+            self._pend('twist', stamp_ns, tuple(angular))
+
+    def target_message(self, sec: int, nanosec: int, frame_id: str,
+                       attitude: Sequence[float]) -> None:
+        """A new target (w, x, y, z) in world_frame, in force for ticks stamped at or after
+        ``(sec, nanosec)`` (a zero stamp: from the next recomputation)."""
+        stamp_ns = self._checked('target', sec, nanosec, frame_id, self.world_frame, attitude)
+        if stamp_ns is None:
+            return
+        if stamp_ns < self._target_stamp:
+            self._reject('stale_stamp', 'target: stamped before the target in force')
+            return
+        norm = math.sqrt(sum(value * value for value in attitude))
+        w, x, y, z = (value / norm for value in attitude)
+        self._targets = [entry for entry in self._targets if entry[0] < stamp_ns]
+        self._targets.append((stamp_ns, (w, x, y, z)))
+        self._target_stamp = stamp_ns
+
+    def malformed(self, topic: str, reason: str) -> None:
+        """Bytes on ``topic`` that are not a message of its type."""
+        self._reject('malformed', f'{topic}: {reason[:200]}; message ignored')
+
+    def _checked(self, topic: str, sec: int, nanosec: int, frame_id: str, expected_frame: str,
+                 values: Sequence[float]) -> int | None:
+        """The stamp in nanoseconds, or None (counted) for a rejected input."""
+        problem = stamp_problem(sec, nanosec)
+        if problem:
+            self._reject('invalid_stamp', f'{topic}: an invalid header stamp ({problem})')
+            return None
+        if frame_id != expected_frame:
+            self._reject('wrong_frame', f'{topic}: frame {frame_id[:100]!r}, expected '
+                                        f'{expected_frame!r}')
+            return None
+        if not all(math.isfinite(value) for value in values):
+            self._reject('non_finite', f'{topic}: a non-finite value (NaN or Inf)')
+            return None
+        if len(values) == 4 and abs(math.sqrt(sum(v * v for v in values)) - 1.0) > UNIT_TOLERANCE:
+            self._reject('non_unit', f'{topic}: a quaternion of norm beyond 1 ± '
+                                     f'{UNIT_TOLERANCE:g}')
+            return None
+        return to_ns(sec, nanosec)
+
+    # -- pairing and answering --------------------------------------------------------------
+
+    def _pend(self, topic: str, stamp_ns: int, value: tuple[float, ...]) -> None:
+        if stamp_ns == self.last_stamp:
+            self._reject('duplicate_stamp', f'{topic}: a second input for the tick answered')
+            return
+        waiting = self.pending[topic]
+        waiting[stamp_ns] = value
+        if len(waiting) > MAX_PENDING:
+            del waiting[min(waiting)]
+            self._reject('unpaired', f'{topic}: more than {MAX_PENDING} inputs without their '
+                                     f'partner of the same stamp')
+        other = self.pending['twist' if topic == 'orientation' else 'orientation']
+        if stamp_ns in other:
+            attitude = self.pending['orientation'].pop(stamp_ns)
+            rate = self.pending['twist'].pop(stamp_ns)
+            self._answer(stamp_ns, attitude, rate)
+
+    def _answer(self, stamp_ns: int, attitude: tuple[float, ...],
+                rate: tuple[float, ...]) -> None:
+        """Publish the torque for the tick ``stamp_ns`` (recomputed or held)."""
+        if self.last_stamp is not None and stamp_ns < self.last_stamp:
+            self.time_jumps_back += 1
+            self.held = None
+            self._drop_pending(lambda stamp: True)
+            self._note('time_jump_back', 'inputs stamped before the last answered tick: the '
+                                         'plant restarted; hold cleared')
+        else:
+            self._drop_pending(lambda stamp: stamp < stamp_ns)
+        self.last_stamp = stamp_ns
+        interval = stamp_ns // self.period_ns if self.period_ns else stamp_ns
+        if self.held is None or self.held[0] != interval:
+            self.held = (interval, self._compute(stamp_ns, attitude, rate))
+        sec, nanosec = divmod(stamp_ns, 1_000_000_000)
+        self.sink.torque(sec, nanosec, self.held[1])
+        self.answered += 1
+        self._period_answered += 1
+
+    def _compute(self, stamp_ns: int, attitude: tuple[float, ...],
+                 rate: tuple[float, ...]) -> Vector:
+        while self._targets and self._targets[0][0] <= stamp_ns:
+            self.target = self._targets.pop(0)[1]
+        self.computed += 1
+        self.pointing_error = float(quaternion.attitude_error(attitude, self.target))
+        return pd_torque_floats(attitude, rate, self.target, self.kp, self.kd, self.limit)
+
+    def _drop_pending(self, drop: Callable[[int], bool]) -> None:
+        for topic, waiting in self.pending.items():
+            for stamp in [stamp for stamp in waiting if drop(stamp)]:
+                del waiting[stamp]
+                self._reject('unpaired', f'{topic}: no partner of the same stamp before a '
+                                         f'later tick was answered')
+
+    # -- counting, warnings, diagnostics ----------------------------------------------------
+
+    def _reject(self, reason: str, text: str) -> None:
+        self.rejections[reason] += 1
+        self._period_rejections[reason] += 1
+        self._note(reason, f'{text} [{self.rejections[reason]} {reason} so far]', LEVEL_WARN)
+
+    def _note(self, key: str, text: str, level: int = LEVEL_INFO) -> None:
+        now = self.monotonic()
+        if now - self._last_warning.get(key, -math.inf) >= WARNING_INTERVAL:
+            self._last_warning[key] = now
+            self.sink.log(level, text)
+
+    def report(self) -> DiagnosticReport:
+        """This period's diagnostics; WARN while no tick was answered or inputs were
+        rejected. Starts the next period."""
+        problems = [f'{count} {reason}' for reason, count in
+                    sorted(self._period_rejections.items())]
+        if not self._period_answered:
+            problems.insert(0, 'no tick answered: waiting for orientation and twist of equal '
+                               'stamps')
+        values = (
+            ('ticks answered', str(self.answered)), ('torques computed', str(self.computed)),
+            ('pointing error [deg]', f'{math.degrees(self.pointing_error):.6g}'),
+            ('torque [N m]', str(self.held[1] if self.held else None)),
+            ('target (w, x, y, z)', str(self.target)),
+            ('time jumps back', str(self.time_jumps_back)),
+            *((f'rejected {reason}', str(count))
+              for reason, count in sorted(self.rejections.items())))
+        self._period_answered = 0
+        self._period_rejections = Counter()
+        return DiagnosticReport(LEVEL_WARN if problems else LEVEL_OK,
+                                '; '.join(problems) or 'controlling', values)
+
+    def publish_diagnostics(self) -> None:
+        """Hand this period's report to the sink."""
+        self.sink.diagnostics(self.report())

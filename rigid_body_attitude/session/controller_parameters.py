@@ -1,0 +1,81 @@
+"""The ``attitude_controller``'s parameters, declared once, and their checks.
+
+``world_frame`` and ``body_frame`` are the propagation node's own declarations
+(:data:`~rigid_body_attitude.session.parameters.PARAMETERS`), so the two nodes agree on them;
+the rest belong to the controller. ``attitude_controller --help``, the node's ROS descriptors
+and :func:`check_controller_values` derive from :data:`CONTROLLER_PARAMETERS`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from rigid_body_attitude.session.parameters import Parameter, PARAMETERS
+
+__all__ = ['CONTROLLER_PARAMETERS', 'UNIT_TOLERANCE', 'check_controller_values',
+           'controller_defaults']
+
+#: Largest ``| |q| − 1 |`` of a quaternion taken as an attitude (parameter or message).
+UNIT_TOLERANCE = 1e-3
+
+_NODE = {parameter.name: parameter for parameter in PARAMETERS}
+
+#: Every parameter of the controller, in the order ``--help`` and the README list them.
+CONTROLLER_PARAMETERS: tuple[Parameter, ...] = (
+    _NODE['world_frame'],
+    _NODE['body_frame'],
+    Parameter('target_rpy', tuple, (),
+              'rad: [roll, pitch, yaw] of the target attitude of body_frame in world_frame, as '
+              'static_transform_publisher takes them ([] = target_quaternion, or the identity)',
+              -10.0, 10.0, may_be_empty=True, read_only=False),
+    Parameter('target_quaternion', tuple, (),
+              '[x, y, z, w] of the target attitude, of unit norm ([] = target_rpy, or the '
+              'identity: body axes on world axes)', -2.0, 2.0, may_be_empty=True,
+              read_only=False, length=4),
+    Parameter('kp', float, 0.1, 'N m: gain on the vector part of the attitude error', 0.0, 1e6,
+              read_only=False),
+    Parameter('kd', float, 0.04, 'N m s: gain on the body rate', 0.0, 1e6, read_only=False),
+    Parameter('torque_limit', float, 0.0,
+              'N m: each torque component clipped to +-this (0 = no limit)', 0.0, 1e12,
+              read_only=False),
+    Parameter('control_period', float, 0.0,
+              's: the torque is recomputed when the input stamps reach a multiple of this and '
+              'held in between (0 = at every tick)', 0.0, 3600.0, read_only=False),
+)
+
+_BY_NAME = {parameter.name: parameter for parameter in CONTROLLER_PARAMETERS}
+
+
+def controller_defaults() -> dict[str, Any]:
+    """Parameter name → default."""
+    return {p.name: p.default for p in CONTROLLER_PARAMETERS}
+
+
+def check_controller_values(values: Mapping[str, Any]) -> str:
+    """Why these parameter values are unusable, or ``''`` when they are fine.
+
+    Each value against its declaration, then: distinct frames, at most one of ``target_rpy``
+    and ``target_quaternion``, and a target quaternion of unit norm within
+    :data:`UNIT_TOLERANCE`.
+    """
+    for name, value in values.items():
+        parameter = _BY_NAME.get(name)
+        if parameter is None:
+            return f'Unknown parameter `{name}`; parameters: {", ".join(_BY_NAME)}'
+        problem = parameter.problem(value)
+        if problem:
+            return problem
+    if values.get('world_frame', 'world') == values.get('body_frame', 'base_link'):
+        return (f'Expected `world_frame` and `body_frame` to differ, both are '
+                f'{values["world_frame"]!r}')
+    if values.get('target_rpy') and values.get('target_quaternion'):
+        return ('Expected at most one of `target_rpy` and `target_quaternion`, got both: '
+                f'{list(values["target_rpy"])} and {list(values["target_quaternion"])}')
+    xyzw = values.get('target_quaternion') or (0.0, 0.0, 0.0, 1.0)
+    norm = math.sqrt(sum(value * value for value in xyzw))
+    if abs(norm - 1.0) > UNIT_TOLERANCE:
+        return (f'Expected parameter `target_quaternion` to have norm 1 (within '
+                f'{UNIT_TOLERANCE:g}), got norm {norm:.6g} for {list(xyzw)}')
+    return ''
