@@ -137,5 +137,6 @@ def test_strapdown_error_over_ros_is_consistent_with_its_covariance(ros, request
         rows = [run[index] for run in table]
         mean_nees.append(np.mean([e @ np.linalg.solve(p, e) for e, p in rows]))
         too_large.append(np.mean([e @ np.linalg.solve(10.0 * p, e) for e, p in rows]))
+    print(f'mean NEES at {CHECKS_S} s: {mean_nees}; 95 % band {BAND}')
     assert all(BAND[0] <= value <= BAND[1] for value in mean_nees), (BAND, mean_nees)
     assert not any(BAND[0] <= value <= BAND[1] for value in too_large), (BAND, too_large)
