@@ -45,8 +45,8 @@ def run(session, ticks_ns):
         session.tick(now)
 
 
-def test_samples_come_at_every_multiple_of_the_period_whatever_the_ticks(open_scene,
-                                                                        tmp_path):
+def test_samples_come_at_every_multiple_of_the_period_whatever_the_ticks(
+        open_scene, tmp_path):
     session, sink = open_scene(scene_file(tmp_path, {'seed': 4}))
     jitter = np.random.default_rng(1).integers(0, 15 * MS, size=60)
     ticks = [START_NS + 3 * MS + k * 20 * MS + int(j) for k, j in enumerate(jitter)]
@@ -129,9 +129,9 @@ def test_held_body_feels_the_sections_gravity_and_free_fall_feels_none(open_scen
                                             omega=(0.0, 0.0, 0.0)))
     run(held, [START_NS, START_NS + 20 * MS])
     assert decoded(held_sink.simulated[0][1])[2][25:28] == pytest.approx((0.0, 0.0, 9.8))
-    falling, falling_sink = open_scene(scene_file(tmp_path, QUIET, ['translation',
-                                                                     'uniform_gravity'],
-                                                  omega=(0.0, 0.0, 0.0)))
+    falling_scene = scene_file(tmp_path, QUIET, ['translation', 'uniform_gravity'],
+                               omega=(0.0, 0.0, 0.0))
+    falling, falling_sink = open_scene(falling_scene)
     run(falling, [START_NS, START_NS + 20 * MS])
     assert decoded(falling_sink.simulated[0][1])[2][25:28] == pytest.approx((0.0, 0.0, 0.0),
                                                                             abs=1e-9)
