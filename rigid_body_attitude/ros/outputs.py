@@ -136,8 +136,8 @@ class RosOutputs:
     def enable_simulated_imu(self, topic: str, body_frame: str, sensor_frame: str,
                              mount: Quaternion) -> None:
         """Publish a simulated IMU's samples on ``topic`` and its mount (w, x, y, z) as the
-        static transform ``body_frame`` -> ``sensor_frame`` on ``/tf_static`` (now, once;
-        none when the frames are the same)."""
+        static transform ``body_frame`` -> ``sensor_frame`` on ``/tf_static`` (once, stamped
+        with the node clock; none when the frames are the same)."""
         self.simulated_imus[topic] = RawOutput(self._publisher(Imu, topic))
         if sensor_frame == body_frame:
             return

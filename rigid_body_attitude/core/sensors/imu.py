@@ -180,9 +180,9 @@ def imu_spec(data: Any) -> ImuSpec:
                              f'{", ".join(sorted(valid))}')
     if 'rate' not in data:
         raise SceneError('Missing key \'rate\' in sensors.imu (sample rate [Hz])')
-    numbers = {key: _bounded_number(key, data[key]) for key in _BOUNDS if key in data}
-    spec = ImuSpec(rate=numbers.pop('rate'))
-    spec = replace(spec, **numbers)
+    numbers: dict[str, Any] = {key: _bounded_number(key, data[key]) for key in _BOUNDS
+                               if key in data}
+    spec = replace(ImuSpec(rate=numbers.pop('rate')), **numbers)
     if 'frame_id' in data:
         spec = replace(spec, frame_id=_matching('frame_id', data['frame_id'], _FRAME))
     if 'topic' in data:
