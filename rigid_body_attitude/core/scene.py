@@ -18,6 +18,8 @@ the effects; only the effects it names are constructed. Format::
       omega_body: [0.1, 2.0, 0.05] # [rad/s]
     effects:                       # list of {effect_name: {parameters}} or effect_name
       - viscous_damping: {coefficient: 0.01}
+    sensors:                       # dynamics scenes: simulated sensors (core/sensors)
+      imu: {rate: 200.0, frame_id: imu_link, seed: 1}
 
 Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`scene_path`).
 
@@ -56,6 +58,7 @@ from rigid_body_attitude.core.effects.base import MAGNITUDE_LIMIT, real
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.inertia import Inertia
 from rigid_body_attitude.core.paths import config_folders
+from rigid_body_attitude.core.sensors.imu import ImuSpec, sensors_spec
 from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml
 
 __all__ = ['MAX_DESCRIPTION_CHARS', 'MAX_NAME_CHARS', 'RATE_SOURCES', 'SCALE_LIMIT', 'Scene',
@@ -65,7 +68,7 @@ FloatArray = NDArray[np.float64]
 
 RATE_SOURCES = ('dynamics', 'gyro')
 _TOP_KEYS = {'name', 'description', 'rate_source', 'integrator', 'step', 'body',
-             'initial_state', 'effects'}
+             'initial_state', 'effects', 'sensors'}
 _REQUIRED_TOP_KEYS = ('rate_source', 'body')
 _BODY_KEYS = {'mass', 'inertia'}
 _STATE_KEYS = {'attitude', 'omega_body'}
@@ -96,6 +99,7 @@ class Scene:
         initial_omega_body: [rad/s].
         effects: ``(name, parameters)`` pairs in scene order.
         source: the file it came from, if any.
+        imu: the simulated IMU of the ``sensors`` section, or None.
     """
 
     name: str
@@ -109,6 +113,7 @@ class Scene:
     initial_omega_body: FloatArray
     effects: tuple[tuple[str, Mapping[str, Any]], ...] = field(default_factory=tuple)
     source: str = ''
+    imu: ImuSpec | None = None
 
     def build_effects(self) -> list[Effect]:
         """Construct the scene's effects, in order; nothing else is built."""
@@ -131,6 +136,7 @@ class Scene:
                           step=step or self.step, effects=effects)
         _check_effects(changed)
         _check_step(changed.step)
+        _check_sensors(changed)
         return changed
 
 
@@ -202,8 +208,10 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
         initial_omega_body=omega,
         effects=_effect_list(data.get('effects') or []),
         source=source,
+        imu=sensors_spec(data.get('sensors')),
     )
     _check_effects(scene)
+    _check_sensors(scene)
     return scene
 
 
@@ -382,3 +390,29 @@ def _check_effects(scene: Scene) -> None:
         raise SceneError(_bounded(str(err))) from err
     except (AttitudeError, TypeError, OverflowError) as err:
         raise SceneError(_bounded(f'effects: {err}')) from err
+
+
+#: Effects that give the world gravity a simulated accelerometer feels.
+GRAVITY_EFFECTS = ('uniform_gravity', 'gravity_about_pivot')
+
+
+def _check_sensors(scene: Scene) -> None:
+    """A simulated IMU: dynamics scenes only, its period a whole number of steps, ``gravity``
+    only where no effect gives it (and the body does not translate)."""
+    imu = scene.imu
+    if imu is None:
+        return
+    if scene.rate_source != 'dynamics':
+        raise SceneError('sensors: simulated sensors need a dynamics scene (rate_source: '
+                         'dynamics)')
+    ratio = imu.period / scene.step
+    if round(ratio) < 1 or abs(ratio - round(ratio)) > 1e-9 * ratio:
+        raise SceneError(f'Expected the period of sensors.imu.rate ({imu.period:.9g} s) to be '
+                         f'a whole multiple of the step ({scene.step:g} s), got {ratio:.6g} '
+                         f'steps')
+    names = [name for name, _ in scene.effects]
+    given_by = [name for name in names if name in GRAVITY_EFFECTS + ('translation',)]
+    if imu.gravity is not None and given_by:
+        raise SceneError(f'sensors.imu.gravity is for a body held in place without gravity '
+                         f'effects; scene {quote(scene.name)} has {given_by[0]!r} (the '
+                         f'accelerometer takes the gravity of its effects)')

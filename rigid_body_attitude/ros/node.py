@@ -17,7 +17,9 @@ same session, so a replayed bag gives the same numbers.
 * Dynamics scenes advance on a timer of the node clock (``use_sim_time`` works) at
   ``publish_rate``, served by the same gyro loop (timers only); commands arrive on
   ``torque`` (WrenchStamped) and ``rotor_torque`` (Vector3Stamped) when the scene takes them.
-  ``~/reset`` restores the scene's initial state.
+  ``~/reset`` restores the scene's initial state. A scene with ``sensors`` also publishes its
+  simulated IMU (``sensor_msgs/msg/Imu``, :mod:`rigid_body_attitude.session.sensors`) and the
+  sensor's mount on ``/tf_static``.
 * Commands (``set_pose``, ``set_pose_with_covariance``, ``torque``, ``rotor_torque``) are
   coalesced: only the newest of each topic matters, so each callback takes every message queued
   behind its own and hands the newest to the session once (the others counted ``superseded``). Log
@@ -135,6 +137,10 @@ class AttitudePropagatorNode(Node):
         self.outputs.log_queue.start()
         if values['publish_tf']:
             self.outputs.enable_tf(values['tf_rate'])
+        imu = self.scene.imu
+        if imu is not None:
+            self.outputs.enable_simulated_imu(imu.topic, values['body_frame'], imu.frame_id,
+                                              imu.mount())
         self._create_inputs()
         self._create_timers()
         self.reset_service = self.create_service(Trigger, '~/reset', self.reset_callback)

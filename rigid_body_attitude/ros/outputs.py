@@ -15,7 +15,10 @@ axis), or all zeros (REP-145: unknown) with the parameter ``covariance`` off.
 marked unknown (:data:`~rigid_body_attitude.session.uncertainty.UNKNOWN_POSITION_VARIANCE`). With
 ``publish_tf`` (:meth:`RosOutputs.enable_tf`) the attitude also goes to ``/tf`` as the transform
 ``world_frame`` -> ``body_frame`` (``tf2_msgs/msg/TFMessage``, CDR bytes too) at the output stamps,
-at most ``tf_rate`` transforms per second of stamps. Log lines go through a
+at most ``tf_rate`` transforms per second of stamps. A dynamics scene with a simulated IMU
+publishes its samples (:meth:`RosOutputs.simulated_imu`, ``sensor_msgs/msg/Imu`` on the
+section's topic) and its mount once on ``/tf_static`` (transient local, as tf2_ros's static
+broadcaster: late subscribers get it). Log lines go through a
 :class:`~.log_queue.LogQueue`: the session logs from the gyro path, which must never wait for a
 slow console.
 """
@@ -39,7 +42,7 @@ from rigid_body_attitude.msgs.cdr import (
     pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
     transform_encoder)
 from rigid_body_attitude.ros.log_queue import LogQueue
-from rigid_body_attitude.ros.qos import OUTPUT_QOS, TF_QOS
+from rigid_body_attitude.ros.qos import OUTPUT_QOS, TF_QOS, TF_STATIC_QOS
 from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
 from rigid_body_attitude.session.uncertainty import pose_covariance
@@ -126,6 +129,21 @@ class RosOutputs:
         self.tf_limiter = StampRateLimiter(0.0)
         #: Where :meth:`log` puts its lines (started by the node).
         self.log_queue = LogQueue(node.get_logger())
+        #: Simulated IMU publishers by topic (:meth:`enable_simulated_imu`).
+        self.simulated_imus: dict[str, RawOutput] = {}
+
+    def enable_simulated_imu(self, topic: str, body_frame: str, sensor_frame: str,
+                             mount: Quaternion) -> None:
+        """Publish a simulated IMU's samples on ``topic`` and its mount (w, x, y, z) as the
+        static transform ``body_frame`` -> ``sensor_frame`` on ``/tf_static`` (once, stamped
+        with the node clock; none when the frames are the same)."""
+        self.simulated_imus[topic] = RawOutput(self._publisher(Imu, topic))
+        if sensor_frame == body_frame:
+            return
+        self.tf_static = self.node.create_publisher(TFMessage, '/tf_static', TF_STATIC_QOS)
+        sec, nanosec = self.node.get_clock().now().seconds_nanoseconds()
+        RawOutput(self.tf_static).publish(
+            transform_encoder(body_frame, sensor_frame)(sec, nanosec, mount))
 
     def enable_tf(self, tf_rate: float) -> None:
         """Publish ``world_frame`` -> ``body_frame`` on ``/tf``, at most ``tf_rate`` per
@@ -210,6 +228,12 @@ class RosOutputs:
             self.energy_raw.publish(encode_float64(energy))
         if self.momentum_raw.subscription_count():
             self.momentum_raw.publish(self.encode_momentum(sec, nanosec, world_momentum))
+
+    def simulated_imu(self, topic: str, data: bytes) -> None:
+        """A simulated IMU's sample (serialized Imu) on ``topic``."""
+        output = self.simulated_imus.get(topic)
+        if output is not None and output.subscription_count():
+            output.publish(data)
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the node clock."""

@@ -74,6 +74,10 @@ class OutputSink(Protocol):
         """A dynamics tick's kinetic energy [J] and world angular momentum [N m s], stamped
         like its attitude."""
 
+    def simulated_imu(self, topic: str, data: bytes) -> None:
+        """A simulated IMU's sample (dynamics scenes with ``sensors``): a serialized
+        ``sensor_msgs/msg/Imu`` for the output ``topic``."""
+
     def diagnostics(self, report: DiagnosticReport) -> None:
         """One diagnostics report."""
 

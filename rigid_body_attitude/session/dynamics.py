@@ -6,7 +6,9 @@ works) the state is integrated up to the clock's time under the clock rules
 stamped with the propagated time. Commands (``wrench``: torque and force; ``rotor_torque``)
 are held from their stamp on (:class:`~rigid_body_attitude.session.stream.CommandStream`).
 The session times its own work (the monotonic clock) to report a scene that cannot keep up:
-its real-time factor and its lag behind the clock.
+its real-time factor and its lag behind the clock. A scene with a simulated IMU (its
+``sensors`` section) is integrated through an
+:class:`~rigid_body_attitude.session.sensors.ImuSampler`, which samples it on the way.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from rigid_body_attitude.session.base import OutputSink, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.reports import LEVEL_WARN, PeriodCounts, body_frame_velocity
+from rigid_body_attitude.session.sensors import ImuSampler
 from rigid_body_attitude.session.stream import ClockDriver, CommandStream, Outcome
 from rigid_body_attitude.session.times import TimeBase, split_ns, stamp_problem, to_ns
 
@@ -55,6 +58,12 @@ class DynamicsSession(Session):
         self._work = self._simulated = self._lag = 0.0
         #: Command messages used (a WrenchStamped is one, whatever fields the scene takes).
         self.commands_accepted = 0
+        #: The simulated IMU of the scene's ``sensors`` section, or None.
+        self.imu: ImuSampler | None = None
+        if scene.imu is not None:
+            self.imu = ImuSampler(scene.imu, self.propagator, self.time_base,
+                                  sink.simulated_imu)
+            self.clock.advance = self.imu.advance_to
         super().__init__(scene, values, sink, clock_ns, monotonic)
 
     def apply(self, values: Mapping[str, Any]) -> None:
@@ -141,6 +150,8 @@ class DynamicsSession(Session):
     def _clock_rejected(self, outcome: Outcome) -> None:
         if outcome.reset:
             self.commands.reset()
+            if self.imu is not None:
+                self.imu.reset()
             self.sink.log(LEVEL_WARN, f'clock: time jumped back by more than '
                                       f'time_jump_threshold ({self.clock.time_jump_threshold:g}'
                                       f' s; looping bag?); reset to the initial state of scene '
@@ -163,6 +174,13 @@ class DynamicsSession(Session):
         self.clock.reset()
         self.propagator.reset(self.propagator.state.time)
         self.commands.reset()
+        if self.imu is not None:
+            self.imu.reset()
+
+    def _pose_set(self, orientation_covariance: tuple[float, ...] | None) -> None:
+        """A pose was set: the simulated IMU's next sample instant is a new baseline."""
+        if self.imu is not None:
+            self.imu.restart()
 
     # -- counts -----------------------------------------------------------------------------
 

@@ -57,7 +57,7 @@ from __future__ import annotations
 import math
 import sys
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator, _Propagator
@@ -493,6 +493,10 @@ class ClockDriver(_Counting):
         self.propagator = propagator
         self.time_jump_threshold = time_jump_threshold
         self.started = False
+        #: Integrates up to a time [s]: the propagator's ``advance_to``, or a simulated
+        #: sensor's (:class:`~rigid_body_attitude.session.sensors.ImuSampler`) that samples
+        #: on the way.
+        self.advance: Callable[[float], int] = propagator.advance_to
 
     def tick(self, now: float) -> Outcome:
         """Integrate up to ``now`` [s on the propagator's time axis]."""
@@ -512,7 +516,7 @@ class ClockDriver(_Counting):
         if now - last > self.time_jump_threshold:
             propagator.state.time = now
             return self._reject('gap')
-        propagator.advance_to(now)
+        self.advance(now)
         return self._accept(INTEGRATED)
 
     def reset(self) -> None:

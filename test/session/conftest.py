@@ -29,6 +29,7 @@ class RecordingSink:
     imus: list[bytes | None] = field(default_factory=list)
     covariances: list[tuple[float, ...]] = field(default_factory=list)
     mounts: list[tuple[float, ...] | None] = field(default_factory=list)
+    simulated: list[tuple[str, bytes]] = field(default_factory=list)
 
     def sensor_mount(self, q_body_sensor):
         self.mounts.append(q_body_sensor)
@@ -45,6 +46,9 @@ class RecordingSink:
 
     def invariants(self, sec, nanosec, energy, world_momentum):
         self.invariant_samples.append((sec, nanosec, energy, world_momentum))
+
+    def simulated_imu(self, topic, data):
+        self.simulated.append((topic, data))
 
     def diagnostics(self, report):
         self.reports.append(report)

@@ -25,6 +25,7 @@ from rigid_body_attitude.msgs import (
     encode_quaternion_stamped, encode_twist_stamped, encode_vector3_stamped,
     imu_with_orientation, pose_stamped_encoder, pose_with_covariance_stamped_encoder,
     quaternion_stamped_encoder)
+from rigid_body_attitude.msgs.types import IMU
 from rigid_body_attitude.session.base import Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import (
@@ -231,6 +232,13 @@ class BagSink:
             self.series.invariant_stamps_ns.append(stamp_ns)
             self.series.energies.append(energy)
             self.series.momenta.extend(world_momentum)
+
+    def simulated_imu(self, topic: str, data: bytes) -> None:
+        """A simulated IMU's sample on ``topic`` (added to the bag at its first sample)."""
+        if topic not in self.ids:
+            self.ids[topic] = self.writer.add_topic(topic, IMU).id
+            self.counts[topic] = 0
+        self._write(topic, data)
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the bag time (the node's sim-time clock)."""

@@ -1,0 +1,99 @@
+"""The simulated IMU priced, in one run.
+
+* **Per sample** [µs]: :meth:`ImuModel.sample` (mean rate from the attitude increment, the
+  specific force, every error term, saturation and quantisation on) and the Imu encoding
+  (:func:`~rigid_body_attitude.msgs.cdr.simulated_imu_encoder`), ``timeit``, best of
+  ``--repeats``.
+* **Per simulated second** [ms]: a dynamics session (rk4, 1 ms step, a tumbling box, ticks of
+  20 ms) without sensors and with a 200 Hz and a 1 kHz IMU, the samples handed to a sink that
+  drops them; the ratio to the session without sensors.
+
+Usage: ``python bench/sensor_costs.py [--seconds 20] [--repeats 5]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+import sys
+import time
+import timeit
+from typing import Any
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from rigid_body_attitude.core import quaternion  # noqa: E402
+from rigid_body_attitude.core.scene import scene_from_mapping  # noqa: E402
+from rigid_body_attitude.core.sensors import ImuModel, ImuSpec  # noqa: E402
+from rigid_body_attitude.msgs.cdr import simulated_imu_encoder  # noqa: E402
+from rigid_body_attitude.session.dynamics import DynamicsSession  # noqa: E402
+from rigid_body_attitude.session.parameters import defaults  # noqa: E402
+
+START_NS = 1_700_000_000 * 10**9
+TICK_NS = 20_000_000
+
+
+class DroppingSink:
+    """An output sink that keeps nothing."""
+
+    use_header_stamps = True
+
+    def __getattr__(self, name: str) -> Any:
+        return lambda *args: None
+
+
+def per_sample(repeats: int) -> tuple[float, float]:
+    """µs per :meth:`ImuModel.sample` and per encoded Imu."""
+    spec = ImuSpec(rate=200.0, seed=1, mount_rpy=(0.1, 0.2, 0.3), gyroscope_range=35.0,
+                   gyroscope_resolution=1e-4, accelerometer_range=160.0,
+                   accelerometer_resolution=1e-3, accelerometer_random_walk=1e-3)
+    model = ImuModel(spec, (0.0, 0.0, -9.80665))
+    q0 = (1.0, 0.0, 0.0, 0.0)
+    q1 = tuple(quaternion.exp([0.004, -0.002, 0.003]).tolist())
+    count = 20_000
+    sample = min(timeit.repeat(lambda: model.sample(q0, q1, (0.0, 0.0, 0.01)),
+                               number=count, repeat=repeats)) / count * 1e6
+    encode = simulated_imu_encoder('imu_link', *spec.sample_variances())
+    gyro, acc = model.sample(q0, q1)
+    encoded = min(timeit.repeat(lambda: encode(1, 2, gyro, acc), number=count,
+                                repeat=repeats)) / count * 1e6
+    return sample, encoded
+
+
+def session_cost(rate: float | None, seconds: float) -> float:
+    """CPU milliseconds per simulated second of a dynamics session (with an IMU at ``rate``)."""
+    data: dict[str, Any] = {
+        'rate_source': 'dynamics', 'step': 0.001, 'integrator': 'rk4',
+        'body': {'inertia': {'moments': [1.0, 2.0, 3.0]}},
+        'initial_state': {'omega_body': [0.3, 2.0, 0.1]}}
+    if rate is not None:
+        data['sensors'] = {'imu': {'rate': rate, 'seed': 1}}
+    session = DynamicsSession(scene_from_mapping(data), defaults(), DroppingSink(),
+                              lambda: START_NS, time.monotonic)
+    ticks = int(seconds * 1e9 / TICK_NS)
+    started = time.process_time()
+    for k in range(ticks + 1):
+        session.tick(START_NS + k * TICK_NS)
+    return (time.process_time() - started) / seconds * 1e3
+
+
+def main() -> None:
+    """Print the two tables."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--seconds', type=float, default=20.0)
+    parser.add_argument('--repeats', type=int, default=5)
+    args = parser.parse_args()
+    sample, encoded = per_sample(args.repeats)
+    print(f'ImuModel.sample: {sample:.2f} us per sample; Imu encoding: {encoded:.2f} us')
+    bare = session_cost(None, args.seconds)
+    print(f'dynamics session, no sensors: {bare:.1f} ms CPU per simulated second')
+    for rate in (200.0, 1000.0):
+        cost = session_cost(rate, args.seconds)
+        print(f'with an IMU at {rate:g} Hz: {cost:.1f} ms per simulated second, '
+              f'{cost / bare:.3f}x; {(cost - bare) * 1e3 / rate:.1f} us per sample in the '
+              f'session')
+
+
+if __name__ == '__main__':
+    main()
