@@ -27,7 +27,8 @@ from rclpy.signals import SignalHandlerGuardCondition
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 
-from rigid_body_attitude.ros.rclpy_internals import new_wait_set
+from rigid_body_attitude.ros.rclpy_internals import (
+    entity_handle, new_wait_set, raw_taker, timer_runner)
 
 __all__ = ['DedicatedGroup', 'EVENT_CHECK_PERIOD', 'GyroLoop', 'Handler', 'WAIT_TIMEOUT_NS']
 
@@ -102,9 +103,9 @@ class GyroLoop:
         self.events = [handler for subscription, _ in served
                        for handler in cast('list[EventHandler]', subscription.event_handlers)]
         self.context = context
-        self.served = [(subscription.handle, subscription.msg_type, handler)
+        self.served = [(entity_handle(subscription), raw_taker(subscription, True), handler)
                        for subscription, handler in served]
-        self.timers = [(timer.handle, timer.callback) for timer in timers]
+        self.timers = [(entity_handle(timer), timer_runner(timer)) for timer in timers]
         self.handled = 0
         self._stopping = threading.Event()
         self._sigint_guard = SignalHandlerGuardCondition(context)
@@ -134,23 +135,21 @@ class GyroLoop:
         context, served, timers, events = self.context, self.served, self.timers, self.events
         stopping, monotonic = self._stopping, time.monotonic
         wait_set = new_wait_set(context, len(served), 2, len(timers), len(events))
-        guards = (self._sigint_guard.handle, self._wake_guard.handle)
+        guards = (entity_handle(self._sigint_guard), entity_handle(self._wake_guard))
         next_event_check = monotonic()
         try:
             while context.ok() and not stopping.is_set():
                 with_events = monotonic() >= next_event_check
                 self._fill(wait_set, guards, with_events)
                 wait_set.wait(WAIT_TIMEOUT_NS)
-                for handle, msg_type, handler in served:
-                    taken = handle.take_message(msg_type, True)
-                    while taken is not None:
-                        handler(taken[0])
+                for _, take, handler in served:
+                    data = take()
+                    while data is not None:
+                        handler(data)
                         self.handled += 1
-                        taken = handle.take_message(msg_type, True)
-                for handle, callback in timers:
-                    if handle.is_timer_ready():
-                        handle.call_timer()
-                        callback()
+                        data = take()
+                for _, run_if_due in timers:
+                    run_if_due()
                 if with_events:
                     next_event_check = monotonic() + EVENT_CHECK_PERIOD
                     for event in events:

@@ -60,7 +60,7 @@ from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.outputs import RosOutputs
 from rigid_body_attitude.ros.qos import COMMAND_QOS, GYRO_QOS, TF_STATIC_QOS
 from rigid_body_attitude.ros.tf_lookup import MountGate
-from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds
+from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
@@ -184,6 +184,7 @@ class AttitudePropagatorNode(Node):
         """
         self.loop_group = DedicatedGroup()  # gyro subscriptions and the timers
         self.subscriptions_by_topic = {}
+        self.takers: dict[str, Callable[[], bytes | None]] = {}
         self.handlers: dict[str, Callable[[bytes], None]] = {}
         self.mount_gate: MountGate | None = None
         session = self.session
@@ -200,6 +201,7 @@ class AttitudePropagatorNode(Node):
                 _MESSAGE_TYPES[topic], topic, handler, GYRO_QOS if gyro else COMMAND_QOS,
                 callback_group=self.loop_group if gyro else None,
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(), raw=True)
+            self.takers[topic] = raw_taker(self.subscriptions_by_topic[topic])
 
     def _gyro_handler(self, topic: str) -> Callable[[bytes], None]:
         """The session's handler of a gyro ``topic`` (:func:`input_handler`) under the state
@@ -218,25 +220,26 @@ class AttitudePropagatorNode(Node):
     def _command_callback(self, topic: str) -> Callable[[bytes], None]:
         """The callback of a command ``topic``: it also takes every message queued behind the
         one it was given and hands only the newest decodable one to the session (the others
-        are counted ``superseded``; malformed ones ``malformed``)."""
+        are counted ``superseded``; malformed ones ``malformed``). On rclpy's stock path
+        nothing more is taken: each message comes to the callback."""
         decode, handle = DECODERS[topic], input_handler(self.session, topic)
         session, lock = self.session, self.state_lock
 
         def coalesce(data: bytes) -> None:
-            subscription = self.subscriptions_by_topic[topic]
+            take = self.takers[topic]
             newest: bytes | None = None
             superseded = 0
-            taken: tuple[bytes, Any] | None = (data, None)
+            taken: bytes | None = data
             while taken is not None:
                 try:
-                    decode(taken[0])
+                    decode(taken)
                 except MALFORMED:
                     with lock:
-                        handle(taken[0])  # counted as malformed
+                        handle(taken)  # counted as malformed
                 else:
                     superseded += newest is not None
-                    newest = taken[0]
-                taken = subscription.handle.take_message(subscription.msg_type, True)
+                    newest = taken
+                taken = take()
             with lock:
                 if superseded:
                     session.rejections['superseded'] += superseded

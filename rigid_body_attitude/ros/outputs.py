@@ -43,6 +43,7 @@ from rigid_body_attitude.msgs.cdr import (
     transform_encoder)
 from rigid_body_attitude.ros.log_queue import LogQueue
 from rigid_body_attitude.ros.qos import OUTPUT_QOS, TF_QOS, TF_STATIC_QOS
+from rigid_body_attitude.ros.rclpy_internals import raw_output
 from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
 from rigid_body_attitude.session.uncertainty import pose_covariance
@@ -61,7 +62,7 @@ _UNKNOWN = (0.0,) * 9
 class RawOutput:
     """An output's subscription count and CDR-bytes publish, bound once.
 
-    Both go straight to rclpy's publisher handle, without :class:`rclpy.publisher.Publisher`'s
+    On the fast path both go straight to rclpy's publisher handle, without :class:`rclpy.publisher.Publisher`'s
     per-call wrapper (it enters the handle as a context manager, against destruction by
     another thread, and checks the message type). That is safe here because the node's
     publishers are destroyed only after its gyro loop has returned. Outputs are VOLATILE
@@ -73,12 +74,11 @@ class RawOutput:
     __slots__ = ('subscription_count', 'publish')
 
     def __init__(self, publisher: Any) -> None:
-        """Bind ``publisher``'s handle."""
-        handle = publisher.handle
-        #: Matched subscriptions at the moment of the call (``int``; call it).
-        self.subscription_count: Callable[[], int] = handle.get_subscription_count
-        #: Publish serialized (CDR) ``bytes``.
-        self.publish: Callable[[bytes], None] = handle.publish_raw
+        """Bind ``publisher``'s handle on the fast path, else its public methods
+        (:func:`~.rclpy_internals.raw_output`)."""
+        #: Matched subscriptions at the moment of the call (``int``; call it), and publish
+        #: serialized (CDR) ``bytes``.
+        self.subscription_count, self.publish = raw_output(publisher)
 
 
 class RosOutputs:

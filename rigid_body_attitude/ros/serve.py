@@ -6,7 +6,10 @@ thread for the rest (parameter services, ``~/reset``, ``set_pose``, commands), w
 sleeps in ``rcl_wait`` (GIL released) nearly all the time;
 :attr:`AttitudePropagatorNode.state_lock` keeps the two threads' changes of the state apart.
 :func:`main` also sets Fast DDS up (:mod:`rigid_body_attitude.ros.middleware`); threads keep
-the scheduling policy and CPUs the process was started with (``chrt``, ``taskset``).
+the scheduling policy and CPUs the process was started with (``chrt``, ``taskset``). That
+fast path uses rclpy's private parts (:mod:`~rigid_body_attitude.ros.rclpy_internals`); without
+them, rclpy's stock executor serves every entity on the main thread instead (one log line says
+so).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wa
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
 from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
-from rigid_body_attitude.ros.rclpy_internals import RCLError
+from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, RCLError
 
 __all__ = ['SERVING_LINE', 'main', 'spin']
 
@@ -110,6 +113,10 @@ def spin(node: AttitudePropagatorNode) -> None:
     """
     gc.collect()
     gc.freeze()
+    problem = fast_path_problem()
+    if problem is not None:
+        _spin_stock(node, problem)
+        return
     # Claims the gyro subscriptions and the timers before any executor spins.
     loop = node.gyro_loop()
     executor = SingleThreadedExecutor(context=node.context)
@@ -130,6 +137,22 @@ def spin(node: AttitudePropagatorNode) -> None:
         loop.close()
     if rest.failures:
         raise rest.failures[0]
+
+
+def _spin_stock(node: AttitudePropagatorNode, problem: str) -> None:
+    """Serve every entity of ``node`` with rclpy's stock ``SingleThreadedExecutor`` on this
+    thread, public calls only (:mod:`~.rclpy_internals`: the fast path's private names are
+    missing, or the environment asks for this path)."""
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    logger = node.get_logger()
+    logger.warning(f"serving with rclpy's stock executor ({problem}): the same topics, at a "
+                   'higher CPU cost per message (docs/performance.md)')
+    logger.info(SERVING_LINE)
+    try:
+        executor.spin()
+    finally:
+        executor.shutdown()
 
 
 @closed_pipe_safe

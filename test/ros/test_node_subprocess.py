@@ -3,7 +3,10 @@
 The executable is ``<prefix>/lib/rigid_body_attitude/propagation_node`` with the prefix from
 ``ament_index_python``'s ``get_package_prefix`` (what ros2run does). Each test starts it in a
 namespace of its own on the test run's domain (conftest's environment is inherited), talks to
-it from an in-process harness node and stops it with SIGINT: exit code 0, no traceback.
+it from an in-process harness node and stops it with SIGINT: exit code 0, no traceback. The
+topic tests run on both serving paths: the fast one, and rclpy's stock executor that the node
+falls back to when rclpy's private parts are missing (forced here with the environment variable
+``RIGID_BODY_ATTITUDE_STOCK_EXECUTOR``, see ``ros/rclpy_internals.py``).
 """
 
 from __future__ import annotations
@@ -25,12 +28,14 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
 from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.ros.rclpy_internals import STOCK_EXECUTOR_VARIABLE
 from rigid_body_attitude.ros.serve import SERVING_LINE
 from rigid_body_attitude.session.parameters import defaults
 
 PACKAGE = 'rigid_body_attitude'
 START_TIMEOUT = 30.0  # seconds for the process to start and discover the harness
 SERVING = f']: {SERVING_LINE}'  # the node's last start-up log line, as logged
+STOCK_LINE = "serving with rclpy's stock executor"
 
 
 @pytest.fixture
@@ -47,10 +52,26 @@ def executable() -> Path:
     return path
 
 
-def start(*arguments: str) -> subprocess.Popen:
-    """Start the installed node with ``arguments``; stdout and stderr are captured."""
+@pytest.fixture(params=['fast', 'stock'])
+def serving_path(request) -> str:
+    """The node's serving path: its own gyro loop, or rclpy's stock executor."""
+    return request.param
+
+
+def start(*arguments: str, path: str = 'fast') -> subprocess.Popen:
+    """Start the installed node with ``arguments`` on the serving ``path``; stdout and stderr
+    are captured."""
+    env = dict(os.environ)
+    env.pop(STOCK_EXECUTOR_VARIABLE, None)
+    if path == 'stock':
+        env[STOCK_EXECUTOR_VARIABLE] = '1'
     return subprocess.Popen([str(executable()), *arguments], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, env=env)
+
+
+def check_serving_path(stderr: str, path: str) -> None:
+    """One line says the stock executor serves (and only on that path)."""
+    assert stderr.count(STOCK_LINE) == (path == 'stock'), stderr
 
 
 def read_until(process: subprocess.Popen, text: str, timeout: float = 30.0) -> list[str]:
@@ -79,9 +100,10 @@ def stop_with_sigint(process: subprocess.Popen, timeout: float = 15.0) -> tuple[
     return process.returncode, stderr
 
 
-def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes):
+def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes, serving_path):
     namespace = unique_namespace(request)
-    process = start('--ros-args', '-p', 'scene:=strapdown', '-r', f'__ns:={namespace}')
+    process = start('--ros-args', '-p', 'scene:=strapdown', '-r', f'__ns:={namespace}',
+                    path=serving_path)
     processes.append(process)
     harness = Harness(ros, namespace)
     imu_publisher = harness.publisher(Imu, 'imu')
@@ -102,6 +124,7 @@ def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes):
     code, stderr = stop_with_sigint(process)
     assert code == 0, stderr
     assert 'Traceback' not in stderr
+    check_serving_path(stderr, serving_path)
 
     def seconds(message: QuaternionStamped) -> float:
         return (message.header.stamp.sec * 10**9 + message.header.stamp.nanosec - base_ns) * 1e-9
@@ -118,12 +141,14 @@ def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes):
         assert np.max(np.abs(np.array([q.w, q.x, q.y, q.z]) - expected)) <= 1e-12
 
 
-def test_services_set_pose_and_timers_work_beside_the_gyro_loop(ros, request, processes):
+def test_services_set_pose_and_timers_work_beside_the_gyro_loop(
+        ros, request, processes, serving_path):
     """The executable serves gyro topics and timers in its gyro loop and the rest with an
-    executor thread: reset, set_pose and /diagnostics all answer while it runs."""
+    executor thread (or all with the stock executor): reset, set_pose and /diagnostics all
+    answer while it runs."""
     namespace = unique_namespace(request)
     process = start('--ros-args', '-p', 'scene:=strapdown', '-p', 'publish_rate:=100.0',
-                    '-r', f'__ns:={namespace}')
+                    '-r', f'__ns:={namespace}', path=serving_path)
     processes.append(process)
     harness = Harness(ros, namespace)
     imu_publisher = harness.publisher(Imu, 'imu')
@@ -169,13 +194,16 @@ def test_services_set_pose_and_timers_work_beside_the_gyro_loop(ros, request, pr
     code, stderr = stop_with_sigint(process)
     assert code == 0, stderr
     assert 'Traceback' not in stderr and 'set_pose: attitude' in stderr
+    check_serving_path(stderr, serving_path)
 
 
-def test_default_scene_with_the_params_file_publishes_pose_alone(ros, request, processes):
+def test_default_scene_with_the_params_file_publishes_pose_alone(
+        ros, request, processes, serving_path):
     namespace = unique_namespace(request)
     params_file = Path(get_package_prefix(PACKAGE)) / 'share' / PACKAGE / 'config' / 'params.yaml'
     assert params_file.is_file()
-    process = start('--ros-args', '--params-file', str(params_file), '-r', f'__ns:={namespace}')
+    process = start('--ros-args', '--params-file', str(params_file), '-r', f'__ns:={namespace}',
+                    path=serving_path)
     processes.append(process)
     harness = Harness(ros, namespace)
     poses = harness.record(PoseStamped, 'pose')
@@ -185,6 +213,7 @@ def test_default_scene_with_the_params_file_publishes_pose_alone(ros, request, p
     assert code == 0, stderr
     assert 'Traceback' not in stderr
     assert "scene 'torque_free_box'" in stderr  # the start-up INFO line names the scene
+    check_serving_path(stderr, serving_path)
     stamps = np.array([m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in poses])
     assert np.all(np.diff(stamps) > 0.0)
     # Timer ticks at publish_rate = 50 Hz on the node clock: a median spacing of 20 ms, with
