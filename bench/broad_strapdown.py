@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from rigid_body_attitude.tools.broad import BroadTrial, load_trial
-from rigid_body_attitude.core.quaternion import attitude_error, scalar_exp_step
+from rigid_body_attitude.core.attitude.quaternion import attitude_error, scalar_exp_step
 
 DEFAULT_DATA_DIR = Path(__file__).resolve().parent.parent / 'data' / 'broad'
 TRIALS = ('07_undisturbed_fast_rotation_B', '15_undisturbed_fast_translation_A')

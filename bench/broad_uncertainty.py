@@ -38,11 +38,12 @@ from pathlib import Path
 
 import numpy as np
 
-from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
-from rigid_body_attitude.core.gyro_error_model import GyroErrorModel, initial_covariance
-from rigid_body_attitude.core.integrators.strapdown import STRAPDOWN_METHODS, strapdown_method
-from rigid_body_attitude.core.quaternion import scalar_step_rate
+from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.imu.attitude_covariance import AttitudeCovariance
+from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.core.attitude.integrators.strapdown import (
+    STRAPDOWN_METHODS, strapdown_method)
+from rigid_body_attitude.core.attitude.quaternion import scalar_step_rate
 from rigid_body_attitude.tools.broad import BroadTrial, load_trial
 
 REPO_ROOT = Path(__file__).resolve().parent.parent

@@ -30,10 +30,11 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from rigid_body_attitude.core.alignment import GravityAligner  # noqa: E402
-from rigid_body_attitude.core.calibration import ImuCalibration  # noqa: E402
-from rigid_body_attitude.core.integrators.strapdown import DeltaSingle, ExpMap  # noqa: E402
-from rigid_body_attitude.core.rest import RestBiasEstimator, RestDetector  # noqa: E402
+from rigid_body_attitude.core.imu.alignment import GravityAligner  # noqa: E402
+from rigid_body_attitude.core.imu.calibration import ImuCalibration  # noqa: E402
+from rigid_body_attitude.core.attitude.integrators.strapdown import (  # noqa: E402
+    DeltaSingle, ExpMap)
+from rigid_body_attitude.core.imu.rest import RestBiasEstimator, RestDetector  # noqa: E402
 
 Rows = list[tuple[float, float, float]]
 

@@ -2,7 +2,8 @@
 
 For each shipped trial (07: fast rotation up to 25 rad/s; 15: translation, small rotations) and
 each strapdown method the propagator offers
-(:func:`rigid_body_attitude.core.integrators.strapdown_method`), the trial is converted to a bag
+(:func:`rigid_body_attitude.core.attitude.integrators.strapdown_method`), the trial is converted to
+a bag
 (``rigid_body_attitude.tools.broad.trial_to_bag``) and replayed with ``replay`` exactly as
 ``test/tools/test_real_data.py`` does: the ``gyro_bias`` effect averages the initial rest phase,
 the attitude starts from the ground truth at the first motion sample, and the largest attitude
@@ -28,7 +29,7 @@ import numpy as np
 import yaml
 
 from rigid_body_attitude.tools import broad
-from rigid_body_attitude.core.integrators import STRAPDOWN_METHODS
+from rigid_body_attitude.core.attitude.integrators import STRAPDOWN_METHODS
 from rigid_body_attitude.tools.replay import ReplayOptions, replay_bag
 
 DEFAULT_DATA_DIR = Path(__file__).resolve().parent.parent / 'data' / 'broad'

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from rigid_body_attitude.core.calibration import load_calibration
+from rigid_body_attitude.core.imu.calibration import load_calibration
 from rigid_body_attitude.core.propagator import GyroPropagator
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
 from rigid_body_attitude.session.levelling import (

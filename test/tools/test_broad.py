@@ -9,7 +9,7 @@ import pytest
 from rigid_body_attitude import bag, msgs
 from rigid_body_attitude.tools import broad
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.quaternion import attitude_error, scalar_exp_step
+from rigid_body_attitude.core.attitude.quaternion import attitude_error, scalar_exp_step
 
 TRIAL_07 = '07_undisturbed_fast_rotation_B'
 TRIAL_15 = '15_undisturbed_fast_translation_A'

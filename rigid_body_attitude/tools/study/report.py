@@ -41,8 +41,8 @@ SIGN_CONVENTION = (
     'Coning drift: the long-run rate [rad/s] of the cone-axis component of the error rotation '
     '`log(q_computed* ⊗ q_true)`, measured between the ends of the first and the last cone '
     'period; positive means the computed attitude lags the truth about the cone axis '
-    '(`rigid_body_attitude/core/integrators/strapdown.py`, where each method declares its '
-    'coefficient).')
+    '(`rigid_body_attitude/core/attitude/integrators/strapdown.py`, where each method declares '
+    'its coefficient).')
 
 
 def cpu_at_error(rows: Sequence[Row], target: float) -> float:
