@@ -21,7 +21,7 @@ from rigid_body_attitude.core.dynamics.effects import Effect, RotorEffect, Torqu
 from rigid_body_attitude.core.errors import InputError, IntegratorError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.dynamics.integrators.base import body_derivative
-from rigid_body_attitude.core.dynamics.integrators.rigid_body_rk4 import rk4_state_step
+from rigid_body_attitude.core.dynamics.integrators.rk4_kernel import rk4_state_step
 
 __all__ = ['RigidBodyModel', 'euler_rate', 'rk4_step']
 
@@ -194,7 +194,7 @@ def _all_finite(h: float, values: tuple[float, ...]) -> bool:
 def rk4_step(model: RigidBodyModel, t: float, attitude: FloatArray, omega_body: FloatArray,
              h: float) -> tuple[FloatArray, FloatArray]:
     """Classical RK4 on ``(q, ω)`` jointly, then ``q`` renormalised: the ``rk4`` integrator's
-    step (:func:`.integrators.rigid_body_rk4.rk4_state_step`) on arrays, with its checks.
+    step (:func:`.integrators.rk4_kernel.rk4_state_step`) on arrays, with its checks.
 
     Raises :class:`InputError` for a non-finite ``h`` or state or wrong shapes and
     :class:`IntegratorError` for a non-finite result. Order 4; cost 4 evaluations of Euler's

@@ -52,11 +52,11 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.effects import EFFECTS, BodyProperties, Effect
-from rigid_body_attitude.core.dynamics.effects.base import MAGNITUDE_LIMIT, real
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.paths import config_folders
-from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml
+from rigid_body_attitude.core.yaml_files import (
+    bounded as _bounded, MAGNITUDE_LIMIT, quote, read_yaml, real)
 
 __all__ = ['MAX_DESCRIPTION_CHARS', 'MAX_NAME_CHARS', 'RATE_SOURCES', 'SCALE_LIMIT', 'Scene',
            'builtin_scenes', 'load_scene', 'scene_from_mapping', 'scene_path']

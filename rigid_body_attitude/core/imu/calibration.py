@@ -42,9 +42,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rigid_body_attitude.core.dynamics.effects.base import real
 from rigid_body_attitude.core.errors import CalibrationError
-from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml
+from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml, real
 
 __all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'ImuNoise', 'ORTHONORMAL_TOLERANCE',
            'calibration_from_mapping', 'load_calibration']

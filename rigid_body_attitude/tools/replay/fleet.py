@@ -24,8 +24,9 @@ import numpy as np
 
 from rigid_body_attitude.bag import BagReader
 from rigid_body_attitude.core.errors import AttitudeError, InputError
-from rigid_body_attitude.tools.campaign.engine import dask_client
-from rigid_body_attitude.tools.replay import ReplayOptions, ReplayResult, replay_bag
+from rigid_body_attitude.tools.cluster import dask_client
+from rigid_body_attitude.tools.replay.options import ReplayOptions
+from rigid_body_attitude.tools.replay.run import ReplayResult, replay_bag
 
 __all__ = ['COLUMNS', 'find_bags', 'format_table', 'replay_fleet', 'replay_one']
 

@@ -331,7 +331,7 @@ def test_written_out_rk4_step_is_the_generic_step(tensor, terms):
     # left out, which are exact zeros): same floats as the generic step, and the same work.
     from rigid_body_attitude.core.dynamics.euler import RigidBodyModel
     from rigid_body_attitude.core.dynamics.inertia import Inertia
-    from rigid_body_attitude.core.dynamics.integrators.rigid_body_rk4 import rk4_work_step
+    from rigid_body_attitude.core.dynamics.integrators.rk4_kernel import rk4_work_step
     from rigid_body_attitude.core.dynamics.integrators.rk4_kernel import rk4_kernel
     torques = [lambda t, q, w: (0.1 * q[1], -0.2 * w[0], 0.3 * t)] if 'torque' in terms else []
     rotors = ([lambda t: ((0.0, 0.3 + 0.1 * t, 0.0), (0.0, 0.1, 0.0))] if 'rotor' in terms

@@ -13,7 +13,8 @@ import pytest
 
 from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.dynamics.effects import EFFECTS, RateCorrection, TorqueEffect
-from rigid_body_attitude.core.dynamics.effects.base import Parameter, real, register
+from rigid_body_attitude.core.dynamics.effects.base import Parameter, register
+from rigid_body_attitude.core.yaml_files import real
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.propagator import (
     build_propagator, DynamicsPropagator, GyroPropagator)

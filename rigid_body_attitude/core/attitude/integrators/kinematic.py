@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from rigid_body_attitude.core.errors import IntegratorError
-from rigid_body_attitude.core.dynamics.integrators.base import (
+from rigid_body_attitude.core.attitude.float_quaternion import (
     q_multiply, q_normalize, q_rotate_step, Quat, SERIES_THRESHOLD, Vec)
 
 __all__ = [

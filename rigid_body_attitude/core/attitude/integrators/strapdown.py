@@ -42,7 +42,7 @@ from fractions import Fraction
 from typing import Any
 
 from rigid_body_attitude.core.errors import IntegratorError
-from rigid_body_attitude.core.dynamics.integrators.base import (
+from rigid_body_attitude.core.attitude.float_quaternion import (
     q_multiply, q_normalize, q_rotate_step, Quat, Vec)
 
 __all__ = [

@@ -37,6 +37,7 @@ from rigid_body_attitude.core.dynamics.batch_rows import BatchChunk
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.registry import Registry
+from rigid_body_attitude.core.yaml_files import real
 
 __all__ = [
     'BatchChunk',
@@ -95,41 +96,6 @@ class Parameter:
     convert: Callable[[Any], Any]
     default: Any
     description: str
-
-
-#: Largest magnitude of an effect's number: the scene's own bound
-#: (:data:`rigid_body_attitude.core.dynamics.scene.SCALE_LIMIT`), so that products of a few such
-#: numbers
-#: (torques, momenta, energies) stay finite; far beyond any physical parameter (the Sun's
-#: gravitational parameter is 1.3e20 m³/s²).
-MAGNITUDE_LIMIT = 1e75
-
-
-def real(value: Any) -> float:
-    """A finite real number of magnitude at most :data:`MAGNITUDE_LIMIT` (booleans and strings
-    are refused)."""
-    if isinstance(value, str) and _looks_numeric(value):
-        raise TypeError(f'a number (YAML 1.1 reads {value} as text: write it with a sign in '
-                        f'the exponent and a dot, e.g. 7.0e+6)')
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError('a number')
-    try:
-        number = float(value)
-    except OverflowError as err:  # an integer too large for a float
-        raise ValueError('a number of magnitude at most 1e75') from err
-    if not np.isfinite(number):
-        raise ValueError('a finite number')
-    if abs(number) > MAGNITUDE_LIMIT:
-        raise ValueError('a number of magnitude at most 1e75')
-    return number
-
-
-def _looks_numeric(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def positive(value: Any) -> float:

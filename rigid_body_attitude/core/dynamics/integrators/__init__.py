@@ -19,11 +19,11 @@ from __future__ import annotations
 from typing import Any
 
 from rigid_body_attitude.core.errors import IntegratorError
-from rigid_body_attitude.core.registry import Registry
 from rigid_body_attitude.core.dynamics.integrators.adaptive import DormandPrince45
 from rigid_body_attitude.core.dynamics.integrators.base import (
     BodyModel, DynamicsIntegrator, SimpleBodyModel)
-from rigid_body_attitude.core.dynamics.integrators.dynamics_base import DynamicsMethod
+from rigid_body_attitude.core.dynamics.integrators.dynamics_base import (
+    DYNAMICS_INTEGRATORS, torque_integrators)
 from rigid_body_attitude.core.dynamics.integrators.exact_step import ExactTorqueFree
 from rigid_body_attitude.core.dynamics.integrators.exact_torque_free import TorqueFreeMotion
 from rigid_body_attitude.core.dynamics.integrators.rigid_body_rk4 import RigidBodyRk4
@@ -42,21 +42,10 @@ __all__ = [
     'torque_integrators',
 ]
 
-#: Dynamics integrators by name (values are classes): a :class:`~.registry.Registry`, the
-#: mechanism the effects use too.
-DYNAMICS_INTEGRATORS: Registry[type[DynamicsMethod]] = Registry('dynamics integrator',
-                                                                IntegratorError)
 for _cls in (RigidBodyRk4, RigidBodyRkmk4, StrangSplitting, Yoshida4Splitting,
              Casimir6Splitting, Casimir8Splitting, BlanesMoan4Splitting, BlanesMoan6Splitting,
              DormandPrince45, ExactTorqueFree):
     DYNAMICS_INTEGRATORS.register(_cls)
-
-
-def torque_integrators() -> tuple[str, ...]:
-    """Names of the dynamics integrators that handle torques and rotors (``supports_torque``),
-    sorted; the others handle torque-free bodies only."""
-    return tuple(sorted(name for name, cls in DYNAMICS_INTEGRATORS.items()
-                        if cls.supports_torque))
 
 
 def dynamics_integrator(name: str, **options: Any) -> Any:

@@ -1,14 +1,12 @@
-"""What the integrators share: the body-model protocol and plain-float quaternion helpers.
+"""What the dynamics integrators share: the body-model protocol and the state derivatives.
 
 Conventions are those of :mod:`rigid_body_attitude.core.attitude.quaternion` (Hamilton, scalar
-first, ``q``
-maps body to world, ``q̇ = ½ q ⊗ (0, ω_body)``). Hot per-step code works on tuples of floats:
-NumPy costs about 1 µs per call, more than a whole plain-float quaternion product.
+first, ``q`` maps body to world, ``q̇ = ½ q ⊗ (0, ω_body)``). Hot per-step code works on tuples
+of floats, with the helpers of :mod:`rigid_body_attitude.core.attitude.float_quaternion`.
 
 The dynamics integrators see the body only through :class:`BodyModel`, a protocol with the
-few members they use (``rigid_body_attitude.core.dynamics.euler.RigidBodyModel`` provides them).
-The
-equations they advance (physics.md §1) are, in body axes,
+few members they use (``rigid_body_attitude.core.dynamics.euler.RigidBodyModel`` provides
+them). The equations they advance are, in body axes,
 
     J ω̇ + ω × (J ω + h) = M − ḣ,        q̇ = ½ q ⊗ (0, ω),
 
@@ -26,6 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude.core.attitude import quaternion as quat
+from rigid_body_attitude.core.attitude.float_quaternion import (
+    q_exp, q_multiply, q_normalize, q_rotate_step, Quat, SERIES_THRESHOLD, Vec)
 from rigid_body_attitude.core.errors import InertiaError, IntegratorError
 from rigid_body_attitude.core.dynamics.integrators.exact_torque_free import principal_frame
 
@@ -34,6 +34,7 @@ __all__ = [
     'DynamicsIntegrator',
     'SimpleBodyModel',
     'Quat',
+    'SERIES_THRESHOLD',
     'Vec',
     'as_state',
     'body_derivative',
@@ -48,13 +49,8 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-Quat = tuple[float, float, float, float]
-Vec = tuple[float, float, float]
 TorqueFunction = Callable[[float, FloatArray, FloatArray], ArrayLike]
 RotorFunction = Callable[[float], tuple[ArrayLike, ArrayLike]]
-
-#: Below this rotation angle (rad) the exponential uses its series (quaternion.py).
-SERIES_THRESHOLD = quat.SERIES_THRESHOLD
 
 
 @runtime_checkable
@@ -188,43 +184,6 @@ def check_step(h: float) -> float:
     if not math.isfinite(step):
         raise IntegratorError(f'Expected a finite step `h`, got {h!r}')
     return step
-
-
-def q_multiply(a: Sequence[float], b: Sequence[float]) -> Quat:
-    """Hamilton product ``a ⊗ b`` of two 4-sequences (plain floats)."""
-    aw, ax, ay, az = a
-    bw, bx, by, bz = b
-    return (aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw)
-
-
-def q_exp(vx: float, vy: float, vz: float) -> Quat:
-    """``exp(v) = (cos(|v|/2), sin(|v|/2) v/|v|)`` with the series below the threshold."""
-    angle = math.sqrt(vx * vx + vy * vy + vz * vz)
-    if angle < SERIES_THRESHOLD:  # guard zero and subnormal angles
-        a2 = angle * angle
-        scale = 0.5 - a2 / 48.0 + a2 * a2 / 3840.0
-    else:
-        scale = math.sin(0.5 * angle) / angle
-    return math.cos(0.5 * angle), vx * scale, vy * scale, vz * scale
-
-
-def q_normalize(q: Sequence[float]) -> Quat:
-    """``q/|q|`` (plain floats); a zero or non-finite norm raises :class:`IntegratorError`."""
-    w, x, y, z = q
-    norm = math.sqrt(w * w + x * x + y * y + z * z)
-    if not (norm > 0.0 and math.isfinite(norm)):
-        raise IntegratorError(f'Expected a finite non-zero quaternion, got {tuple(q)!r}; the '
-                              f'step is unstable for this rate')
-    inv = 1.0 / norm
-    return w * inv, x * inv, y * inv, z * inv
-
-
-def q_rotate_step(q: Sequence[float], vx: float, vy: float, vz: float) -> Quat:
-    """``normalize(q ⊗ exp(v))``: the exact update for the rotation vector ``v`` (body)."""
-    return q_normalize(q_multiply(q, q_exp(vx, vy, vz)))
 
 
 def body_derivative(model: BodyModel, t: float, state: Sequence[float]) -> tuple[float, ...]:

@@ -23,11 +23,12 @@ from typing import ClassVar
 from numpy.typing import ArrayLike
 
 from rigid_body_attitude.core.errors import IntegratorError
+from rigid_body_attitude.core.registry import Registry
 from rigid_body_attitude.core.dynamics.integrators.base import (
     as_state, body_derivative_power, BodyModel, check_step, FloatArray, output, q_exp,
     q_multiply, Quat, Vec)
 
-__all__ = ['DynamicsMethod']
+__all__ = ['DYNAMICS_INTEGRATORS', 'DynamicsMethod', 'torque_integrators']
 
 #: Relative slack on ``max_rotation_per_step``, so that a step at the limit up to round-off
 #: (the propagator's equal substeps, ``h·|ω|`` computed as 2·(1 + 2ε)) passes and is not
@@ -88,15 +89,12 @@ class DynamicsMethod:
 
     def _check_model(self, model: BodyModel) -> None:
         if not self.supports_torque and not model.torque_free:
-            from rigid_body_attitude.core.dynamics.integrators import (  # no cycle
-                torque_integrators)
             raise IntegratorError(f'Integrator {self.name!r} handles torque-free bodies only; '
                                   f'this model has a torque or a rotor. Use one of '
                                   f'{", ".join(torque_integrators())}')
 
     def _refuse_rotation(self, h: float, omega: Vec, step_index: int) -> None:
         """Raise the :class:`IntegratorError` for a step with ``h·|ω|`` above the limit."""
-        from rigid_body_attitude.core.dynamics.integrators import DYNAMICS_INTEGRATORS  # no cycle
         stable = sorted(name for name, cls in DYNAMICS_INTEGRATORS.items()
                         if cls.max_rotation_per_step == math.inf)
         speed = math.sqrt(omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2])
@@ -147,3 +145,17 @@ class DynamicsMethod:
                 self._refuse_rotation(h, omega, k + 1)
             q, omega = advance(q, omega, t_start + k * h, h, model)
         return output(q, omega)
+
+
+#: Dynamics integrators by name (values are classes): a :class:`~.registry.Registry`, the
+#: mechanism the effects use too. The package's ``__init__`` registers every method; it sits
+#: here, below the methods, so that a method's error message can list the others.
+DYNAMICS_INTEGRATORS: Registry[type[DynamicsMethod]] = Registry('dynamics integrator',
+                                                                IntegratorError)
+
+
+def torque_integrators() -> tuple[str, ...]:
+    """Names of the dynamics integrators that handle torques and rotors (``supports_torque``),
+    sorted; the others handle torque-free bodies only."""
+    return tuple(sorted(name for name, cls in DYNAMICS_INTEGRATORS.items()
+                        if cls.supports_torque))

@@ -8,43 +8,11 @@ energy balance costs no extra torque evaluation.
 
 from __future__ import annotations
 
-from rigid_body_attitude.core.dynamics.integrators.base import (
-    body_derivative_power, BodyModel, q_normalize, Quat, Vec)
+from rigid_body_attitude.core.dynamics.integrators.base import BodyModel, q_normalize, Quat, Vec
 from rigid_body_attitude.core.dynamics.integrators.dynamics_base import DynamicsMethod
 from rigid_body_attitude.core.dynamics.integrators.rk4_kernel import Rk4Kernel, rk4_kernel
 
-__all__ = ['RigidBodyRk4', 'rk4_state_step', 'rk4_work_step']
-
-
-def rk4_work_step(model: BodyModel, t: float, state: tuple[float, ...],
-                  h: float) -> tuple[tuple[float, ...], float]:
-    """One classical RK4 step of ``h`` from ``t`` on the 7-float state ``(q, ω)``, without
-    renormalisation, and the work [J] of the torques over the step (RK4 quadrature of the
-    stage powers). Plain floats, every stage written out (no per-stage tuple building)."""
-    y0, y1, y2, y3, y4, y5, y6 = state
-    half = 0.5 * h
-    a0, a1, a2, a3, a4, a5, a6, a7 = body_derivative_power(model, t, state)
-    b0, b1, b2, b3, b4, b5, b6, b7 = body_derivative_power(model, t + half, (
-        y0 + half * a0, y1 + half * a1, y2 + half * a2, y3 + half * a3, y4 + half * a4,
-        y5 + half * a5, y6 + half * a6))
-    c0, c1, c2, c3, c4, c5, c6, c7 = body_derivative_power(model, t + half, (
-        y0 + half * b0, y1 + half * b1, y2 + half * b2, y3 + half * b3, y4 + half * b4,
-        y5 + half * b5, y6 + half * b6))
-    d0, d1, d2, d3, d4, d5, d6, d7 = body_derivative_power(model, t + h, (
-        y0 + h * c0, y1 + h * c1, y2 + h * c2, y3 + h * c3, y4 + h * c4, y5 + h * c5,
-        y6 + h * c6))
-    s = h / 6.0
-    return ((y0 + s * (a0 + 2.0 * (b0 + c0) + d0), y1 + s * (a1 + 2.0 * (b1 + c1) + d1),
-             y2 + s * (a2 + 2.0 * (b2 + c2) + d2), y3 + s * (a3 + 2.0 * (b3 + c3) + d3),
-             y4 + s * (a4 + 2.0 * (b4 + c4) + d4), y5 + s * (a5 + 2.0 * (b5 + c5) + d5),
-             y6 + s * (a6 + 2.0 * (b6 + c6) + d6)),
-            s * (a7 + 2.0 * (b7 + c7) + d7))
-
-
-def rk4_state_step(model: BodyModel, t: float, state: tuple[float, ...],
-                   h: float) -> tuple[float, ...]:
-    """:func:`rk4_work_step` without the work."""
-    return rk4_work_step(model, t, state, h)[0]
+__all__ = ['RigidBodyRk4']
 
 
 class RigidBodyRk4(DynamicsMethod):
