@@ -431,20 +431,12 @@ class HeldInput:
             self.owner.count('stale')
         return None
 
-    def active(self, t: float) -> bool:
-        """Whether a command is in force at ``t``; counts an expiry once."""
-        return self.segment_at(t) is not None
-
     def vector_at(self, t: float) -> Vec:
         """The command in force at ``t``, or zero (plain floats)."""
         if self.window is not None:
             return self.pinned[2]
         segment = self.segment_at(t)
         return _ZERO if segment is None else segment[2]
-
-    def value_at(self, t: float) -> FloatArray:
-        """:meth:`vector_at` as a (3,) array."""
-        return np.array(self.vector_at(t))
 
     def integral_at(self, t: float) -> Vec:
         """``∫ command dt`` from the first command to ``t`` (exact for the piecewise constant)."""

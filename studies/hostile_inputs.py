@@ -7,8 +7,8 @@ counted every case in ``/diagnostics`` under the expected reason, kept every out
 ended with exactly the state the good inputs alone give. ``docs/robustness.md`` quotes the
 table this prints (or writes to ``--out``)::
 
-    .venv/bin/python bench/hostile_inputs.py            # about a minute
-    .venv/bin/python bench/hostile_inputs.py --domain 91 --out /tmp/hostile.md
+    .venv/bin/python studies/hostile_inputs.py            # about a minute
+    .venv/bin/python studies/hostile_inputs.py --domain 91 --out /tmp/hostile.md
 """
 
 from __future__ import annotations
@@ -368,7 +368,7 @@ def write_report(results: list[Result], path: Path | None, seed: int) -> None:
               f'| {r.outcome} |' for r in results]
     total = sum(r.cases for r in results)
     lines += ['', f'{total} cases in {sum(r.seconds for r in results):.0f} s '
-                  f'(`bench/hostile_inputs.py --seed {seed}`).']
+                  f'(`studies/hostile_inputs.py --seed {seed}`).']
     if path is None:
         print('\n'.join(lines))
         return

@@ -22,7 +22,7 @@ prior and the misalignment prior added alone, then all of them (the defaults).
 ``--priors SCALE,MISALIGNMENT``: other 1σ priors for the scale-factor and misalignment errors
 than the defaults (what a user with a calibrated or better-specified gyro would set).
 
-Usage: ``python bench/broad_uncertainty.py [DATA_DIR ...] [--methods a,b] [--budget]
+Usage: ``python studies/broad_uncertainty.py [DATA_DIR ...] [--methods a,b] [--budget]
 [--priors S,M]`` (default: the repository's ``data/broad`` and a ``shared/data/broad`` beside
 or above the checkout).
 Data: BROAD, Laidig et al., Data 6(7):72, 2021, doi:10.3390/data6070072, CC BY 4.0.

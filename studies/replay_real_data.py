@@ -13,7 +13,7 @@ Prints a Markdown table (the README's).
 Data: D. Laidig, M. Caruso, A. Cereatti, T. Seel, "BROAD — A Benchmark for Robust Inertial
 Orientation Estimation", Data 6(7):72, 2021, doi:10.3390/data6070072, CC BY 4.0.
 
-Usage: ``python bench/replay_real_data.py [DATA_DIR] [--methods a,b,...]``
+Usage: ``python studies/replay_real_data.py [DATA_DIR] [--methods a,b,...]``
 (default the repository's ``data/broad``, all methods).
 """
 

@@ -9,7 +9,7 @@ largest attitude error against the ground truth at the sample stamps. Updates co
 * ``exp, ω_{k+1}``: ``q_{k+1} = q_k ⊗ exp(h ω_{k+1})`` (rate sample at the end),
 * ``trapezoid + coning``: ``q_{k+1} = q_k ⊗ exp(½h(ω_k + ω_{k+1}) + (h²/12) ω_k × ω_{k+1})``.
 
-Usage: ``python bench/broad_strapdown.py [DATA_DIR]`` (default the repository's ``data/broad``).
+Usage: ``python studies/broad_strapdown.py [DATA_DIR]`` (default the repository's ``data/broad``).
 Data: BROAD, Laidig et al., Data 6(7):72, 2021, doi:10.3390/data6070072, CC BY 4.0.
 """
 
