@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.core.imu.alignment import ALIGNED, GravityAligner
 from rigid_body_attitude.core.imu.calibration import ImuCalibration
 from rigid_body_attitude.core.errors import InputError
@@ -44,15 +45,6 @@ Affine = tuple[float, float, float, float, float, float, float, float, float, fl
 
 #: Where the initial attitude came from (:attr:`AlignmentResult.source`).
 FROM_GRAVITY, FROM_TIMEOUT, FROM_SCENE = 'gravity', 'timeout', 'scene'
-
-
-def rpy_quaternion(roll: float, pitch: float, yaw: float) -> Quat:
-    """``Rz(yaw) Ry(pitch) Rx(roll)`` as ``(w, x, y, z)`` (tf2's ``setRPY``; radians)."""
-    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
-    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
-    cy, sy = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
-    return (cy * cp * cr + sy * sp * sr, cy * cp * sr - sy * sp * cr,
-            cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr)
 
 
 def heading(attitude: Sequence[float]) -> float:

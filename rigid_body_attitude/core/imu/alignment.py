@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 
+from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.imu.rest import RestDetector
 
@@ -65,11 +66,7 @@ def levelled_attitude(specific_force_body: Vec, yaw: float = 0.0,
     s = world_up(world_axes)[2]
     roll = math.atan2(s * fy, s * fz)
     pitch = math.atan2(-s * fx, math.hypot(fy, fz))
-    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
-    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
-    cy, sy = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
-    return (cy * cp * cr + sy * sp * sr, cy * cp * sr - sy * sp * cr,
-            cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr)
+    return rpy_quaternion(roll, pitch, yaw)
 
 
 def _up_in_body(q: Quat, up: Vec) -> Vec:
