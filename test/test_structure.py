@@ -1,6 +1,7 @@
 """The package stays in small pieces: no module over 600 lines, no class over 250."""
 
 import ast
+import re
 from pathlib import Path
 import sys
 
@@ -179,3 +180,22 @@ def test_core_rooms_import_only_the_rooms_below_them():
 def test_the_core_imports_no_node_layer():
     allowed = ('numpy', 'scipy', 'yaml', 'rigid_body_attitude.core')
     assert imports_outside(['core'], allowed) == []
+
+
+def listed_in_architecture(relative, text):
+    """Whether docs/architecture.md names the module at ``relative`` (a path in the package):
+    its file name in the tree drawing (the tree's indentation places it), or its path."""
+    return relative.as_posix() in text or re.search(
+        rf'(?<![\w/]){re.escape(relative.name)}(?!\w)', text) is not None
+
+
+def test_architecture_lists_every_module_and_subpackage():
+    text = (PACKAGE.parent / 'docs' / 'architecture.md').read_text()
+    missing = [str(path.relative_to(PACKAGE)) for path in sorted(PACKAGE.rglob('*.py'))
+               if path.name not in ('__init__.py', '__main__.py')
+               and not listed_in_architecture(path.relative_to(PACKAGE), text)]
+    missing += [f'{path.relative_to(PACKAGE)}/' for path in sorted(PACKAGE.rglob('*'))
+                if path.is_dir() and path.name != '__pycache__'
+                and f'{path.name}/' not in text]
+    assert missing == []
+    assert not listed_in_architecture(Path('core/no_such_module.py'), text)
