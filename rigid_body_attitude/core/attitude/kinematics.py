@@ -73,8 +73,8 @@ def rk4_quaternion_step(attitude: ArrayLike, omega_of_time: Callable[[float], Ar
                         t: float, h: float) -> FloatArray:
     """Classical RK4 on ``q`` for a rate ``ω(t)``, renormalised (order 4, 4 products).
 
-    RK4 does not keep ``|q|`` (it shrinks by about ``(h|ω|)⁶/9216`` per step, physics.md §6);
-    the projection restores it.
+    RK4 does not keep ``|q|`` (it shrinks by about ``(h|ω|)⁶/9216`` per step: RK4's stability
+    function on the imaginary axis); the projection restores it.
     """
     q = _checked_attitude(attitude)
     h = _checked_step(h)

@@ -22,7 +22,8 @@ Conventions (every other module refers here):
   jump. :func:`attitude_error` is sign-invariant.
 * **Euler angles (ZXZ)** ``(ψ, θ, φ)``: ``q = exp(ψ e_z) ⊗ exp(θ e_x) ⊗ exp(φ e_z)``
   (intrinsic z–x′–z″, seeds 000 eq. 20 and 002). **Bryant angles (XYZ)** ``(α₁, α₂, α₃)``:
-  ``q = exp(α₁ e_x) ⊗ exp(α₂ e_y) ⊗ exp(α₃ e_z)`` (seed 000 eq. 24).
+  ``q = exp(α₁ e_x) ⊗ exp(α₂ e_y) ⊗ exp(α₃ e_z)`` (Wittenburg, *Dynamics of Multibody Systems*, 2nd
+  ed., 2008, §2.2).
 * Units SI, frames right-handed (REP-103), the world frame ENU by default.
 
 Small angles use series (``sin(a/2)/a ≈ ½ − a²/48 + a⁴/3840``) below ``SERIES_THRESHOLD`` so
@@ -306,7 +307,8 @@ def continuous(q: ArrayLike, previous: ArrayLike) -> FloatArray:
 def attitude_error(p: ArrayLike, q: ArrayLike) -> FloatArray | float:
     """Angle (rad, in ``[0, π]``) of the rotation between ``p`` and ``q``; sign-invariant.
 
-    ``2 atan2(|vec(p* ⊗ q)|, |scalar(p* ⊗ q)|)`` (physics.md §1).
+    ``2 atan2(|vec(p* ⊗ q)|, |scalar(p* ⊗ q)|)``: the rotation angle of ``p* ⊗ q`` (Shuster,
+    "A survey of attitude representations", 1993, §5).
     """
     d = multiply(conjugate(p), q)
     result = 2.0 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))

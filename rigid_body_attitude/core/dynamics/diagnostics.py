@@ -1,4 +1,4 @@
-"""Energy and angular-momentum diagnostics (seed 002: kinetic energy, power theorem).
+"""Energy and angular-momentum diagnostics (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36).
 
 * rotational kinetic energy ``T = ½ ωᵀ J ω`` (+ ``½ m v²`` with translation) [J];
 * body angular momentum ``m = J ω + h_rotor`` [N m s] and its world-frame image

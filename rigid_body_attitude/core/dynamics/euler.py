@@ -1,7 +1,8 @@
 """Euler's rigid-body equations and the body model the dynamics integrators advance.
 
 Body axes, full symmetric inertia ``J`` about the centre of mass (or the fixed point), rotor
-(gyrostat) momentum ``h`` in body axes (physics.md §1, seed 002 §8):
+(gyrostat) momentum ``h`` in body axes (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36; the
+rotor term: Hughes, *Spacecraft Attitude Dynamics*, 1986, §3.4):
 
     J ω̇ + ω × (J ω + h) = M − ḣ,        q̇ = ½ q ⊗ (0, ω).
 
@@ -201,8 +202,9 @@ def rk4_step(model: RigidBodyModel, t: float, attitude: FloatArray, omega_body: 
     equations and of the torques per step, in plain float math (no NumPy per-call overhead
     for a torque-free body). Keeps ``|q| = 1`` by
     projection only (RK4 alone shrinks ``|q|`` by about ``(h|ω|)⁶/9216`` per step,
-    physics.md §6); energy and momentum drift at O(h⁴) per unit time. The baseline every other
-    method is measured against (Kutta 1901; Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1).
+    its stability function on the imaginary axis); energy and momentum drift at O(h⁴) per unit
+    time. The baseline every other method is measured against (Kutta 1901; Hairer, Nørsett &
+    Wanner, *Solving ODEs I*, §II.1).
     """
     y0 = tuple(attitude.tolist()) + tuple(omega_body.tolist())
     if len(y0) != 7 or not _all_finite(h, y0):

@@ -6,7 +6,8 @@ at construction: symmetric (to a relative 1e−12), finite, positive definite an
 triangle inequalities of the principal moments (``J₁ + J₂ ≥ J₃`` for every permutation, which
 holds for any real mass distribution). Errors name the offending values.
 
-Shapes follow seed 002 (§8, example 8.1) and physics.md §2.7.
+Shapes: the inertia tensor and the parallel-axis theorem of Landau & Lifshitz, *Mechanics*, 3rd
+ed., 1976, §32.
 """
 
 from __future__ import annotations
@@ -121,8 +122,9 @@ class Inertia:
         """Solid box of ``mass`` [kg] and ``edges`` (a, b, c) [m] along x, y, z.
 
         ``about='centre'``: diag(M(b²+c²), M(c²+a²), M(a²+b²))/12.
-        ``about='corner'``: about a corner with the edges on the positive axes (seed 002,
-        example 8.1): diagonal M(b²+c²)/3 …, products of inertia −M ab/4, −M ac/4, −M bc/4.
+        ``about='corner'``: about a corner with the edges on the positive axes (the centre
+        values moved by the parallel-axis theorem): diagonal M(b²+c²)/3 …, products of inertia
+        −M ab/4, −M ac/4, −M bc/4.
         """
         mass = _positive(mass, 'mass')
         a, b, c = _positive_vector(edges, 'edges')

@@ -9,8 +9,8 @@ whole run (family ``dynamics``); ``stepped`` rows advance the propagator itself 
 rate (``DynamicsPropagator.advance_to``, diagnostics included), as the node does.
 
 ``torque_free``
-    Hairer–Vilmart body (physics.md §2.5), T = 10 s; exact reference; invariant: world
-    angular momentum drift.
+    Hairer–Vilmart body (Hairer & Vilmart, J. Phys. A 39, 2006), T = 10 s; exact reference;
+    invariant: world angular momentum drift.
 ``near_separatrix``
     J = (1, 2, 3), ω₀ = (1e−4, 1, 0), T = 30 s (several flips); exact reference.
 ``heavy_top``

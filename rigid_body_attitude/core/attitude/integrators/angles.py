@@ -7,17 +7,17 @@ older forms break. Angle conventions are those of
 exp(α₃ e_z)``); rates are body-frame. All three use classical RK4 (order 4, three rate
 evaluations per step) on a rate given as a function of time.
 
-* Euler angles (seed 000 eq. 21)::
+* Euler angles (Wittenburg, *Dynamics of Multibody Systems*, 2nd ed., 2008, §2.2)::
 
       ψ̇ = (ω_x sin φ + ω_y cos φ)/sin θ,   θ̇ = ω_x cos φ − ω_y sin φ,
       φ̇ = ω_z − (ω_x sin φ + ω_y cos φ) cot θ         — singular at sin θ = 0.
 
-* Bryant angles (seed 000 eq. 25)::
+* Bryant angles (Wittenburg, *Dynamics of Multibody Systems*, 2nd ed., 2008, §2.2)::
 
       α̇₁ = (ω_x cos α₃ − ω_y sin α₃)/cos α₂,   α̇₂ = ω_x sin α₃ + ω_y cos α₃,
       α̇₃ = ω_z − (ω_x cos α₃ − ω_y sin α₃) tan α₂   — singular at cos α₂ = 0.
 
-* Direction cosines (seed 000 eqs. 32–33, Poisson): ``Ȧ = A ω̃`` with ``v_world = A v_body``;
+* Direction cosines (Poisson's equation, ibid.): ``Ȧ = A ω̃`` with ``v_world = A v_body``;
   nine numbers, no singularity, orthogonality drifts unless re-orthonormalised (optional
   symmetric ``A (AᵀA)^(−1/2)`` projection each step).
 
@@ -54,7 +54,7 @@ SINGULARITY_TOLERANCE = 1e-9
 
 
 def euler_zxz_rates(angles: Sequence[float], omega_body: Sequence[float]) -> Angles:
-    """``(ψ̇, θ̇, φ̇)`` from body rates (seed 000 eq. 21); raises at ``sin θ ≈ 0``."""
+    """``(ψ̇, θ̇, φ̇)`` from body rates (Wittenburg 2008, §2.2); raises at ``sin θ ≈ 0``."""
     _, theta, phi = angles
     wx, wy, wz = omega_body
     sin_theta = math.sin(theta)
@@ -68,7 +68,7 @@ def euler_zxz_rates(angles: Sequence[float], omega_body: Sequence[float]) -> Ang
 
 
 def bryant_xyz_rates(angles: Sequence[float], omega_body: Sequence[float]) -> Angles:
-    """``(α̇₁, α̇₂, α̇₃)`` from body rates (seed 000 eq. 25); raises at ``cos α₂ ≈ 0``."""
+    """``(α̇₁, α̇₂, α̇₃)`` from body rates (Wittenburg 2008, §2.2); raises at ``cos α₂ ≈ 0``."""
     _, alpha2, alpha3 = angles
     wx, wy, wz = omega_body
     cos_alpha2 = math.cos(alpha2)

@@ -3,8 +3,8 @@
 Each function advances ``q̇ = ½ q ⊗ (0, ω_body(t))`` (conventions of
 :mod:`rigid_body_attitude.core.attitude.quaternion`) by one step ``h`` from time ``t``:
 ``step(q, omega_of_time, t, h) -> q`` with ``q`` a 4-tuple of floats and ``omega_of_time(t)``
-returning a 3-sequence [rad/s]. They are the study's kinematic menu (physics.md §4); the
-sampled-stream versions the propagator uses are in
+returning a 3-sequence [rad/s]. They are the study's kinematic menu (Iserles, Munthe-Kaas, Nørsett
+& Zanna, "Lie-group methods", 2000); the sampled-stream versions the propagator uses are in
 :mod:`rigid_body_attitude.core.attitude.integrators.strapdown`.
 
 ``dexpinv`` below is the inverse differential of the exponential for the right-trivialised
@@ -113,7 +113,7 @@ def magnus4_step(q: Sequence[float], omega_of_time: RateFunction, t: float, h: f
         φ = (h/2)(ω₁ + ω₂) + (√3/12) h² ω₁ × ω₂,   q ⊗ exp(φ).
 
     Order 4; two rate evaluations, one exponential. Keeps ``|q| = 1``. Coning drift
-    ``+a²Ω(Ωh)⁴/1440`` (sign convention of :mod:`.strapdown`; physics.md §3; measured by
+    ``+a²Ω(Ωh)⁴/1440`` (sign convention of :mod:`.strapdown`; measured by
     test/core/attitude/test_integrators_strapdown.py). Source: Iserles & Nørsett (1999); Blanes,
     Casas
     & Ros (2000).

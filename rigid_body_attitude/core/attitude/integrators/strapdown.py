@@ -14,17 +14,18 @@ is a small class with
 ``omega_current`` is the mean rate over the interval, ``Δθ/dt`` (what an integrating gyro
 reports), and ``omega_previous`` is not used (the method keeps its own history).
 
-**Coning drift** (physics.md §2.3 and §3): under classical coning of half-angle ``a`` at
-frequency ``Ω`` about the cone axis ``e``, the drift ``D`` of a method is the long-run rate
-[rad/s] of the ``e`` component of the error rotation ``log(q_computed* ⊗ q_true)`` (the
-rotation vector that takes the computed attitude to the true one, in body axes). ``D > 0``
+**Coning drift** (classical coning: Savage, "Strapdown inertial navigation integration algorithm
+design, part 1", 1998; drift per cone period as in Ignagni 1990): under classical coning of
+half-angle ``a`` at frequency ``Ω`` about the cone axis ``e``, the drift ``D`` of a method is the
+long-run rate [rad/s] of the ``e`` component of the error rotation ``log(q_computed* ⊗ q_true)``
+(the rotation vector that takes the computed attitude to the true one, in body axes). ``D > 0``
 means the computed attitude lags the true one about the cone axis. Each method's
-:attr:`coning_drift` holds the leading-order term ``D = c a²Ω θᵖ`` with ``θ = Ω × (update
-interval)``: ``θ = Ωh`` for updates over one sample spacing ``h``, ``ΩH`` (``H = 2h``) for
-``simpson_coning`` and ``ΩT`` (``T`` = the group of 1, 2 or 3 delta angles) for the delta-angle
-methods; the class docstrings quote it, and test/core/attitude/test_integrators_strapdown.py
-measures
-every method's drift against it (within 5 %) over whole cone periods.
+:attr:`coning_drift` holds the leading-order term ``D = c a²Ω θᵖ`` with
+``θ = Ω × (update interval)``: ``θ = Ωh`` for updates over one sample spacing ``h``, ``ΩH``
+(``H = 2h``) for ``simpson_coning`` and ``ΩT`` (``T`` = the group of 1, 2 or 3 delta angles) for
+the delta-angle methods; the class docstrings quote it, and
+test/core/attitude/test_integrators_strapdown.py measures every method's drift against it
+(within 5 %) over whole cone periods.
 Sources: Bortz (1971), Miller (JGCD 6(4), 1983), Ignagni (JGCD 13(2), 1990; 19(2), 1996),
 Savage (JGCD 21(1) and 21(2), 1998).
 
@@ -129,7 +130,7 @@ class ExpMap(_Strapdown):
     """Rate held from the interval's first sample: ``φ = h ω_k`` (zero-order hold).
 
     Order 1; cost one exponential and one product. Keeps ``|q| = 1``. Coning drift
-    ``+a²Ω(Ωh)²/24`` (the next term ``+a²Ω(Ωh)⁴/1440``; physics.md §3). The first-order gyro
+    ``+a²Ω(Ωh)²/24`` (the next term ``+a²Ω(Ωh)⁴/1440``; Ignagni 1990). The first-order gyro
     step of imu_filter_madgwick-style filters, done exactly on the sphere (Savage 1998).
     """
 
@@ -149,7 +150,7 @@ class ExpMidpoint(_Strapdown):
 
     Order 2; cost one exponential. Keeps ``|q| = 1``. Coning drift ``+a²Ω(Ωh)²/6`` (four
     times ``exp_map``'s: the mean of two point samples underestimates the transverse rotation
-    by ``cos(θ/2)``). Source: Savage (1998); physics.md §3.
+    by ``cos(θ/2)``). Source: Savage (1998).
     """
 
     name = 'exp_midpoint'
@@ -172,7 +173,7 @@ class TrapezoidConing(_Strapdown):
     smooth rate); cost one exponential and a cross product. Coning drift ``+a²Ω(Ωh)²/12``:
     half ``exp_midpoint``'s, not O(θ⁴) — point rate samples cannot cancel the θ² term, only
     delta angles can (``delta_two_sample``). Source: Savage (1998), Bortz (1971) second-order
-    expansion; physics.md §3.
+    expansion.
     """
 
     name = 'trapezoid_coning'
@@ -205,7 +206,7 @@ class Magnus4(_Strapdown):
     ``−a²Ω(Ωh)⁴/60`` (negative: it leads the truth; the Magnus-4 step with the rate at the
     Gauss points, :func:`~rigid_body_attitude.core.attitude.integrators.kinematic.magnus4_step`,
     drifts
-    ``+θ⁴/1440`` instead, physics.md §3). Source: Iserles & Nørsett (1999) Magnus expansion;
+    ``+θ⁴/1440`` instead). Source: Iserles & Nørsett (1999) Magnus expansion;
     Savage (1998).
     """
 
@@ -270,7 +271,7 @@ class SimpsonConing(_Strapdown):
     Order 4 at the end of each pair of intervals (Simpson's rule, and the coning term exact
     to O(H⁵)); the attitude after the first interval of a pair is provisional
     (trapezoid + coning). Cost one exponential per pair plus one provisional. Keeps
-    ``|q| = 1``. Coning drift ``+(3/320)a²Ω(ΩH)⁴``. Source: physics.md §3; Savage (1998).
+    ``|q| = 1``. Coning drift ``+(3/320)a²Ω(ΩH)⁴``. Source: Savage (1998); Ignagni (1990).
     """
 
     name = 'simpson_coning'
@@ -308,8 +309,8 @@ class EulerNormalize(_Strapdown):
 
     Order 1; cost one product. ``|q|`` only by projection: without it the norm grows by
     ``(h|ω|)²/8`` per step, with it the attitude lags ``(h|ω|)³/12`` rad per step
-    (physics.md §6). Coning drift ``+a²Ω(Ωh)²/24``, as ``exp_map`` (the norm projection's lag
-    is O(a³)). The baseline of first-order filters (e.g. imu_filter_madgwick).
+    (series of the projected step). Coning drift ``+a²Ω(Ωh)²/24``, as ``exp_map`` (the norm
+    projection's lag is O(a³)). The baseline of first-order filters (e.g. imu_filter_madgwick).
     """
 
     name = 'euler_normalize'
@@ -334,7 +335,8 @@ class Rk4Quaternion(_Strapdown):
     four
     products; ``|q|`` kept by projection (RK4 alone shrinks it by ``(h|ω|)⁶/9216`` per step).
     Coning drift ``+a²Ω(Ωh)²/12``, as ``trapezoid_coning`` (to which it is equivalent to
-    O(h⁴) per step). Source: Kutta (1901); physics.md §4.
+    O(h⁴) per step). Source: Kutta (1901); Iserles, Munthe-Kaas, Nørsett & Zanna, "Lie-group
+    methods", 2000.
     """
 
     name = 'rk4_quaternion'
@@ -473,7 +475,7 @@ class DeltaThreeSample(_DeltaGroup):
     Order 4 at the group ends on a generic rate (the third Magnus term is not modelled);
     cost one exponential per three samples plus two provisional. Coning drift
     ``+a²Ω(ΩT)⁶/204120`` (leading order in ``a``; a residual of about ``7e−3 a⁴Ω(ΩT)⁴``
-    dominates it unless ``a ≲ 1e−3`` rad, physics.md §3). Source: Miller (1983), Ignagni (1996).
+    dominates it unless ``a ≲ 1e−3`` rad). Source: Miller (1983), Ignagni (1996).
     """
 
     name = 'delta_three_sample'

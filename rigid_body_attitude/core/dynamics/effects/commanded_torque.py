@@ -5,7 +5,8 @@ until the next command), then zero (counted as ``stale``). Assumptions: the comm
 piecewise constant; a command stamped ahead of the propagated time acts from its stamp on. The
 propagator ends its steps at the switch times, so the integrator keeps its order across them.
 In a batch every body receives the same command. Source: Euler's equations with an external
-torque (physics.md §1); Basilisk's ``extForceTorque`` effector holds commands the same way.
+torque (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36); Basilisk's ``extForceTorque`` effector
+holds commands the same way.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 ``M_body = M`` (``frame: body``) or ``M_body = R(q)ᵀ M`` (``frame: world``, e.g. a thruster
 fixed in inertial space). Assumption: constant in time. Source: Euler's equations with an
-external torque (physics.md §1).
+external torque (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36).
 """
 
 from __future__ import annotations

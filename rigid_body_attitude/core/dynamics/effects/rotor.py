@@ -1,8 +1,8 @@
 """rotor: a gyrostat rotor (momentum wheel) with constant or commanded momentum.
 
 The rotor's momentum ``h`` relative to the body (body axes) enters Euler's equations as
-``J ω̇ + ω × (J ω + h) = M − ḣ`` (Source: physics.md §1; Hughes §3.4; Basilisk reaction
-wheels). With
+``J ω̇ + ω × (J ω + h) = M − ḣ`` (Source: Hughes, *Spacecraft Attitude Dynamics*, 1986, §3.4;
+Basilisk reaction wheels). With
 ``commanded: false`` ``h`` is constant and the rotor only adds gyroscopic stiffness. With
 ``commanded: true`` the ``rotor_torque`` input ``u`` (the motor torque on the rotor, body axes)
 drives ``ḣ = u``, held until ``timeout`` (or the next command) and then zero; the body feels

@@ -3,7 +3,7 @@
 Models eddy-current or fluid damping. ``coefficient`` is one number or one per body axis
 [N m s/rad], each ≥ 0. The power ``ω·M = −Σ c_i ω_i²`` is never positive, so the kinetic
 energy decays monotonically. Assumption: linear in the rate (no stiction, no quadratic drag).
-Source: the power theorem ``dT/dt = ω·M`` (physics.md §1).
+Source: the power theorem ``dT/dt = ω·M`` (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36).
 """
 
 from __future__ import annotations

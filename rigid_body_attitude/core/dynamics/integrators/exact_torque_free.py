@@ -13,7 +13,8 @@ body has the rate ``ω 2^(E−K)`` along the same path, so it is solved at the s
 never square a tiny or huge number: zero, subnormal, 1e−300 and 1e+300 rad/s rates are
 handled like 1 rad/s.
 
-Cases (physics.md §2.4–2.6):
+Cases (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §§36–37; Celledoni, Fassò, Säfström & Zanna,
+SIAM J. Sci. Comput. 30(4), 2008):
 
 * **steady** — ``m`` along a principal axis (or a spherical body): ``q(t) = q₀ ⊗ exp(t ω₀)``.
 * **axisymmetric** — two exactly equal moments ``J_t``, symmetry axis ``e_s`` (nearly equal
@@ -305,7 +306,7 @@ class _SteadyRotation:
 
 
 class _AxisymmetricMotion:
-    """Two equal moments: regular precession (physics.md §2.4)."""
+    """Two equal moments: regular precession (Landau & Lifshitz, *Mechanics*, 1976, §36)."""
 
     kind = 'axisymmetric'
 

@@ -1,9 +1,9 @@
 """Classical RK4 on the coupled attitude/Euler equations, with renormalisation.
 
-``y = (q, ω)``, ``ẏ = (½ q ⊗ (0, ω), J⁻¹(M − ḣ − ω × (Jω + h)))`` (physics.md §1); after the
-step ``q`` is projected back to unit norm. The work of the torques, ``W = ∫ ω·(M − ħ) dt``, is
-integrated alongside as an eighth component (the same RK4 weights on the stage powers): the
-energy balance costs no extra torque evaluation.
+``y = (q, ω)``, ``ẏ = (½ q ⊗ (0, ω), J⁻¹(M − ḣ − ω × (Jω + h)))`` (Landau & Lifshitz, *Mechanics*,
+3rd ed., 1976, §36); after the step ``q`` is projected back to unit norm. The work of the torques,
+``W = ∫ ω·(M − ħ) dt``, is integrated alongside as an eighth component (the same RK4 weights on the
+stage powers): the energy balance costs no extra torque evaluation.
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ class RigidBodyRk4(DynamicsMethod):
     float math, every stage written out (``bench/effect_costs.py`` prices it). Invariants:
     ``|q| = 1`` by projection only (RK4 alone shrinks ``|q|`` by ``(h|ω|)⁶/9216`` per step);
     energy, ``|m|`` and world momentum drift at O(h⁴) per unit time (Hairer–Vilmart body,
-    T = 1000, h = 0.05: energy −6e−7, physics.md §6). Steps with h·|ω| > 2 rad are refused
-    (:class:`IntegratorError`; RK4 diverges above 2√2, silently until it overflows). Source:
-    Kutta (1901); Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1.
+    T = 1000, h = 0.05: energy −6e−7, test/hard/test_hard_long_runs.py). Steps with h·|ω| > 2 rad
+    are refused (:class:`IntegratorError`; RK4 diverges above 2√2, silently until it overflows).
+    Source: Kutta (1901); Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1.
     """
 
     name = 'rk4'

@@ -1,10 +1,10 @@
 """RK4 steps written out for one body model: the four stages inlined, specialised once.
 
-The classical RK4 step on ``(q, ω)`` with Euler's right-hand side (physics.md §1,
-:mod:`.rigid_body_rk4`) costs, in CPython, mostly the calls and tuples around its arithmetic:
-four calls of a generic right-hand side that re-reads the model and tests its flags each time.
-:func:`rk4_kernel` writes the step's source once per model with every stage inlined and only
-the terms the model has: a diagonal inertia multiplies by three moments instead of a 3×3
+The classical RK4 step on ``(q, ω)`` with Euler's right-hand side (Landau & Lifshitz, *Mechanics*,
+3rd ed., 1976, §36, :mod:`.rigid_body_rk4`) costs, in CPython, mostly the calls and tuples around
+its arithmetic: four calls of a generic right-hand side that re-reads the model and tests its flags
+each time. :func:`rk4_kernel` writes the step's source once per model with every stage inlined and
+only the terms the model has: a diagonal inertia multiplies by three moments instead of a 3×3
 tensor (and ``J⁻¹``), a torque-free body calls no torque, a body without rotor asks for none.
 The source is compiled with :func:`compile` and cached on the model's kernel key. The
 arithmetic is the generic right-hand side's, term by term (with the zero products of a

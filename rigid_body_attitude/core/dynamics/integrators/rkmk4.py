@@ -31,8 +31,9 @@ class RigidBodyRkmk4(DynamicsMethod):
     Order 4; cost four evaluations of Euler's equations, one exponential (plus three stage
     exponentials when a torque may depend on the attitude). Invariants: ``|q| = 1`` exactly
     (no projection); energy and momentum drift at O(h⁴). On the Hairer–Vilmart body it is
-    ~8× more accurate than RK4 on ``(q, ω)`` (physics.md §5). Steps with h·|ω| > 2 rad are
-    refused (:class:`IntegratorError`; RK4 diverges above 2√2, silently until it overflows).
+    ~8× more accurate than RK4 on ``(q, ω)`` (Hairer–Vilmart body at T = 10). Steps with h·|ω| > 2
+    rad are refused (:class:`IntegratorError`; RK4 diverges above 2√2, silently until it
+    overflows).
     Source: Munthe-Kaas, BIT 38 (1998); Iserles, Munthe-Kaas, Nørsett & Zanna, Acta Numerica
     9 (2000).
     """

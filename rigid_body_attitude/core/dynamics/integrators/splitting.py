@@ -5,7 +5,8 @@ of its flow are built from exactly integrable pieces:
 
 * **axis sweep** ``T₁(h/2) T₂(h/2) T₃(h) T₂(h/2) T₁(h/2)``, with ``T_i(τ)``: ``θ = τ m_i/J_i``,
   ``m ←`` rotation of ``m`` about ``e_i`` by ``−θ``, ``q ← q ⊗ exp(θ e_i)`` (McLachlan 1993;
-  Touma & Wisdom 1994; physics.md §5);
+  Touma & Wisdom 1994; Hairer, Lubich & Wanner, *Geometric Numerical Integration*, 2nd ed., 2006,
+  §VII.5);
 * **Casimir split** ``T = G²/(2J₂) + Σ_{i=1,3} ½ (1/J_i − 1/J₂) m_i²``: the ``G²`` flow
   ``q ← q ⊗ exp(τ m/J₂)`` (``m`` constant) commutes with everything, the other two terms are
   axis rotations with ``θ = τ (1/J_i − 1/J₂) m_i``, swept ``R₁(h/2) R₃(h) R₁(h/2)``. For an
