@@ -5,7 +5,8 @@ A Monte-Carlo dispersion (per-body inertia tensors with random principal axes, r
 attitudes and rates) of ``--bodies`` bodies (default 10⁵) is advanced ``--steps`` RK4 steps of
 1 ms per repetition; the best of ``--repeats`` repetitions gives body-steps per second
 (target ≥ 10⁷ at N = 10⁵). The same run checks ``--check`` bodies, spread over the
-batch, against the single-body ``rk4`` integrator (``test/core/test_batch.py`` does the same on a
+batch, against the single-body ``rk4`` integrator (``test/core/dynamics/test_batch.py`` does the
+same on a
 small dispersion): every component within 1e-12, or exit 1. ``--bodies`` takes a list, so the
 scaling with N shows too.
 
@@ -40,14 +41,14 @@ sys.path.insert(0, str(REPO))
 
 import dataclasses  # noqa: E402
 
-from rigid_body_attitude.core import quaternion  # noqa: E402
-from rigid_body_attitude.core.batch import (  # noqa: E402
+from rigid_body_attitude.core.attitude import quaternion  # noqa: E402
+from rigid_body_attitude.core.dynamics.batch import (  # noqa: E402
     SCENE_CHUNK, SceneBatch, TorqueFreeBatch)
-from rigid_body_attitude.core.inertia import Inertia  # noqa: E402
+from rigid_body_attitude.core.dynamics.inertia import Inertia  # noqa: E402
 from rigid_body_attitude.core.propagator import DynamicsPropagator  # noqa: E402
-from rigid_body_attitude.core.scene import scene_from_mapping  # noqa: E402
-from rigid_body_attitude.core.integrators import dynamics_integrator  # noqa: E402
-from rigid_body_attitude.core.integrators.base import SimpleBodyModel  # noqa: E402
+from rigid_body_attitude.core.dynamics.scene import scene_from_mapping  # noqa: E402
+from rigid_body_attitude.core.dynamics.integrators import dynamics_integrator  # noqa: E402
+from rigid_body_attitude.core.dynamics.integrators.base import SimpleBodyModel  # noqa: E402
 
 STEP = 1e-3
 TARGET_BODY_STEPS_PER_S = 1e7

@@ -45,7 +45,7 @@ sys.path.insert(0, str(REPO))
 
 from distributed import Client  # noqa: E402
 
-from rigid_body_attitude.core.batch import SceneBatch  # noqa: E402
+from rigid_body_attitude.core.dynamics.batch import SceneBatch  # noqa: E402
 from rigid_body_attitude.tools.campaign import (  # noqa: E402
     METRICS, local_cluster, read_runs, run_campaign, sample_runs, spec_from_mapping)
 from rigid_body_attitude.tools.campaign.plot import write_envelopes  # noqa: E402

@@ -46,12 +46,12 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from rigid_body_attitude.core import quaternion  # noqa: E402
-from rigid_body_attitude.core.dynamics import RigidBodyModel, rk4_step  # noqa: E402
-from rigid_body_attitude.core.inertia import Inertia  # noqa: E402
-from rigid_body_attitude.core.integrators import (  # noqa: E402
-    dynamics_integrator, strapdown_method)
-from rigid_body_attitude.core.integrators.base import SimpleBodyModel  # noqa: E402
+from rigid_body_attitude.core.attitude import quaternion  # noqa: E402
+from rigid_body_attitude.core.dynamics.euler import RigidBodyModel, rk4_step  # noqa: E402
+from rigid_body_attitude.core.dynamics.inertia import Inertia  # noqa: E402
+from rigid_body_attitude.core.attitude.integrators import strapdown_method  # noqa: E402
+from rigid_body_attitude.core.dynamics.integrators import dynamics_integrator  # noqa: E402
+from rigid_body_attitude.core.dynamics.integrators.base import SimpleBodyModel  # noqa: E402
 
 #: Targets [µs per step] and the required speed-up over every baseline.
 TARGET_STRAPDOWN_US = 3.0

@@ -37,7 +37,7 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from rigid_body_attitude.core.propagator import DynamicsPropagator  # noqa: E402
-from rigid_body_attitude.core.scene import Scene, load_scene  # noqa: E402
+from rigid_body_attitude.core.dynamics.scene import Scene, load_scene  # noqa: E402
 
 SCENES = ('torque_free_box', 'dzhanibekov', 'gravity_gradient_satellite', 'commanded_torque',
           'gyrostat', 'free_flyer', 'heavy_top')

@@ -11,7 +11,7 @@ no, one and three effects, in one run.
   damping and a world-fixed constant torque. This is the whole propagator step: integrator,
   effects, energy-balance work.
 * **RK4 kernel**: the written-out RK4 step (:mod:`.integrators.rk4_kernel`) against the generic
-  one (:func:`.integrators.rigid_body_rk4.rk4_work_step`) on the same models.
+  one (:func:`.integrators.rk4_kernel.rk4_work_step`) on the same models.
 
 Usage: ``python bench/effect_costs.py [--steps 2000] [--repeats 5] [--json PATH]``.
 """
@@ -31,15 +31,15 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from rigid_body_attitude.core import quaternion  # noqa: E402
-from rigid_body_attitude.core.effects import (  # noqa: E402
+from rigid_body_attitude.core.attitude import quaternion  # noqa: E402
+from rigid_body_attitude.core.dynamics.effects import (  # noqa: E402
     BodyProperties, EFFECTS, ForceEffect, RateCorrection, RotorEffect, TorqueEffect)
-from rigid_body_attitude.core.inertia import Inertia  # noqa: E402
-from rigid_body_attitude.core.integrators import torque_integrators  # noqa: E402
-from rigid_body_attitude.core.integrators.rigid_body_rk4 import rk4_work_step  # noqa: E402
-from rigid_body_attitude.core.integrators.rk4_kernel import rk4_kernel  # noqa: E402
+from rigid_body_attitude.core.dynamics.inertia import Inertia  # noqa: E402
+from rigid_body_attitude.core.dynamics.integrators import torque_integrators  # noqa: E402
+from rigid_body_attitude.core.dynamics.integrators.rk4_kernel import (  # noqa: E402
+    rk4_kernel, rk4_work_step)
 from rigid_body_attitude.core.propagator import DynamicsPropagator  # noqa: E402
-from rigid_body_attitude.core.scene import scene_from_mapping  # noqa: E402
+from rigid_body_attitude.core.dynamics.scene import scene_from_mapping  # noqa: E402
 
 #: Parameters of every effect for the per-evaluation table.
 EFFECT_PARAMETERS: dict[str, dict[str, Any]] = {

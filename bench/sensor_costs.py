@@ -23,8 +23,8 @@ from typing import Any
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from rigid_body_attitude.core import quaternion  # noqa: E402
-from rigid_body_attitude.core.scene import scene_from_mapping  # noqa: E402
+from rigid_body_attitude.core.attitude import quaternion  # noqa: E402
+from rigid_body_attitude.core.dynamics.scene import scene_from_mapping  # noqa: E402
 from rigid_body_attitude.core.sensors import ImuModel, ImuSpec  # noqa: E402
 from rigid_body_attitude.msgs.cdr import simulated_imu_encoder  # noqa: E402
 from rigid_body_attitude.session.dynamics import DynamicsSession  # noqa: E402

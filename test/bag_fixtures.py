@@ -15,7 +15,8 @@ Cases (physics.md §2):
   (the two-axis composition of §2.2 with varying rates); its body rate
   ``ω = f′ R(q)ᵀ â + g′ b̂`` changes magnitude and direction, so it is not a coning motion.
 * ``torque_free`` (dynamics): the Hairer–Vilmart body tumbling torque-free; exact solution
-  from :class:`~rigid_body_attitude.core.integrators.exact_torque_free.TorqueFreeMotion`. The bag
+  from :class:`~rigid_body_attitude.core.dynamics.integrators.exact_torque_free.TorqueFreeMotion`.
+  The bag
   holds only the ground truth, which gives the replay its time axis.
 * ``constant_torque`` (dynamics): a constant commanded torque ``M`` about the principal axis
   ``e_z`` of a body spinning about it: ``q(τ) = q₀ ⊗ exp(θ e_z)``, ``θ = ω₀τ + Mτ²/(2J_z)``
@@ -36,10 +37,10 @@ from typing import Any
 import numpy as np
 import yaml
 
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.bag import BagWriter, write_bag
 from rigid_body_attitude.msgs import stamp_to_ns
-from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
+from rigid_body_attitude.core.dynamics.integrators.exact_torque_free import TorqueFreeMotion
 
 __all__ = ['AnalyticCase', 'CASES', 'GROUND_TRUTH_TOPIC', 'build_case', 'write_case_bag',
            'write_records', 'write_scene']

@@ -6,7 +6,7 @@
 * Public functions and methods of the core (everything but the rclpy shells, which stay lightly
   typed like the ROS examples) annotate every parameter and the return type (``__init__`` needs
   no return annotation).
-* No work-in-progress markers in the package, benchmarks, scripts or tests.
+* No work-in-progress markers in the package, benchmarks, studies, scripts or tests.
 """
 
 import ast
@@ -21,7 +21,7 @@ SHELL_MODULES = {'node.py', 'replay.py'}  # rclpy shells: docstrings yes, full t
 
 PACKAGE_FILES = sorted(PACKAGE_DIR.rglob('*.py'))
 MARKER_FILES = sorted(
-    path for folder in ('rigid_body_attitude', 'bench', 'scripts', 'test')
+    path for folder in ('rigid_body_attitude', 'bench', 'studies', 'scripts', 'test')
     for path in (REPO_ROOT / folder).rglob('*')
     if path.is_file() and (path.suffix == '.py' or path.parent.name in ('scripts', 'launchers'))
     and '__pycache__' not in path.parts)

@@ -39,7 +39,7 @@ def shipped_files() -> list[Path]:
     for folder in ('docs', 'config'):
         files += [path for path in (REPO_ROOT / folder).rglob('*')
                   if path.is_file() and path.suffix in TEXT_SUFFIXES]
-    for folder in ('rigid_body_attitude', 'bench'):
+    for folder in ('rigid_body_attitude', 'bench', 'studies'):
         files += (REPO_ROOT / folder).rglob('*.py')
     return sorted(path for path in files if path.is_file())
 
@@ -72,20 +72,21 @@ def history_hits(path: Path) -> list[str]:
 
 
 def test_named_benchmarks_exist():
-    """A shipped file that names a benchmark names one that is there."""
+    """A shipped file that names a benchmark or a study names one that is there."""
     missing = []
     for path in shipped_files():
         for number, line in enumerate(path.read_text(encoding='utf-8').splitlines(), start=1):
-            for name in re.findall(r'bench/([\w.]+\.(?:py|xml|md))', line):
-                if not (REPO_ROOT / 'bench' / name).is_file():
-                    missing.append(f'{path.relative_to(REPO_ROOT)}:{number}: bench/{name}')
+            for folder, name in re.findall(r'\b(bench|studies)/([\w.]+\.(?:py|xml|md))', line):
+                if not (REPO_ROOT / folder / name).is_file():
+                    missing.append(f'{path.relative_to(REPO_ROOT)}:{number}: {folder}/{name}')
     assert missing == [], 'names a benchmark that does not exist:\n' + '\n'.join(missing)
 
 
 def test_scanned_set_holds_the_shipped_files():
     names = {path.relative_to(REPO_ROOT).as_posix() for path in shipped_files()}
     assert {'README.md', 'package.xml', 'setup.py', 'config/fastdds.xml',
-            'rigid_body_attitude/__init__.py', 'bench/node_throughput.py'} <= names
+            'rigid_body_attitude/__init__.py', 'bench/node_throughput.py',
+            'studies/broad_strapdown.py'} <= names
     assert any(name.startswith('docs/') for name in names)
 
 

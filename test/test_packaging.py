@@ -344,7 +344,7 @@ def test_an_undeclared_import_is_reported():
 
 def test_core_module_discovery_finds_the_core_and_leaves_out_shells():
     names = core_module_names()
-    assert {'rigid_body_attitude', 'rigid_body_attitude.core.quaternion',
+    assert {'rigid_body_attitude', 'rigid_body_attitude.core.attitude.quaternion',
             'rigid_body_attitude.core.errors'} <= set(names)
     assert not SHELL_MODULES & set(names)
 

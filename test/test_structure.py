@@ -1,6 +1,7 @@
 """The package stays in small pieces: no module over 600 lines, no class over 250."""
 
 import ast
+import re
 from pathlib import Path
 import sys
 
@@ -69,3 +70,132 @@ def test_the_node_layers_import_no_bag_or_tool_module():
     found = [entry for entry in imports_outside(['core', 'msgs', 'session', 'ros'], ())
              if entry.split(': ')[1].startswith(forbidden)]
     assert found == []
+
+
+def module_name(path, root=PACKAGE):
+    """Dotted name of the module at ``path`` (a package's ``__init__.py`` names the package)."""
+    parts = path.relative_to(root.parent).with_suffix('').parts
+    return '.'.join(parts[:-1] if parts[-1] == '__init__' else parts)
+
+
+def internal_imports(path, modules, root=PACKAGE):
+    """The package's modules that ``path`` imports, anywhere in it (function-level imports
+    included): the module imported, and each package on its way that the importer is not
+    inside (importing ``a.b.c`` runs ``a/b/__init__.py`` unless ``a.b`` is already loading)."""
+    importer = module_name(path, root)
+    ancestors = {importer.rsplit('.', n)[0] for n in range(importer.count('.') + 1)}
+    package = importer if path.name == '__init__.py' else importer.rpartition('.')[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ''
+            if node.level:
+                base = '.'.join(
+                    [*package.split('.')[:len(package.split('.')) - node.level + 1], base]
+                ).rstrip('.')
+            targets = [f'{base}.{alias.name}' if f'{base}.{alias.name}' in modules else base
+                       for alias in node.names]
+        else:
+            continue
+        for target in targets:
+            while target and target not in modules:
+                target = target.rpartition('.')[0]
+            parts = target.split('.')
+            found.update(name for name in ('.'.join(parts[:n]) for n in range(1, len(parts) + 1))
+                         if name in modules and (name == target or name not in ancestors))
+    found.discard(importer)
+    return found
+
+
+def import_cycles(root=PACKAGE):
+    """Each cycle of imports among the modules under ``root``, as a list of module names."""
+    paths = {module_name(path, root): path for path in sorted(root.rglob('*.py'))}
+    graph = {name: sorted(internal_imports(path, paths, root)) for name, path in paths.items()}
+    cycles, state = [], {}
+
+    def visit(name, stack):
+        state[name] = 'open'
+        stack.append(name)
+        for target in graph[name]:
+            if state.get(target) == 'open':
+                cycles.append(stack[stack.index(target):] + [target])
+            elif target not in state:
+                visit(target, stack)
+        stack.pop()
+        state[name] = 'done'
+
+    for name in sorted(graph):
+        if name not in state:
+            visit(name, [])
+    return cycles
+
+
+def test_no_import_cycles_lazy_imports_included():
+    assert import_cycles() == []
+
+
+def test_the_cycle_check_sees_a_cycle_through_a_function_level_import(tmp_path):
+    root = tmp_path / 'pkg'
+    (root / 'sub').mkdir(parents=True)
+    (root / '__init__.py').write_text('')
+    (root / 'sub' / '__init__.py').write_text('from pkg.sub.b import B\n')
+    (root / 'sub' / 'b.py').write_text('from pkg import a\nB = 1\n')
+    (root / 'a.py').write_text('def f():\n    from .sub import B\n    return B\n')
+    assert import_cycles(root) == [['pkg.a', 'pkg.sub', 'pkg.sub.b', 'pkg.a']]
+
+
+#: What each room of core/ may import besides the standard library, NumPy, SciPy, PyYAML and
+#: the shared modules (errors, registry, paths, yaml_files): attitude math at the bottom; the
+#: IMU's models, sensors and control laws over it; rigid-body dynamics (a scene: the body, its
+#: effects, its sensors and controllers) over those; the propagators at the top.
+CORE_ROOMS = {
+    'attitude': (),
+    'imu': ('attitude',),
+    'control': ('attitude',),
+    'sensors': ('attitude', 'imu'),
+    'dynamics': ('attitude', 'imu', 'control', 'sensors'),
+}
+CORE_SHARED = ('errors', 'registry', 'paths', 'yaml_files')
+THIRD_PARTY_IN_CORE = ('numpy', 'scipy', 'yaml')
+
+
+def test_core_rooms_import_only_the_rooms_below_them():
+    assert set(CORE_ROOMS) >= {'attitude', 'imu', 'dynamics'}
+    core = 'rigid_body_attitude.core'
+    found = []
+    for room, below in CORE_ROOMS.items():
+        if not (PACKAGE / 'core' / room).is_dir():
+            continue
+        allowed = (*THIRD_PARTY_IN_CORE, *(f'{core}.{name}' for name in (room, *below)),
+                   *(f'{core}.{name}' for name in CORE_SHARED))
+        found += imports_outside([f'core/{room}'], allowed)
+    shared = [f'core/{name}.py' for name in CORE_SHARED]
+    found += [entry for entry in imports_outside(['core'], ('numpy', 'scipy', 'yaml'))
+              if entry.split(':')[0] in shared]
+    assert found == []
+
+
+def test_the_core_imports_no_node_layer():
+    allowed = ('numpy', 'scipy', 'yaml', 'rigid_body_attitude.core')
+    assert imports_outside(['core'], allowed) == []
+
+
+def listed_in_architecture(relative, text):
+    """Whether docs/architecture.md names the module at ``relative`` (a path in the package):
+    its file name in the tree drawing (the tree's indentation places it), or its path."""
+    return relative.as_posix() in text or re.search(
+        rf'(?<![\w/]){re.escape(relative.name)}(?!\w)', text) is not None
+
+
+def test_architecture_lists_every_module_and_subpackage():
+    text = (PACKAGE.parent / 'docs' / 'architecture.md').read_text()
+    missing = [str(path.relative_to(PACKAGE)) for path in sorted(PACKAGE.rglob('*.py'))
+               if path.name not in ('__init__.py', '__main__.py')
+               and not listed_in_architecture(path.relative_to(PACKAGE), text)]
+    missing += [f'{path.relative_to(PACKAGE)}/' for path in sorted(PACKAGE.rglob('*'))
+                if path.is_dir() and path.name != '__pycache__'
+                and f'{path.name}/' not in text]
+    assert missing == []
+    assert not listed_in_architecture(Path('core/no_such_module.py'), text)

@@ -413,8 +413,3 @@ def _reader_incompatibilities(path: Path) -> list[str]:
             for chunk in getattr(file, 'chunks', []) if name == 'McapReader' else []:
                 found += _missing('ChunkInfo', chunk, _INSTANCE_ATTRIBUTES['ChunkInfo'])
     return found
-
-
-def pinned_version() -> str:
-    """The ``rosbags`` version installed (the one :func:`incompatibilities` examined)."""
-    return version('rosbags')

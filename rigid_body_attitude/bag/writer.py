@@ -34,7 +34,7 @@ from rosbags.rosbag2 import StoragePlugin, WriterError
 
 from rigid_body_attitude.bag.errors import BagError
 from rigid_body_attitude.bag.rosbags_internals import Record, Rosbag2Writer
-from rigid_body_attitude.bag.serde import serialize, typestore
+from rigid_body_attitude.bag.serde import typestore
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.msgs.cdr import (
     encode_imu,
@@ -168,10 +168,6 @@ class BagWriter:
                            f'in [0, 2**63) ns and bytes, got ids {unknown} not registered, '
                            f'times [{first}, {last}], data of types {types}')
         writer.write_records(records, channel_ids, times, datas, counts)
-
-    def write_message(self, connection: Connection, bag_time_ns: int, message: object) -> None:
-        """Serialise a ``rosbags`` message object of the connection's type and write it."""
-        self.write(connection, bag_time_ns, serialize(message, connection.msgtype))
 
     def close(self) -> None:
         """Finish the bag: flush storage and write ``metadata.yaml``."""

@@ -2,12 +2,13 @@
 
 * :class:`DynamicsPropagator` integrates Euler's equations and the attitude jointly with the
   scene's integrator and step, summing the torques, rotor momenta and forces of the scene's
-  effects through :class:`~rigid_body_attitude.core.dynamics.RigidBodyModel`.
+  effects through :class:`~rigid_body_attitude.core.dynamics.euler.RigidBodyModel`.
 * :class:`GyroPropagator` integrates measured body rates (strapdown), after the scene's rate
   corrections (bias, Earth rate), with the scene's strapdown method.
 
 Neither knows any particular effect: each effect declares its kinds by the base classes it
-derives from (:mod:`rigid_body_attitude.core.effects.base`), and the propagators sort them by
+derives from (:mod:`rigid_body_attitude.core.dynamics.effects.base`), and the propagators sort them
+by
 kind. The dynamics hot loop runs on plain floats from one call of :meth:`advance_to` to its
 end (arrays are built once per call, for the state's readers). Time handling of input
 streams (stale stamps, gaps, jumps) is :mod:`rigid_body_attitude.session.stream`'s job.
@@ -21,19 +22,19 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.core.diagnostics import Diagnostics, DiagnosticsTracker
-from rigid_body_attitude.core.dynamics import RigidBodyModel
-from rigid_body_attitude.core.effects import (
+from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.dynamics.diagnostics import Diagnostics, DiagnosticsTracker
+from rigid_body_attitude.core.dynamics.euler import RigidBodyModel
+from rigid_body_attitude.core.dynamics.effects import (
     CommandedEffect, ConservativeTorque, Effect, ForceEffect, RateCorrection, RotorEffect,
     StatefulEffect, TorqueEffect)
-from rigid_body_attitude.core.effects.base import ForceSum
+from rigid_body_attitude.core.dynamics.effects.base import ForceSum
 from rigid_body_attitude.core.errors import InputError, IntegratorError
-from rigid_body_attitude.core.integrators import (
-    dynamics_integrator, strapdown_method, torque_integrators)
-from rigid_body_attitude.core.integrators.base import Quat, Vec
-from rigid_body_attitude.core.integrators.dynamics_base import ROTATION_LIMIT_SLACK
-from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.core.attitude.integrators import strapdown_method
+from rigid_body_attitude.core.dynamics.integrators import dynamics_integrator, torque_integrators
+from rigid_body_attitude.core.dynamics.integrators.base import Quat, Vec
+from rigid_body_attitude.core.dynamics.integrators.dynamics_base import ROTATION_LIMIT_SLACK
+from rigid_body_attitude.core.dynamics.scene import Scene
 
 __all__ = ['DynamicsPropagator', 'GyroPropagator', 'PropagatorState', 'build_propagator']
 

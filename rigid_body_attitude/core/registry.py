@@ -1,7 +1,8 @@
 """The one registry mechanism: classes by their ``name``, filled by a class decorator.
 
-Effects (:data:`rigid_body_attitude.core.effects.EFFECTS`) and dynamics integrators
-(:data:`rigid_body_attitude.core.integrators.DYNAMICS_INTEGRATORS`) are each a :class:`Registry`:
+Effects (:data:`rigid_body_attitude.core.dynamics.effects.EFFECTS`) and dynamics integrators
+(:data:`rigid_body_attitude.core.dynamics.integrators.DYNAMICS_INTEGRATORS`) are each a
+:class:`Registry`:
 a read-mostly mapping name → class that a module joins with ``@REGISTRY.register``, so adding
 one means adding a module, never editing a list elsewhere.
 """

@@ -16,6 +16,7 @@ are at most :data:`MAX_ERROR_CHARS` long, on one line (:func:`bounded`).
 
 from __future__ import annotations
 
+import math
 import reprlib
 from collections.abc import Iterator, Mapping
 from pathlib import Path
@@ -23,8 +24,8 @@ from typing import Any
 
 import yaml
 
-__all__ = ['MAX_DEPTH', 'MAX_ERROR_CHARS', 'MAX_FILE_BYTES', 'QUOTE_LIMIT', 'bounded', 'quote',
-           'read_yaml']
+__all__ = ['MAGNITUDE_LIMIT', 'MAX_DEPTH', 'MAX_ERROR_CHARS', 'MAX_FILE_BYTES', 'QUOTE_LIMIT',
+           'bounded', 'quote', 'read_yaml', 'real']
 
 #: Largest file read [bytes] (the shipped files are a few KiB at most; the limit is small
 #: because the pure-Python YAML parser that the alias and depth checks need is slow).
@@ -152,3 +153,37 @@ def _integers(data: Any, key_path: str) -> Iterator[tuple[str, int]]:
     elif isinstance(data, list):
         for index, value in enumerate(data):
             yield from _integers(value, f'{key_path}[{index}]')
+
+
+#: Largest magnitude of a number in a file (scene, effect parameter, calibration): the scene's
+#: bound (:data:`rigid_body_attitude.core.dynamics.scene.SCALE_LIMIT`), so that products of a
+#: few such numbers (torques, momenta, energies) stay finite; far beyond any physical parameter
+#: (the Sun's gravitational parameter is 1.3e20 m³/s²).
+MAGNITUDE_LIMIT = 1e75
+
+
+def real(value: Any) -> float:
+    """A finite real number of magnitude at most :data:`MAGNITUDE_LIMIT` (booleans and strings
+    are refused)."""
+    if isinstance(value, str) and _looks_numeric(value):
+        raise TypeError(f'a number (YAML 1.1 reads {value} as text: write it with a sign in '
+                        f'the exponent and a dot, e.g. 7.0e+6)')
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError('a number')
+    try:
+        number = float(value)
+    except OverflowError as err:  # an integer too large for a float
+        raise ValueError('a number of magnitude at most 1e75') from err
+    if not math.isfinite(number):
+        raise ValueError('a finite number')
+    if abs(number) > MAGNITUDE_LIMIT:
+        raise ValueError('a number of magnitude at most 1e75')
+    return number
+
+
+def _looks_numeric(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

@@ -16,7 +16,8 @@ messages with these, as the replay tool does with a bag's records.
 * :mod:`~rigid_body_attitude.msgs.diagnostics`: the ``DiagnosticArray`` encoder.
 
 Quaternions cross this API scalar-first ``(w, x, y, z)`` as everywhere in the package
-(:mod:`rigid_body_attitude.core.quaternion`); only the CDR bytes hold ``(x, y, z, w)``. Decoders
+(:mod:`rigid_body_attitude.core.attitude.quaternion`); only the CDR bytes hold ``(x, y, z, w)``.
+Decoders
 return header stamps as float seconds (resolution 2.4·10⁻⁷ s at epoch times) or as the integer
 ``(sec, nanosec)`` of the header; :func:`header_stamp_ns` gives the exact integer nanoseconds.
 """

@@ -17,8 +17,9 @@ Encoders write OMG CDR / XCDR1 little-endian (``00 01 00 00``), as ROS 2 and ``r
 float64 body follows at the next multiple of 8.
 
 Quaternions: decoders return and encoders take **scalar-first** ``(w, x, y, z)``; the message
-order is ``(x, y, z, w)``. This is :func:`rigid_body_attitude.core.quaternion.to_ros` /
-:func:`~rigid_body_attitude.core.quaternion.from_ros` done inside the ``struct`` argument list,
+order is ``(x, y, z, w)``. This is :func:`rigid_body_attitude.core.attitude.quaternion.to_ros` /
+:func:`~rigid_body_attitude.core.attitude.quaternion.from_ros` done inside the ``struct`` argument
+list,
 because the NumPy versions cost microseconds per call (the tests check the codecs against
 them). Encoders take integer nanoseconds. Encoders do not check finiteness (fault-injection
 bags need NaN values); :func:`rigid_body_attitude.bag.write_bag` does.
@@ -62,7 +63,7 @@ from rigid_body_attitude.msgs.types import (
     WRENCH_STAMPED,
 )
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.quaternion import multiply_floats
+from rigid_body_attitude.core.attitude.quaternion import multiply_floats
 
 __all__ = [
     'ATTITUDE_DECODERS',

@@ -24,7 +24,8 @@ they are (physical bounds are the session's job).
 
 ``sec`` is the int32 and ``nanosec`` the uint32 of the header stamp, as sent; vectors are
 tuples of floats; quaternions scalar-first (the message holds ``(x, y, z, w)``; see
-:mod:`rigid_body_attitude.core.quaternion`). :data:`GYRO_DECODERS` maps each gyro message type
+:mod:`rigid_body_attitude.core.attitude.quaternion`). :data:`GYRO_DECODERS` maps each gyro message
+type
 to its rate decoder.
 
 What is taken. Layout (OMG CDR): a 4-byte encapsulation header, then ``std_msgs/Header``

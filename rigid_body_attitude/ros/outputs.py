@@ -25,7 +25,6 @@ slow console.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -62,10 +61,11 @@ _UNKNOWN = (0.0,) * 9
 class RawOutput:
     """An output's subscription count and CDR-bytes publish, bound once.
 
-    On the fast path both go straight to rclpy's publisher handle, without :class:`rclpy.publisher.Publisher`'s
-    per-call wrapper (it enters the handle as a context manager, against destruction by
-    another thread, and checks the message type). That is safe here because the node's
-    publishers are destroyed only after its gyro loop has returned. Outputs are VOLATILE
+    On the fast path both go straight to rclpy's publisher handle, without
+    :class:`rclpy.publisher.Publisher`'s per-call wrapper (it enters the handle as a context
+    manager, against destruction by another thread, and checks the message type). That is
+    safe here because the node's publishers are destroyed only after its gyro loop has
+    returned. Outputs are VOLATILE
     (``qos_overrides`` cannot change durability), so a sample published with no matched
     subscription reaches nobody, ever; Fast DDS would still store it, about 10 µs per message
     here against about 2 µs for the count (docs/performance.md).

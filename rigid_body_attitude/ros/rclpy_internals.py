@@ -127,7 +127,7 @@ def raw_taker(subscription: Subscription, fast: bool | None = None
 
     def take_bytes() -> bytes | None:
         taken = take(msg_type, True)
-        return None if taken is None else taken[0]  # type: ignore[no-any-return]
+        return None if taken is None else taken[0]
     return take_bytes
 
 

@@ -20,7 +20,7 @@ from typing import Any, Protocol
 
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
-from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.session.outputs import OutputSample, OutputTracker
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.uncertainty import orientation_block

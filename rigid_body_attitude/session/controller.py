@@ -27,11 +27,11 @@ from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol
 
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.control import as_axis_gains, pd_torque_floats
 from rigid_body_attitude.session.base import LEVEL_INFO, WARNING_INTERVAL
 from rigid_body_attitude.session.controller_parameters import UNIT_TOLERANCE
-from rigid_body_attitude.session.levelling import rpy_quaternion
+from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_OK, LEVEL_WARN
 from rigid_body_attitude.session.times import seconds_to_ns, stamp_problem, to_ns
 

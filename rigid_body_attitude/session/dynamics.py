@@ -20,7 +20,7 @@ from typing import Any
 
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.core.propagator import DynamicsPropagator, MAX_STEPS_PER_CALL
-from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.session.base import OutputSink, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.parameters import check_values

@@ -22,10 +22,10 @@ from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from rigid_body_attitude.core.integrators.strapdown import DeltaSingle, ExpMap
+from rigid_body_attitude.core.attitude.integrators.strapdown import DeltaSingle, ExpMap
 from rigid_body_attitude.core.propagator import GyroPropagator
-from rigid_body_attitude.core.quaternion import scalar_step_rate
-from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.core.attitude.quaternion import scalar_step_rate
+from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.imu_start import REJECTION_DETAIL, ImuStart
 from rigid_body_attitude.session.levelling import FROM_SCENE, AlignmentResult

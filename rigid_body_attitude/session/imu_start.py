@@ -17,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from rigid_body_attitude.core.calibration import load_calibration
+from rigid_body_attitude.core.imu.calibration import load_calibration
 from rigid_body_attitude.core.propagator import GyroPropagator
-from rigid_body_attitude.core.rest import SPECIFIC_FORCE_LIMIT
+from rigid_body_attitude.core.imu.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
 from rigid_body_attitude.session.levelling import (
     FROM_SCENE, AlignmentResult, Levelling, SampleMap, heading, rpy_quaternion)
@@ -311,7 +311,7 @@ def _sample_problem(rate: Sequence[float], accel: Sequence[float],
 
 def _accel_problem(accel: Sequence[float]) -> str:
     """``'non_finite'``, ``'accel_out_of_range'`` (a magnitude above
-    :data:`~rigid_body_attitude.core.rest.SPECIFIC_FORCE_LIMIT`) or ``''`` for a specific
+    :data:`~rigid_body_attitude.core.imu.rest.SPECIFIC_FORCE_LIMIT`) or ``''`` for a specific
     force [m/s²]."""
     try:
         ax, ay, az = (float(value) for value in accel)

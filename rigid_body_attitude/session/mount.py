@@ -14,7 +14,7 @@ from collections import deque
 from collections.abc import Iterable
 import math
 
-from rigid_body_attitude.core.quaternion import multiply_floats
+from rigid_body_attitude.core.attitude.quaternion import multiply_floats
 from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.gyro import GyroSession
 

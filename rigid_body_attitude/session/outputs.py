@@ -2,7 +2,8 @@
 
 :class:`OutputTracker` turns the propagator's state into an :class:`OutputSample`: the attitude
 made continuous with the previous output (``q · q_prev ≥ 0``, see
-:mod:`rigid_body_attitude.core.quaternion`) and renormalised, the position, the body rate, the
+:mod:`rigid_body_attitude.core.attitude.quaternion`) and renormalised, the position, the body rate,
+the
 kinetic energy and the world angular momentum. The node converts a sample to messages; the
 replay tool writes the same messages to a bag, so both give the same numbers.
 """

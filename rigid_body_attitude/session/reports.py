@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 
 import math
 
-from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.core.effects.gyro_bias import GyroBias
+from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.dynamics.effects.gyro_bias import GyroBias
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
 from rigid_body_attitude.session.stream import REASONS
 

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from rigid_body_attitude.core.effects.translation import Translation
+from rigid_body_attitude.core.dynamics.effects.translation import Translation
 from rigid_body_attitude.core.propagator import DynamicsPropagator
-from rigid_body_attitude.core.scene import GRAVITY_EFFECTS
+from rigid_body_attitude.core.dynamics.scene import GRAVITY_EFFECTS
 from rigid_body_attitude.core.sensors.imu import ImuModel, ImuSpec
 from rigid_body_attitude.msgs.cdr import simulated_imu_encoder
 from rigid_body_attitude.session.times import TimeBase, split_ns

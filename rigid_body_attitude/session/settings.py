@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from rigid_body_attitude.core.scene import Scene, load_scene
+from rigid_body_attitude.core.dynamics.scene import Scene, load_scene
 from rigid_body_attitude.msgs.types import (
     DIAGNOSTIC_ARRAY, FLOAT64, IMU, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED,
     QUATERNION_STAMPED, TWIST_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED)

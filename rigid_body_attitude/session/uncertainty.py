@@ -1,6 +1,6 @@
 """The attitude uncertainty of a gyro session: the covariance carried with the attitude.
 
-:class:`Uncertainty` owns a :class:`~rigid_body_attitude.core.attitude_covariance.
+:class:`Uncertainty` owns a :class:`~rigid_body_attitude.core.imu.attitude_covariance.
 AttitudeCovariance` and feeds it each integrated strapdown step (the session's
 ``_after_step``). It starts from the levelling's uncertainty when levelling completes
 (:meth:`Uncertainty.aligned`), or, without levelling, from the scene's attitude with the
@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from rigid_body_attitude.core.attitude_covariance import AttitudeCovariance
+from rigid_body_attitude.core.imu.attitude_covariance import AttitudeCovariance
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel, initial_covariance
 from rigid_body_attitude.session.levelling import AlignmentResult
 
 __all__ = ['BATCH_SIZE', 'FOLD_SECONDS', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE',

@@ -8,7 +8,8 @@ See ``docs/data.md``; converted bags carry the citation in their ``custom_data``
 A trial archive (``.npz``, converted from BROAD's HDF5 files, values unchanged) holds
 ``sampling_rate`` (Hz), ``imu_gyr`` (N, 3) rad/s and ``imu_acc`` (N, 3) m/s² in the IMU (body)
 frame, ``opt_quat_wxyz`` (N, 4) the optical attitude of the IMU frame w.r.t. an ENU world frame
-(scalar first, body → world as in :mod:`rigid_body_attitude.core.quaternion`; NaN rows where the
+(scalar first, body → world as in :mod:`rigid_body_attitude.core.attitude.quaternion`; NaN rows
+where the
 cameras lost the body), ``movement`` (N,) bool, and ``info``. Sample ``i`` is at
 ``i / sampling_rate`` s. Each trial starts and ends at rest; the initial rest phase gives the
 gyroscope bias estimate (:meth:`BroadTrial.rest_gyro_bias`).

@@ -9,7 +9,7 @@ import yaml
 from rigid_body_attitude import bag, msgs
 from rigid_body_attitude.bag import mcap, rosbags_internals, sqlite
 from rigid_body_attitude.core.errors import AttitudeError, InputError
-from rigid_body_attitude.core.quaternion import normalize
+from rigid_body_attitude.core.attitude.quaternion import normalize
 from rigid_body_attitude.msgs import cdr
 
 STORAGES = ['sqlite3', 'mcap']

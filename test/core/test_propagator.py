@@ -13,11 +13,11 @@ import re
 import numpy as np
 import pytest
 
-from rigid_body_attitude.core import quaternion as quat
+from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.errors import InputError, IntegratorError
 from rigid_body_attitude.core.propagator import (
     build_propagator, DynamicsPropagator, GyroPropagator, MAX_STEPS_PER_CALL)
-from rigid_body_attitude.core.scene import scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
 
 
 def dynamics_scene(inertia, omega_body, effects=(), step=0.001, attitude=(1.0, 0, 0, 0)):

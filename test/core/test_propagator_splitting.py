@@ -1,6 +1,7 @@
 """Propagated scenes and the splitting integrators: what the body model declares to them.
 
-The propagator's :class:`~rigid_body_attitude.core.dynamics.RigidBodyModel` says whether any torque
+The propagator's :class:`~rigid_body_attitude.core.dynamics.euler.RigidBodyModel` says whether any
+torque
 uses the body rate (``torque_depends_on_rate``, from the effects) and whether a rotor acts
 (``has_rotor``); with neither, the splitting methods apply gravity as an exact kick and keep
 their order. Reference: DOP853 at rtol 1e−13 on the same model's equations.
@@ -12,14 +13,14 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.effects import BodyProperties, EFFECTS, TorqueEffect
+from rigid_body_attitude.core.attitude import quaternion as quat
+from rigid_body_attitude.core.dynamics.effects import BodyProperties, EFFECTS, TorqueEffect
 from rigid_body_attitude.core.errors import IntegratorError
-from rigid_body_attitude.core.inertia import Inertia
-from rigid_body_attitude.core.dynamics import RigidBodyModel
-from rigid_body_attitude.core.integrators import DYNAMICS_INTEGRATORS
+from rigid_body_attitude.core.dynamics.inertia import Inertia
+from rigid_body_attitude.core.dynamics.euler import RigidBodyModel
+from rigid_body_attitude.core.dynamics.integrators import DYNAMICS_INTEGRATORS
 from rigid_body_attitude.core.propagator import DynamicsPropagator
-from rigid_body_attitude.core.scene import scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
 
 BODY = BodyProperties(Inertia([0.5, 0.7, 0.9]), 2.0)
 #: Parameters that build each torque effect with a non-zero torque.

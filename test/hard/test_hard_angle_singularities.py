@@ -4,7 +4,8 @@ The angle rates of seed 000 (eq. 21, ψ̇ = (ω_x sin φ + ω_y cos φ)/sin θ; 
 α̇₁ = (ω_x cos α₃ − ω_y sin α₃)/cos α₂) divide by sin θ and cos α₂. A naive integrator of
 these forms returns inf/NaN on the singularity and garbage near it (rates of order
 |ω|/δ for a closest approach δ). The package's angle forms
-(:mod:`rigid_body_attitude.core.integrators.angles`) refuse a step that reaches the singularity
+(:mod:`rigid_body_attitude.core.attitude.integrators.angles`) refuse a step that reaches the
+singularity
 with an :class:`IntegratorError` telling the user to use quaternions; near it their error grows
 like 1/δ. The quaternion and direction-cosine paths integrate the same motion with an error
 that does not depend on δ. (docs/hard-cases.md §6.)
@@ -15,10 +16,10 @@ import math
 import numpy as np
 import pytest
 
-from rigid_body_attitude.core import quaternion as quat
+from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.errors import IntegratorError
-from rigid_body_attitude.core.integrators import angles
-from rigid_body_attitude.core.integrators.kinematic import rk4_quaternion_step
+from rigid_body_attitude.core.attitude.integrators import angles
+from rigid_body_attitude.core.attitude.integrators.kinematic import rk4_quaternion_step
 
 OMEGA = np.array([1.0, 0.0, 0.0])  # constant body rate about body x [rad/s]
 STEP = 0.01

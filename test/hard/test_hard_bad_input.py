@@ -15,16 +15,16 @@ import re
 import numpy as np
 import pytest
 
-from rigid_body_attitude.core import kinematics
-from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.batch import TorqueFreeBatch
-from rigid_body_attitude.core.dynamics import RigidBodyModel, rk4_step
+from rigid_body_attitude.core.attitude import kinematics
+from rigid_body_attitude.core.attitude import quaternion as quat
+from rigid_body_attitude.core.dynamics.batch import TorqueFreeBatch
+from rigid_body_attitude.core.dynamics.euler import RigidBodyModel, rk4_step
 from rigid_body_attitude.core.errors import (
     AttitudeError, InertiaError, InputError, IntegratorError, SceneError)
-from rigid_body_attitude.core.inertia import Inertia
-from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
+from rigid_body_attitude.core.dynamics.inertia import Inertia
+from rigid_body_attitude.core.dynamics.integrators.exact_torque_free import TorqueFreeMotion
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
-from rigid_body_attitude.core.scene import load_scene, scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import load_scene, scene_from_mapping
 
 NAN = float('nan')
 INF = float('inf')

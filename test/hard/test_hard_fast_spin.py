@@ -27,14 +27,15 @@ import pytest
 
 from high_precision import mp_attitude_error
 
-from rigid_body_attitude.core import quaternion as quat
+from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.errors import IntegratorError
-from rigid_body_attitude.core.integrators import (
+from rigid_body_attitude.core.dynamics.integrators import (
     DYNAMICS_INTEGRATORS, dynamics_integrator, SimpleBodyModel)
-from rigid_body_attitude.core.integrators.strapdown import STRAPDOWN_METHODS, strapdown_method
+from rigid_body_attitude.core.attitude.integrators.strapdown import (
+    STRAPDOWN_METHODS, strapdown_method)
 from rigid_body_attitude.core.propagator import (
     DynamicsPropagator, GyroPropagator, MAX_SUBSTEPS)
-from rigid_body_attitude.core.scene import load_scene, scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import load_scene, scene_from_mapping
 
 #: The explicit Runge–Kutta methods: the dynamics integrators with a finite stability limit.
 LIMITED_METHODS = sorted(name for name, cls in DYNAMICS_INTEGRATORS.items()

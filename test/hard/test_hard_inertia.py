@@ -21,11 +21,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.dynamics import RigidBodyModel
-from rigid_body_attitude.core.inertia import Inertia
-from rigid_body_attitude.core.integrators import DYNAMICS_INTEGRATORS, dynamics_integrator
-from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
+from rigid_body_attitude.core.attitude import quaternion as quat
+from rigid_body_attitude.core.dynamics.euler import RigidBodyModel
+from rigid_body_attitude.core.dynamics.inertia import Inertia
+from rigid_body_attitude.core.dynamics.integrators import DYNAMICS_INTEGRATORS, dynamics_integrator
+from rigid_body_attitude.core.dynamics.integrators.exact_torque_free import TorqueFreeMotion
 
 EPS = np.finfo(float).eps
 Q0 = quat.normalize([0.8, -0.2, 0.3, 0.4])

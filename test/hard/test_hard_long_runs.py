@@ -23,11 +23,11 @@ import pytest
 
 from high_precision import mp_attitude_error
 
-from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.integrators import dynamics_integrator
-from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
+from rigid_body_attitude.core.attitude import quaternion as quat
+from rigid_body_attitude.core.dynamics.integrators import dynamics_integrator
+from rigid_body_attitude.core.dynamics.integrators.exact_torque_free import TorqueFreeMotion
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
-from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.core.dynamics.scene import load_scene
 
 mpmath.mp.dps = 40
 EPS = np.finfo(float).eps

@@ -18,10 +18,10 @@ import mpmath
 import numpy as np
 import pytest
 
-from rigid_body_attitude.core import quaternion as quat
+from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.session.outputs import OutputTracker
 from rigid_body_attitude.core.propagator import GyroPropagator
-from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.core.dynamics.scene import load_scene
 
 mpmath.mp.dps = 40
 EPS = np.finfo(float).eps

@@ -28,7 +28,7 @@ from ros_helpers import Harness, unique_namespace
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.session.outputs import OutputTracker
 from rigid_body_attitude.core.propagator import build_propagator
-from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.core.dynamics.scene import load_scene
 from rigid_body_attitude.session.stream import GyroStream
 
 MESSAGES = 100_000

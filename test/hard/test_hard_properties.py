@@ -26,15 +26,15 @@ import math
 from hypothesis import given, HealthCheck, settings, strategies as st
 import numpy as np
 
-from rigid_body_attitude.core import kinematics
-from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.dynamics import RigidBodyModel
-from rigid_body_attitude.core.inertia import Inertia
-from rigid_body_attitude.core.integrators import (
-    DYNAMICS_INTEGRATORS, dynamics_integrator, STRAPDOWN_METHODS, strapdown_method)
-from rigid_body_attitude.core.integrators.exact_torque_free import TorqueFreeMotion
+from rigid_body_attitude.core.attitude import kinematics
+from rigid_body_attitude.core.attitude import quaternion as quat
+from rigid_body_attitude.core.dynamics.euler import RigidBodyModel
+from rigid_body_attitude.core.dynamics.inertia import Inertia
+from rigid_body_attitude.core.attitude.integrators import STRAPDOWN_METHODS, strapdown_method
+from rigid_body_attitude.core.dynamics.integrators import DYNAMICS_INTEGRATORS, dynamics_integrator
+from rigid_body_attitude.core.dynamics.integrators.exact_torque_free import TorqueFreeMotion
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
-from rigid_body_attitude.core.scene import load_scene, scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import load_scene, scene_from_mapping
 from rigid_body_attitude.session.stream import ClockDriver, GyroStream
 
 EPS = np.finfo(float).eps

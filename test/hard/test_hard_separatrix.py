@@ -21,11 +21,11 @@ import pytest
 from scipy.optimize import brentq
 from scipy.special import ellipkm1
 
-from rigid_body_attitude.core.integrators import dynamics_integrator, SimpleBodyModel
-from rigid_body_attitude.core.integrators.exact_torque_free import (
+from rigid_body_attitude.core.dynamics.integrators import dynamics_integrator, SimpleBodyModel
+from rigid_body_attitude.core.dynamics.integrators.exact_torque_free import (
     torque_free_invariants, TorqueFreeMotion)
 from rigid_body_attitude.core.propagator import DynamicsPropagator
-from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.core.dynamics.scene import load_scene
 
 INERTIA = np.array([1.0, 2.0, 3.0])
 MOMENTUM = np.array([1e-4, 2.0, 0.0])

@@ -15,14 +15,14 @@ import mpmath
 import numpy as np
 import pytest
 
-from rigid_body_attitude.core import kinematics
-from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.batch import TorqueFreeBatch
-from rigid_body_attitude.core.dynamics import RigidBodyModel, rk4_step
-from rigid_body_attitude.core.inertia import Inertia
-from rigid_body_attitude.core.integrators.kinematic import _dexpinv_exact as dexpinv
+from rigid_body_attitude.core.attitude import kinematics
+from rigid_body_attitude.core.attitude import quaternion as quat
+from rigid_body_attitude.core.dynamics.batch import TorqueFreeBatch
+from rigid_body_attitude.core.dynamics.euler import RigidBodyModel, rk4_step
+from rigid_body_attitude.core.dynamics.inertia import Inertia
+from rigid_body_attitude.core.attitude.integrators.kinematic import _dexpinv_exact as dexpinv
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
-from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.core.dynamics.scene import load_scene
 
 mpmath.mp.dps = 50
 

@@ -5,7 +5,7 @@ import pytest
 
 from rigid_body_attitude import bag, msgs
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.quaternion import from_ros, normalize, to_ros
+from rigid_body_attitude.core.attitude.quaternion import from_ros, normalize, to_ros
 from rigid_body_attitude.msgs import cdr
 
 FRAME_IDS = ['', 'a', 'imu_lin', 'base_link', 'abcdefghijkl', 'ünïcode']

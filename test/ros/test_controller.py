@@ -29,7 +29,7 @@ import pytest
 from ros_helpers import Harness, unique_namespace
 import yaml
 
-from rigid_body_attitude.core import quaternion as quat
+from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.control import pd_torque_floats
 from rigid_body_attitude.msgs.cdr import encode_quaternion_stamped
 

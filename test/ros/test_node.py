@@ -29,7 +29,7 @@ from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 
 from rigid_body_attitude.msgs.decoders import decode_pose_stamped
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import (
     CalibrationError, InputError, IntegratorError, SceneError)
 from rigid_body_attitude.session.reports import body_frame_velocity
@@ -39,7 +39,7 @@ from rigid_body_attitude.ros.node import AttitudePropagatorNode, LOG_EVERY_PERIO
 from rigid_body_attitude.ros.serve import main
 from rigid_body_attitude.session.outputs import OutputTracker
 from rigid_body_attitude.core.propagator import build_propagator
-from rigid_body_attitude.core.scene import load_scene
+from rigid_body_attitude.core.dynamics.scene import load_scene
 from rigid_body_attitude.session.stream import ClockDriver, CommandStream, GyroStream
 
 #: Input stamps start at a realistic epoch with a fractional second: as float seconds these

@@ -27,7 +27,7 @@ from ros_helpers import Harness, ros_session, RosContext, unique_namespace
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.ros.rclpy_internals import STOCK_EXECUTOR_VARIABLE
 from rigid_body_attitude.ros.serve import SERVING_LINE
 from rigid_body_attitude.session.parameters import defaults

@@ -41,7 +41,7 @@ from std_msgs.msg import Float64
 
 from bag_fixtures import (
     AnalyticCase, build_case, CASES, GYRO_RATE, write_case_bag, write_records, write_scene)
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.bag import BagReader, typestore
 from rigid_body_attitude.msgs import (
     decode_pose_with_covariance_stamped,

@@ -27,7 +27,7 @@ from ros_helpers import Harness, ros_session, RosContext, stamp
 from scipy.stats import chi2
 import yaml
 
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.ros.serve import SERVING_LINE
 
 from test_node_subprocess import read_until, start, stop_with_sigint

@@ -26,7 +26,7 @@ from test_input_qos import (
 from test_node_subprocess import stop_with_sigint
 
 from rigid_body_attitude import bag
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.msgs.cdr import transform_encoder
 from rigid_body_attitude.ros.qos import TF_STATIC_QOS
 from rigid_body_attitude.session.mount import StaticTransforms

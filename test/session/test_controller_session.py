@@ -12,7 +12,7 @@ import math
 
 import pytest
 
-from rigid_body_attitude.core import quaternion as quat
+from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.control import pd_torque_floats
 from rigid_body_attitude.session.controller import ControllerSession, MAX_PENDING
 from rigid_body_attitude.session.controller_parameters import (

@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 from conftest import BASE_NS, MS
 
-from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.core.alignment import tilt_angle, world_up
-from rigid_body_attitude.core.rest import SPECIFIC_FORCE_LIMIT
+from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.imu.alignment import tilt_angle, world_up
+from rigid_body_attitude.core.imu.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs import encode_imu
 from rigid_body_attitude.session.decoding import input_handler
-from rigid_body_attitude.session.levelling import rpy_quaternion
+from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.session.reports import LEVEL_OK
 
 G = 9.80665

@@ -13,7 +13,7 @@ import random
 import pytest
 
 from rigid_body_attitude.core.propagator import GyroPropagator
-from rigid_body_attitude.core.scene import scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
 from rigid_body_attitude.session.stream import GyroStream
 
 BASE = 1_700_000_000 * 10**9 + 123_456_789

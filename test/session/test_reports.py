@@ -6,12 +6,12 @@ import math
 import numpy as np
 import pytest
 
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.session.reports import (
     body_frame_velocity, diagnostic_report, gyro_bias_text, LEVEL_ERROR, LEVEL_OK, LEVEL_WARN,
     NOT_ALIGNED, REJECTION_KEYS, PeriodCounts, stale_command_count, state_summary)
 from rigid_body_attitude.core.propagator import build_propagator
-from rigid_body_attitude.core.scene import load_scene, scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import load_scene, scene_from_mapping
 
 
 def test_body_frame_velocity_rotates_the_world_velocity_into_body_axes():

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from conftest import BASE_NS, MS
 
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.session.reports import LEVEL_ERROR, LEVEL_OK, LEVEL_WARN
 
 OMEGA = (0.0, 0.0, 2.0)

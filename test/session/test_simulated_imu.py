@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import yaml
 
-from rigid_body_attitude.core import quaternion
-from rigid_body_attitude.core.integrators import strapdown_method
+from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.attitude.integrators import strapdown_method
 from rigid_body_attitude.msgs.decoders import parse_stamped
 from rigid_body_attitude.msgs.decoders import IMU_COUNT
 from rigid_body_attitude.msgs.types import IMU

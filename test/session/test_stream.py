@@ -11,9 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from rigid_body_attitude.core import quaternion as quat
+from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
-from rigid_body_attitude.core.scene import scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
 from rigid_body_attitude.session.stream import (
     ClockDriver, COMMAND_LIMIT, CommandStream, GyroStream, JUMP_CONFIRMATIONS, PERIOD_BATCH)
 

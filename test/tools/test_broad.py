@@ -9,7 +9,7 @@ import pytest
 from rigid_body_attitude import bag, msgs
 from rigid_body_attitude.tools import broad
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.quaternion import attitude_error, scalar_exp_step
+from rigid_body_attitude.core.attitude.quaternion import attitude_error, scalar_exp_step
 
 TRIAL_07 = '07_undisturbed_fast_rotation_B'
 TRIAL_15 = '15_undisturbed_fast_translation_A'
@@ -159,7 +159,7 @@ def test_strapdown_errors_reproduce_the_issue_with_rate_at_interval_start(trials
     trapezoid = {name: _strapdown_max_error_deg(trials[name], 'start', coning=True)
                  for name in trials}
     # Our figures (deterministic to round-off, pinned to the printed 1e-3 deg): see
-    # bench/broad_strapdown.py.
+    # studies/broad_strapdown.py.
     assert first_order[TRIAL_07] == pytest.approx(8.875, abs=1e-3)
     assert first_order[TRIAL_15] == pytest.approx(1.329, abs=1e-3)
     assert trapezoid[TRIAL_07] == pytest.approx(6.520, abs=1e-3)

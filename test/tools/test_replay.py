@@ -15,7 +15,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from bag_fixtures import build_case, write_case_bag, write_scene
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.bag import BagError, BagReader, deserialize, read_series, write_bag
 from rigid_body_attitude.msgs import IMU, POSE_STAMPED, QUATERNION_STAMPED, header_stamp_ns
 from rigid_body_attitude.core.errors import InputError, SceneError

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.effects.base import Effect
+from rigid_body_attitude.core.attitude import quaternion as quat
+from rigid_body_attitude.core.dynamics.effects.base import Effect
 from rigid_body_attitude.tools import study
 from rigid_body_attitude.tools.study import dynamics_cases, figure, report
 from rigid_body_attitude.tools.study.runner import Row

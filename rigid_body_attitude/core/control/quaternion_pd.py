@@ -1,7 +1,7 @@
 """Quaternion-feedback PD attitude control: the one copy of the law.
 
 With the attitude error ``q_err = q_target* ⊗ q_world_body`` (Hamilton, scalar first, see
-:mod:`rigid_body_attitude.core.quaternion`) and the body rate ``ω`` [rad/s], the commanded
+:mod:`rigid_body_attitude.core.attitude.quaternion`) and the body rate ``ω`` [rad/s], the commanded
 body torque is
 
     ``τ = −k_p · sign(q_err,w) · q_err,xyz − k_d · ω``        (``sign(0) = +1``)
@@ -30,7 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import InputError
 
 __all__ = ['as_axis_gains', 'pd_torque_body', 'pd_torque_floats']

@@ -4,8 +4,8 @@ on Dask.
 ``campaign SPEC --out DIR`` reads a YAML spec (:mod:`~.spec`: scene, runs, duration, output
 times, dispersions of inertia, attitude, rates, effect parameters and commanded torques),
 draws each run's parameters from its own stream of one root seed (:mod:`~.sampling`, over
-:mod:`rigid_body_attitude.core.dispersions`), runs chunks of runs on the batch engine
-(:mod:`~.runner`, :class:`~rigid_body_attitude.core.batch.SceneBatch`) as Dask tasks
+:mod:`rigid_body_attitude.core.dynamics.dispersions`), runs chunks of runs on the batch engine
+(:mod:`~.runner`, :class:`~rigid_body_attitude.core.dynamics.batch.SceneBatch`) as Dask tasks
 (:mod:`~.engine`: a local cluster by default, ``--scheduler ADDRESS`` for an existing one),
 keeps each finished chunk as Parquet (:mod:`~.storage`: an interrupted campaign resumes),
 and summarises percentiles of the metrics over time (:mod:`~.statistics`, :mod:`~.plot`).
@@ -23,7 +23,7 @@ from rigid_body_attitude.tools.campaign.cli import main
 from rigid_body_attitude.tools.campaign.engine import (
     CampaignError, CampaignResult, chunk_runs, dask_client, local_cluster,
     LOCAL_CLUSTER_CONFIG, read_runs, run_campaign)
-from rigid_body_attitude.tools.campaign.fleet import find_bags, replay_fleet, replay_one
+from rigid_body_attitude.tools.replay.fleet import find_bags, replay_fleet, replay_one
 from rigid_body_attitude.tools.campaign.runner import FAILURE_REASONS, run_chunk
 from rigid_body_attitude.tools.campaign.sampling import RunParameters, sample_runs
 from rigid_body_attitude.tools.campaign.spec import (

@@ -17,7 +17,7 @@ from typing import NoReturn
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.tools.campaign.engine import CampaignResult, run_campaign
-from rigid_body_attitude.tools.campaign.fleet import find_bags, format_table, replay_fleet
+from rigid_body_attitude.tools.replay.fleet import find_bags, format_table, replay_fleet
 from rigid_body_attitude.tools.campaign.spec import load_spec
 from rigid_body_attitude.tools.campaign.statistics import METRICS, UNITS
 

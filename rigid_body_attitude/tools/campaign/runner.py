@@ -1,7 +1,8 @@
 """One campaign task: a set of runs on the batch engine (:class:`.SceneBatch`).
 
 :func:`run_chunk` draws the runs' parameters (:func:`.sample_runs`), builds one
-:class:`~rigid_body_attitude.core.batch.SceneBatch`, applies the commands at their times and
+:class:`~rigid_body_attitude.core.dynamics.batch.SceneBatch`, applies the commands at their times
+and
 advances to every output time, recording each run's metrics (:mod:`.statistics`). A run fails
 without stopping the others when its dispersed effect parameters are outside the effect's
 range, its rate exceeds RK4's limit of 2 rad per step (checked at every output and command
@@ -17,8 +18,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigid_body_attitude.core.batch import SceneBatch
-from rigid_body_attitude.core.effects import BodyProperties, EFFECTS
+from rigid_body_attitude.core.dynamics.batch import SceneBatch
+from rigid_body_attitude.core.dynamics.effects import BodyProperties, EFFECTS
 from rigid_body_attitude.tools.campaign.sampling import RunParameters, sample_runs
 from rigid_body_attitude.tools.campaign.spec import CampaignSpec, COMMAND_EFFECT
 from rigid_body_attitude.tools.campaign.statistics import BodyState, METRICS, metrics

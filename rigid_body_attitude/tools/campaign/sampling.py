@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigid_body_attitude.core.dispersions import (
+from rigid_body_attitude.core.dynamics.dispersions import (
     cone_quaternions, dispersed_inertia, perturbed_tensors, RunStreams, uniform_quaternions)
 from rigid_body_attitude.tools.campaign.spec import CampaignSpec, Spread
 

@@ -27,7 +27,8 @@ Format (``config/campaigns/`` ships examples)::
       target: [0, 0, 1]              # world direction (default: boresight at the start)
 
 Errors are one :class:`SpecError` naming the file and the key path
-(``dispersions.attitude.cone_deg``), as for scene files (:mod:`rigid_body_attitude.core.scene`:
+(``dispersions.attitude.cone_deg``), as for scene files
+(:mod:`rigid_body_attitude.core.dynamics.scene`:
 same size, UTF-8, alias and nesting limits).
 """
 
@@ -43,9 +44,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
-from rigid_body_attitude.core.scene import load_scene, Scene, scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import load_scene, Scene, scene_from_mapping
 from rigid_body_attitude.core.yaml_files import quote, read_yaml
 
 __all__ = ['CampaignSpec', 'CommandDispersion', 'InertiaDispersion', 'MAX_OUTPUT_TIMES',

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 
 __all__ = ['METRICS', 'UNITS', 'BodyState', 'metrics', 'percentile_table']
 

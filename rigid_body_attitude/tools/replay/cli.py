@@ -8,7 +8,7 @@ mistakes (bad options, bags, scenes, files) print one ``error: ...`` line and re
 (argparse usage errors exit with 2); the session's warnings go to stderr as ``[WARN]`` lines.
 
 A glob pattern, or a folder that is not itself a bag but holds bags, replays every bag as a
-Dask task (:mod:`rigid_body_attitude.tools.campaign.fleet`): one output bag each in the
+Dask task (:mod:`rigid_body_attitude.tools.replay.fleet`): one output bag each in the
 ``--output`` folder, one table of their reports (and errors against ground truth where the
 bag has the topic), also written to ``OUTPUT/fleet.csv``.
 """
@@ -228,7 +228,7 @@ class _UsageError(Exception):
 
 
 def _replay_many(args: argparse.Namespace) -> int:
-    from rigid_body_attitude.tools.campaign.fleet import find_bags, format_table, replay_fleet
+    from rigid_body_attitude.tools.replay.fleet import find_bags, format_table, replay_fleet
     if args.csv or args.plot:
         raise _UsageError('--csv and --plot are for one bag; many bags write OUTPUT/fleet.csv')
     if args.workers < 0:

@@ -14,7 +14,7 @@ from typing import Any
 
 from rigid_body_attitude.bag import BagError, BagReader
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.msgs import (
     ATTITUDE_DECODERS, IMU, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED, VECTOR3_STAMPED,
     WRENCH_STAMPED)

@@ -18,10 +18,10 @@ from pathlib import Path
 from typing import Any
 
 from rigid_body_attitude.bag import BagError, BagReader, BagWriter
-from rigid_body_attitude.core.diagnostics import Diagnostics
+from rigid_body_attitude.core.dynamics.diagnostics import Diagnostics
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.propagator import build_propagator
-from rigid_body_attitude.core.scene import Scene
+from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.reports import state_summary
 from rigid_body_attitude.session.settings import (

@@ -2,7 +2,7 @@
 outputs against it, and starting the replay from it.
 
 Quaternions are scalar-first ``(w, x, y, z)``, body → world
-(:mod:`rigid_body_attitude.core.quaternion`); stamps are integer nanoseconds.
+(:mod:`rigid_body_attitude.core.attitude.quaternion`); stamps are integer nanoseconds.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation, Slerp
 
 from rigid_body_attitude.bag import BagError, BagReader
-from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
 from rigid_body_attitude.msgs import ATTITUDE_DECODERS, header_stamp_ns
@@ -98,7 +98,7 @@ class ErrorStatistics:
     Attributes:
         stamps_ns: stamps compared [ns].
         errors: attitude error at each [rad]
-            (:func:`~rigid_body_attitude.core.quaternion.attitude_error`).
+            (:func:`~rigid_body_attitude.core.attitude.quaternion.attitude_error`).
     """
 
     stamps_ns: StampArray

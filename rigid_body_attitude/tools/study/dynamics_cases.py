@@ -1,6 +1,6 @@
 """Dynamics cases, built from scenes and their effects the way the propagator builds them.
 
-Each case is a scene (:func:`rigid_body_attitude.core.scene.scene_from_mapping`); a
+Each case is a scene (:func:`rigid_body_attitude.core.dynamics.scene.scene_from_mapping`); a
 :class:`~rigid_body_attitude.core.propagator.DynamicsPropagator` built from it supplies the
 body model (inertia, the effects' torques and rotors) that every method integrates, and the
 DOP853 references and scipy's DOP853 evaluate the same model (:func:`model_rhs`). No torque
@@ -9,8 +9,8 @@ whole run (family ``dynamics``); ``stepped`` rows advance the propagator itself 
 rate (``DynamicsPropagator.advance_to``, diagnostics included), as the node does.
 
 ``torque_free``
-    Hairer–Vilmart body (physics.md §2.5), T = 10 s; exact reference; invariant: world
-    angular momentum drift.
+    Hairer–Vilmart body (Hairer & Vilmart, J. Phys. A 39, 2006), T = 10 s; exact reference;
+    invariant: world angular momentum drift.
 ``near_separatrix``
     J = (1, 2, 3), ω₀ = (1e−4, 1, 0), T = 30 s (several flips); exact reference.
 ``heavy_top``
@@ -38,13 +38,13 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from rigid_body_attitude.core import quaternion as quat
-from rigid_body_attitude.core.dynamics import RigidBodyModel
-from rigid_body_attitude.core.effects.base import CommandedEffect
-from rigid_body_attitude.core.effects.gravity_about_pivot import GravityAboutPivot
-from rigid_body_attitude.core.integrators import TorqueFreeMotion, dynamics_integrator
+from rigid_body_attitude.core.attitude import quaternion as quat
+from rigid_body_attitude.core.dynamics.euler import RigidBodyModel
+from rigid_body_attitude.core.dynamics.effects.base import CommandedEffect
+from rigid_body_attitude.core.dynamics.effects.gravity_about_pivot import GravityAboutPivot
+from rigid_body_attitude.core.dynamics.integrators import TorqueFreeMotion, dynamics_integrator
 from rigid_body_attitude.core.propagator import DynamicsPropagator
-from rigid_body_attitude.core.scene import Scene, scene_from_mapping
+from rigid_body_attitude.core.dynamics.scene import Scene, scene_from_mapping
 from rigid_body_attitude.tools.study.runner import Job, Outcome
 
 __all__ = ['DynamicsCase', 'dynamics_jobs', 'model_rhs', 'DYNAMICS_CASES']

@@ -2,8 +2,8 @@
 
 ``coning``
     classical coning, half-angle 0.05 rad at 2 Hz, T = 10 s (20 cone periods), strapdown
-    stream methods; error vs the closed form (physics.md §2.3); invariant: the coning drift
-    (sign convention of :mod:`rigid_body_attitude.core.integrators.strapdown`), measured
+    stream methods; error vs the closed form (Savage 1998); invariant: the coning drift
+    (sign convention of :mod:`rigid_body_attitude.core.attitude.integrators.strapdown`), measured
     from the end of the first cone period to the end of the run.
 ``generic``
     a smooth wandering rate, T = 4 s: ω(t) methods, stream methods (rate and delta-angle
@@ -23,10 +23,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from rigid_body_attitude.core import quaternion as quat
+from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.errors import AttitudeError
-from rigid_body_attitude.core.integrators import KINEMATIC_METHODS, STRAPDOWN_METHODS
-from rigid_body_attitude.core.integrators import angles
+from rigid_body_attitude.core.attitude.integrators import KINEMATIC_METHODS, STRAPDOWN_METHODS
+from rigid_body_attitude.core.attitude.integrators import angles
 from rigid_body_attitude.tools.study.runner import Job, Outcome
 
 __all__ = ['coning_jobs', 'generic_jobs', 'gimbal_jobs']
@@ -42,7 +42,7 @@ CONING_FLOOR = 1e-12
 
 
 def coning_rate(t: float) -> tuple[float, float, float]:
-    """Body rate of classical coning about the x axis (physics.md §2.3) [rad/s]."""
+    """Body rate of classical coning about the x axis (Savage 1998) [rad/s]."""
     a, w = CONE_ANGLE, CONE_FREQUENCY
     return (-2.0 * w * math.sin(0.5 * a) ** 2, -w * math.sin(a) * math.sin(w * t),
             w * math.sin(a) * math.cos(w * t))

@@ -1,0 +1,22 @@
+"""Effects a scene may name; each module registers one effect class in :data:`EFFECTS`.
+
+Importing this package imports every module in it, so a new effect module is found without
+editing any other file.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from rigid_body_attitude.core.dynamics.effects.base import (
+    BatchChunk, BodyProperties, CommandedEffect, ConservativeTorque, Effect, EFFECTS, ForceEffect,
+    RateCorrection, RotorEffect, StatefulEffect, TorqueEffect)
+
+__all__ = ['BatchChunk', 'BodyProperties', 'CommandedEffect', 'ConservativeTorque', 'EFFECTS',
+           'Effect', 'ForceEffect', 'RateCorrection', 'RotorEffect', 'StatefulEffect',
+           'TorqueEffect']
+
+for _module in pkgutil.iter_modules(__path__):
+    if _module.name != 'base':
+        importlib.import_module(f'{__name__}.{_module.name}')

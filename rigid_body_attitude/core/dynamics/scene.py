@@ -1,0 +1,418 @@
+"""Scenes: what to simulate, read from YAML and validated once, before anything runs.
+
+A scene names the body, the initial state, the rate source, the integrator and its step, and
+the effects; only the effects it names are constructed. Format::
+
+    name: torque_free_box
+    description: a free box tumbling about no principal axis
+    rate_source: dynamics          # or gyro (strapdown from measured rates)
+    integrator: rk4                # default rk4; gyro scenes: delta_single
+    step: 0.001                    # [s]; for gyro scenes the input stamps set the step
+    body:
+      mass: 2.0                    # [kg]
+      inertia: {box: {edges: [0.1, 0.2, 0.3], about: centre}}
+      # or inertia: {tensor: [[...], [...], [...]]} | {moments: [J1, J2, J3]}
+      #    | {cylinder: {radius, height}} | {sphere: {radius}}
+    initial_state:
+      attitude: [1, 0, 0, 0]       # (w, x, y, z), normalised on load
+      omega_body: [0.1, 2.0, 0.05] # [rad/s]
+    effects:                       # list of {effect_name: {parameters}} or effect_name
+      - viscous_damping: {coefficient: 0.01}
+    sensors:                       # dynamics scenes: simulated sensors (core/sensors)
+      imu: {rate: 200.0, frame_id: imu_link, seed: 1}
+
+Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`scene_path`).
+
+Hostile or broken files are refused at load with one :class:`SceneError` naming the file and
+the key path (``initial_state.attitude``), or the line and column of a YAML syntax error; error
+texts quote at most 100 characters of a bad value. Limits:
+
+* the file checks of :mod:`~rigid_body_attitude.core.yaml_files`: at most 64 KiB (the shipped
+  scenes are under 1 KiB), UTF-8, no YAML aliases, nesting at most 32 levels, every integer
+  fits a float;
+* ``name`` at most :data:`MAX_NAME_CHARS` characters, ``description`` at most
+  :data:`MAX_DESCRIPTION_CHARS`;
+* physics that stays finite: mass, principal moments and their inverses, ``|omega_body|``,
+  the initial kinetic energy ``½ ωᵀJω`` and ``|Jω|``, and the attitude's magnitude before
+  normalisation all within ``[1/SCALE_LIMIT, SCALE_LIMIT]`` (zero allowed for rates and
+  energies). With :data:`SCALE_LIMIT` = 1e75 a product of two such quantities (``ω × Jω``,
+  ``J⁻¹τ``) is at most 1e150 and its squared norm at most 1e300, below the float maximum
+  (1.8e308); real bodies are far inside (the Earth: 8e37 kg m², 7e33 kg m²/s).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.dynamics.effects import EFFECTS, BodyProperties, Effect
+from rigid_body_attitude.core.errors import AttitudeError, SceneError
+from rigid_body_attitude.core.dynamics.inertia import Inertia
+from rigid_body_attitude.core.paths import config_folders
+from rigid_body_attitude.core.sensors.imu import ImuSpec, sensors_spec
+from rigid_body_attitude.core.yaml_files import (
+    bounded as _bounded, MAGNITUDE_LIMIT, quote, read_yaml, real)
+
+__all__ = ['MAX_DESCRIPTION_CHARS', 'MAX_NAME_CHARS', 'RATE_SOURCES', 'SCALE_LIMIT', 'Scene',
+           'builtin_scenes', 'load_scene', 'scene_from_mapping', 'scene_path']
+
+FloatArray = NDArray[np.float64]
+
+RATE_SOURCES = ('dynamics', 'gyro')
+_TOP_KEYS = {'name', 'description', 'rate_source', 'integrator', 'step', 'body',
+             'initial_state', 'effects', 'sensors'}
+_REQUIRED_TOP_KEYS = ('rate_source', 'body')
+_BODY_KEYS = {'mass', 'inertia'}
+_STATE_KEYS = {'attitude', 'omega_body'}
+_SHAPES = ('tensor', 'moments', 'box', 'cylinder', 'sphere')
+_DEFAULT_INTEGRATOR = {'dynamics': 'rk4', 'gyro': 'delta_single'}
+
+#: Longest ``name`` and ``description`` [characters].
+MAX_NAME_CHARS = 256
+MAX_DESCRIPTION_CHARS = 1024
+#: Bound on every physical magnitude of a scene (SI units), and 1/bound on the positive ones
+#: (the effects' parameters share it).
+SCALE_LIMIT = MAGNITUDE_LIMIT
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene; :meth:`build_effects` constructs the named effects (only those).
+
+    Attributes:
+        name: scene name.
+        description: one line for logs and docs.
+        rate_source: ``'dynamics'`` (Euler's equations) or ``'gyro'`` (measured rates).
+        integrator: integrator name (see :mod:`rigid_body_attitude.core.dynamics.integrators`).
+        step: integration step [s] for dynamics scenes.
+        inertia: validated inertia [kg m²], body axes.
+        mass: [kg].
+        initial_attitude: unit quaternion (w, x, y, z), body → world.
+        initial_omega_body: [rad/s].
+        effects: ``(name, parameters)`` pairs in scene order.
+        source: the file it came from, if any.
+        imu: the simulated IMU of the ``sensors`` section, or None.
+    """
+
+    name: str
+    description: str
+    rate_source: str
+    integrator: str
+    step: float
+    inertia: Inertia
+    mass: float
+    initial_attitude: FloatArray
+    initial_omega_body: FloatArray
+    effects: tuple[tuple[str, Mapping[str, Any]], ...] = field(default_factory=tuple)
+    source: str = ''
+    imu: ImuSpec | None = None
+
+    def build_effects(self) -> list[Effect]:
+        """Construct the scene's effects, in order; nothing else is built."""
+        body = BodyProperties(self.inertia, self.mass)
+        return [EFFECTS[name](params, body) for name, params in self.effects]
+
+    def with_overrides(self, integrator: str = '', step: float = 0.0,
+                       effect_parameters: Mapping[str, Mapping[str, Any]] | None = None
+                       ) -> Scene:
+        """A copy with another integrator or step, or some effect parameters replaced.
+
+        ``effect_parameters`` maps an effect name to parameters merged into that effect's
+        (ignored for effects the scene does not name). The copy is validated again.
+        """
+        effects = self.effects
+        if effect_parameters:
+            effects = tuple((name, {**params, **effect_parameters.get(name, {})})
+                            for name, params in self.effects)
+        changed = replace(self, integrator=integrator or self.integrator,
+                          step=step or self.step, effects=effects)
+        _check_effects(changed)
+        _check_step(changed.step)
+        _check_sensors(changed)
+        return changed
+
+
+def builtin_scenes() -> dict[str, Path]:
+    """Names and files of the shipped scenes (``config/scenes/*.yaml``)."""
+    found: dict[str, Path] = {}
+    for folder in reversed(config_folders('scenes')):
+        for path in sorted(folder.glob('*.yaml')):
+            found[path.stem] = path
+    return found
+
+
+def scene_path(name_or_path: str) -> Path:
+    """The file of a built-in scene name, or ``name_or_path`` itself if it is a file."""
+    candidate = Path(name_or_path).expanduser()
+    if candidate.suffix in ('.yaml', '.yml') or os.sep in name_or_path:
+        if candidate.is_file():
+            return candidate
+        raise SceneError(f'Scene file {name_or_path!r} does not exist')
+    scenes = builtin_scenes()
+    if name_or_path in scenes:
+        return scenes[name_or_path]
+    raise SceneError(f'Unknown scene {name_or_path!r}; built-in scenes: '
+                     f'{", ".join(sorted(scenes)) or "(none found)"}, or give a path to a '
+                     f'.yaml file')
+
+
+def load_scene(name_or_path: str) -> Scene:
+    """Load and validate a built-in scene by name or a scene YAML file by path.
+
+    Every fault is one :class:`SceneError` whose text starts ``Scene file '<path>'`` (see the
+    module's limits); nothing else escapes for any file content.
+    """
+    path = scene_path(name_or_path)
+    where = f'Scene file {str(path)!r}'
+    data = read_yaml(path, where, SceneError, 'scene files')
+    try:
+        return scene_from_mapping(data, default_name=path.stem, source=str(path))
+    except SceneError as err:
+        raise SceneError(_bounded(f'{where}: {err}')) from None
+
+
+def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '') -> Scene:
+    """Validate a scene given as a mapping (the parsed YAML).
+
+    Errors name the key path (``body.mass``, ``initial_state.attitude``) and quote at most
+    100 characters of the bad value.
+    """
+    if not isinstance(data, Mapping):
+        raise SceneError(f'Expected a scene to be a mapping with keys '
+                         f'{", ".join(sorted(_TOP_KEYS))}, got {quote(data)}')
+    _check_keys('scene', data, _TOP_KEYS, _REQUIRED_TOP_KEYS)
+    rate_source = data['rate_source']
+    if rate_source not in RATE_SOURCES:
+        raise SceneError(f'Unknown rate_source {quote(rate_source)}; valid choices: '
+                         f'{", ".join(RATE_SOURCES)}')
+    with np.errstate(all='ignore'):  # overflow is refused below, not warned about
+        inertia, mass = _body(data['body'])
+        attitude, omega = _initial_state(data.get('initial_state', {}), inertia)
+    scene = Scene(
+        name=_label('name', data.get('name', default_name), MAX_NAME_CHARS),
+        description=_label('description', data.get('description', ''), MAX_DESCRIPTION_CHARS),
+        rate_source=rate_source,
+        integrator=_text('integrator', data.get('integrator', _DEFAULT_INTEGRATOR[rate_source])),
+        step=_check_step(data.get('step', 0.001)),
+        inertia=inertia,
+        mass=mass,
+        initial_attitude=attitude,
+        initial_omega_body=omega,
+        effects=_effect_list(data.get('effects') or []),
+        source=source,
+        imu=sensors_spec(data.get('sensors')),
+    )
+    _check_effects(scene)
+    _check_sensors(scene)
+    return scene
+
+
+def _check_keys(where: str, data: Mapping[Any, Any], valid: set[str],
+                required: tuple[str, ...] = ()) -> None:
+    for key in data:
+        if key not in valid:
+            raise SceneError(f'Unknown key {quote(key)} in {where}; valid keys: '
+                             f'{", ".join(sorted(valid))}')
+    for key in required:
+        if key not in data:
+            raise SceneError(f'Missing key {key!r} in {where}; valid keys: '
+                             f'{", ".join(sorted(valid))}')
+
+
+def _text(key: str, value: Any) -> str:
+    if not isinstance(value, str):
+        raise SceneError(f'Expected {key!r} to be a string, got {quote(value)}')
+    return value
+
+
+def _label(key: str, value: Any, limit: int) -> str:
+    """A name or description: text (numbers are written as text), at most ``limit`` chars."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        value = str(value)
+    text = _text(key, value)
+    if len(text) > limit:
+        raise SceneError(f'Expected {key!r} to be at most {limit} characters, got '
+                         f'{len(text)}: {quote(text)}')
+    return text
+
+
+def _number(key: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        try:
+            real(value)  # always raises here; its reason explains YAML 1.1's '1e-3' text
+        except (TypeError, ValueError) as err:
+            raise SceneError(f'Expected {key!r} to be {err}, got {quote(value)}') from err
+    try:
+        return float(value)
+    except OverflowError:
+        raise SceneError(f'Expected {key!r} to be a number within the float range, got '
+                         f'{quote(value)}') from None
+
+
+def _check_step(value: Any) -> float:
+    step = _number('step', value)
+    if not np.isfinite(step) or step <= 0.0:
+        raise SceneError(f'Expected step to be a positive number of seconds, got {quote(value)}')
+    return step
+
+
+def _body(data: Any) -> tuple[Inertia, float]:
+    if not isinstance(data, Mapping):
+        raise SceneError(f'Expected body to be a mapping with keys mass, inertia; got '
+                         f'{quote(data)}')
+    _check_keys('body', data, _BODY_KEYS, ('inertia',))
+    mass = _number('body.mass', data.get('mass', 1.0))
+    if not np.isfinite(mass) or mass <= 0.0:
+        raise SceneError(f'Expected body.mass to be a positive number [kg], got {mass!r}')
+    _within_scale('body.mass', mass, positive=True)
+    spec = data['inertia']
+    if not isinstance(spec, Mapping) or len(spec) != 1 or next(iter(spec)) not in _SHAPES:
+        raise SceneError(f'Expected body.inertia to be one of {{{", ".join(_SHAPES)}: ...}}, '
+                         f'got {quote(spec)}')
+    kind, params = next(iter(spec.items()))
+    try:
+        inertia = _inertia(kind, params, mass)
+    except AttitudeError as err:
+        raise SceneError(_bounded(f'Bad body.inertia.{kind}: {err}')) from err
+    except (TypeError, OverflowError) as err:
+        raise SceneError(_bounded(f'Bad body.inertia.{kind} parameters {quote(params)}: '
+                                  f'{err}')) from err
+    for moment in inertia.principal_moments.tolist():
+        _within_scale(f'body.inertia.{kind} (principal moment)', moment, positive=True)
+    return inertia, mass
+
+
+def _inertia(kind: str, params: Any, mass: float) -> Inertia:
+    if kind in ('tensor', 'moments'):
+        return Inertia(params)
+    if not isinstance(params, Mapping):
+        raise SceneError(f'Expected body.inertia.{kind} to be a mapping, got {quote(params)}')
+    if kind == 'box':
+        return Inertia.box(mass, **params)
+    if kind == 'cylinder':
+        return Inertia.cylinder(mass, **params)
+    return Inertia.sphere(mass, **params)
+
+
+def _within_scale(key: str, value: float, positive: bool = False) -> None:
+    """Refuse a magnitude above :data:`SCALE_LIMIT` (or, if ``positive``, below its inverse)."""
+    if not abs(value) <= SCALE_LIMIT or (positive and not abs(value) >= 1.0 / SCALE_LIMIT):
+        bounds = f'[{1.0 / SCALE_LIMIT:g}, {SCALE_LIMIT:g}]' if positive else (
+            f'at most {SCALE_LIMIT:g}')
+        raise SceneError(f'Expected {key} to be {bounds} so that the physics stays finite, '
+                         f'got {value:.6g}')
+
+
+def _initial_state(data: Any, inertia: Inertia) -> tuple[FloatArray, FloatArray]:
+    if not isinstance(data, Mapping):
+        raise SceneError(f'Expected initial_state to be a mapping, got {quote(data)}')
+    _check_keys('initial_state', data, _STATE_KEYS)
+    try:
+        raw_attitude = quaternion.as_quaternion(data.get('attitude', [1.0, 0.0, 0.0, 0.0]),
+                                                'initial_state.attitude')
+        omega = quaternion.as_vector(data.get('omega_body', [0.0, 0.0, 0.0]),
+                                     'initial_state.omega_body')
+    except AttitudeError as err:
+        raise SceneError(_bounded(str(err))) from err
+    except OverflowError as err:
+        raise SceneError(f'Expected initial_state to hold numbers within the float range: '
+                         f'{err}') from err
+    if raw_attitude.shape != (4,) or omega.shape != (3,):
+        raise SceneError('Expected initial_state.attitude to be 4 numbers (w, x, y, z) and '
+                         f'omega_body 3 numbers, got {quote(data)}')
+    largest = float(np.max(np.abs(raw_attitude)))
+    if largest == 0.0:
+        raise SceneError(f'Expected initial_state.attitude to be a non-zero quaternion '
+                         f'(w, x, y, z), got {raw_attitude.tolist()!r}')
+    _within_scale('initial_state.attitude (largest component)', largest, positive=True)
+    attitude = quaternion.normalize(raw_attitude)
+    _within_scale('|initial_state.omega_body| [rad/s]', _norm(omega))
+    momentum = inertia.tensor @ omega
+    _within_scale('the initial angular momentum |J omega_body| [kg m²/s]', _norm(momentum))
+    _within_scale('the initial kinetic energy [J]', 0.5 * float(omega @ momentum))
+    return attitude, omega
+
+
+def _norm(vector: FloatArray) -> float:
+    """Euclidean norm without overflow in the squares (components are finite)."""
+    scale = float(np.max(np.abs(vector)))
+    return 0.0 if scale == 0.0 else scale * math.sqrt(float(np.sum((vector / scale) ** 2)))
+
+
+def _effect_list(data: Any) -> tuple[tuple[str, Mapping[str, Any]], ...]:
+    if not isinstance(data, list):
+        raise SceneError(f'Expected effects to be a list, got {quote(data)}')
+    effects = []
+    for index, item in enumerate(data):
+        params: Any
+        if isinstance(item, str):
+            name, params = item, {}
+        elif isinstance(item, Mapping) and len(item) == 1:
+            name, params = next(iter(item.items()))
+            params = {} if params is None else params
+        else:
+            raise SceneError(f'Expected effects[{index}] to be a name or '
+                             f'{{name: {{parameters}}}}, got {quote(item)}')
+        if not isinstance(name, str) or name not in EFFECTS:
+            raise SceneError(f'Unknown effect {quote(name)}; valid effects: '
+                             f'{", ".join(sorted(EFFECTS))}')
+        if not isinstance(params, Mapping):
+            raise SceneError(f'Expected the parameters of effect {name!r} to be a mapping, '
+                             f'got {quote(params)}')
+        effects.append((name, dict(params)))
+    return tuple(effects)
+
+
+def _check_effects(scene: Scene) -> None:
+    names = [name for name, _ in scene.effects]
+    for name in names:
+        cls = EFFECTS[name]
+        if names.count(name) > 1:
+            raise SceneError(f'Effect {name!r} is named more than once in scene '
+                             f'{quote(scene.name)}')
+        if scene.rate_source not in cls.rate_sources:
+            raise SceneError(f'Effect {name!r} applies to {"/".join(sorted(cls.rate_sources))} '
+                             f'scenes, not to rate_source {scene.rate_source!r}')
+        for required in cls.requires:
+            if required not in names:
+                raise SceneError(f'Effect {name!r} needs effect {required!r} in the same scene')
+    try:
+        scene.build_effects()
+    except SceneError as err:
+        raise SceneError(_bounded(str(err))) from err
+    except (AttitudeError, TypeError, OverflowError) as err:
+        raise SceneError(_bounded(f'effects: {err}')) from err
+
+
+#: Effects that give the world gravity a simulated accelerometer feels.
+GRAVITY_EFFECTS = ('uniform_gravity', 'gravity_about_pivot')
+
+
+def _check_sensors(scene: Scene) -> None:
+    """A simulated IMU: dynamics scenes only, its period a whole number of steps, ``gravity``
+    only where no effect gives it (and the body does not translate)."""
+    imu = scene.imu
+    if imu is None:
+        return
+    if scene.rate_source != 'dynamics':
+        raise SceneError('sensors: simulated sensors need a dynamics scene (rate_source: '
+                         'dynamics)')
+    ratio = imu.period / scene.step
+    if round(ratio) < 1 or abs(ratio - round(ratio)) > 1e-9 * ratio:
+        raise SceneError(f'Expected the period of sensors.imu.rate ({imu.period:.9g} s) to be '
+                         f'a whole multiple of the step ({scene.step:g} s), got {ratio:.6g} '
+                         f'steps')
+    names = [name for name, _ in scene.effects]
+    given_by = [name for name in names if name in GRAVITY_EFFECTS + ('translation',)]
+    if imu.gravity is not None and given_by:
+        raise SceneError(f'sensors.imu.gravity is for a body held in place without gravity '
+                         f'effects; scene {quote(scene.name)} has {given_by[0]!r} (the '
+                         f'accelerometer takes the gravity of its effects)')

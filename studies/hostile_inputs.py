@@ -1,0 +1,380 @@
+"""Attack the installed ``propagation_node`` as a hostile peer would; report what it did.
+
+Every attack class is sent to a running node (a subprocess started as a user would, through
+real rclpy publishers in this process) or given to it at start (scene files, parameters).
+For each class the report says how many cases were tried and whether the node survived,
+counted every case in ``/diagnostics`` under the expected reason, kept every output finite, and
+ended with exactly the state the good inputs alone give. ``docs/robustness.md`` quotes the
+table this prints (or writes to ``--out``)::
+
+    .venv/bin/python studies/hostile_inputs.py            # about a minute
+    .venv/bin/python studies/hostile_inputs.py --domain 91 --out /tmp/hostile.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import random
+import signal
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+MS = 1_000_000
+BASE_NS = 1_700_000_000 * 10**9 + 123_456_789
+OMEGA = (0.3, -0.2, 1.1)
+
+
+@dataclass
+class Result:
+    """One attack class: cases tried and what was checked."""
+
+    name: str
+    cases: int
+    reason: str
+    outcome: str
+    seconds: float
+
+
+def node_command(*arguments: str) -> list[str]:
+    return [str(Path(sys.prefix) / 'bin' / 'propagation_node'), '--ros-args', *arguments]
+
+
+def deep_inputs(*topics: str) -> list[str]:
+    """Reliable, 10 000-deep input queues: this bench tests rejection, not loss."""
+    arguments = []
+    for topic in topics:
+        prefix = f'qos_overrides./{topic}.subscription'
+        arguments += ['-p', f'{prefix}.reliability:=reliable', '-p', f'{prefix}.depth:=10000']
+    return arguments
+
+
+# -- payloads ---------------------------------------------------------------------------------
+
+def stamp(nanoseconds: int) -> Any:
+    from builtin_interfaces.msg import Time
+    sec, nanosec = divmod(nanoseconds, 10**9)
+    return Time(sec=sec, nanosec=nanosec)
+
+
+def imu(at_ns: int, rate: tuple[float, float, float] = OMEGA) -> Any:
+    from sensor_msgs.msg import Imu
+    message = Imu()
+    message.header.stamp, message.header.frame_id = stamp(at_ns), 'base_link'
+    message.angular_velocity.x, message.angular_velocity.y, message.angular_velocity.z = rate
+    return message
+
+
+def malformed_cases(good: bytes, seed: int) -> dict[str, list[bytes]]:
+    """Malformed variants of a serialized message, by class."""
+    generator = random.Random(seed)
+    valid_ids = {0x0000, 0x0001}
+    encapsulations = [bytes([high, low]) + good[2:] for high in range(256)
+                      for low in (0, 1, 2, 3) if (high << 8 | low) not in valid_ids]
+    lengths = []
+    for value in (0, 2, 3, 100, len(good), 2**16, 2**31, 2**32 - 1):
+        data = bytearray(good)
+        struct.pack_into('<I', data, 12, value)
+        lengths.append(bytes(data))
+    return {
+        # From 1 byte: an empty payload never reaches the node (rmw_fastrtps drops it; on a
+        # reliable connection it stalls that writer's later samples: docs/robustness.md).
+        'truncated at every length': [good[:n] for n in range(1, len(good))],
+        'encapsulation id other than CDR_BE, CDR_LE': encapsulations,
+        'frame_id length absurd or wrong': lengths,
+        'random bytes': [generator.randbytes(generator.randrange(1, 600)) for _ in range(200)],
+    }
+
+
+# -- a running node ---------------------------------------------------------------------------
+
+class RunningNode:
+    """The installed node in a subprocess and a harness node publishing to it."""
+
+    def __init__(self, domain: int, arguments: list[str]) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                   ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', PYTHONFAULTHANDLER='1')
+        self.process = subprocess.Popen(node_command(*arguments), env=env,
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                        text=True)
+        os.environ['ROS_DOMAIN_ID'] = str(domain)
+        os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node('hostile_harness', context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.publishers: dict[str, Any] = {}
+        self.received: dict[str, list[Any]] = {}
+
+    def publisher(self, message_type: Any, topic: str) -> Any:
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        qos = QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE)
+        self.publishers[topic] = self.node.create_publisher(message_type, topic, qos)
+        return self.publishers[topic]
+
+    def record(self, message_type: Any, topic: str) -> list[Any]:
+        from rclpy.qos import QoSProfile
+        messages = self.received.setdefault(topic, [])
+        self.node.create_subscription(message_type, topic, messages.append,
+                                      QoSProfile(depth=10000))
+        return messages
+
+    def spin_until(self, condition: Callable[[], bool], timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        while not condition():
+            if time.monotonic() > deadline or self.process.poll() is not None:
+                return condition()
+            self.executor.spin_once(timeout_sec=0.01)
+        return True
+
+    def connected(self) -> bool:
+        return self.spin_until(lambda: all(
+            p.get_subscription_count() > 0 for p in self.publishers.values()), 20.0)
+
+    def diagnostics(self) -> dict[str, str]:
+        statuses = [m for m in self.received.get('/diagnostics', [])
+                    if m.status and m.status[0].name == '/attitude_propagator']
+        return {p.key: p.value for p in statuses[-1].status[0].values} if statuses else {}
+
+    def wait_received(self, count: int) -> dict[str, str]:
+        self.spin_until(lambda: self.diagnostics().get('received') == str(count), 30.0)
+        return self.diagnostics()
+
+    def stop(self) -> tuple[int, str]:
+        """SIGINT; the exit code and stderr."""
+        alive = self.process.poll() is None
+        if alive:
+            self.process.send_signal(signal.SIGINT)
+        try:
+            _, stderr = self.process.communicate(timeout=15)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            _, stderr = self.process.communicate()
+        self.executor.shutdown()
+        self.node.destroy_node()
+        import rclpy
+        rclpy.shutdown(context=self.context)
+        return (self.process.returncode if alive else -999), stderr
+
+
+# -- gyro attacks -----------------------------------------------------------------------------
+
+def gyro_attack(domain: int, name: str, attacks: list[tuple[str, Any]], reason: str
+                ) -> Result:
+    """Good Imu samples at 1 kHz with one attack after each; the node must end at the good
+    stream's attitude, with every attack counted under ``reason``."""
+    from geometry_msgs.msg import PoseStamped, QuaternionStamped
+    from diagnostic_msgs.msg import DiagnosticArray
+    from sensor_msgs.msg import Imu
+    started = time.monotonic()
+    running = RunningNode(domain, ['-p', 'scene:=strapdown', *deep_inputs('imu', 'set_pose')])
+    running.publisher(Imu, 'imu')
+    running.publisher(PoseStamped, 'set_pose')
+    orientations = running.record(QuaternionStamped, 'orientation')
+    running.record(DiagnosticArray, '/diagnostics')
+    if not running.connected():
+        return Result(name, len(attacks), reason, 'node did not connect', 0.0)
+    good = len(attacks) + 1
+    for k in range(good):
+        running.publishers['imu'].publish(imu(BASE_NS + k * MS))
+        if k < len(attacks):
+            topic, payload = attacks[k]
+            running.publishers[topic].publish(payload)
+        if k % 200 == 0:
+            running.spin_until(lambda: False, 0.01)
+    values = running.wait_received(good + len(attacks))
+    running.spin_until(lambda: len(orientations) >= good, 10.0)
+    code, stderr = running.stop()
+    problems = []
+    if code != 0 or 'Traceback' in stderr:
+        problems.append(f'exit {code}')
+        print(stderr[-4000:], file=sys.stderr)  # the crash's traces (faulthandler)
+    counted = sum(int(values.get(f'rejected {key}', 0)) for key in reason.split('|'))
+    if counted != len(attacks):
+        problems.append(f'rejected {reason} = {counted}')
+    attitudes = [(m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z)
+                 for m in orientations]
+    if not all(math.isfinite(v) for q in attitudes for v in q):
+        problems.append('non-finite output')
+    if len(attitudes) != good or _error(attitudes[-1], (good - 1) * 1e-3) > 1e-12:
+        problems.append(f'state changed ({len(attitudes)} outputs of {good})')
+    outcome = ('survived; all counted; outputs finite; state unchanged' if not problems
+               else 'FAILED: ' + '; '.join(problems))
+    return Result(name, len(attacks), reason, outcome, time.monotonic() - started)
+
+
+def _error(attitude: tuple[float, ...], seconds: float) -> float:
+    """Distance from exp(ω t), the good constant-rate stream alone."""
+    norm = math.sqrt(sum(w * w for w in OMEGA))
+    half = 0.5 * norm * seconds
+    expected = (math.cos(half), *(math.sin(half) * w / norm for w in OMEGA))
+    return max(abs(a - b) for a, b in zip(attitude, expected))
+
+
+def gyro_classes(seed: int) -> Iterator[tuple[str, list[tuple[str, Any]], str]]:
+    from geometry_msgs.msg import PoseStamped
+    from rclpy.serialization import serialize_message
+    good_imu = serialize_message(imu(BASE_NS))
+    # A length field that still fits may decode as another, well-formed frame_id: then the
+    # message is judged as such (set_pose: wrong_frame; imu: the first stamp again, stale).
+    # Decodable set_pose messages queued behind a newer one are counted superseded.
+    for name, payloads in malformed_cases(good_imu, seed).items():
+        yield f'imu: {name}', [('imu', p) for p in payloads], 'malformed|stale_stamp'
+    good_pose = serialize_message(PoseStamped())
+    for name, payloads in malformed_cases(good_pose, seed + 1).items():
+        yield (f'set_pose: {name}', [('set_pose', p) for p in payloads],
+               'malformed|wrong_frame|superseded')
+    absurd = [(1e200, 0.0, 0.0), (1e308, 1e308, 1e308), (-1e308, 0.0, 0.0), (1e10, 0.0, 0.0),
+              (0.0, 0.0, 1000.1), (600.0, 600.0, 600.0)]
+    yield 'imu: rates finite but absurd', [
+        ('imu', imu(BASE_NS + k * MS + MS // 2, rate)) for k, rate in enumerate(absurd)], \
+        'out_of_range'
+    non_finite = [(math.nan, 0.0, 0.0), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf)] * 4
+    yield 'imu: NaN and Inf rates', [
+        ('imu', imu(BASE_NS + k * MS + MS // 2, rate)) for k, rate in enumerate(non_finite)], \
+        'non_finite'
+    nanosecs = [10**9, 10**9 + 1, 2**31, 2**32 - 1] * 3
+    yield 'imu: nanosec >= 1e9', [
+        ('imu', _bad_stamp(BASE_NS // 10**9 + k, nanosec)) for k, nanosec in enumerate(nanosecs)
+    ], 'invalid_stamp'
+    yield 'imu: lone stamps far off the time line', [
+        ('imu', imu(at)) for at in [(2**31 - 1) * 10**9, 10**9, BASE_NS + 10**12,
+                                    BASE_NS - 10**12, BASE_NS + 500 * MS] * 2], 'outlier_stamp'
+    poses = []
+    for frame, w in (('map', 1.0), ('', 1.0), ('world', 0.0)):
+        pose = PoseStamped()
+        pose.header.frame_id, pose.pose.orientation.w = frame, w
+        poses.append(('set_pose', pose))
+    yield 'set_pose: wrong frame or zero quaternion', poses, 'wrong_frame|invalid_pose|superseded'
+
+
+def _bad_stamp(sec: int, nanosec: int) -> Any:
+    """An Imu whose stamp is not a normalised time (the message type allows any uint32)."""
+    message = imu(BASE_NS)
+    message.header.stamp.sec, message.header.stamp.nanosec = sec, nanosec
+    return message
+
+
+# -- start-time attacks -----------------------------------------------------------------------
+
+def scene_files(folder: Path) -> dict[str, Path]:
+    """Hostile scene files."""
+    files = {
+        'not UTF-8': b'name: \xff\xfe\nrate_source: dynamics\n',
+        '400-digit mass': ('body: {mass: ' + '9' * 400 + ', inertia: {moments: [1, 2, 3]}}\n'
+                           ).encode(),
+        '400-digit moment': ('body: {inertia: {moments: [' + '9' * 400 + ', 2, 3]}}\n').encode(),
+        'nested 500 levels': ('a: ' + '[' * 500 + ']' * 500 + '\n').encode(),
+        'omega_body 1e308': b'body: {inertia: {moments: [1, 2, 3]}}\n'
+                            b'initial_state: {omega_body: [1e308, 1e308, 1e308]}\n',
+        'moments 1e308': b'body: {inertia: {moments: [1e308, 1e308, 1e308]}}\n'
+                         b'initial_state: {omega_body: [1, 1, 1]}\n',
+        'attitude 1e308': b'body: {inertia: {moments: [1, 2, 3]}}\n'
+                          b'initial_state: {attitude: [1e308, 1e308, 1e308, 1e308]}\n',
+        'alias bomb (name)': _alias_bomb(b'name'),
+        'alias bomb (error text)': _alias_bomb(b'rate_source'),
+        'YAML syntax error': b'body: {inertia: [1, 2\n',
+        '20 MB file': b'# ' + b'x' * (20 * 2**20) + b'\n',
+    }
+    paths = {}
+    for name, content in files.items():
+        path = folder / (name.replace(' ', '_').replace('(', '').replace(')', '') + '.yaml')
+        path.write_bytes(content)
+        paths[name] = path
+    return paths
+
+
+def _alias_bomb(key: bytes) -> bytes:
+    lines = [b'a0: &a0 "lol lol lol lol lol lol lol lol"']
+    for level in range(1, 10):
+        refs = b', '.join([b'*a%d' % (level - 1)] * 9)
+        lines.append(b'a%d: &a%d [%s]' % (level, level, refs))
+    lines.append(key + b': *a9')
+    return b'\n'.join(lines) + b'\n'
+
+
+def start_attack(name: str, cases: dict[str, list[str]], domain: int) -> Result:
+    """Each case must end at start with one ``error:`` line, exit 2, within a second."""
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    started, problems, slowest = time.monotonic(), [], 0.0
+    for case, arguments in cases.items():
+        began = time.monotonic()
+        try:
+            done = subprocess.run(node_command(*arguments), env=env, capture_output=True,
+                                  text=True, errors='replace', timeout=30)
+        except subprocess.TimeoutExpired:
+            problems.append(f'{case}: hung')
+            continue
+        took = time.monotonic() - began
+        lines = [line for line in done.stderr.splitlines() if line.startswith('error:')]
+        slowest = max(slowest, took)
+        if (done.returncode != 2 or len(lines) != 1 or 'Traceback' in done.stderr
+                or len(lines[0]) > 1000):
+            problems.append(f'{case}: exit {done.returncode}, {len(lines)} error lines, '
+                            f'{len(done.stderr)} chars')
+    outcome = (f'one error: line, exit 2 each (slowest {slowest:.2f} s incl. start-up)'
+               if not problems else 'FAILED: ' + '; '.join(problems))
+    return Result(name, len(cases), 'error: exit 2', outcome, time.monotonic() - started)
+
+
+def parameter_cases() -> dict[str, list[str]]:
+    return {f'{name}:={value}': ['-p', f'{name}:={value}'] for name, value in [
+        ('publish_rate', '50'), ('publish_rate', '0.0'), ('publish_rate', '.nan'),
+        ('max_dt', '-1.0'), ('max_angular_rate', '0.0'), ('time_jump_threshold', '1e300'),
+        ('constant_dt', 'true'), ('use_header_stamps', '2.0'), ('step', '.inf'),
+        ('world_frame', "''"), ('body_frame', 'world'), ('integrator', 'no_such'),
+        ('scene', 'no_such_scene'), ('scene', 'x' * 5000), ('step', '-0.001')]}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--domain', type=int, default=91)
+    parser.add_argument('--seed', type=int, default=7)
+    parser.add_argument('--out', type=Path, default=None,
+                        help='write the table here instead of printing it')
+    args = parser.parse_args(argv)
+    results = []
+    for name, attacks, reason in gyro_classes(args.seed):
+        result = gyro_attack(args.domain, name, attacks, reason)
+        print(f'{result.name}: {result.cases} cases: {result.outcome}', flush=True)
+        results.append(result)
+    with tempfile.TemporaryDirectory() as folder:
+        scenes = {name: ['-p', f'scene:={path}']
+                  for name, path in scene_files(Path(folder)).items()}
+        for name, cases in (('scene files', scenes), ('parameters', parameter_cases())):
+            result = start_attack(name, cases, args.domain)
+            print(f'{result.name}: {result.cases} cases: {result.outcome}', flush=True)
+            results.append(result)
+    write_report(results, args.out, args.seed)
+    return 0 if all(not r.outcome.startswith('FAILED') for r in results) else 1
+
+
+def write_report(results: list[Result], path: Path | None, seed: int) -> None:
+    """Print the table of ``results``, or write it to ``path``."""
+    lines = ['| attack class | cases | counted as | result |', '|---|---|---|---|']
+    lines += [f'| {r.name} | {r.cases} | {", ".join(f"`{x}`" for x in r.reason.split("|"))} '
+              f'| {r.outcome} |' for r in results]
+    total = sum(r.cases for r in results)
+    lines += ['', f'{total} cases in {sum(r.seconds for r in results):.0f} s '
+                  f'(`studies/hostile_inputs.py --seed {seed}`).']
+    if path is None:
+        print('\n'.join(lines))
+        return
+    path.write_text('\n'.join(lines) + '\n')
+    print(f'wrote {path}')
+
+
+if __name__ == '__main__':
+    sys.exit(main())
