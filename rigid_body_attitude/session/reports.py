@@ -58,13 +58,13 @@ DRIFT_ERROR_THRESHOLD = 1e-3
 #: messages, invalid or zero stamps, poses), expired commands, refused integrations, gyro
 #: samples dropped without a mount and commands superseded by a newer one before use.
 REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
-                  'wrong_frame', 'stale_torque', 'integration_failed', 'non_finite_result',
+                  'invalid_covariance', 'wrong_frame', 'stale_torque', 'integration_failed', 'non_finite_result',
                   'internal_error', 'no_mount', 'superseded')
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
                 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame',
-                'no_mount')
+                'no_mount', 'invalid_covariance')
 ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
 
 #: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).

@@ -163,7 +163,7 @@ def test_a_bad_covariance_refuses_the_pose_and_is_counted(open_scene, block, why
     before = (session.propagator.state.attitude_tuple(), len(sink.covariances))
     session.set_pose('world', (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 0.0), pose_cov(block))
     assert (session.propagator.state.attitude_tuple(), len(sink.covariances)) == before
-    assert session.rejection_counts()['invalid_pose'] == 1
+    assert session.rejection_counts()['invalid_covariance'] == 1
     assert why in sink.logs[-1][1]
     with pytest.raises(InputError):
         orientation_block((0.0,) * 35)
