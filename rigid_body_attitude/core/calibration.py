@@ -45,8 +45,8 @@ from rigid_body_attitude.core.effects.base import real
 from rigid_body_attitude.core.errors import CalibrationError
 from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml
 
-__all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'ImuNoise', 'ORTHONORMAL_TOLERANCE',
-           'calibration_from_mapping', 'load_calibration']
+__all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'ImuNoise', 'NOISE_BOUNDS', 'ORTHONORMAL_TOLERANCE',
+           'REQUIRED_NOISE_KEYS', 'calibration_from_mapping', 'load_calibration']
 
 FloatArray = NDArray[np.float64]
 Vec = tuple[float, float, float]
@@ -67,8 +67,22 @@ ORTHONORMAL_TOLERANCE = 1e-6
 MAX_RATE_BIAS = 100.0  # [rad/s], beyond any gyro's range (2000 °/s = 35 rad/s)
 MAX_ACCELERATION_BIAS = 1e3  # [m/s²]
 MAX_G_SENSITIVITY = 1.0  # [(rad/s)/(m/s²)]; real sensors: below 1e-3
-MAX_NOISE = 1e3  # densities and random walks, SI units
-MAX_UPDATE_RATE = 1e6  # [Hz]
+#: Largest noise figure accepted per key (SI units; 0 is refused: no sensor is noiseless).
+#: The gyro bounds are the node parameters' of the same names; a consumer MEMS gyro has a
+#: density near 2e-4 rad/s/√Hz, an accelerometer near 2e-3 m/s²/√Hz.
+NOISE_BOUNDS = {'gyroscope_noise_density': 1.0, 'gyroscope_random_walk': 1.0,
+                'accelerometer_noise_density': 10.0, 'accelerometer_random_walk': 10.0}
+#: Sample rates accepted [Hz] (real IMUs run at 100 Hz to 2 kHz).
+MIN_UPDATE_RATE = 1.0
+MAX_UPDATE_RATE = 1e5
+#: Diagonal of a scale or scale-misalignment matrix: a working sensor is within a few per cent
+#: of 1; a factor of 2 or more is a unit mistake (deg/s read as rad/s is 57).
+SCALE_RANGE = (0.5, 2.0)
+#: Largest off-diagonal entry of a scale-misalignment matrix (0.1: about 5.7° between axes;
+#: real sensors: below 0.02).
+MAX_MISALIGNMENT = 0.1
+#: Keys a kalibr ``imu.yaml`` (the noise model alone) must give: those the node uses.
+REQUIRED_NOISE_KEYS = ('gyroscope_noise_density', 'gyroscope_random_walk', 'update_rate')
 _IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
@@ -256,7 +270,8 @@ def _kalibr_result(data: Mapping[Any, Any], key: str, source: str) -> ImuCalibra
 
 def _kalibr(section: Mapping[Any, Any], prefix: str, source: str) -> ImuCalibration:
     _check_keys(section, _KALIBR_KEYS | {'rx_i', 'ry_i', 'rz_i'}, prefix)
-    noise = _noise(section, prefix)
+    noise_only = not any(key in section for key in ('gyroscopes', 'accelerometers'))
+    noise = _noise(section, prefix, REQUIRED_NOISE_KEYS if noise_only else ())
     gyros = _mapping(section.get('gyroscopes', {}), f'{prefix}gyroscopes', {'M', 'A', 'C_gyro_i'})
     accs = _mapping(section.get('accelerometers', {}), f'{prefix}accelerometers', {'M'})
     m_gyro = _invertible(gyros.get('M', _IDENTITY), f'{prefix}gyroscopes.M')
@@ -276,10 +291,11 @@ def _plain(data: Mapping[Any, Any], source: str) -> ImuCalibration:
     scale_value = data.get('scale', [1.0, 1.0, 1.0])
     if isinstance(scale_value, list) and len(scale_value) == 3 and not any(
             isinstance(item, list) for item in scale_value):
-        scale = np.diag(_vector(scale_value, 'scale', 1e3))
+        scale = _near_identity(np.diag(_vector(scale_value, 'scale', 1e3)), 'scale')
     else:
-        scale = _matrix(scale_value, 'scale', 1e3)
-    misalignment = _matrix(data.get('misalignment', _IDENTITY), 'misalignment', 1e3)
+        scale = _near_identity(_matrix(scale_value, 'scale', 1e3), 'scale')
+    misalignment = _near_identity(_matrix(data.get('misalignment', _IDENTITY), 'misalignment',
+                                          1e3), 'misalignment')
     gyro_matrix = _conditioned(misalignment @ scale, 'misalignment · scale')
     acc_matrix = _invertible(data.get('accelerometer_matrix', _IDENTITY), 'accelerometer_matrix')
     return ImuCalibration(
@@ -318,18 +334,30 @@ def _number(value: Any, key: str, low: float, high: float) -> float:
     return number
 
 
-def _noise(data: Mapping[Any, Any], prefix: str) -> ImuNoise:
+def _noise(data: Mapping[Any, Any], prefix: str, required: tuple[str, ...] = ()) -> ImuNoise:
+    """The noise figures of ``data``: each in its :data:`NOISE_BOUNDS`, densities and random
+    walks in pairs, the keys ``required`` present (else one error naming the key)."""
+    for key in required:
+        if data.get(key) is None:
+            raise CalibrationError(f'Missing key {prefix}{key} (a kalibr imu.yaml gives '
+                                   f'{", ".join(REQUIRED_NOISE_KEYS)})')
+    for sensor in ('gyroscope', 'accelerometer'):
+        pair = (f'{sensor}_noise_density', f'{sensor}_random_walk')
+        given = [data.get(key) is not None for key in pair]
+        if given[0] != given[1]:
+            raise CalibrationError(f'Missing key {prefix}{pair[given[0]]} (given with '
+                                   f'{prefix}{pair[given[1]]}: the two come as a pair)')
     values: dict[str, float | None] = {}
     for key in NOISE_KEYS:
         values[key] = (None if data.get(key) is None
-                       else _number(data[key], f'{prefix}{key}', 0.0, MAX_NOISE))
+                       else _number(data[key], f'{prefix}{key}', 0.0, NOISE_BOUNDS[key]))
     rate = data.get('update_rate')
     topic = data.get('rostopic', '')
     if not isinstance(topic, str):
         raise CalibrationError(f'Expected {prefix}rostopic to be a topic name, got {quote(topic)}')
     return ImuNoise(
-        update_rate=None if rate is None else _number(rate, f'{prefix}update_rate', 0.0,
-                                                      MAX_UPDATE_RATE),
+        update_rate=None if rate is None else _number(rate, f'{prefix}update_rate',
+                                                      MIN_UPDATE_RATE, MAX_UPDATE_RATE),
         rostopic=topic, **values)
 
 
@@ -381,7 +409,25 @@ def _inverse(matrix: FloatArray) -> FloatArray:
 
 
 def _invertible(value: Any, key: str) -> FloatArray:
-    return _conditioned(_matrix(value, key, 1e3), key)
+    return _conditioned(_near_identity(_matrix(value, key, 1e3), key), key)
+
+
+def _near_identity(matrix: FloatArray, key: str) -> FloatArray:
+    """A scale-misalignment matrix: diagonal in :data:`SCALE_RANGE`, off-diagonal entries
+    at most :data:`MAX_MISALIGNMENT` in magnitude (else one error naming the entry)."""
+    low, high = SCALE_RANGE
+    for row in range(3):
+        for column in range(3):
+            value = float(matrix[row, column])
+            if row == column and not low <= value <= high:
+                raise CalibrationError(f'Expected the scale factors (diagonal) of {key} to be '
+                                       f'in [{low:g}, {high:g}], got {value!r} at '
+                                       f'[{row}][{column}]')
+            if row != column and abs(value) > MAX_MISALIGNMENT:
+                raise CalibrationError(f'Expected the misalignment (off-diagonal) entries of '
+                                       f'{key} to be at most {MAX_MISALIGNMENT:g} in magnitude, '
+                                       f'got {value!r} at [{row}][{column}]')
+    return matrix
 
 
 def _rotation(value: Any, key: str) -> FloatArray:

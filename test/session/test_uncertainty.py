@@ -228,7 +228,8 @@ def test_the_pose_covariance_is_spd_with_the_position_unknown():
 def test_a_kalibr_imu_yaml_gives_the_session_its_gyro_noise(open_scene, tmp_path):
     path = tmp_path / 'imu.yaml'
     path.write_text('rostopic: /imu\nupdate_rate: 200.0\ngyroscope_noise_density: 2.0e-4\n'
-                    'gyroscope_random_walk: 3.0e-5\naccelerometer_noise_density: 1.0e-3\n')
+                    'gyroscope_random_walk: 3.0e-5\naccelerometer_noise_density: 1.0e-3\n'
+                    'accelerometer_random_walk: 1.0e-4\n')
     session, _ = open_scene('strapdown', calibration_file=str(path),
                             gyroscope_noise_density=1e-3, gyroscope_random_walk=1e-4)
     model = session.uncertainty.model
