@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -45,7 +45,8 @@ from rigid_body_attitude.core.effects.base import real
 from rigid_body_attitude.core.errors import CalibrationError
 from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml
 
-__all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'ImuNoise', 'NOISE_BOUNDS', 'ORTHONORMAL_TOLERANCE',
+__all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'KIND_NAMES', 'calibration_summary',
+           'calibration_terms', 'ImuNoise', 'NOISE_BOUNDS', 'ORTHONORMAL_TOLERANCE',
            'REQUIRED_NOISE_KEYS', 'calibration_from_mapping', 'load_calibration']
 
 FloatArray = NDArray[np.float64]
@@ -147,6 +148,7 @@ class ImuCalibration:
         noise: the noise model, if the file has one.
         kind: ``'kalibr'``, ``'kalibr_noise'``, ``'plain'`` or ``'identity'``.
         source: the file it came from, if any.
+        imu_key: the section of a kalibr imu-camera result it came from (``imu0``), if any.
     """
 
     gyro_matrix: FloatArray = field(default_factory=lambda: np.eye(3))
@@ -157,6 +159,7 @@ class ImuCalibration:
     noise: ImuNoise = field(default_factory=ImuNoise)
     kind: str = 'identity'
     source: str = ''
+    imu_key: str = ''
     _k: Mat = field(init=False, repr=False, compare=False)
     _kb: Vec = field(init=False, repr=False, compare=False)
     _kg: Mat = field(init=False, repr=False, compare=False)
@@ -215,6 +218,49 @@ class ImuCalibration:
         return rates, acc_i
 
 
+#: The kinds of file in words (log lines, /diagnostics).
+KIND_NAMES = {'kalibr': 'kalibr imu-camera result', 'kalibr_noise': 'kalibr imu.yaml',
+              'plain': 'plain bias-scale-misalignment', 'identity': 'none'}
+_NOISE_UNITS = {'gyroscope_noise_density': 'rad/s/sqrt(Hz)',
+                'gyroscope_random_walk': 'rad/s^2/sqrt(Hz)',
+                'accelerometer_noise_density': 'm/s^2/sqrt(Hz)',
+                'accelerometer_random_walk': 'm/s^3/sqrt(Hz)', 'update_rate': 'Hz'}
+
+
+def _numbers(values: FloatArray) -> str:
+    return '[' + ', '.join(_numbers(row) if row.ndim else f'{float(row):.6g}'
+                           for row in values) + ']'
+
+
+def calibration_terms(calibration: ImuCalibration) -> list[tuple[str, str]]:
+    """What a calibration applies, as (name, value) pairs: the corrections that are not the
+    identity (``gyro_bias [rad/s]``, ``gyro_matrix K``, ``g_sensitivity G``,
+    ``accelerometer_matrix N``, ``accelerometer_bias [m/s^2]``) and the noise figures given
+    (kalibr names with units)."""
+    c = calibration
+    terms = [(name, _numbers(value)) for name, value, neutral in (
+        ('gyro_bias [rad/s]', c.gyro_bias, np.zeros(3)),
+        ('gyro_matrix K', c.gyro_matrix, np.eye(3)),
+        ('g_sensitivity G [(rad/s)/(m/s^2)]', c.g_sensitivity, np.zeros((3, 3))),
+        ('accelerometer_matrix N', c.accelerometer_matrix, np.eye(3)),
+        ('accelerometer_bias [m/s^2]', c.accelerometer_bias, np.zeros(3)),
+    ) if not np.array_equal(value, neutral)]
+    for key, unit in _NOISE_UNITS.items():
+        value = getattr(c.noise, key)
+        if value is not None:
+            terms.append((f'{key} [{unit}]', f'{value:.6g}'))
+    return terms
+
+
+def calibration_summary(calibration: ImuCalibration) -> str:
+    """One line: the file, its kind, the IMU key and every term applied (for the log)."""
+    c = calibration
+    key = f', IMU key {c.imu_key}' if c.imu_key else ''
+    terms = '; '.join(f'{name} {value}' for name, value in calibration_terms(c))
+    return (f'calibration: file {c.source!r} ({KIND_NAMES[c.kind]}{key}): '
+            f'{terms or "no correction, no noise figures"}')
+
+
 def load_calibration(path: str | Path, imu_key: str = '') -> ImuCalibration:
     """Read and check a calibration file (module docstring); ``imu_key`` picks an IMU
     (``imu0``) in a kalibr result holding several. Every fault is one
@@ -265,7 +311,7 @@ def _chosen_imu(imu_key: str, imu_keys: list[str]) -> str:
 
 
 def _kalibr_result(data: Mapping[Any, Any], key: str, source: str) -> ImuCalibration:
-    return _kalibr(data[key], f'{key}.', source)
+    return replace(_kalibr(data[key], f'{key}.', source), imu_key=key)
 
 
 def _kalibr(section: Mapping[Any, Any], prefix: str, source: str) -> ImuCalibration:

@@ -59,6 +59,7 @@ class GyroSession(ImuStart):
         self.uncertainty: Uncertainty | None = None
         self._start_imu(values)
         super().__init__(scene, values, sink, clock_ns, monotonic)
+        self.tell_calibration()
         if self._mount_given:
             self._tell_mount()
         if values['covariance']:
@@ -162,8 +163,11 @@ class GyroSession(ImuStart):
             self.sink.attitude_covariance(self.uncertainty.published)
 
     def report(self) -> DiagnosticReport:
-        """The diagnostics report, with the 1σ tilt and yaw (WARN past ``tilt_stddev_warn``)."""
+        """The diagnostics report, with the calibration applied and the 1σ tilt and yaw (WARN
+        past ``tilt_stddev_warn``)."""
         report = super().report()
+        report = DiagnosticReport(report.level, report.message,
+                                  report.values + tuple(self.calibration_values()))
         if self.uncertainty is None:
             return report
         problem, values = self.uncertainty.diagnostic()

@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from rigid_body_attitude.core.calibration import load_calibration
+from rigid_body_attitude.core.calibration import (
+    KIND_NAMES, calibration_summary, calibration_terms, load_calibration)
 from rigid_body_attitude.core.propagator import GyroPropagator
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
 from rigid_body_attitude.session.levelling import (
@@ -85,6 +86,24 @@ class ImuStart(Session):
         self._affine: tuple[float, ...] | None = None
         self._told_no_accelerometer = False
         self._align_samples = 0
+
+    def tell_calibration(self) -> None:
+        """The INFO line naming the calibration file, its kind, the IMU key and the terms
+        applied (once, at start; nothing without a file)."""
+        if self._calibration is not None:
+            self.sink.log(LEVEL_INFO, calibration_summary(self._calibration))
+
+    def calibration_values(self) -> list[tuple[str, str]]:
+        """The calibration in ``/diagnostics``: file, kind, IMU key and each term applied
+        (``calibration``: ``none`` without a file)."""
+        calibration = self._calibration
+        if calibration is None:
+            return [('calibration', 'none')]
+        return [('calibration', calibration.source),
+                ('calibration_kind', KIND_NAMES[calibration.kind]),
+                ('calibration_imu_key', calibration.imu_key or '-'),
+                *((f'calibration {name}', value) for name, value in calibration_terms(
+                    calibration))]
 
     def calibration_noise(self) -> dict[str, float]:
         """The noise densities the calibration file gives (kalibr names; empty without a
