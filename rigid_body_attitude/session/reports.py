@@ -58,8 +58,8 @@ DRIFT_ERROR_THRESHOLD = 1e-3
 #: messages, invalid or zero stamps, poses), expired commands, refused integrations, gyro
 #: samples dropped without a mount and commands superseded by a newer one before use.
 REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
-                  'invalid_covariance', 'wrong_frame', 'stale_torque', 'integration_failed', 'non_finite_result',
-                  'internal_error', 'no_mount', 'superseded')
+                  'invalid_covariance', 'wrong_frame', 'stale_torque', 'integration_failed',
+                  'non_finite_result', 'internal_error', 'no_mount', 'superseded')
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',

@@ -199,7 +199,8 @@ def test_load_calibration_refuses_a_singular_matrix(tmp_path):
     ('scale: [57.3, 1.0, 1.0]\n', r'scale factors \(diagonal\) of scale to be in \[0\.5, 2\], '
                                   r'got 57\.3'),
     ('misalignment: [[1, 0.3, 0], [0, 1, 0], [0, 0, 1]]\n',
-     r'misalignment \(off-diagonal\) entries of misalignment to be at most 0\.1.*0\.3 at \[0\]\[1\]'),
+     r'misalignment \(off-diagonal\) entries of misalignment to be at most 0\.1.*'
+     r'0\.3 at \[0\]\[1\]'),
     ('accelerometer_matrix: [[1, 0, 0], [0, 1, 0], [0, 0, -1]]\n',
      r'accelerometer_matrix to be in \[0\.5, 2\], got -1\.0'),
     ('bias: [150.0, 0.0, 0.0]\n', r'bias to be at most 100'),
