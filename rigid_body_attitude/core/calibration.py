@@ -385,7 +385,7 @@ def _noise(data: Mapping[Any, Any], prefix: str, required: tuple[str, ...] = ())
     walks in pairs, the keys ``required`` present (else one error naming the key)."""
     for key in required:
         if data.get(key) is None:
-            raise CalibrationError(f'Missing key {prefix}{key} (a kalibr imu.yaml gives '
+            raise CalibrationError(f'Missing key {prefix}{key} (a kalibr imu.yaml must give '
                                    f'{", ".join(REQUIRED_NOISE_KEYS)})')
     for sensor in ('gyroscope', 'accelerometer'):
         pair = (f'{sensor}_noise_density', f'{sensor}_random_walk')
