@@ -175,13 +175,15 @@ def gyro_attack(domain: int, name: str, attacks: list[tuple[str, Any]], reason: 
                 ) -> Result:
     """Good Imu samples at 1 kHz with one attack after each; the node must end at the good
     stream's attitude, with every attack counted under ``reason``."""
-    from geometry_msgs.msg import PoseStamped, QuaternionStamped
+    from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
     from diagnostic_msgs.msg import DiagnosticArray
     from sensor_msgs.msg import Imu
     started = time.monotonic()
-    running = RunningNode(domain, ['-p', 'scene:=strapdown', *deep_inputs('imu', 'set_pose')])
+    running = RunningNode(domain, ['-p', 'scene:=strapdown', *deep_inputs(
+        'imu', 'set_pose', 'set_pose_with_covariance')])
     running.publisher(Imu, 'imu')
     running.publisher(PoseStamped, 'set_pose')
+    running.publisher(PoseWithCovarianceStamped, 'set_pose_with_covariance')
     orientations = running.record(QuaternionStamped, 'orientation')
     running.record(DiagnosticArray, '/diagnostics')
     if not running.connected():
@@ -258,6 +260,32 @@ def gyro_classes(seed: int) -> Iterator[tuple[str, list[tuple[str, Any]], str]]:
         pose.header.frame_id, pose.pose.orientation.w = frame, w
         poses.append(('set_pose', pose))
     yield 'set_pose: wrong frame or zero quaternion', poses, 'wrong_frame|invalid_pose|superseded'
+    yield ('set_pose_with_covariance: orientation blocks huge, unphysical or not PSD',
+           [('set_pose_with_covariance', _covariance_pose(block))
+            for block in _hostile_orientation_blocks()], 'invalid_covariance|superseded')
+
+
+def _hostile_orientation_blocks() -> list[list[float]]:
+    """Row-major 3×3 orientation blocks: finite but huge (symmetrising or an
+    eigen-decomposition would overflow), above pi^2 rad^2, asymmetric, not PSD, NaN."""
+    big, largest = 1e308, 1.7976931348623157e308
+    return [[big, 0, 0, 0, big, 0, 0, 0, big], [big] * 9, [largest, 0, 0, 0, 1, 0, 0, 0, 1],
+            [big, -big, 0, -big, big, 0, 0, 0, 1], [1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 1e300],
+            [1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 10.0], [1, big, 0, -big, 1, 0, 0, 0, 1],
+            [1, 0.5, 0, 0, 1, 0, 0, 0, 1], [1, 0, 0, 0, -1, 0, 0, 0, 1],
+            [math.nan, 0, 0, 0, 1, 0, 0, 0, 1], [1, 0, 0, 0, math.inf, 0, 0, 0, 1]]
+
+
+def _covariance_pose(block: list[float]) -> Any:
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    message = PoseWithCovarianceStamped()
+    message.header.frame_id, message.pose.pose.orientation.x = 'world', 1.0
+    covariance = [0.0] * 36
+    for row in range(3):
+        covariance[7 * row] = 1.0
+        covariance[21 + 6 * row:24 + 6 * row] = [float(v) for v in block[3 * row:3 * row + 3]]
+    message.pose.covariance = covariance
+    return message
 
 
 def _bad_stamp(sec: int, nanosec: int) -> Any:

@@ -145,8 +145,9 @@ class Session(ABC):
 
         ``covariance``: the 36 row-major values of a ``PoseWithCovarianceStamped``, whose
         orientation block (about fixed world axes, rad²) becomes the attitude covariance of a
-        gyro scene; it must be finite, symmetric and positive semi-definite (else the pose is
-        refused as ``invalid_pose``). None: the covariance resets to ``set_pose_stddev``.
+        gyro scene; it must be finite, symmetric, positive semi-definite with variances at
+        most π² rad² (else the pose is refused as ``invalid_covariance``, checked before
+        anything changes). None: the covariance resets to ``set_pose_stddev``.
         """
         reason, detail = self._pose_problem(frame_id, attitude, position)
         block = None
@@ -154,7 +155,7 @@ class Session(ABC):
             try:
                 block = orientation_block(covariance)
             except InputError as err:
-                reason, detail = 'invalid_pose', str(err)
+                reason, detail = 'invalid_covariance', str(err)
         if reason:
             self.rejections[reason] += 1
             self.warn(reason, f'set_pose rejected ({reason}): {detail}')

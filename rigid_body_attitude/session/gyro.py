@@ -59,6 +59,7 @@ class GyroSession(ImuStart):
         self.uncertainty: Uncertainty | None = None
         self._start_imu(values)
         super().__init__(scene, values, sink, clock_ns, monotonic)
+        self.tell_calibration()
         if self._mount_given:
             self._tell_mount()
         if values['covariance']:
@@ -93,7 +94,7 @@ class GyroSession(ImuStart):
         if not self.use_header_stamps:
             sec, nanosec = split_ns(self.clock_ns())
         elif nanosec >= NANOSECONDS_PER_SECOND or (sec <= 0 and (sec < 0 or not nanosec)):
-            return self._bad_stamp(sec, nanosec)
+            return _refuse_stamp(self, sec, nanosec)
         if self._special:
             mapped = self._special_sample(sec, nanosec, rate, accel)
             if mapped is None:
@@ -162,8 +163,11 @@ class GyroSession(ImuStart):
             self.sink.attitude_covariance(self.uncertainty.published)
 
     def report(self) -> DiagnosticReport:
-        """The diagnostics report, with the 1σ tilt and yaw (WARN past ``tilt_stddev_warn``)."""
+        """The diagnostics report, with the calibration applied and the 1σ tilt and yaw (WARN
+        past ``tilt_stddev_warn``)."""
         report = super().report()
+        report = DiagnosticReport(report.level, report.message,
+                                  report.values + tuple(self.calibration_values()))
         if self.uncertainty is None:
             return report
         problem, values = self.uncertainty.diagnostic()
@@ -215,19 +219,6 @@ class GyroSession(ImuStart):
     def output_stamp(self) -> tuple[int, int]:
         """``(sec, nanosec)`` of the last attitude that went to the sink."""
         return self._output_sec, self._output_nanosec
-
-    def _bad_stamp(self, sec: int, nanosec: int) -> bool:
-        self.stream.refused_samples += 1  # received: never counted as missed
-        if sec == 0 and nanosec == 0:
-            self.rejections['zero_stamp'] += 1
-            self.warn('zero_stamp', 'gyro: a zero header stamp; sample ignored (unstamped '
-                                    'input: set use_header_stamps:=false)')
-            return False
-        problem = stamp_problem(sec, nanosec)
-        self.rejections['invalid_stamp'] += 1
-        self.warn('invalid_stamp', f'gyro: an invalid header stamp ({problem}); sample ignored '
-                                   f'(parameter `use_header_stamps`)')
-        return False
 
     def _rejected(self, outcome: Outcome) -> None:
         reason = outcome.reason
@@ -290,3 +281,19 @@ class GyroSession(ImuStart):
 
     def _pending_count(self) -> int:
         return len(self.stream.pending)
+
+
+def _refuse_stamp(session: GyroSession, sec: int, nanosec: int) -> bool:
+    """A gyro sample whose header stamp is zero or invalid: refused, counted (never missed),
+    warned about; always False (nothing published)."""
+    session.stream.refused_samples += 1  # received: never counted as missed
+    if sec == 0 and nanosec == 0:
+        session.rejections['zero_stamp'] += 1
+        session.warn('zero_stamp', 'gyro: a zero header stamp; sample ignored (unstamped '
+                                   'input: set use_header_stamps:=false)')
+        return False
+    problem = stamp_problem(sec, nanosec)
+    session.rejections['invalid_stamp'] += 1
+    session.warn('invalid_stamp', f'gyro: an invalid header stamp ({problem}); sample '
+                                  f'ignored (parameter `use_header_stamps`)')
+    return False

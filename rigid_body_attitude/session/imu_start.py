@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from rigid_body_attitude.core.imu.calibration import load_calibration
+from rigid_body_attitude.core.imu.calibration import (
+    calibration_noise, calibration_summary, calibration_values, load_calibration)
 from rigid_body_attitude.core.propagator import GyroPropagator
 from rigid_body_attitude.core.imu.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
@@ -92,15 +93,19 @@ class ImuStart(Session):
         self._align_samples = 0
         self._refused_levelling = 0
 
+    def tell_calibration(self) -> None:
+        """The INFO line naming the calibration file, its kind, the IMU key and the terms
+        applied (once, at start; nothing without a file)."""
+        if self._calibration is not None:
+            self.sink.log(LEVEL_INFO, calibration_summary(self._calibration))
+
+    def calibration_values(self) -> list[tuple[str, str]]:
+        """The calibration in ``/diagnostics`` (:func:`calibration_values`)."""
+        return calibration_values(self._calibration)
+
     def calibration_noise(self) -> dict[str, float]:
-        """The noise densities the calibration file gives (kalibr names; empty without a
-        file or without a noise model)."""
-        if self._calibration is None:
-            return {}
-        noise = self._calibration.noise
-        given = {'gyroscope_noise_density': noise.gyroscope_noise_density,
-                 'gyroscope_random_walk': noise.gyroscope_random_walk}
-        return {key: value for key, value in given.items() if value is not None}
+        """The noise figures the calibration file gives (:func:`calibration_noise`)."""
+        return calibration_noise(self._calibration)
 
     def _restart_levelling(self) -> None:
         """``~/reset`` with levelling: the scene's attitude, no bias, level again."""

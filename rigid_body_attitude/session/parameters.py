@@ -226,7 +226,7 @@ PARAMETERS: tuple[Parameter, ...] = (
               'rad: 1-sigma of the initial heading (pi = unknown)', 0.0, 10.0),
     Parameter('set_pose_stddev', float, 0.01,
               'rad: 1-sigma per axis of the attitude after a set_pose without covariance',
-              0.0, 10.0, low_open=True, read_only=False),
+              0.0, math.pi, low_open=True, read_only=False),
     Parameter('tilt_stddev_warn', float, 0.1745,
               'rad: /diagnostics warns while the 1-sigma tilt exceeds this (0 = never)',
               0.0, 10.0, read_only=False),

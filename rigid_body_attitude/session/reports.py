@@ -59,13 +59,14 @@ DRIFT_ERROR_THRESHOLD = 1e-3
 #: samples dropped without a mount, commands superseded by a newer one before use and
 #: Imu samples whose specific force is beyond any accelerometer's range.
 REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
-                  'wrong_frame', 'stale_torque', 'integration_failed', 'non_finite_result',
-                  'internal_error', 'no_mount', 'superseded', 'accel_out_of_range')
+                  'invalid_covariance', 'wrong_frame', 'stale_torque', 'integration_failed',
+                  'non_finite_result', 'internal_error', 'no_mount', 'superseded',
+                  'accel_out_of_range')
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
                 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame',
-                'no_mount', 'accel_out_of_range')
+                'no_mount', 'accel_out_of_range', 'invalid_covariance')
 ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
 
 #: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).

@@ -30,7 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from rigid_body_attitude.core.imu.attitude_covariance import AttitudeCovariance
+from rigid_body_attitude.core.imu.attitude_covariance import (
+    AttitudeCovariance, checked_attitude_covariance)
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel, initial_covariance
 from rigid_body_attitude.session.levelling import AlignmentResult
@@ -81,20 +82,16 @@ def error_model_from(values: Mapping[str, Any],
 
 def orientation_block(covariance: Sequence[float]) -> tuple[float, ...]:
     """The row-major 3×3 orientation block (rows and columns 3-5) of the 36 row-major values
-    of a ``PoseWithCovariance``, checked: finite, symmetric, positive semi-definite (else
-    InputError saying which)."""
+    of a ``PoseWithCovariance``, checked as the covariance will take it
+    (:func:`~rigid_body_attitude.core.attitude_covariance.checked_attitude_covariance`:
+    finite, symmetric, positive semi-definite, variances at most π² rad²; else InputError
+    saying which), symmetrised and with its diagonal floored."""
     values = tuple(covariance)
     if len(values) != 36:
         raise InputError(f'Expected a covariance of 36 values, got {len(values)}')
     block = np.array(values, dtype=np.float64).reshape(6, 6)[3:, 3:]
-    if not np.all(np.isfinite(block)):
-        raise InputError('Expected the orientation covariance to be finite')
-    scale = max(float(np.abs(block).max()), 1e-300)
-    if np.abs(block - block.T).max() > 1e-9 * scale:
-        raise InputError('Expected the orientation covariance to be symmetric')
-    if float(np.linalg.eigvalsh(block)[0]) < -1e-12 * scale:
-        raise InputError('Expected the orientation covariance to be positive semi-definite')
-    return tuple(block.reshape(9).tolist())
+    checked = checked_attitude_covariance(block, 'orientation covariance')
+    return tuple(checked.reshape(9).tolist())
 
 
 def pose_covariance(attitude: Sequence[float]) -> tuple[float, ...]:
@@ -171,8 +168,8 @@ class Uncertainty:
 
     def set_pose(self, covariance: Sequence[float] | None = None) -> None:
         """After ``set_pose``: the row-major 3×3 world-frame ``covariance`` [rad²] of the
-        message, or ``set_pose_stddev`` on each axis (None). Raises InputError for a matrix
-        that is not a finite symmetric positive semi-definite 3×3."""
+        message (as :func:`orientation_block` returns it), or ``set_pose_stddev`` on each axis
+        (None). Raises InputError for a matrix :func:`orientation_block` refuses."""
         if covariance is None:
             self.covariance.set_pose(stddev=self.set_pose_stddev)
         else:

@@ -27,6 +27,7 @@ import math
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -37,8 +38,8 @@ from rigid_body_attitude.bag import BagReader
 from rigid_body_attitude.msgs import IMU, imu_acceleration, imu_rates
 from rigid_body_attitude.core.errors import AttitudeError, InputError
 
-__all__ = ['AllanCurve', 'NoiseFit', 'Recording', 'allan_curve', 'fit_noise', 'kalibr_yaml',
-           'main', 'read_recording', 'write_plot']
+__all__ = ['AllanCurve', 'NoiseFit', 'Recording', 'allan_curve', 'check_static', 'checked_yaml',
+           'fit_noise', 'kalibr_yaml', 'main', 'read_recording', 'write_plot']
 
 FloatArray = NDArray[np.float64]
 
@@ -49,6 +50,12 @@ POINTS_PER_DECADE = 12
 #: Flicker floor factor: σ_min = √(2 ln 2/π) B.
 FLICKER_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 _RISING = 0.25
+#: Most robust standard deviations (1.4826 × the median absolute deviation) a sample of a
+#: static recording may lie from the median; Gaussian noise stays within 7 in 10^11 samples.
+OUTLIER_SPREADS = 1000.0
+#: Largest share of an axis's samples at its largest or smallest value (further than three
+#: robust standard deviations from the median): more is a saturated sensor.
+SATURATED_FRACTION = 0.01
 
 
 @dataclass(frozen=True)
@@ -96,10 +103,45 @@ def read_recording(path: str | Path, topic: str | None = None) -> Recording:
     else:
         recording = _read_bag(path, topic)
     duration = recording.gyro.shape[0] / recording.rate
-    if duration < MIN_SECONDS:
+    if not duration >= MIN_SECONDS:
         raise InputError(f'Expected at least {MIN_SECONDS:g} s of static data in '
                          f'{str(path)!r}, got {duration:.3g} s')
+    check_static(recording.gyro, 'gyroscope', f'{str(path)!r}')
+    if recording.acc is not None:
+        check_static(recording.acc, 'accelerometer', f'{str(path)!r}')
     return recording
+
+
+def check_static(samples: FloatArray, sensor: str, where: str) -> None:
+    """Refuse (InputError saying why) samples no Allan deviation can be estimated from:
+    non-finite; an axis constant, or more than half its samples at one value (a stuck
+    sensor, or quantisation coarser than the noise); a sample more than
+    :data:`OUTLIER_SPREADS` robust spreads off the median (a glitch or a bump: not static);
+    or more than :data:`SATURATED_FRACTION` of the samples at the axis's extreme value (a
+    saturated sensor)."""
+    if not np.all(np.isfinite(samples)):
+        raise InputError(f'Expected finite {sensor} samples in {where}; '
+                         f'{int(np.sum(~np.isfinite(samples)))} are NaN or Inf')
+    for axis, name in enumerate('xyz'):
+        column = samples[:, axis]
+        median = float(np.median(column))
+        spread = 1.4826 * float(np.median(np.abs(column - median)))  # σ of Gaussian noise
+        if not spread > 0.0:
+            share = float(np.mean(column == median))
+            raise InputError(f'Expected the {sensor} {name} axis in {where} to vary: '
+                             f'{100 * share:.0f} % of its samples equal {median:.6g} (a stuck or '
+                             f'saturated sensor, or quantisation coarser than the noise)')
+        off = float(np.max(np.abs(column - median))) / spread
+        if off > OUTLIER_SPREADS:
+            raise InputError(f'Expected a static recording in {where}: a {sensor} {name} '
+                             f'sample lies {off:.3g} robust standard deviations from the '
+                             f'median (at most {OUTLIER_SPREADS:g}: a glitch or a bump)')
+        for extreme in (float(column.max()), float(column.min())):
+            share = float(np.mean(column == extreme))
+            if share > SATURATED_FRACTION and abs(extreme - median) > 3.0 * spread:
+                raise InputError(f'Expected an unsaturated {sensor} in {where}: '
+                                 f'{100 * share:.2g} % of the {name} samples sit at '
+                                 f'{extreme:.6g} (at most {100 * SATURATED_FRACTION:g} %)')
 
 
 def _read_bag(path: Path, topic: str | None) -> Recording:
@@ -128,9 +170,6 @@ def _checked_recording(path: Path, topic: str, stamps: FloatArray, gyro: FloatAr
     if stamps.size < 2 or not np.all(np.diff(stamps) > 0.0):
         raise InputError(f'Expected increasing header stamps on {topic!r} in {str(path)!r} '
                          f'({stamps.size} messages)')
-    if not (np.all(np.isfinite(gyro)) and np.all(np.isfinite(acc))):
-        raise InputError(f'Expected finite rates and accelerations on {topic!r} in '
-                         f'{str(path)!r}')
     rate = (stamps.size - 1) / float(stamps[-1] - stamps[0])
     has_acc = bool(np.any(acc != 0.0))
     return Recording(rate, gyro.reshape(-1, 3), acc.reshape(-1, 3) if has_acc else None, topic)
@@ -196,28 +235,73 @@ def kalibr_yaml(recording: Recording, gyro: NoiseFit, acc: NoiseFit | None,
     return '\n'.join(lines) + '\n'
 
 
-def write_plot(curves: dict[str, tuple[AllanCurve, NoiseFit]], path: Path) -> None:
-    """PNG: Allan deviation per axis and the fitted −½ and +½ lines, one panel per sensor."""
+def checked_yaml(text: str) -> None:
+    """Refuse (InputError) an ``imu.yaml`` text the node would refuse as a calibration file:
+    read back and checked by the node's own checker
+    (:func:`~rigid_body_attitude.core.imu.calibration.calibration_from_mapping`)."""
+    import yaml
+    from rigid_body_attitude.core.imu.calibration import calibration_from_mapping
+    from rigid_body_attitude.core.errors import CalibrationError
+    try:
+        calibration_from_mapping(yaml.safe_load(text))
+    except CalibrationError as err:
+        raise InputError(f'The estimate gives an imu.yaml the node would refuse ({err}); '
+                         f'nothing written') from None
+
+
+def _plot_title(recording: Recording, source: str) -> str:
+    count = recording.gyro.shape[0]
+    return (f'Allan deviation of {Path(source).name}: {count} samples, '
+            f'{count / recording.rate:.1f} s at {recording.rate:.6g} Hz')
+
+
+_UNITS = {'gyroscope': ('rad/s', 'rad/s/sqrt(Hz)', 'rad/s^2/sqrt(Hz)'),
+          'accelerometer': ('m/s^2', 'm/s^2/sqrt(Hz)', 'm/s^3/sqrt(Hz)')}
+
+
+def write_plot(curves: dict[str, tuple[AllanCurve, NoiseFit]], path: Path,
+               title: str = 'Allan deviation') -> None:
+    """PNG, one panel per sensor: the Allan deviation of each axis, the fitted −½ and +½ slope
+    lines, and the points read off (N at τ = 1 s, K at τ = 3 s) marked and labelled."""
     import matplotlib
     matplotlib.use('Agg')
     from matplotlib import pyplot
-    figure, panels = pyplot.subplots(1, len(curves), figsize=(6.5 * len(curves), 5),
+    figure, panels = pyplot.subplots(1, len(curves), figsize=(7.0 * len(curves), 5.5),
                                      squeeze=False)
     for axes, (name, (curve, fit)) in zip(panels[0], curves.items()):
-        for axis, label in enumerate('xyz'):
-            axes.loglog(curve.taus, curve.axes[:, axis], linewidth=0.9, label=label)
-        axes.loglog(curve.taus, fit.white / np.sqrt(curve.taus), 'k--',
-                    label=f'N = {fit.white:.3g} (slope -1/2, tau = 1 s)')
-        walk_label = 'K <= ' if fit.k_is_bound else 'K = '
-        axes.loglog(curve.taus, fit.random_walk * np.sqrt(curve.taus / 3.0), 'k:',
-                    label=f'{walk_label}{fit.random_walk:.3g} (slope +1/2, tau = 3 s)')
-        axes.set_xlabel('tau [s]')
-        axes.set_ylabel(f'{name} Allan deviation')
-        axes.grid(True, which='both', alpha=0.3)
-        axes.legend(fontsize=8)
+        _panel(axes, name, curve, fit)
+    figure.suptitle(title)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     pyplot.close(figure)
+
+
+def _panel(axes: Any, name: str, curve: AllanCurve, fit: NoiseFit) -> None:
+    """One sensor's Allan deviation, fitted lines and read-off points."""
+    unit, white_unit, walk_unit = _UNITS.get(name, ('', '', ''))
+    for axis, label in enumerate('xyz'):
+        axes.loglog(curve.taus, curve.axes[:, axis], linewidth=1.0, label=f'{label} axis')
+    taus = np.logspace(math.log10(min(curve.taus[0], 1.0)),
+                       math.log10(max(curve.taus[-1], 3.0)), 50)
+    bound = 'K <= ' if fit.k_is_bound else 'K = '
+    axes.loglog(taus, fit.white / np.sqrt(taus), 'k--', linewidth=0.9,
+                label='white noise, slope -1/2: N / sqrt(tau)')
+    axes.loglog(taus, fit.random_walk * np.sqrt(taus / 3.0), 'k:', linewidth=1.2,
+                label='rate random walk, slope +1/2: K sqrt(tau / 3)')
+    for tau, value, text, offset in (
+            (1.0, fit.white, f'N = {fit.white:.3g} {white_unit}\n(read at tau = 1 s)', -30),
+            (3.0, fit.random_walk,
+             f'{bound}{fit.random_walk:.3g} {walk_unit}\n(read at tau = 3 s)', 10)):
+        axes.plot([tau], [value], 'o', color='crimson', markersize=6, zorder=5)
+        axes.annotate(text, (tau, value), xytext=(8, offset), textcoords='offset points',
+                      fontsize=8, color='crimson',
+                      bbox={'boxstyle': 'round', 'facecolor': 'white', 'alpha': 0.8})
+    axes.set_title(f'{name}: N {fit.white:.3g} {white_unit}, {bound}{fit.random_walk:.3g} '
+                   f'{walk_unit}', fontsize=9)
+    axes.set_xlabel('averaging time tau [s]')
+    axes.set_ylabel(f'{name} Allan deviation sigma(tau) [{unit}]')
+    axes.grid(True, which='both', alpha=0.3)
+    axes.legend(fontsize=8, loc='lower left')
 
 
 class _Parser(argparse.ArgumentParser):
@@ -256,8 +340,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         text = kalibr_yaml(recording, curves['gyroscope'][1],
                            curves['accelerometer'][1] if recording.acc is not None else None,
                            rostopic)
+        checked_yaml(text)
         Path(args.output).write_text(text, encoding='utf-8')
-        write_plot(curves, Path(args.plot))
+        write_plot(curves, Path(args.plot), _plot_title(recording, args.input))
     except (AttitudeError, OSError) as err:
         print(f'error: {err}', file=sys.stderr)
         return 2

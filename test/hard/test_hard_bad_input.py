@@ -286,3 +286,33 @@ def test_bad_numbers_in_a_scene(changes, where):
 def test_every_error_type_is_a_value_error():
     for error in (AttitudeError, InputError, InertiaError, IntegratorError, SceneError):
         assert issubclass(error, ValueError)
+
+
+_LARGEST = np.finfo(np.float64).max
+
+
+@pytest.mark.parametrize('block, value_text', [
+    (np.diag([_LARGEST] * 3), r'at most pi\^2'),
+    (np.full((3, 3), 1e308), r'at most pi\^2'),
+    ([[1e308, -1e308, 0.0], [-1e308, 1e308, 0.0], [0.0, 0.0, 1.0]], r'at most pi\^2'),
+    ([[1.0, 1e308, 0.0], [-1e308, 1.0, 0.0], [0.0, 0.0, 1.0]], r'symmetric'),
+    (np.diag([1e-4, 1e-4, 10.0]), r'at most pi\^2.*axis z'),
+    (np.diag([1.0, -1e-3, 1.0]), r'positive semi-definite'),
+    (np.diag([1.0, NAN, 1.0]), r'finite'),
+    ([['a', 0, 0], [0, 1, 0], [0, 0, 1]], r'matrix of numbers'),
+    (np.eye(2), r'shape'),
+])
+def test_attitude_covariance_set_pose_refuses_without_changing_the_covariance(block,
+                                                                              value_text):
+    """An attitude covariance given from outside (``set_pose_with_covariance``) is refused
+    whole when it is not a finite symmetric positive semi-definite 3×3 with variances at most
+    π² rad², the largest floats included (no overflow, no linear-algebra error), and the
+    15×15 covariance is bit-for-bit what it was."""
+    from rigid_body_attitude.core.imu.attitude_covariance import AttitudeCovariance
+    covariance = AttitudeCovariance(batch_size=4)
+    for _ in range(6):
+        covariance.add_sample(tuple(Q0), tuple(OMEGA), 1e-3)
+    before = covariance.covariance
+    assert_rejected(lambda: covariance.set_pose(covariance=block), InputError, 'covariance',
+                    value_text)
+    assert np.array_equal(covariance.covariance, before)

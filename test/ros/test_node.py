@@ -440,7 +440,9 @@ def test_a_gyro_scene_reports_what_a_strapdown_user_needs_and_no_energy(ros, req
         'scene', 'rate_source', 'integrator', 'step [s]', 'time [s]',
         'rotation_from_initial [deg]', 'gyro_bias [rad/s]', 'alignment',
         'quaternion_norm_error', 'input_rate [Hz]', 'received_rate [Hz]', 'received',
-        'accepted', 'missed_samples', 'tilt_stddev [deg]', 'yaw_stddev [deg]']
+        'accepted', 'missed_samples', 'calibration', 'tilt_stddev [deg]',
+        'yaw_stddev [deg]']
+    assert values['calibration'] == 'none'
     assert float(values['rotation_from_initial [deg]']) == pytest.approx(0.9, abs=1e-9)
     assert values['gyro_bias [rad/s]'] == 'none'
     assert values['alignment'].startswith('not levelled: no accelerometer data')

@@ -12,7 +12,8 @@ import struct
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import PoseStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
+from geometry_msgs.msg import (
+    PoseStamped, PoseWithCovarianceStamped, QuaternionStamped, Vector3Stamped, WrenchStamped)
 import numpy as np
 import pytest
 from rclpy.parameter import Parameter
@@ -147,3 +148,44 @@ def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, mess
         ros.executor.remove_node(node)
         node.destroy_node()
     assert outputs['hostile'] == outputs['quiet']
+
+
+def test_huge_covariances_on_set_pose_with_covariance_change_nothing(ros, request):
+    """Finite but huge, or unphysical, orientation blocks on ``set_pose_with_covariance``
+    between good gyro samples: each refused and counted as ``invalid_covariance`` in
+    /diagnostics, the attitude the good stream alone gives, every ``imu/data`` and
+    ``pose_with_covariance`` covariance finite, no internal error."""
+    harness = Harness(ros, unique_namespace(request))
+    node = start_node(harness, scene='strapdown')
+    harness.publisher(Imu, 'imu')
+    harness.publisher(PoseWithCovarianceStamped, 'set_pose_with_covariance')
+    orientations = harness.record(QuaternionStamped, 'orientation')
+    imu_outputs = harness.record(Imu, 'imu/data')
+    poses = harness.record(PoseWithCovarianceStamped, 'pose_with_covariance')
+    diagnostics = harness.record(DiagnosticArray, '/diagnostics')
+    harness.wait_for_connections()
+    blocks = [np.diag([1e308] * 3), np.full((3, 3), 1e308), np.diag([1e-4, 1e-4, 1e300]),
+              np.diag([1e-4, 1e-4, 10.0])]
+    good_count = 2 * len(blocks) + 1
+    for k in range(good_count):
+        send(harness, node, 'imu', gyro_message('imu', BASE_NS + k * MS))
+        if k < len(blocks):
+            pose = PoseWithCovarianceStamped()
+            pose.header.frame_id = 'world'
+            pose.pose.pose.orientation.x = 1.0
+            covariance = np.eye(6)
+            covariance[3:, 3:] = blocks[k]
+            pose.pose.covariance = covariance.reshape(36).tolist()
+            send(harness, node, 'set_pose_with_covariance', pose)
+    assert harness.spin_until(lambda: min(len(orientations), len(imu_outputs), len(poses))
+                              == good_count, 5.0)
+    expected = _exp((good_count - 1) * 1e-3 * np.array(OMEGA))
+    last = orientations[-1].quaternion
+    assert np.max(np.abs(np.array([last.w, last.x, last.y, last.z]) - expected)) <= 1e-14
+    assert all(np.all(np.isfinite(m.orientation_covariance)) for m in imu_outputs)
+    assert all(np.all(np.isfinite(m.pose.covariance)) and max(m.pose.covariance[21::7]) < 10.0
+               for m in poses)
+    assert harness.spin_until(
+        lambda: own_values(diagnostics, node).get('rejected invalid_covariance')
+        == str(len(blocks)), 3.0)
+    assert own_values(diagnostics, node)['rejected internal_error'] == '0'

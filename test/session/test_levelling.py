@@ -308,7 +308,8 @@ def test_hostile_parameters_are_refused_naming_the_parameter(name, value, match)
 
 @pytest.mark.parametrize('text, match', [
     ('bias: [0.1, 0.0]\n', 'Expected bias to be a 3 numbers'),
-    ('scale: [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]\n', 'invertible'),
+    ('scale: [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]\n',
+     r'scale factors \(diagonal\) of scale to be in \[0.5, 2\]'),
     ('imu0:\n  gyroscopes:\n    C_gyro_i: [[2.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0]]\n',
      'imu0.gyroscopes.C_gyro_i to be a rotation matrix'),
     ('no_such_key: 1\n', 'Expected kalibr keys'),
@@ -352,3 +353,26 @@ def test_broad_trials_level_within_half_a_degree_of_the_optical_truth(open_scene
     assert math.degrees(tilt_angle(session.alignment.attitude, tuple(truth.tolist()))) < 0.5
     assert sink.attitudes and sink.attitudes[0][0] * 10**9 + sink.attitudes[0][1] == (
         BASE_NS + k * period_ns)
+
+
+def test_the_calibration_applied_is_said_at_start_and_in_diagnostics(open_scene, tmp_path):
+    """One INFO line at start naming the file, its kind, the IMU key and every term with its
+    values; the same in the diagnostics' values; ``calibration none`` without a file."""
+    path = tmp_path / 'camchain-imucam.yaml'
+    path.write_text('imu0:\n  gyroscopes:\n    M: [[1.02, 0, 0], [0.01, 0.98, 0], [0, 0, 1]]\n'
+                    '  gyroscope_noise_density: 1.6968e-04\n  gyroscope_random_walk: 1.9393e-05\n'
+                    '  update_rate: 200.0\n')
+    session, sink = open_scene('strapdown', calibration_file=str(path))
+    lines = [text for level, text in sink.logs if text.startswith('calibration:')]
+    assert len(lines) == 1 and sink.logs[0][0] == LEVEL_INFO
+    assert lines[0].startswith(f"calibration: file '{path}' (kalibr imu-camera result, IMU key "
+                               f"imu0): gyro_matrix K [[0.980392, 0, 0], [-0.010004, 1.02041, 0], "
+                               "[0, 0, 1]]; gyroscope_noise_density")
+    assert ('gyroscope_noise_density [rad/s/sqrt(Hz)] 0.00016968; gyroscope_random_walk '
+            '[rad/s^2/sqrt(Hz)] 1.9393e-05; update_rate [Hz] 200') in lines[0]
+    values = dict(session.report().values)
+    assert (values['calibration'], values['calibration_kind'], values['calibration_imu_key']) == (
+        str(path), 'kalibr imu-camera result', 'imu0')
+    assert values['calibration gyroscope_noise_density [rad/s/sqrt(Hz)]'] == '0.00016968'
+    plain, _ = open_scene('strapdown')
+    assert dict(plain.report().values)['calibration'] == 'none'

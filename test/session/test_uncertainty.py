@@ -163,7 +163,7 @@ def test_a_bad_covariance_refuses_the_pose_and_is_counted(open_scene, block, why
     before = (session.propagator.state.attitude_tuple(), len(sink.covariances))
     session.set_pose('world', (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 0.0), pose_cov(block))
     assert (session.propagator.state.attitude_tuple(), len(sink.covariances)) == before
-    assert session.rejection_counts()['invalid_pose'] == 1
+    assert session.rejection_counts()['invalid_covariance'] == 1
     assert why in sink.logs[-1][1]
     with pytest.raises(InputError):
         orientation_block((0.0,) * 35)
@@ -228,7 +228,8 @@ def test_the_pose_covariance_is_spd_with_the_position_unknown():
 def test_a_kalibr_imu_yaml_gives_the_session_its_gyro_noise(open_scene, tmp_path):
     path = tmp_path / 'imu.yaml'
     path.write_text('rostopic: /imu\nupdate_rate: 200.0\ngyroscope_noise_density: 2.0e-4\n'
-                    'gyroscope_random_walk: 3.0e-5\naccelerometer_noise_density: 1.0e-3\n')
+                    'gyroscope_random_walk: 3.0e-5\naccelerometer_noise_density: 1.0e-3\n'
+                    'accelerometer_random_walk: 1.0e-4\n')
     session, _ = open_scene('strapdown', calibration_file=str(path),
                             gyroscope_noise_density=1e-3, gyroscope_random_walk=1e-4)
     model = session.uncertainty.model
@@ -299,3 +300,58 @@ def test_a_pose_set_while_levelling_keeps_its_yaw_variance_when_levelling_comple
     assert session.alignment is not None and session.alignment.at_rest
     assert np.reshape(sink.covariances[-1], (3, 3))[2, 2] == pytest.approx(
         model.initial_yaw_stddev ** 2, rel=1e-6)
+
+
+#: Orientation blocks a hostile or careless peer sends on ``set_pose_with_covariance``: finite
+#: but huge (symmetrising, an eigen-decomposition or the first fold would overflow), or above
+#: the physical bound of pi^2 rad^2.
+HOSTILE_BLOCKS = {
+    'huge diagonal': (1e308, 0.0, 0.0, 0.0, 1e308, 0.0, 0.0, 0.0, 1e308),
+    'huge rank one': (1e308,) * 9,
+    'huge with opposite signs': (1e308, -1e308, 0.0, -1e308, 1e308, 0.0, 0.0, 0.0, 1.0),
+    'huge yaw only': (1e-4, 0.0, 0.0, 0.0, 1e-4, 0.0, 0.0, 0.0, 1e300),
+    'variance above pi^2': (1e-4, 0.0, 0.0, 0.0, 1e-4, 0.0, 0.0, 0.0, 10.0),
+    'huge asymmetric': (1.0, 1e308, 0.0, -1e308, 1.0, 0.0, 0.0, 0.0, 1.0),
+}
+
+
+@pytest.mark.parametrize('name', sorted(HOSTILE_BLOCKS))
+def test_a_huge_or_unphysical_covariance_is_refused_before_anything_changes(
+        open_scene, clocks, name):
+    """Refused as ``invalid_covariance`` (three times, one warning), the attitude and the
+    covariance as they were, every covariance handed to the sink finite, no internal error;
+    a valid pose afterwards is taken."""
+    session, sink = open_scene('strapdown')
+    feed(session, 10)
+    before = (session.propagator.state.attitude_tuple(), len(sink.covariances))
+    for _ in range(3):
+        session.set_pose('world', (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 0.0),
+                         pose_cov(HOSTILE_BLOCKS[name]))
+        clocks.monotonic += 1.0
+    assert (session.propagator.state.attitude_tuple(), len(sink.covariances)) == before
+    counts = session.rejection_counts()
+    assert (counts['invalid_covariance'], counts['internal_error'], session.poses_accepted) == (
+        3, 0, 0)
+    warnings = [text for level, text in sink.logs if 'invalid_covariance' in text]
+    assert len(warnings) == 1 and warnings[0].startswith('set_pose rejected')
+    feed(session, 3 * BATCH_SIZE, start_ns=BASE_NS + 10 * MS)
+    session.set_pose('world', (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 0.0),
+                     pose_cov((math.pi ** 2, 0.0, 0.0, 0.0, 1e-4, 0.0, 0.0, 0.0, 1e-4)))
+    feed(session, 3 * BATCH_SIZE, start_ns=BASE_NS + 10 * MS + 3 * BATCH_SIZE * MS)
+    assert session.poses_accepted == 1 and session.rejection_counts()['internal_error'] == 0
+    assert all(is_spd(values, 3) for values in sink.covariances)
+    report = session.report()
+    assert dict(report.values)['rejected invalid_covariance'] == '3'
+
+
+def test_the_covariance_check_scales_before_symmetrising():
+    """A symmetric block of the largest floats is checked without overflow; one barely
+    asymmetric is symmetrised without overflow (and then refused by the bound)."""
+    largest = np.finfo(np.float64).max
+    for block in [(largest, 0.0, 0.0, 0.0, largest, 0.0, 0.0, 0.0, largest),
+                  (largest, largest, 0.0, largest * (1 - 1e-12), largest, 0.0, 0.0, 0.0, 1.0)]:
+        with pytest.raises(InputError, match=r'at most pi\^2'):
+            orientation_block(pose_cov(block))
+    tiny = (5e-324, 0.0, 0.0, 0.0, 5e-324, 0.0, 0.0, 0.0, 5e-324)  # subnormal: floored
+    assert orientation_block(pose_cov(tiny)) == (1e-24, 0.0, 0.0, 0.0, 1e-24, 0.0, 0.0, 0.0,
+                                                 1e-24)

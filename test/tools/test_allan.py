@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import re
 
 import numpy as np
 import pytest
 import yaml
 
 from rigid_body_attitude.bag import write_bag
+from rigid_body_attitude.core.imu.calibration import load_calibration
+from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.tools import allan
 
 import broad_coverage
@@ -104,3 +107,64 @@ def test_a_file_that_is_not_a_recording_and_bad_options_are_one_error_line(tmp_p
     run_error(['--no-such-option'], capsys)
     trial = str(next(p for p in broad_coverage.trial_paths() if p.stem.startswith('07')))
     assert 'no' in run_error([trial, '--output', str(tmp_path / 'no' / 'dir.yaml')], capsys)
+
+
+def static_bag(path, samples, rate=RATE):
+    stamps = 1.7e9 + np.arange(samples.shape[0]) / rate
+    write_bag(path, stamps=stamps, rates=samples, ground_truth_topic=None, torque_topic=None)
+    return str(path)
+
+
+def _with(samples, change):
+    samples = samples.copy()
+    change(samples)
+    return samples
+
+
+@pytest.mark.parametrize('name, change, why', [
+    ('constant', lambda s: s.__setitem__(slice(None), 0.01), r'to vary: 100 % of its samples'),
+    ('one axis stuck', lambda s: s.__setitem__((slice(None), 1), 0.0), r'y axis .* to vary'),
+    ('one huge sample', lambda s: s.__setitem__((500, 2), 1e300), r'robust standard deviations'),
+    ('one glitch of 35 rad/s', lambda s: s.__setitem__((500, 0), 35.0),
+     r'x sample lies .* robust standard deviations'),
+    ('saturated 5 %', lambda s: s.__setitem__((slice(0, None, 20), 0), 0.5),
+     r'unsaturated gyroscope.*5 % of the x samples sit at 0\.5'),
+])
+def test_a_recording_no_estimate_can_come_from_is_refused_and_nothing_written(
+        tmp_path, capsys, name, change, why):
+    """One ``error:`` line saying why; neither imu.yaml nor the plot is written."""
+    bag = static_bag(tmp_path / 'bag', _with(synthetic(60.0, walk=0.0), change))
+    output, plot = tmp_path / 'imu.yaml', tmp_path / 'allan.png'
+    line = run_error([bag, '--output', str(output), '--plot', str(plot)], capsys)
+    assert re.search(why, line), line
+    assert not output.exists() and not plot.exists()
+
+
+def test_non_finite_samples_are_refused():
+    """(The bag writer refuses them, so the check is called as ``read_recording`` calls it.)"""
+    for bad in (np.nan, np.inf, -np.inf):
+        samples = synthetic(20.0, walk=0.0)
+        samples[7, 0] = bad
+        with pytest.raises(InputError, match=r'finite gyroscope samples in here; 1 are NaN'):
+            allan.check_static(samples, 'gyroscope', 'here')
+
+
+def test_the_output_is_checked_by_the_nodes_calibration_checker():
+    """A text the node would refuse (noise density 0, inf) is refused before writing; a
+    written one loads as the node loads it."""
+    good = ('rostopic: /imu\nupdate_rate: 50\ngyroscope_noise_density: 2.0e-03\n'
+            'gyroscope_random_walk: 1.0e-04\n')
+    allan.checked_yaml(good)
+    for bad in (good.replace('2.0e-03', '0.0'), good.replace('1.0e-04', '.inf'),
+                good.replace('gyroscope_random_walk: 1.0e-04\n', '')):
+        with pytest.raises(InputError, match='the node would refuse'):
+            allan.checked_yaml(bad)
+
+
+def test_every_file_imu_noise_writes_is_one_the_node_loads(tmp_path):
+    bag = static_bag(tmp_path / 'bag', synthetic(60.0, seed=3))
+    output = tmp_path / 'imu.yaml'
+    assert allan.main([bag, '--output', str(output), '--plot', str(tmp_path / 'a.png')]) == 0
+    calibration = load_calibration(output)
+    assert calibration.kind == 'kalibr_noise'
+    assert calibration.noise.gyroscope_noise_density == pytest.approx(WHITE, rel=0.1)

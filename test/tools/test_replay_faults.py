@@ -203,3 +203,20 @@ def test_double_array_options_and_a_bad_calibration_file(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.startswith(expected) and err.count('\n') == 1, err
         assert not output.exists()
+
+
+def test_the_replay_prints_the_calibration_it_applies(tmp_path, capsys):
+    """The node's start-up line, on stderr: file, kind, terms with values, noise figures."""
+    bag = tmp_path / 'input'
+    write_records(bag, {'imu': IMU}, imu_records(20, faults=False))
+    calibration = tmp_path / 'imu.yaml'
+    calibration.write_text('bias: [0.01, 0.0, 0.0]\nscale: [1.01, 1.0, 1.0]\n'
+                           'gyroscope_noise_density: 2.0e-4\ngyroscope_random_walk: 3.0e-5\n')
+    assert main([str(bag), '-o', str(tmp_path / 'out'), '--scene', 'strapdown',
+                 '--no-progress', '--calibration-file', str(calibration)]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines()
+             if line.startswith('calibration: ')]
+    assert lines == [f"calibration: file '{calibration}' (plain bias-scale-misalignment): "
+                     'gyro_bias [rad/s] [0.01, 0, 0]; gyro_matrix K [[1.01, 0, 0], [0, 1, 0], '
+                     '[0, 0, 1]]; gyroscope_noise_density [rad/s/sqrt(Hz)] 0.0002; '
+                     'gyroscope_random_walk [rad/s^2/sqrt(Hz)] 3e-05']

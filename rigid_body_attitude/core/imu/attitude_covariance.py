@@ -45,7 +45,8 @@ from rigid_body_attitude.core.imu.gyro_error_model import (
     initial_covariance,
 )
 
-__all__ = ['AttitudeCovariance', 'AttitudeStddev', 'DEFAULT_BATCH_SIZE', 'transition_blocks']
+__all__ = ['AttitudeCovariance', 'AttitudeStddev', 'DEFAULT_BATCH_SIZE', 'MAX_ATTITUDE_VARIANCE',
+           'checked_attitude_covariance', 'transition_blocks']
 
 FloatArray = NDArray[np.float64]
 
@@ -53,6 +54,15 @@ FloatArray = NDArray[np.float64]
 DEFAULT_BATCH_SIZE = 64
 #: Smallest variance kept on the diagonal [rad², (rad/s)², 1] (a known-exact parameter).
 VARIANCE_FLOOR = 1e-24
+#: Largest variance [rad²] of an attitude covariance given from outside (``set_pose``): π²,
+#: a 1σ of 180°. The error state is a rotation vector; a larger variance says no more than
+#: "unknown about this axis" and is refused, so the propagated covariance stays finite.
+MAX_ATTITUDE_VARIANCE = math.pi ** 2
+#: Largest asymmetry accepted, relative to the largest entry of a covariance.
+SYMMETRY_TOLERANCE = 1e-9
+#: Most negative eigenvalue accepted, relative to the largest entry (round-off of a
+#: positive semi-definite matrix computed elsewhere).
+PSD_TOLERANCE = 1e-12
 _SERIES_ANGLE = 0.1
 _TINY_ANGLE = 1e-4
 _EYE3 = np.eye(3)
@@ -257,7 +267,7 @@ class AttitudeCovariance:
             if not math.isfinite(value) or value <= 0.0:
                 raise InputError(f'Expected `stddev` to be finite and > 0, got {stddev!r}')
             covariance = np.eye(3) * value * value
-        block = _checked_covariance(covariance, 'covariance', 3)
+        block = checked_attitude_covariance(covariance)
         self._p[:3, 3:] = 0.0
         self._p[3:, :3] = 0.0
         self._p[:3, :3] = block
@@ -294,19 +304,44 @@ def _propagated(p: FloatArray, coupling: FloatArray, duration: float,
     return out
 
 
+def checked_attitude_covariance(value: ArrayLike, name: str = 'covariance') -> FloatArray:
+    """``value`` as a 3×3 attitude covariance [rad²] (:func:`_checked_covariance`) whose
+    diagonal is at most :data:`MAX_ATTITUDE_VARIANCE`; else InputError naming ``name``, the
+    entry and the bound."""
+    matrix = _checked_covariance(value, name, 3)
+    largest = int(np.argmax(np.diag(matrix)))
+    if matrix[largest, largest] > MAX_ATTITUDE_VARIANCE:
+        raise InputError(f'Expected the variances of `{name}` to be at most pi^2 = '
+                         f'{MAX_ATTITUDE_VARIANCE:.6g} rad^2 (1-sigma 180 deg: the attitude '
+                         f'about that axis unknown), got {matrix[largest, largest]!r} on axis '
+                         f'{"xyz"[largest]}')
+    return matrix
+
+
 def _checked_covariance(value: ArrayLike, name: str, size: int) -> FloatArray:
     """``value`` as a symmetric positive semi-definite (size, size) matrix, diagonal floored at
-    :data:`VARIANCE_FLOOR`; else InputError."""
-    matrix = np.array(value, dtype=np.float64)
+    :data:`VARIANCE_FLOOR`; else InputError. The checks and the symmetrising work on the
+    matrix scaled by its largest entry, so no value up to the largest float overflows."""
+    try:
+        matrix = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f'Expected `{name}` to be a matrix of numbers') from None
     if matrix.shape != (size, size):
         raise InputError(f'Expected `{name}` to have shape ({size}, {size}), got {matrix.shape}')
     if not np.all(np.isfinite(matrix)):
         raise InputError(f'Expected `{name}` to be finite')
     scale = max(float(np.abs(matrix).max()), VARIANCE_FLOOR)
-    if np.abs(matrix - matrix.T).max() > 1e-9 * scale:
+    unit = matrix / scale  # entries in [-1, 1]
+    if np.abs(unit - unit.T).max() > SYMMETRY_TOLERANCE:
         raise InputError(f'Expected `{name}` to be symmetric')
-    matrix = 0.5 * (matrix + matrix.T)
-    if np.linalg.eigvalsh(matrix)[0] < -1e-12 * scale:
+    if not np.array_equal(matrix, matrix.T):
+        unit = 0.5 * (unit + unit.T)
+        matrix = unit * scale
+    try:
+        smallest = float(np.linalg.eigvalsh(unit)[0])
+    except np.linalg.LinAlgError:
+        smallest = -math.inf
+    if not smallest >= -PSD_TOLERANCE:
         raise InputError(f'Expected `{name}` to be positive semi-definite')
     diagonal = np.einsum('ii->i', matrix)
     np.maximum(diagonal, VARIANCE_FLOOR, out=diagonal)

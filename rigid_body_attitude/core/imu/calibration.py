@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -45,8 +45,10 @@ from numpy.typing import NDArray
 from rigid_body_attitude.core.errors import CalibrationError
 from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml, real
 
-__all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'ImuNoise', 'ORTHONORMAL_TOLERANCE',
-           'calibration_from_mapping', 'load_calibration']
+__all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'KIND_NAMES', 'calibration_summary',
+           'calibration_terms', 'ImuNoise', 'NOISE_BOUNDS', 'ORTHONORMAL_TOLERANCE',
+           'REQUIRED_NOISE_KEYS', 'calibration_from_mapping', 'calibration_noise',
+           'calibration_values', 'load_calibration']
 
 FloatArray = NDArray[np.float64]
 Vec = tuple[float, float, float]
@@ -67,8 +69,22 @@ ORTHONORMAL_TOLERANCE = 1e-6
 MAX_RATE_BIAS = 100.0  # [rad/s], beyond any gyro's range (2000 °/s = 35 rad/s)
 MAX_ACCELERATION_BIAS = 1e3  # [m/s²]
 MAX_G_SENSITIVITY = 1.0  # [(rad/s)/(m/s²)]; real sensors: below 1e-3
-MAX_NOISE = 1e3  # densities and random walks, SI units
-MAX_UPDATE_RATE = 1e6  # [Hz]
+#: Largest noise figure accepted per key (SI units; 0 is refused: no sensor is noiseless).
+#: The gyro bounds are the node parameters' of the same names; a consumer MEMS gyro has a
+#: density near 2e-4 rad/s/√Hz, an accelerometer near 2e-3 m/s²/√Hz.
+NOISE_BOUNDS = {'gyroscope_noise_density': 1.0, 'gyroscope_random_walk': 1.0,
+                'accelerometer_noise_density': 10.0, 'accelerometer_random_walk': 10.0}
+#: Sample rates accepted [Hz] (real IMUs run at 100 Hz to 2 kHz).
+MIN_UPDATE_RATE = 1.0
+MAX_UPDATE_RATE = 1e5
+#: Diagonal of a scale or scale-misalignment matrix: a working sensor is within a few per cent
+#: of 1; a factor of 2 or more is a unit mistake (deg/s read as rad/s is 57).
+SCALE_RANGE = (0.5, 2.0)
+#: Largest off-diagonal entry of a scale-misalignment matrix (0.1: about 5.7° between axes;
+#: real sensors: below 0.02).
+MAX_MISALIGNMENT = 0.1
+#: Keys a kalibr ``imu.yaml`` (the noise model alone) must give: those the node uses.
+REQUIRED_NOISE_KEYS = ('gyroscope_noise_density', 'gyroscope_random_walk', 'update_rate')
 _IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
@@ -133,6 +149,7 @@ class ImuCalibration:
         noise: the noise model, if the file has one.
         kind: ``'kalibr'``, ``'kalibr_noise'``, ``'plain'`` or ``'identity'``.
         source: the file it came from, if any.
+        imu_key: the section of a kalibr imu-camera result it came from (``imu0``), if any.
     """
 
     gyro_matrix: FloatArray = field(default_factory=lambda: np.eye(3))
@@ -143,6 +160,7 @@ class ImuCalibration:
     noise: ImuNoise = field(default_factory=ImuNoise)
     kind: str = 'identity'
     source: str = ''
+    imu_key: str = ''
     _k: Mat = field(init=False, repr=False, compare=False)
     _kb: Vec = field(init=False, repr=False, compare=False)
     _kg: Mat = field(init=False, repr=False, compare=False)
@@ -201,6 +219,72 @@ class ImuCalibration:
         return rates, acc_i
 
 
+#: The kinds of file in words (log lines, /diagnostics).
+KIND_NAMES = {'kalibr': 'kalibr imu-camera result', 'kalibr_noise': 'kalibr imu.yaml',
+              'plain': 'plain bias-scale-misalignment', 'identity': 'none'}
+_NOISE_UNITS = {'gyroscope_noise_density': 'rad/s/sqrt(Hz)',
+                'gyroscope_random_walk': 'rad/s^2/sqrt(Hz)',
+                'accelerometer_noise_density': 'm/s^2/sqrt(Hz)',
+                'accelerometer_random_walk': 'm/s^3/sqrt(Hz)', 'update_rate': 'Hz'}
+
+
+def _numbers(values: FloatArray) -> str:
+    return '[' + ', '.join(_numbers(row) if row.ndim else f'{float(row):.6g}'
+                           for row in values) + ']'
+
+
+def calibration_terms(calibration: ImuCalibration) -> list[tuple[str, str]]:
+    """What a calibration applies, as (name, value) pairs: the corrections that are not the
+    identity (``gyro_bias [rad/s]``, ``gyro_matrix K``, ``g_sensitivity G``,
+    ``accelerometer_matrix N``, ``accelerometer_bias [m/s^2]``) and the noise figures given
+    (kalibr names with units)."""
+    c = calibration
+    terms = [(name, _numbers(value)) for name, value, neutral in (
+        ('gyro_bias [rad/s]', c.gyro_bias, np.zeros(3)),
+        ('gyro_matrix K', c.gyro_matrix, np.eye(3)),
+        ('g_sensitivity G [(rad/s)/(m/s^2)]', c.g_sensitivity, np.zeros((3, 3))),
+        ('accelerometer_matrix N', c.accelerometer_matrix, np.eye(3)),
+        ('accelerometer_bias [m/s^2]', c.accelerometer_bias, np.zeros(3)),
+    ) if not np.array_equal(value, neutral)]
+    for key, unit in _NOISE_UNITS.items():
+        value = getattr(c.noise, key)
+        if value is not None:
+            terms.append((f'{key} [{unit}]', f'{value:.6g}'))
+    return terms
+
+
+def calibration_summary(calibration: ImuCalibration) -> str:
+    """One line: the file, its kind, the IMU key and every term applied (for the log)."""
+    c = calibration
+    key = f', IMU key {c.imu_key}' if c.imu_key else ''
+    terms = '; '.join(f'{name} {value}' for name, value in calibration_terms(c))
+    return (f'calibration: file {c.source!r} ({KIND_NAMES[c.kind]}{key}): '
+            f'{terms or "no correction, no noise figures"}')
+
+
+def calibration_values(calibration: ImuCalibration | None) -> list[tuple[str, str]]:
+    """A calibration as ``/diagnostics`` key-values: file, kind, IMU key and each term
+    applied (``calibration``: ``none`` without a file)."""
+    if calibration is None:
+        return [('calibration', 'none')]
+    return [('calibration', calibration.source),
+            ('calibration_kind', KIND_NAMES[calibration.kind]),
+            ('calibration_imu_key', calibration.imu_key or '-'),
+            *((f'calibration {name}', value) for name, value in calibration_terms(
+                calibration))]
+
+
+def calibration_noise(calibration: ImuCalibration | None) -> dict[str, float]:
+    """The gyro noise figures a calibration gives (kalibr names; empty without a file or
+    without a noise model)."""
+    if calibration is None:
+        return {}
+    noise = calibration.noise
+    given = {'gyroscope_noise_density': noise.gyroscope_noise_density,
+             'gyroscope_random_walk': noise.gyroscope_random_walk}
+    return {key: value for key, value in given.items() if value is not None}
+
+
 def load_calibration(path: str | Path, imu_key: str = '') -> ImuCalibration:
     """Read and check a calibration file (module docstring); ``imu_key`` picks an IMU
     (``imu0``) in a kalibr result holding several. Every fault is one
@@ -251,12 +335,13 @@ def _chosen_imu(imu_key: str, imu_keys: list[str]) -> str:
 
 
 def _kalibr_result(data: Mapping[Any, Any], key: str, source: str) -> ImuCalibration:
-    return _kalibr(data[key], f'{key}.', source)
+    return replace(_kalibr(data[key], f'{key}.', source), imu_key=key)
 
 
 def _kalibr(section: Mapping[Any, Any], prefix: str, source: str) -> ImuCalibration:
     _check_keys(section, _KALIBR_KEYS | {'rx_i', 'ry_i', 'rz_i'}, prefix)
-    noise = _noise(section, prefix)
+    noise_only = not any(key in section for key in ('gyroscopes', 'accelerometers'))
+    noise = _noise(section, prefix, REQUIRED_NOISE_KEYS if noise_only else ())
     gyros = _mapping(section.get('gyroscopes', {}), f'{prefix}gyroscopes', {'M', 'A', 'C_gyro_i'})
     accs = _mapping(section.get('accelerometers', {}), f'{prefix}accelerometers', {'M'})
     m_gyro = _invertible(gyros.get('M', _IDENTITY), f'{prefix}gyroscopes.M')
@@ -276,10 +361,11 @@ def _plain(data: Mapping[Any, Any], source: str) -> ImuCalibration:
     scale_value = data.get('scale', [1.0, 1.0, 1.0])
     if isinstance(scale_value, list) and len(scale_value) == 3 and not any(
             isinstance(item, list) for item in scale_value):
-        scale = np.diag(_vector(scale_value, 'scale', 1e3))
+        scale = _near_identity(np.diag(_vector(scale_value, 'scale', 1e3)), 'scale')
     else:
-        scale = _matrix(scale_value, 'scale', 1e3)
-    misalignment = _matrix(data.get('misalignment', _IDENTITY), 'misalignment', 1e3)
+        scale = _near_identity(_matrix(scale_value, 'scale', 1e3), 'scale')
+    misalignment = _near_identity(_matrix(data.get('misalignment', _IDENTITY), 'misalignment',
+                                          1e3), 'misalignment')
     gyro_matrix = _conditioned(misalignment @ scale, 'misalignment · scale')
     acc_matrix = _invertible(data.get('accelerometer_matrix', _IDENTITY), 'accelerometer_matrix')
     return ImuCalibration(
@@ -318,18 +404,30 @@ def _number(value: Any, key: str, low: float, high: float) -> float:
     return number
 
 
-def _noise(data: Mapping[Any, Any], prefix: str) -> ImuNoise:
+def _noise(data: Mapping[Any, Any], prefix: str, required: tuple[str, ...] = ()) -> ImuNoise:
+    """The noise figures of ``data``: each in its :data:`NOISE_BOUNDS`, densities and random
+    walks in pairs, the keys ``required`` present (else one error naming the key)."""
+    for key in required:
+        if data.get(key) is None:
+            raise CalibrationError(f'Missing key {prefix}{key} (a kalibr imu.yaml must give '
+                                   f'{", ".join(REQUIRED_NOISE_KEYS)})')
+    for sensor in ('gyroscope', 'accelerometer'):
+        pair = (f'{sensor}_noise_density', f'{sensor}_random_walk')
+        given = [data.get(key) is not None for key in pair]
+        if given[0] != given[1]:
+            raise CalibrationError(f'Missing key {prefix}{pair[given[0]]} (given with '
+                                   f'{prefix}{pair[given[1]]}: the two come as a pair)')
     values: dict[str, float | None] = {}
     for key in NOISE_KEYS:
         values[key] = (None if data.get(key) is None
-                       else _number(data[key], f'{prefix}{key}', 0.0, MAX_NOISE))
+                       else _number(data[key], f'{prefix}{key}', 0.0, NOISE_BOUNDS[key]))
     rate = data.get('update_rate')
     topic = data.get('rostopic', '')
     if not isinstance(topic, str):
         raise CalibrationError(f'Expected {prefix}rostopic to be a topic name, got {quote(topic)}')
     return ImuNoise(
-        update_rate=None if rate is None else _number(rate, f'{prefix}update_rate', 0.0,
-                                                      MAX_UPDATE_RATE),
+        update_rate=None if rate is None else _number(rate, f'{prefix}update_rate',
+                                                      MIN_UPDATE_RATE, MAX_UPDATE_RATE),
         rostopic=topic, **values)
 
 
@@ -381,7 +479,25 @@ def _inverse(matrix: FloatArray) -> FloatArray:
 
 
 def _invertible(value: Any, key: str) -> FloatArray:
-    return _conditioned(_matrix(value, key, 1e3), key)
+    return _conditioned(_near_identity(_matrix(value, key, 1e3), key), key)
+
+
+def _near_identity(matrix: FloatArray, key: str) -> FloatArray:
+    """A scale-misalignment matrix: diagonal in :data:`SCALE_RANGE`, off-diagonal entries
+    at most :data:`MAX_MISALIGNMENT` in magnitude (else one error naming the entry)."""
+    low, high = SCALE_RANGE
+    for row in range(3):
+        for column in range(3):
+            value = float(matrix[row, column])
+            if row == column and not low <= value <= high:
+                raise CalibrationError(f'Expected the scale factors (diagonal) of {key} to be '
+                                       f'in [{low:g}, {high:g}], got {value!r} at '
+                                       f'[{row}][{column}]')
+            if row != column and abs(value) > MAX_MISALIGNMENT:
+                raise CalibrationError(f'Expected the misalignment (off-diagonal) entries of '
+                                       f'{key} to be at most {MAX_MISALIGNMENT:g} in magnitude, '
+                                       f'got {value!r} at [{row}][{column}]')
+    return matrix
 
 
 def _rotation(value: Any, key: str) -> FloatArray:

@@ -171,7 +171,8 @@ def _default_output(bag: str) -> Path:
 
 
 class _StderrLog:
-    """Prints the session's warnings and errors to stderr, at most :data:`MAX_LOG_LINES`."""
+    """Prints the session's warnings and errors to stderr, at most :data:`MAX_LOG_LINES`, and
+    its calibration line (the node's INFO line at start)."""
 
     def __init__(self) -> None:
         self.printed = 0
@@ -179,6 +180,8 @@ class _StderrLog:
     def __call__(self, bag_time_ns: int, level: int, text: str) -> None:
         tag = _LEVEL_TAGS.get(level)
         if tag is None:
+            if text.startswith('calibration: '):  # the node's start-up line, printed as is
+                print(text, file=sys.stderr)
             return
         self.printed += 1
         if self.printed <= MAX_LOG_LINES:

@@ -17,18 +17,18 @@ from rigid_body_attitude.core.yaml_files import MAX_ERROR_CHARS, MAX_FILE_BYTES
 
 # kalibr imu-camera result, worked by hand (kalibr's model, IccScaledMisalignedImu):
 #   w_measured = M C w_i + A C a_i + b,   a_measured = M_a a_i
-#   M   = [[2, 0, 0], [1, 1, 0], [0, 0, 4]]   (lower triangular)
-#   M⁻¹ = [[0.5, 0, 0], [-0.5, 1, 0], [0, 0, 0.25]]   (check: row 2 of M times column 1
-#         of M⁻¹ is 1·0.5 + 1·(−0.5) = 0)
+#   M   = [[1.25, 0, 0], [0.05, 1, 0], [0, 0, 0.8]]   (lower triangular)
+#   M⁻¹ = [[0.8, 0, 0], [-0.04, 1, 0], [0, 0, 1.25]]   (check: row 2 of M times column 1
+#         of M⁻¹ is 0.05·0.8 + 1·(−0.04) = 0)
 #   C   = 90° about z = [[0, -1, 0], [1, 0, 0], [0, 0, 1]];  Cᵀ = [[0, 1, 0], [-1, 0, 0],
 #         [0, 0, 1]]
 #   A   = diag(0.01, 0, 0.02),  M_a = diag(1, 1, 2)
 # Sample: a_measured = (0, 0, 20) → a_i = M_a⁻¹ a_measured = (0, 0, 10)
 #         C a_i = (0, 0, 10);  A C a_i = (0, 0, 0.2)
 #         w_measured = (1, 2, 3) → w_measured − A C a_i = (1, 2, 2.8)
-#         M⁻¹ (1, 2, 2.8) = (0.5, −0.5 + 2, 0.7) = (0.5, 1.5, 0.7)
-#         Cᵀ (0.5, 1.5, 0.7) = (1.5, −0.5, 0.7)
-# Forward check: C (1.5, −0.5, 0.7) = (0.5, 1.5, 0.7); M (0.5, 1.5, 0.7) = (1, 2, 2.8);
+#         M⁻¹ (1, 2, 2.8) = (0.8, −0.04 + 2, 3.5) = (0.8, 1.96, 3.5)
+#         Cᵀ (0.8, 1.96, 3.5) = (1.96, −0.8, 3.5)
+# Forward check: C (1.96, −0.8, 3.5) = (0.8, 1.96, 3.5); M (0.8, 1.96, 3.5) = (1, 2, 2.8);
 #                plus A C a_i = (1, 2, 3).
 KALIBR_RESULT = """\
 imu0:
@@ -56,15 +56,15 @@ imu0:
     - [1.0, 0.0, 0.0]
     - [0.0, 0.0, 1.0]
     M:
-    - [2.0, 0.0, 0.0]
-    - [1.0, 1.0, 0.0]
-    - [0.0, 0.0, 4.0]
+    - [1.25, 0.0, 0.0]
+    - [0.05, 1.0, 0.0]
+    - [0.0, 0.0, 0.8]
   model: scale-misalignment
   rostopic: /imu0
   time_offset: 0.0
   update_rate: 200.0
 """
-HAND_RATE = (1.5, -0.5, 0.7)
+HAND_RATE = (1.96, -0.8, 3.5)
 HAND_ACC = (0.0, 0.0, 10.0)
 
 # EuRoC's ADIS16448 noise model as kalibr's imu.yaml, with OpenVINS's first line.
@@ -170,9 +170,9 @@ def test_load_calibration_refuses_a_missing_imu_key(tmp_path):
 
 
 def test_load_calibration_refuses_a_matrix_of_the_wrong_shape(tmp_path):
-    text = _replace('    - [0.0, 0.0, 4.0]\n', '')
+    text = _replace('    - [0.0, 0.0, 0.8]\n', '')
     _refused(tmp_path, text, r'imu0\.gyroscopes\.M.*3x3 matrix')
-    _refused(tmp_path, _replace('[2.0, 0.0, 0.0]', '[2.0, 0.0]'),
+    _refused(tmp_path, _replace('[1.25, 0.0, 0.0]', '[1.25, 0.0]'),
              r'imu0\.gyroscopes\.M.*3x3 matrix')
     _refused(tmp_path, 'bias: [0.1, 0.2]\n', r'bias.*3 numbers')
 
@@ -182,15 +182,54 @@ def test_load_calibration_refuses_non_finite_numbers(tmp_path):
              r'imu0\.gyroscopes\.A.*finite')
     _refused(tmp_path, 'bias: [.inf, 0.0, 0.0]\n', r'bias.*finite')
     _refused(tmp_path, _replace('update_rate: 200.0', 'update_rate: -200.0'),
-             r'imu0\.update_rate.*\(0, 1e\+06\]')
+             r'imu0\.update_rate.*\[1, 100000\]')
     _refused(tmp_path, KALIBR_IMU_YAML.replace('1.6968e-04', '1e-4'),
              r'gyroscope_noise_density.*YAML 1\.1')
 
 
 def test_load_calibration_refuses_a_singular_matrix(tmp_path):
-    _refused(tmp_path, _replace('[0.0, 0.0, 4.0]', '[0.0, 0.0, 0.0]'),
-             r'imu0\.gyroscopes\.M.*invertible')
-    _refused(tmp_path, 'scale: [1.0, 0.0, 1.0]\n', r'misalignment · scale.*invertible')
+    """A singular matrix has a scale factor far from 1 (the bounds keep every accepted
+    matrix diagonally dominant, so invertible)."""
+    _refused(tmp_path, _replace('[0.0, 0.0, 0.8]', '[0.0, 0.0, 0.0]'),
+             r'scale factors \(diagonal\) of imu0\.gyroscopes\.M to be in \[0\.5, 2\].*\[2\]\[2\]')
+    _refused(tmp_path, 'scale: [1.0, 0.0, 1.0]\n', r'scale factors .*of scale.*0\.0 at \[1\]\[1\]')
+
+
+@pytest.mark.parametrize('text, pattern', [
+    ('scale: [57.3, 1.0, 1.0]\n', r'scale factors \(diagonal\) of scale to be in \[0\.5, 2\], '
+                                  r'got 57\.3'),
+    ('misalignment: [[1, 0.3, 0], [0, 1, 0], [0, 0, 1]]\n',
+     r'misalignment \(off-diagonal\) entries of misalignment to be at most 0\.1.*'
+     r'0\.3 at \[0\]\[1\]'),
+    ('accelerometer_matrix: [[1, 0, 0], [0, 1, 0], [0, 0, -1]]\n',
+     r'accelerometer_matrix to be in \[0\.5, 2\], got -1\.0'),
+    ('bias: [150.0, 0.0, 0.0]\n', r'bias to be at most 100'),
+    (KALIBR_IMU_YAML.replace('1.6968e-04', '0.0'), r'gyroscope_noise_density to be in \(0, 1\]'),
+    (KALIBR_IMU_YAML.replace('1.6968e-04', '5.0'), r'gyroscope_noise_density to be in \(0, 1\]'),
+    (KALIBR_IMU_YAML.replace('2.0000e-03', '11.0'), r'accelerometer_noise_density .*\(0, 10\]'),
+    (KALIBR_IMU_YAML.replace('200.0', '1.0e+7'), r'update_rate to be in \[1, 100000\]'),
+])
+def test_load_calibration_refuses_values_out_of_physical_bounds(tmp_path, text, pattern):
+    _refused(tmp_path, text, pattern)
+
+
+@pytest.mark.parametrize('missing', ['gyroscope_random_walk', 'gyroscope_noise_density',
+                                     'update_rate'])
+def test_a_kalibr_imu_yaml_missing_a_key_the_node_uses_is_refused(tmp_path, missing):
+    text = ''.join(line + '\n' for line in KALIBR_IMU_YAML.splitlines()
+                   if not line.startswith(missing))
+    _refused(tmp_path, text, rf'Missing key {missing}')
+
+
+def test_noise_figures_come_in_pairs_in_every_kind_of_file(tmp_path):
+    _refused(tmp_path, _replace('  accelerometer_random_walk: 3.0e-03\n', ''),
+             r'Missing key imu0\.accelerometer_random_walk \(given with '
+             r'imu0\.accelerometer_noise_density')
+    _refused(tmp_path, 'bias: [0.0, 0.0, 0.0]\ngyroscope_random_walk: 1e-5\n',
+             r'Missing key gyroscope_noise_density')
+    gyro_only = ''.join(line + '\n' for line in KALIBR_IMU_YAML.splitlines()
+                        if not line.startswith('accelerometer'))
+    assert load_calibration(_write(tmp_path, gyro_only)).noise.accelerometer_noise_density is None
 
 
 def test_load_calibration_refuses_a_c_gyro_that_is_not_a_rotation(tmp_path):
