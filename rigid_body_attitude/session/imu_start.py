@@ -19,6 +19,7 @@ import numpy as np
 
 from rigid_body_attitude.core.calibration import load_calibration
 from rigid_body_attitude.core.propagator import GyroPropagator
+from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
 from rigid_body_attitude.session.levelling import (
     FROM_SCENE, AlignmentResult, Levelling, SampleMap, heading, rpy_quaternion)
@@ -62,6 +63,10 @@ class ImuStart(Session):
     propagator: GyroPropagator
     stream: GyroStream
     body_frame: str
+    #: The IMU's frame: the first sample frame with a known mount (``mount_rpy``, being
+    #: ``body_frame``, a static transform); ``None`` until then. Samples in another frame are
+    #: refused (:meth:`foreign_frame`).
+    imu_frame: str | None = None
 
     def _start_imu(self, values: Mapping[str, Any]) -> None:
         """Read the calibration file and set up mount and levelling from ``values``."""
@@ -113,6 +118,13 @@ class ImuStart(Session):
         """Whether the mount must come from TF: ``mount_rpy`` is not set and the Imu's frame
         ``sensor_frame`` (not empty) differs from ``body_frame``."""
         return not self._mount_given and bool(sensor_frame) and sensor_frame != self.body_frame
+
+    def foreign_frame(self, frame: str) -> None:
+        """A gyro sample in ``frame``, not :attr:`imu_frame`: refused (``foreign_frame``)."""
+        self.rejections['foreign_frame'] += 1
+        self.warn('foreign_frame', f'gyro: a sample in frame {quoted(frame)}, not the IMU '
+                                   f'frame {quoted(self.imu_frame or "")} (the first frame '
+                                   f'with a known mount; one IMU per topic); sample ignored')
 
     def set_mount(self, q_body_sensor: tuple[float, float, float, float] | None) -> None:
         """The rotation ``(w, x, y, z)`` mapping sensor-frame vectors into the body frame
