@@ -5,8 +5,8 @@ differs from ``body_frame``, the mount comes from the static transforms on ``/tf
 (``tf2_msgs/msg/TFMessage``, what robot_state_publisher and ``static_transform_publisher``
 publish; read as tf2_ros reads them, :data:`~.qos.TF_STATIC_LISTENER_QOS`, so transforms
 published before the node started arrive too). A chain of static transforms (``base_link``
--> ``torso`` -> ``imu_link``, or up and down a tree) is composed. Only rotations matter: the node reports an
-attitude. The table, its checks and bounds and the chain composition are
+-> ``torso`` -> ``imu_link``, or up and down a tree) is composed. Only rotations matter: the
+node reports an attitude. The table, its checks and bounds and the chain composition are
 :mod:`rigid_body_attitude.session.mount`'s, shared with the replay; the chains from
 ``body_frame`` are resolved when ``/tf_static`` brings something new, so a gyro sample costs
 one look-up however many transforms arrived.
