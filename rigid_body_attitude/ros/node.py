@@ -243,7 +243,8 @@ class AttitudePropagatorNode(Node):
 
     def tf_static_callback(self, data: bytes) -> None:
         """Static transforms for the mount (:class:`~.tf_lookup.MountGate`): decoded with the
-        checked decoder (malformed messages counted per topic), refusals counted."""
+        checked decoder (malformed messages counted per topic), refusals counted, the held
+        samples handed on when their mount arrived."""
         gate = self.mount_gate
         if gate is None or gate.open:
             return
@@ -254,9 +255,10 @@ class AttitudePropagatorNode(Node):
                 self.session.malformed('/tf_static', str(err)[:200])
             return
         refused = gate.add_transforms(transforms)
-        if refused:
-            with self.state_lock:
+        with self.state_lock:
+            if refused:
                 gate.count_refused(refused)
+            gate.retry()
 
     def _create_timers(self) -> None:
         """The output timer (node clock; dynamics scenes only) and the diagnostics timer

@@ -16,13 +16,13 @@ first sample whose frame has a mount (``body_frame`` itself, ``mount_rpy``, or a
 ``/tf_static``) names the IMU's frame; samples in any other frame are refused from then on
 (``foreign_frame``: one IMU per topic). Until then samples are **held** (at most
 :data:`HELD_SAMPLES` and :data:`HELD_BYTES`, the oldest dropped beyond that and counted as
-``no_mount``) and handed on in order once the mount arrives, so a robot_state_publisher
-started a moment after the node costs nothing. Each frame awaiting a mount waits ``tf_timeout``
-seconds from its first sample (at most :data:`PENDING_FRAMES` frames, the oldest forgotten
-beyond that); after that its samples are dropped and counted as ``no_mount``
-(``/diagnostics`` WARN), with an error line naming the frames and the remedy (throttled),
-until the transform arrives. A sample in a frame without a mount never holds up those of a
-frame with one.
+``no_mount``) and handed on in order as soon as the mount arrives, so a
+robot_state_publisher started a moment after the node costs nothing. Each frame awaiting a
+mount waits ``tf_timeout`` seconds from its first sample (at most :data:`PENDING_FRAMES`
+frames, the oldest forgotten beyond that); after that its samples are dropped and counted
+as ``no_mount`` (``/diagnostics`` WARN), with an error line naming the frames and the remedy
+(throttled), until the transform arrives. A sample in a frame without a mount never holds up
+those of a frame with one.
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ _REMEDY = ('set the parameter `mount_rpy`, or publish the transform, e.g. '
 class MountGate:
     """Holds gyro samples until the IMU's frame and its mount are known, then hands them on.
 
-    :meth:`sample` and :meth:`count_refused` run under the node's state lock;
+    :meth:`sample`, :meth:`retry` and :meth:`count_refused` run under the node's state lock;
     :meth:`add_transforms` in the executor thread (``/tf_static``), under the gate's own lock.
     """
 
@@ -75,6 +75,7 @@ class MountGate:
         self._deadlines: dict[str, float] = {}  # frame awaiting a mount -> when it times out
         self._held: deque[tuple[str, bytes]] = deque()
         self._held_bytes = 0
+        self._handle: Callable[[bytes], None] | None = None
         self._lock = threading.Lock()
 
     def add_transforms(self, transforms: Iterable[Transform]) -> Counter[str]:
@@ -103,16 +104,32 @@ class MountGate:
         if not self.session.mount_needed(frame):
             self._open(frame, data, handle)
             return
-        found = self._mounts.get(frame)
-        if found is not None:
-            set_found_mount(self.session, frame, found[0], '/tf_static')
-            with self._lock:
-                self.transforms.protect(self.session.body_frame, frame)
-            self._open(frame, data, handle)
+        self._handle = handle
+        if frame in self._mounts:
+            self._mounted(frame, data, handle)
             return
         self._wait(frame, data)
 
-    def _open(self, frame: str, data: bytes, handle: Callable[[bytes], None]) -> None:
+    def retry(self) -> None:
+        """After new transforms (state lock held): when a held sample's frame now has a
+        mount, it is the IMU's; the held samples are handed on at once."""
+        handle = self._handle
+        if self.open or handle is None:
+            return
+        for frame, _ in self._held:
+            if frame in self._mounts:
+                self._mounted(frame, None, handle)
+                return
+
+    def _mounted(self, frame: str, data: bytes | None, handle: Callable[[bytes], None]
+                 ) -> None:
+        """``frame``'s mount is in the table: set it, keep its chain, open."""
+        set_found_mount(self.session, frame, self._mounts[frame][0], '/tf_static')
+        with self._lock:
+            self.transforms.protect(self.session.body_frame, frame)
+        self._open(frame, data, handle)
+
+    def _open(self, frame: str, data: bytes | None, handle: Callable[[bytes], None]) -> None:
         """``frame`` is the IMU's: hand on the held samples (the handler refuses those of
         other frames) and ``data``."""
         self.open = True
@@ -122,7 +139,8 @@ class MountGate:
         self._deadlines.clear()
         for _, earlier in held:
             handle(earlier)
-        handle(data)
+        if data is not None:
+            handle(data)
 
     def _wait(self, frame: str, data: bytes) -> None:
         """Hold ``data`` while ``frame``'s mount may still come, else drop it."""
