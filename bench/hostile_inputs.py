@@ -2,12 +2,16 @@
 
 Every attack class is sent to a running node (a subprocess started as a user would, through
 real rclpy publishers in this process) or given to it at start (scene files, parameters).
+Each input under attack is one entry of :data:`SURFACES` (topic, message type, parameters,
+its classes of cases and the reasons they must be counted under): a new input is attacked
+the same way by adding an entry.
 For each class the report says how many cases were tried and whether the node survived,
 counted every case in ``/diagnostics`` under the expected reason, kept every output finite, and
 ended with exactly the state the good inputs alone give. ``docs/robustness.md`` quotes the
 table this prints (or writes to ``--out``)::
 
-    .venv/bin/python bench/hostile_inputs.py            # about a minute
+    .venv/bin/python bench/hostile_inputs.py            # about five minutes
+    .venv/bin/python bench/hostile_inputs.py --surface /tf_static   # one surface
     .venv/bin/python bench/hostile_inputs.py --domain 91 --out /tmp/hostile.md
 """
 
