@@ -111,8 +111,8 @@ class MountGate:
         self._wait(frame, data)
 
     def retry(self) -> None:
-        """After new transforms (state lock held): when a held sample's frame now has a
-        mount, it is the IMU's; the held samples are handed on at once."""
+        """After new transforms (state lock held): the first held sample whose frame has a
+        mount names the IMU's frame; the held samples are handed on at once."""
         handle = self._handle
         if self.open or handle is None:
             return
