@@ -2,12 +2,16 @@
 
 Every attack class is sent to a running node (a subprocess started as a user would, through
 real rclpy publishers in this process) or given to it at start (scene files, parameters).
+Each input under attack is one entry of :data:`SURFACES` (topic, message type, parameters,
+its classes of cases and the reasons they must be counted under): a new input is attacked
+the same way by adding an entry.
 For each class the report says how many cases were tried and whether the node survived,
 counted every case in ``/diagnostics`` under the expected reason, kept every output finite, and
 ended with exactly the state the good inputs alone give. ``docs/robustness.md`` quotes the
 table this prints (or writes to ``--out``)::
 
-    .venv/bin/python studies/hostile_inputs.py            # about a minute
+    .venv/bin/python studies/hostile_inputs.py            # about five minutes
+    .venv/bin/python studies/hostile_inputs.py --surface /tf_static   # one surface
     .venv/bin/python studies/hostile_inputs.py --domain 91 --out /tmp/hostile.md
 """
 
@@ -43,6 +47,7 @@ class Result:
     reason: str
     outcome: str
     seconds: float
+    rss_growth_mib: float | None = None
 
 
 def node_command(*arguments: str) -> list[str]:
@@ -66,10 +71,10 @@ def stamp(nanoseconds: int) -> Any:
     return Time(sec=sec, nanosec=nanosec)
 
 
-def imu(at_ns: int, rate: tuple[float, float, float] = OMEGA) -> Any:
+def imu(at_ns: int, rate: tuple[float, float, float] = OMEGA, frame: str = 'base_link') -> Any:
     from sensor_msgs.msg import Imu
     message = Imu()
-    message.header.stamp, message.header.frame_id = stamp(at_ns), 'base_link'
+    message.header.stamp, message.header.frame_id = stamp(at_ns), frame
     message.angular_velocity.x, message.angular_velocity.y, message.angular_velocity.z = rate
     return message
 
@@ -118,9 +123,11 @@ class RunningNode:
         self.publishers: dict[str, Any] = {}
         self.received: dict[str, list[Any]] = {}
 
-    def publisher(self, message_type: Any, topic: str) -> Any:
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
-        qos = QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE)
+    def publisher(self, message_type: Any, topic: str, latched: bool = False) -> Any:
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        qos = QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=(DurabilityPolicy.TRANSIENT_LOCAL if latched
+                                     else DurabilityPolicy.VOLATILE))
         self.publishers[topic] = self.node.create_publisher(message_type, topic, qos)
         return self.publishers[topic]
 
@@ -152,6 +159,16 @@ class RunningNode:
         self.spin_until(lambda: self.diagnostics().get('received') == str(count), 30.0)
         return self.diagnostics()
 
+    def rss_mib(self) -> float:
+        """The node process's resident memory [MiB] (Linux ``/proc``)."""
+        try:
+            status = Path(f'/proc/{self.process.pid}/status').read_text()
+        except OSError:
+            return math.nan
+        kib = next(int(line.split()[1]) for line in status.splitlines()
+                   if line.startswith('VmRSS:'))
+        return kib / 1024.0
+
     def stop(self) -> tuple[int, str]:
         """SIGINT; the exit code and stderr."""
         alive = self.process.poll() is None
@@ -169,43 +186,95 @@ class RunningNode:
         return (self.process.returncode if alive else -999), stderr
 
 
-# -- gyro attacks -----------------------------------------------------------------------------
+# -- the surfaces under attack ----------------------------------------------------------------
 
-def gyro_attack(domain: int, name: str, attacks: list[tuple[str, Any]], reason: str
-                ) -> Result:
-    """Good Imu samples at 1 kHz with one attack after each; the node must end at the good
-    stream's attitude, with every attack counted under ``reason``."""
-    from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
+@dataclass
+class AttackClass:
+    """One class of hostile cases sent to one surface.
+
+    ``reasons``: the rejection reasons the cases may be counted under (``a|b``); ``counted``:
+    the rejections expected in all (default: one per payload).
+    """
+
+    name: str
+    payloads: list[Any]
+    reasons: str
+    counted: int | None = None
+
+
+@dataclass
+class Surface:
+    """One input of the running node, attacked class by class.
+
+    Attributes:
+        name: the prefix of its rows in the table.
+        topic: where the cases are published.
+        message_type: the rclpy message class of ``topic`` (a function: imported lazily).
+        classes: ``classes(seed)``: the hostile classes.
+        parameters: node parameters the surface needs (``name:=value``).
+        imu_frame: the frame of the good gyro stream.
+        latched: publish as ``/tf_static`` is published (transient local).
+        before_last: called before the last good sample (e.g. publishes the mount).
+    """
+
+    name: str
+    topic: str
+    message_type: Callable[[], Any]
+    classes: Callable[[int], Iterator[AttackClass]]
+    parameters: tuple[str, ...] = ()
+    imu_frame: str = 'base_link'
+    latched: bool = False
+    before_last: Callable[['RunningNode'], None] | None = None
+
+
+def attack(domain: int, surface: Surface, hostile: AttackClass) -> Result:
+    """Good Imu samples at 1 kHz with one case after each; the node must end at the good
+    stream's attitude, with every case counted under ``hostile.reasons``, short log lines
+    and no traceback."""
     from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import QuaternionStamped
     from sensor_msgs.msg import Imu
+    name, attacks = f'{surface.name}: {hostile.name}', hostile.payloads
+    expected = len(attacks) if hostile.counted is None else hostile.counted
     started = time.monotonic()
-    running = RunningNode(domain, ['-p', 'scene:=strapdown', *deep_inputs(
-        'imu', 'set_pose', 'set_pose_with_covariance')])
+    running = RunningNode(domain, ['-p', 'scene:=strapdown', *deep_inputs('imu', surface.topic),
+                                   *(a for p in surface.parameters for a in ('-p', p))])
     running.publisher(Imu, 'imu')
-    running.publisher(PoseStamped, 'set_pose')
-    running.publisher(PoseWithCovarianceStamped, 'set_pose_with_covariance')
+    running.publisher(surface.message_type(), surface.topic, surface.latched)
     orientations = running.record(QuaternionStamped, 'orientation')
     running.record(DiagnosticArray, '/diagnostics')
     if not running.connected():
-        return Result(name, len(attacks), reason, 'node did not connect', 0.0)
+        running.stop()
+        return Result(name, len(attacks), hostile.reasons, 'node did not connect', 0.0, 0.0)
+    rss_start = running.rss_mib()
     good = len(attacks) + 1
     for k in range(good):
-        running.publishers['imu'].publish(imu(BASE_NS + k * MS))
+        if k == good - 1 and surface.before_last is not None:
+            surface.before_last(running)
+        running.publishers['imu'].publish(imu(BASE_NS + k * MS, frame=surface.imu_frame))
         if k < len(attacks):
-            topic, payload = attacks[k]
-            running.publishers[topic].publish(payload)
-        if k % 200 == 0:
+            running.publishers[surface.topic].publish(attacks[k])
+        if k % 200 == 0 or surface.latched:  # /tf_static is read 100 deep (as tf2_ros)
             running.spin_until(lambda: False, 0.01)
-    values = running.wait_received(good + len(attacks))
-    running.spin_until(lambda: len(orientations) >= good, 10.0)
+    reasons = hostile.reasons.split('|')
+
+    def counted() -> int:
+        values = running.diagnostics()
+        return sum(int(values.get(f'rejected {key}', 0)) for key in reasons)
+    running.spin_until(lambda: counted() >= expected and len(orientations) >= good, 60.0)
+    running.spin_until(lambda: False, 1.5)  # a last diagnostics period
+    rss_growth = running.rss_mib() - rss_start
+    found = counted()
     code, stderr = running.stop()
     problems = []
     if code != 0 or 'Traceback' in stderr:
         problems.append(f'exit {code}')
         print(stderr[-4000:], file=sys.stderr)  # the crash's traces (faulthandler)
-    counted = sum(int(values.get(f'rejected {key}', 0)) for key in reason.split('|'))
-    if counted != len(attacks):
-        problems.append(f'rejected {reason} = {counted}')
+    longest = max((len(line) for line in stderr.splitlines()), default=0)
+    if longest > 1000:
+        problems.append(f'a log line of {longest} characters')
+    if found != expected:
+        problems.append(f'rejected {hostile.reasons} = {found}')
     attitudes = [(m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z)
                  for m in orientations]
     if not all(math.isfinite(v) for q in attitudes for v in q):
@@ -214,7 +283,8 @@ def gyro_attack(domain: int, name: str, attacks: list[tuple[str, Any]], reason: 
         problems.append(f'state changed ({len(attitudes)} outputs of {good})')
     outcome = ('survived; all counted; outputs finite; state unchanged' if not problems
                else 'FAILED: ' + '; '.join(problems))
-    return Result(name, len(attacks), reason, outcome, time.monotonic() - started)
+    return Result(name, len(attacks), hostile.reasons, outcome, time.monotonic() - started,
+                  rss_growth)
 
 
 def _error(attitude: tuple[float, ...], seconds: float) -> float:
@@ -225,44 +295,57 @@ def _error(attitude: tuple[float, ...], seconds: float) -> float:
     return max(abs(a - b) for a, b in zip(attitude, expected))
 
 
-def gyro_classes(seed: int) -> Iterator[tuple[str, list[tuple[str, Any]], str]]:
-    from geometry_msgs.msg import PoseStamped
+def imu_classes(seed: int) -> Iterator[AttackClass]:
+    """The gyro input: malformed bytes, absurd and non-finite rates, bad stamps, samples in
+    a frame other than the IMU's."""
     from rclpy.serialization import serialize_message
-    good_imu = serialize_message(imu(BASE_NS))
     # A length field that still fits may decode as another, well-formed frame_id: then the
-    # message is judged as such (set_pose: wrong_frame; imu: the first stamp again, stale).
-    # Decodable set_pose messages queued behind a newer one are counted superseded.
-    for name, payloads in malformed_cases(good_imu, seed).items():
-        yield f'imu: {name}', [('imu', p) for p in payloads], 'malformed|stale_stamp'
-    good_pose = serialize_message(PoseStamped())
-    for name, payloads in malformed_cases(good_pose, seed + 1).items():
-        yield (f'set_pose: {name}', [('set_pose', p) for p in payloads],
-               'malformed|wrong_frame|superseded')
+    # message is judged as such (the first stamp again: stale; another frame: foreign).
+    for name, payloads in malformed_cases(serialize_message(imu(BASE_NS)), seed).items():
+        yield AttackClass(name, payloads, 'malformed|stale_stamp|foreign_frame')
     absurd = [(1e200, 0.0, 0.0), (1e308, 1e308, 1e308), (-1e308, 0.0, 0.0), (1e10, 0.0, 0.0),
               (0.0, 0.0, 1000.1), (600.0, 600.0, 600.0)]
-    yield 'imu: rates finite but absurd', [
-        ('imu', imu(BASE_NS + k * MS + MS // 2, rate)) for k, rate in enumerate(absurd)], \
-        'out_of_range'
+    yield AttackClass('rates finite but absurd', [
+        imu(BASE_NS + k * MS + MS // 2, rate) for k, rate in enumerate(absurd)], 'out_of_range')
     non_finite = [(math.nan, 0.0, 0.0), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf)] * 4
-    yield 'imu: NaN and Inf rates', [
-        ('imu', imu(BASE_NS + k * MS + MS // 2, rate)) for k, rate in enumerate(non_finite)], \
-        'non_finite'
+    yield AttackClass('NaN and Inf rates', [
+        imu(BASE_NS + k * MS + MS // 2, rate) for k, rate in enumerate(non_finite)],
+        'non_finite')
     nanosecs = [10**9, 10**9 + 1, 2**31, 2**32 - 1] * 3
-    yield 'imu: nanosec >= 1e9', [
-        ('imu', _bad_stamp(BASE_NS // 10**9 + k, nanosec)) for k, nanosec in enumerate(nanosecs)
-    ], 'invalid_stamp'
-    yield 'imu: lone stamps far off the time line', [
-        ('imu', imu(at)) for at in [(2**31 - 1) * 10**9, 10**9, BASE_NS + 10**12,
-                                    BASE_NS - 10**12, BASE_NS + 500 * MS] * 2], 'outlier_stamp'
+    yield AttackClass('nanosec >= 1e9', [
+        _bad_stamp(BASE_NS // 10**9 + k, nanosec) for k, nanosec in enumerate(nanosecs)],
+        'invalid_stamp')
+    yield AttackClass('lone stamps far off the time line', [
+        imu(at) for at in [(2**31 - 1) * 10**9, 10**9, BASE_NS + 10**12, BASE_NS - 10**12,
+                           BASE_NS + 500 * MS] * 2], 'outlier_stamp')
+    frames = ['other_imu', '', 'imu_link', '\x1b[2J\x07', 'x' * 2**20, 'base_link ']
+    yield AttackClass('samples in another frame (1 MiB and escape sequences included)', [
+        imu(BASE_NS + k * MS + MS // 2, frame=frame) for k, frame in enumerate(frames)],
+        'foreign_frame')
+
+
+def set_pose_classes(seed: int) -> Iterator[AttackClass]:
+    """``set_pose``: malformed bytes, wrong frames, a zero quaternion."""
+    from geometry_msgs.msg import PoseStamped
+    from rclpy.serialization import serialize_message
+    # Decodable set_pose messages queued behind a newer one are counted superseded.
+    for name, payloads in malformed_cases(serialize_message(PoseStamped()), seed + 1).items():
+        yield AttackClass(name, payloads, 'malformed|wrong_frame|superseded')
     poses = []
-    for frame, w in (('map', 1.0), ('', 1.0), ('world', 0.0)):
+    for frame, w in (('map', 1.0), ('', 1.0), ('world', 0.0), ('x' * 2**20, 1.0)):
         pose = PoseStamped()
         pose.header.frame_id, pose.pose.orientation.w = frame, w
-        poses.append(('set_pose', pose))
-    yield 'set_pose: wrong frame or zero quaternion', poses, 'wrong_frame|invalid_pose|superseded'
-    yield ('set_pose_with_covariance: orientation blocks huge, unphysical or not PSD',
-           [('set_pose_with_covariance', _covariance_pose(block))
-            for block in _hostile_orientation_blocks()], 'invalid_covariance|superseded')
+        poses.append(pose)
+    yield AttackClass('wrong frame (1 MiB included) or zero quaternion', poses,
+                      'wrong_frame|invalid_pose|superseded')
+
+
+def set_pose_with_covariance_classes(seed: int) -> Iterator[AttackClass]:
+    """``set_pose_with_covariance``: orientation blocks that are huge, unphysical or not
+    positive semi-definite (the attitude is never changed by them)."""
+    yield AttackClass('orientation blocks huge, unphysical or not PSD',
+                      [_covariance_pose(block) for block in _hostile_orientation_blocks()],
+                      'invalid_covariance|superseded')
 
 
 def _hostile_orientation_blocks() -> list[list[float]]:
@@ -286,6 +369,88 @@ def _covariance_pose(block: list[float]) -> Any:
         covariance[21 + 6 * row:24 + 6 * row] = [float(v) for v in block[3 * row:3 * row + 3]]
     message.pose.covariance = covariance
     return message
+
+
+def tf_message(*transforms: tuple[str, str, tuple[float, ...], tuple[float, ...]]) -> Any:
+    """A TFMessage of (parent, child, rotation (w, x, y, z), translation)."""
+    from geometry_msgs.msg import TransformStamped
+    from tf2_msgs.msg import TFMessage
+    message = TFMessage()
+    for parent, child, (w, x, y, z), (tx, ty, tz) in transforms:
+        t = TransformStamped()
+        t.header.frame_id, t.child_frame_id = parent, child
+        r, v = t.transform.rotation, t.transform.translation
+        r.w, r.x, r.y, r.z, v.x, v.y, v.z = w, x, y, z, tx, ty, tz
+        message.transforms.append(t)
+    return message
+
+
+def tf_static_classes(seed: int) -> Iterator[AttackClass]:
+    """``/tf_static`` while the IMU's mount is awaited: invalid transforms, malformed bytes,
+    a flood of irrelevant transforms; the mount arrives last."""
+    from rclpy.serialization import serialize_message
+    unit, zero = (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    rotations = [(0.0, 0.0, 0.0, 0.0), (1e-8, 0.0, 0.0, 0.0), (0.9, 0.0, 0.0, 0.0),
+                 (1e300, 1e300, 0.0, 0.0), (math.nan, 0.0, 0.0, 1.0), (math.inf, 0.0, 0.0, 0.0)]
+    cases = [tf_message(('base_link', 'imu_link', q, zero)) for q in rotations]
+    cases += [tf_message(('base_link', 'imu_link', unit, v))
+              for v in ((math.inf, 0.0, 0.0), (0.0, math.nan, 0.0))]
+    cases += [tf_message((parent, child, unit, zero)) for parent, child in (
+        ('', 'imu_link'), ('imu_link', 'imu_link'), ('base_link', 'x' * 2**20))]
+    yield AttackClass('zero, near-zero, non-unit, NaN, Inf rotations; Inf translations; '
+                      'empty, equal, 1 MiB frames', cases,
+                      'tf_denormalized|tf_non_finite|tf_bad_frames')
+    good = serialize_message(tf_message(('base_link', 'torso', unit, zero)))
+    cases_by_class = malformed_cases(good, seed + 2)
+    # The transport pads a payload to a multiple of 4 bytes with zeros: a message cut inside
+    # its last number can arrive as a whole one with a zeroed w, refused as denormalized.
+    for name in ('truncated at every length', 'random bytes'):
+        yield AttackClass(name, cases_by_class[name], 'malformed|tf_denormalized')
+    flood = [tf_message(*((f'junk_{m}_{k}', f'leaf_{m}_{k}', unit, zero)
+                          for k in range(10_000))) for m in range(3)]
+    # The mount, sent last, makes room too: 20 001 dropped.
+    yield AttackClass('3 messages of 10 000 irrelevant transforms', flood, 'tf_evicted',
+                      counted=20_001)
+
+
+def send_mount(running: 'RunningNode') -> None:
+    """The IMU's mount ``base_link`` -> ``imu_link`` (identity), then a moment to read it."""
+    running.publishers['/tf_static'].publish(tf_message(
+        ('base_link', 'imu_link', (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0))))
+    running.spin_until(lambda: False, 0.5)
+
+
+def _imu_type() -> Any:
+    from sensor_msgs.msg import Imu
+    return Imu
+
+
+def _pose_type() -> Any:
+    from geometry_msgs.msg import PoseStamped
+    return PoseStamped
+
+
+def _pose_covariance_type() -> Any:
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    return PoseWithCovarianceStamped
+
+
+def _tf_type() -> Any:
+    from tf2_msgs.msg import TFMessage
+    return TFMessage
+
+
+#: Every surface of the running node under attack: add one entry (and its classes) to attack
+#: a new input the same way.
+SURFACES = [
+    Surface('imu', 'imu', _imu_type, imu_classes),
+    Surface('set_pose', 'set_pose', _pose_type, set_pose_classes),
+    Surface('set_pose_with_covariance', 'set_pose_with_covariance', _pose_covariance_type,
+            set_pose_with_covariance_classes),
+    Surface('/tf_static', '/tf_static', _tf_type, tf_static_classes,
+            parameters=('tf_timeout:=60.0',), imu_frame='imu_link', latched=True,
+            before_last=send_mount),
+]
 
 
 def _bad_stamp(sec: int, nanosec: int) -> Any:
@@ -370,30 +535,48 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--domain', type=int, default=91)
     parser.add_argument('--seed', type=int, default=7)
+    parser.add_argument('--surface', action='append', default=None,
+                        choices=[surface.name for surface in SURFACES],
+                        help='attack only this surface (repeatable); no start-time attacks')
     parser.add_argument('--out', type=Path, default=None,
                         help='write the table here instead of printing it')
     args = parser.parse_args(argv)
     results = []
-    for name, attacks, reason in gyro_classes(args.seed):
-        result = gyro_attack(args.domain, name, attacks, reason)
-        print(f'{result.name}: {result.cases} cases: {result.outcome}', flush=True)
-        results.append(result)
-    with tempfile.TemporaryDirectory() as folder:
-        scenes = {name: ['-p', f'scene:={path}']
-                  for name, path in scene_files(Path(folder)).items()}
-        for name, cases in (('scene files', scenes), ('parameters', parameter_cases())):
-            result = start_attack(name, cases, args.domain)
-            print(f'{result.name}: {result.cases} cases: {result.outcome}', flush=True)
+    for surface in SURFACES:
+        if args.surface and surface.name not in args.surface:
+            continue
+        for hostile in surface.classes(args.seed):
+            result = attack(args.domain, surface, hostile)
+            print(f'{result.name}: {result.cases} cases: {result.outcome} '
+                  f'(RSS {result.rss_growth_mib:+.1f} MiB)', flush=True)
             results.append(result)
+    if not args.surface:
+        results += start_attacks(args.domain)
     write_report(results, args.out, args.seed)
     return 0 if all(not r.outcome.startswith('FAILED') for r in results) else 1
 
 
+def start_attacks(domain: int) -> list[Result]:
+    """The scene files and parameters a user may give."""
+    results = []
+    with tempfile.TemporaryDirectory() as folder:
+        scenes = {name: ['-p', f'scene:={path}']
+                  for name, path in scene_files(Path(folder)).items()}
+        for name, cases in (('scene files', scenes), ('parameters', parameter_cases())):
+            result = start_attack(name, cases, domain)
+            print(f'{result.name}: {result.cases} cases: {result.outcome}', flush=True)
+            results.append(result)
+    return results
+
+
 def write_report(results: list[Result], path: Path | None, seed: int) -> None:
     """Print the table of ``results``, or write it to ``path``."""
-    lines = ['| attack class | cases | counted as | result |', '|---|---|---|---|']
+    lines = ['| attack class | cases | counted as | result | node RSS growth |',
+             '|---|---|---|---|---|']
     lines += [f'| {r.name} | {r.cases} | {", ".join(f"`{x}`" for x in r.reason.split("|"))} '
-              f'| {r.outcome} |' for r in results]
+              f'| {r.outcome} | '
+              f'{"" if r.rss_growth_mib is None else f"{r.rss_growth_mib:+.1f} MiB"} |'
+              for r in results]
     total = sum(r.cases for r in results)
     lines += ['', f'{total} cases in {sum(r.seconds for r in results):.0f} s '
                   f'(`studies/hostile_inputs.py --seed {seed}`).']

@@ -54,11 +54,13 @@ from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
 
 from rigid_body_attitude.core.errors import InputError
+from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.tf_message import decode_tf_message
 from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import DECODERS, input_handler, MALFORMED
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.outputs import RosOutputs
-from rigid_body_attitude.ros.qos import COMMAND_QOS, GYRO_QOS, TF_STATIC_QOS
+from rigid_body_attitude.ros.qos import COMMAND_QOS, GYRO_QOS, TF_STATIC_LISTENER_QOS
 from rigid_body_attitude.ros.tf_lookup import MountGate
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
 from rigid_body_attitude.session.dynamics import DynamicsSession
@@ -192,7 +194,8 @@ class AttitudePropagatorNode(Node):
             self.mount_gate = MountGate(session, self.get_parameter('tf_timeout').value,
                                         time.monotonic)
             self.tf_static_subscription = self.create_subscription(
-                TFMessage, '/tf_static', self.tf_static_callback, TF_STATIC_QOS)
+                TFMessage, '/tf_static', self.tf_static_callback, TF_STATIC_LISTENER_QOS,
+                raw=True)
         for topic in input_topics(self.scene, session.propagator.input_names):
             gyro = topic in _GYRO_TOPICS
             handler = self._gyro_handler(topic) if gyro else self._command_callback(topic)
@@ -247,16 +250,24 @@ class AttitudePropagatorNode(Node):
                     handle(newest)
         return coalesce
 
-    def tf_static_callback(self, message: TFMessage) -> None:
-        """Static transforms for the mount (:class:`~.tf_lookup.MountGate`)."""
+    def tf_static_callback(self, data: bytes) -> None:
+        """Static transforms for the mount (:class:`~.tf_lookup.MountGate`): decoded with the
+        checked decoder (malformed messages counted per topic), refusals counted, the held
+        samples handed on when their mount arrived."""
         gate = self.mount_gate
         if gate is None or gate.open:
             return
-        gate.add_transforms(
-            (t.header.frame_id, t.child_frame_id,
-             (t.transform.rotation.w, t.transform.rotation.x, t.transform.rotation.y,
-              t.transform.rotation.z))
-            for t in message.transforms)
+        try:
+            transforms = decode_tf_message(data)
+        except MalformedMessage as err:
+            with self.state_lock:
+                self.session.malformed('/tf_static', str(err)[:200])
+            return
+        refused = gate.add_transforms(transforms)
+        with self.state_lock:
+            if refused:
+                gate.count_refused(refused)
+            gate.retry()
 
     def _create_timers(self) -> None:
         """The output timer (node clock; dynamics scenes only) and the diagnostics timer

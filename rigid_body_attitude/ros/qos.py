@@ -36,7 +36,9 @@ each).
 tf2_ros's broadcaster. **Static TF** (:data:`TF_STATIC_QOS`, ``/tf_static``, read for the
 mount): RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1, as robot_state_publisher and
 ``static_transform_publisher`` publish it, so transforms published before the node started
-still arrive.
+still arrive; read keeping the last 100 (:data:`TF_STATIC_LISTENER_QOS`, tf2_ros's
+``StaticListenerQoS``), so the latched messages of many publishers, delivered at once, are all
+read.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
 
 __all__ = ['COMMAND_QOS', 'GYRO_QOS', 'INPUT_DEPTH', 'OUTPUT_DEPTH', 'OUTPUT_QOS', 'TF_QOS',
-           'TF_STATIC_QOS']
+           'TF_STATIC_LISTENER_QOS', 'TF_STATIC_QOS']
 
 #: Samples an input queue holds while the node cannot take them (5 s at 1 kHz).
 INPUT_DEPTH = 5000
@@ -77,4 +79,10 @@ TF_QOS = QoSProfile(
 #: last 1), so a transform published before the node started is delivered to it.
 TF_STATIC_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST, depth=1,
+    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+#: Reading ``/tf_static``: as tf2_ros's StaticListenerQoS (reliable, transient local, keep
+#: last 100).
+TF_STATIC_LISTENER_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=100,
     reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)

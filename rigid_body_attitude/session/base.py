@@ -21,6 +21,7 @@ from typing import Any, Protocol
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
 from rigid_body_attitude.core.dynamics.scene import Scene
+from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.outputs import OutputSample, OutputTracker
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.uncertainty import orientation_block
@@ -35,8 +36,9 @@ WARNING_INTERVAL = 5.0
 #: Log level of ordinary messages (warnings and errors use the diagnostics levels).
 LEVEL_INFO = 0
 #: Rejection reasons that count no input: expired commands, refused integrations of clock
-#: ticks, and the session's own failures.
-NOT_INPUTS = ('stale_torque', 'integration_failed', 'non_finite_result', 'internal_error')
+#: ticks, the session's own failures, and static transforms (not inputs of the propagator).
+NOT_INPUTS = ('stale_torque', 'integration_failed', 'non_finite_result', 'internal_error',
+              'tf_bad_frames', 'tf_non_finite', 'tf_denormalized', 'tf_evicted')
 #: Largest distance of a ``set_pose`` position from the origin [m] (0.1 light-year).
 POSITION_LIMIT = 1e15
 
@@ -181,8 +183,8 @@ class Session(ABC):
     def _pose_problem(self, frame_id: str, attitude: Quaternion,
                       position: Vector) -> tuple[str, str]:
         if frame_id != self.world_frame:
-            return 'wrong_frame', (f'frame {frame_id[:100]!r}, expected world_frame '
-                                   f'{self.world_frame!r}')
+            return 'wrong_frame', (f'frame {quoted(frame_id)}, expected world_frame '
+                                   f'{quoted(self.world_frame)}')
         if not all(math.isfinite(value) for value in attitude + position):
             return 'non_finite', f'{attitude + position}'
         if max(abs(value) for value in attitude) == 0.0:

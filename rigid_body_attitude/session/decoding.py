@@ -140,14 +140,20 @@ def input_handler(session: AnySession, topic: str,
 def _gyro_handler(session: GyroSession, topic: str, decode: Callable[[bytes], Any],
                   reraise: tuple[type[Exception], ...]) -> Handler:
     """:func:`input_handler` of a gyro topic (the hot path: one decoder call and
-    ``session.gyro`` with the Imu bytes, if any, for ``imu/data``, and the specific force)."""
+    ``session.gyro`` with the Imu bytes, if any, for ``imu/data``, and the specific force).
+    Once the session knows its IMU's frame (``imu_frame``), samples in any other frame are
+    refused (``foreign_frame``)."""
     gyro, malformed, internal_error = session.gyro, session.malformed, session.internal_error
 
     def handle(data: bytes) -> None:
         try:
-            sec, nanosec, _, rate, imu, accel = decode(data)
+            sec, nanosec, frame, rate, imu, accel = decode(data)
         except MALFORMED as err:
             malformed(topic, str(err)[:200])
+            return
+        expected = session.imu_frame
+        if expected is not None and frame != expected:
+            session.foreign_frame(frame)
             return
         try:
             gyro(sec, nanosec, rate, imu, accel)

@@ -21,6 +21,7 @@ from rigid_body_attitude.core.imu.calibration import (
     calibration_noise, calibration_summary, calibration_values, load_calibration)
 from rigid_body_attitude.core.propagator import GyroPropagator
 from rigid_body_attitude.core.imu.rest import SPECIFIC_FORCE_LIMIT
+from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
 from rigid_body_attitude.session.levelling import (
     FROM_SCENE, AlignmentResult, Levelling, SampleMap, heading, rpy_quaternion)
@@ -68,6 +69,10 @@ class ImuStart(Session):
     propagator: GyroPropagator
     stream: GyroStream
     body_frame: str
+    #: The IMU's frame: the first sample frame with a known mount (``mount_rpy``, being
+    #: ``body_frame``, a static transform); ``None`` until then. Samples in another frame are
+    #: refused (:meth:`foreign_frame`).
+    imu_frame: str | None = None
 
     def _start_imu(self, values: Mapping[str, Any]) -> None:
         """Read the calibration file and set up mount and levelling from ``values``."""
@@ -125,6 +130,13 @@ class ImuStart(Session):
         """Whether the mount must come from TF: ``mount_rpy`` is not set and the Imu's frame
         ``sensor_frame`` (not empty) differs from ``body_frame``."""
         return not self._mount_given and bool(sensor_frame) and sensor_frame != self.body_frame
+
+    def foreign_frame(self, frame: str) -> None:
+        """A gyro sample in ``frame``, not :attr:`imu_frame`: refused (``foreign_frame``)."""
+        self.rejections['foreign_frame'] += 1
+        self.warn('foreign_frame', f'gyro: a sample in frame {quoted(frame)}, not the IMU '
+                                   f'frame {quoted(self.imu_frame or "")} (the first frame '
+                                   f'with a known mount; one IMU per topic); sample ignored')
 
     def set_mount(self, q_body_sensor: tuple[float, float, float, float] | None) -> None:
         """The rotation ``(w, x, y, z)`` mapping sensor-frame vectors into the body frame
@@ -265,15 +277,7 @@ class ImuStart(Session):
 
     def alignment_text(self) -> str:
         """The alignment state in words (the diagnostics' ``alignment`` value)."""
-        if self._aligning:
-            if self.levelling is not None and not self.levelling.samples and (
-                    self._refused_levelling):
-                return (f'aligning: no usable sample yet ({self._refused_levelling} refused, '
-                        f'see the rejected counts)')
-            if self.levelling is None or not self.levelling.samples:
-                return 'not started: no gyro sample yet'
-            return f'aligning: {self.levelling.status}'
-        return self.alignment.status if self.alignment is not None else NOT_ALIGNED
+        return _alignment_text(self)
 
     def strapdown_state(self) -> StrapdownState:
         """The alignment and the bias estimate for the reports (levelling: WARN, nothing is
@@ -294,6 +298,19 @@ class ImuStart(Session):
             self.levelling.refine_bias_at_rest) else ''
         text = f'{_vector_text(self.sample_map.gyro_bias)} (levelling{refined})'
         return text if scene_bias == 'none' else f'{text}; scene gyro_bias {scene_bias}'
+
+
+def _alignment_text(start: ImuStart) -> str:
+    """:meth:`ImuStart.alignment_text`: levelling, waiting, or the alignment's status."""
+    if start._aligning:
+        if start.levelling is not None and not start.levelling.samples and (
+                start._refused_levelling):
+            return (f'aligning: no usable sample yet ({start._refused_levelling} refused, '
+                    f'see the rejected counts)')
+        if start.levelling is None or not start.levelling.samples:
+            return 'not started: no gyro sample yet'
+        return f'aligning: {start.levelling.status}'
+    return start.alignment.status if start.alignment is not None else NOT_ALIGNED
 
 
 def _sample_problem(rate: Sequence[float], accel: Sequence[float],

@@ -34,6 +34,7 @@ from rigid_body_attitude.session.stream import REASONS
 __all__ = [
     'DRIFT_ERROR_THRESHOLD', 'DRIFT_WARN_THRESHOLD', 'DiagnosticReport', 'GOVERNING_PARAMETER',
     'LEVEL_ERROR', 'LEVEL_OK', 'LEVEL_WARN', 'NOT_ALIGNED', 'PeriodCounts', 'REJECTION_KEYS',
+    'TRANSFORM_KEYS',
     'StrapdownState', 'WARN_REASONS', 'alignment_state', 'body_frame_velocity', 'body_summary',
     'body_values',
     'diagnostic_report', 'gyro_bias_text', 'rotation_from_initial_deg', 'stale_command_count',
@@ -54,6 +55,10 @@ NOT_ALIGNED = ('not aligned: no accelerometer levelling (initial attitude from t
 DRIFT_WARN_THRESHOLD = 1e-6
 DRIFT_ERROR_THRESHOLD = 1e-3
 
+#: Static transforms refused (``/tf_static``, :mod:`~rigid_body_attitude.session.mount`) and
+#: gyro samples in a frame other than the IMU's.
+TRANSFORM_KEYS = ('foreign_frame', 'tf_bad_frames', 'tf_non_finite', 'tf_denormalized',
+                  'tf_evicted')
 #: Rejection counters reported, in order: the stream reasons, the session's own (malformed
 #: messages, invalid or zero stamps, poses), expired commands, refused integrations, gyro
 #: samples dropped without a mount, commands superseded by a newer one before use and
@@ -61,12 +66,12 @@ DRIFT_ERROR_THRESHOLD = 1e-3
 REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
                   'invalid_covariance', 'wrong_frame', 'stale_torque', 'integration_failed',
                   'non_finite_result', 'internal_error', 'no_mount', 'superseded',
-                  'accel_out_of_range')
+                  'accel_out_of_range', *TRANSFORM_KEYS)
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
                 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame',
-                'no_mount', 'accel_out_of_range', 'invalid_covariance')
+                'no_mount', 'accel_out_of_range', 'invalid_covariance', *TRANSFORM_KEYS)
 ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
 
 #: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).

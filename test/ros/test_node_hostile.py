@@ -1,14 +1,27 @@
-"""Malformed bytes on every input topic of the running node, through real rclpy publishers.
+"""Hostile input on every input topic of the running node, through real rclpy publishers.
 
 Each malformed payload is published raw (serialized bytes) between good messages. The node must
 count it per topic (``rejected malformed``, ``malformed <topic>`` in /diagnostics), keep going,
 and end with exactly the attitude the good messages alone give: the malformed ones changed
 nothing.
+
+Decodable but hostile messages are declared per surface in :data:`SURFACES` (topic, message
+type, the hostile cases, the reasons they are counted under): each class is sent between the
+samples of a good 1 kHz gyro stream to the node in this process, and must be counted in full
+while the attitude ends where the good stream alone takes it. A new input gets the same
+treatment by adding one entry. The issue-sized cases (a 200 Hz stream behind a foreign frame
+or thousands of junk transforms, 4 MB frame ids) run against the installed node in a process
+of its own, whose log and resident memory are measured.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass, field
+import math
+from pathlib import Path
 import struct
+import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -16,11 +29,19 @@ from geometry_msgs.msg import (
     PoseStamped, PoseWithCovarianceStamped, QuaternionStamped, Vector3Stamped, WrenchStamped)
 import numpy as np
 import pytest
+from geometry_msgs.msg import TransformStamped
+from rclpy.duration import Duration
 from rclpy.parameter import Parameter
+from rclpy.qos import (
+    DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data)
 from rclpy.serialization import serialize_message
 from ros_helpers import Harness, stamp, unique_namespace
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
+from tf2_msgs.msg import TFMessage
+from test_input_qos import connect, missing_stamps, receive_all, RECORD_QOS
+from test_input_qos import start_node as start_node_process
+from test_node_subprocess import stop_with_sigint
 
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 
@@ -60,7 +81,7 @@ def send(harness: Harness, node: AttitudePropagatorNode, topic: str, payload: An
     assert harness.spin_until(lambda: node.session.received_count() >= expected, 5.0), topic
 
 
-def gyro_message(topic: str, at_ns: int) -> Any:
+def gyro_message(topic: str, at_ns: int, frame: str = 'base_link') -> Any:
     if topic == 'imu':
         message = Imu()
         message.angular_velocity.x, message.angular_velocity.y, message.angular_velocity.z = OMEGA
@@ -68,7 +89,7 @@ def gyro_message(topic: str, at_ns: int) -> Any:
         message = Vector3Stamped()
         message.vector.x, message.vector.y, message.vector.z = OMEGA
     message.header.stamp = stamp(at_ns)
-    message.header.frame_id = 'base_link'  # mounted in the body frame: no mount to look up
+    message.header.frame_id = frame  # base_link: in the body frame, no mount to look up
     return message
 
 
@@ -189,3 +210,256 @@ def test_huge_covariances_on_set_pose_with_covariance_change_nothing(ros, reques
         lambda: own_values(diagnostics, node).get('rejected invalid_covariance')
         == str(len(blocks)), 3.0)
     assert own_values(diagnostics, node)['rejected internal_error'] == '0'
+
+
+# -- declared surfaces: decodable but hostile messages ----------------------------------------
+
+#: /tf_static as a test publishes it: transient local, deep enough that nothing is replaced
+#: before the node read it.
+LATCHED_QOS = QoSProfile(depth=1000, history=HistoryPolicy.KEEP_LAST,
+                         reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+DEEP_QOS = QoSProfile(depth=5000, history=HistoryPolicy.KEEP_LAST,
+                      reliability=ReliabilityPolicy.RELIABLE)
+UNIT = (1.0, 0.0, 0.0, 0.0)
+ZERO = (0.0, 0.0, 0.0)
+
+
+@dataclass
+class Surface:
+    """One input of the node and a class of hostile cases for it.
+
+    ``cases()`` builds the messages (or raw bytes) sent on ``topic``, one after each good
+    ``imu`` sample in ``imu_frame``; all must be counted under ``reasons`` (``counted`` in
+    all, default one each). ``before_last(harness)`` runs before the last good sample (the
+    mount, when the stream waits for one); ``parameters`` go to the node.
+    """
+
+    name: str
+    topic: str
+    message_type: Any
+    cases: Callable[[], list[Any]]
+    reasons: tuple[str, ...]
+    counted: int | None = None
+    imu_frame: str = 'base_link'
+    latched: bool = False
+    before_last: Callable[[Harness], None] | None = None
+    parameters: dict[str, Any] = field(default_factory=dict)
+
+
+def tf_message(*transforms: tuple[str, str, tuple[float, ...], tuple[float, ...]]
+               ) -> TFMessage:
+    """A TFMessage of (parent, child, rotation (w, x, y, z), translation)."""
+    message = TFMessage()
+    for parent, child, (w, x, y, z), (tx, ty, tz) in transforms:
+        t = TransformStamped()
+        t.header.frame_id, t.child_frame_id = parent, child
+        r, v = t.transform.rotation, t.transform.translation
+        r.w, r.x, r.y, r.z, v.x, v.y, v.z = w, x, y, z, tx, ty, tz
+        message.transforms.append(t)
+    return message
+
+
+def send_mount(harness: Harness) -> None:
+    """``base_link`` -> ``imu_link`` (identity) on /tf_static; a moment to read it."""
+    harness.publishers['/tf_static'].publish(tf_message(('base_link', 'imu_link', UNIT, ZERO)))
+    harness.spin_for(0.3)
+
+
+def invalid_transforms() -> list[TFMessage]:
+    rotations = [(0.0, 0.0, 0.0, 0.0), (1e-8, 0.0, 0.0, 0.0), (0.9, 0.0, 0.0, 0.0),
+                 (1e300, 1e300, 0.0, 0.0), (math.nan, 0.0, 0.0, 1.0), (math.inf, 0.0, 0.0, 0.0)]
+    cases = [tf_message(('base_link', 'imu_link', q, ZERO)) for q in rotations]
+    cases += [tf_message(('base_link', 'imu_link', UNIT, v))
+              for v in ((math.inf, 0.0, 0.0), (0.0, math.nan, 0.0))]
+    return cases + [tf_message((parent, child, UNIT, ZERO)) for parent, child in (
+        ('', 'imu_link'), ('imu_link', 'imu_link'), ('base_link', 'x' * 2**20))]
+
+
+def junk_transforms() -> list[TFMessage]:
+    """Three messages of 10 000 transforms hanging off ``base_link`` (every one on a chain
+    from the body frame a search would walk), none leading to the IMU."""
+    return [tf_message(*(('base_link', f'junk_{m}_{k}', UNIT, ZERO) for k in range(10_000)))
+            for m in range(3)]
+
+
+def malformed_transforms() -> list[bytes]:
+    good = serialize_message(tf_message(('base_link', 'torso', UNIT, ZERO)))
+    return [good[:n] for n in (3, 8, 12, 20, len(good) // 2, len(good) - 1)] + [
+        b'\x01\x05' + good[2:], b'\x00\x0a' + good[2:], bytes(range(256)) * 2]
+
+
+def foreign_frames() -> list[Imu]:
+    frames = ['other_imu', '', 'imu_link', '\x1b[2J\x07', 'x' * 2**20, 'base_link ']
+    return [gyro_message('imu', BASE_NS + k * MS + MS // 2, frame)
+            for k, frame in enumerate(frames)]
+
+
+_TF = dict(imu_frame='imu_link', latched=True, before_last=send_mount)
+#: Every surface and hostile class the in-process node is fed. Add an entry to cover a new
+#: input (its topic, message type, cases and the reasons they must be counted under).
+SURFACES = [
+    Surface('imu: samples in another frame', 'imu', Imu, foreign_frames, ('foreign_frame',)),
+    Surface('/tf_static: invalid transforms', '/tf_static', TFMessage, invalid_transforms,
+            ('tf_denormalized', 'tf_non_finite', 'tf_bad_frames'), **_TF),
+    Surface('/tf_static: malformed bytes', '/tf_static', TFMessage, malformed_transforms,
+            ('malformed',), **_TF),
+    Surface('/tf_static: 30 000 junk transforms', '/tf_static', TFMessage, junk_transforms,
+            ('tf_evicted',), counted=20_001, **_TF),  # the mount makes room too
+]
+
+
+@pytest.mark.parametrize('surface', SURFACES, ids=[s.name for s in SURFACES])
+def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
+    """Each case after a good sample: all counted under the surface's reasons, every log line
+    short, and the attitude exactly the good stream's."""
+    harness = Harness(ros, unique_namespace(request))
+    node = start_node(harness, scene='strapdown', **surface.parameters)
+    lines: list[str] = []
+    log = node.outputs.log
+
+    def logged(level: int, text: str) -> None:  # every line the node logs, also kept here
+        lines.append(text)
+        log(level, text)
+    node.outputs.log = logged  # type: ignore[method-assign]
+    harness.publisher(Imu, 'imu')
+    harness.publisher(surface.message_type, surface.topic,
+                      LATCHED_QOS if surface.latched else DEEP_QOS)
+    orientations = harness.record(QuaternionStamped, 'orientation')
+    harness.wait_for_connections()
+    cases = surface.cases()
+    good = len(cases) + 1
+    for k in range(good):
+        if k == good - 1 and surface.before_last is not None:
+            surface.before_last(harness)
+        harness.publishers['imu'].publish(gyro_message('imu', BASE_NS + k * MS,
+                                                       surface.imu_frame))
+        if k < len(cases):
+            harness.publishers[surface.topic].publish(cases[k])
+        harness.spin_for(0.01)
+    counts = node.session.rejection_counts
+    expected = len(cases) if surface.counted is None else surface.counted
+    assert harness.spin_until(
+        lambda: sum(counts()[reason] for reason in surface.reasons) >= expected
+        and len(orientations) >= good, 30.0), (counts(), len(orientations))
+    harness.spin_for(0.2)
+    assert sum(counts()[reason] for reason in surface.reasons) == expected
+    assert len(orientations) == good and node.session.accepted_count() == good
+    last = orientations[-1].quaternion
+    expected_q = _exp((good - 1) * 1e-3 * np.array(OMEGA))
+    assert np.max(np.abs(np.array([last.w, last.x, last.y, last.z]) - expected_q)) <= 1e-14
+    assert lines and max(len(line) for line in lines) < 600
+    assert not any('\x1b' in line or '\n' in line for line in lines)
+
+
+# -- the installed node in a process of its own -------------------------------------------------
+
+def values_of(statuses: list[DiagnosticArray], key: str) -> int:
+    return int({v.key: v.value for v in statuses[-1].status[0].values}[key])
+
+
+def test_a_foreign_frame_never_holds_up_a_mounted_200hz_stream(ros, request, processes):
+    """One Imu in ``other_imu`` before 1000 at 200 Hz in the IMU's frame, whose mount is
+    latched on /tf_static: all 1000 integrated, the other counted ``foreign_frame``."""
+    namespace = unique_namespace(request)
+    sensor = f'{namespace[1:]}_imu'
+    node = start_node_process(processes, namespace)
+    harness, sender, poses = connect(ros, namespace, qos_profile_sensor_data, sensor)
+    statuses = harness.record(DiagnosticArray, '/diagnostics', RECORD_QOS)
+    tf_static = harness.node.create_publisher(TFMessage, '/tf_static', LATCHED_QOS)
+    tf_static.publish(tf_message(('base_link', sensor, UNIT, ZERO)))
+    harness.wait_for_connections()
+    harness.spin_for(0.5)
+    sender.publish(serialize_message(gyro_message('imu', BASE_NS - MS, 'other_imu')))
+    sender.paced(200.0, 1000)
+    receive_all(harness, poses, 1000, 10.0)
+    harness.spin_for(1.5)
+    code, stderr = stop_with_sigint(node)
+    assert code == 0, stderr
+    assert missing_stamps(poses, 1000) == []
+    assert values_of(statuses, 'rejected foreign_frame') == 1
+    assert values_of(statuses, 'accepted') == 1000
+    assert "'other_imu'" in stderr and 'Traceback' not in stderr
+
+
+def test_junk_transforms_never_starve_diagnostics_nor_lock_the_mount_out(
+        ros, request, processes):
+    """30 000 transforms hanging off ``base_link`` and 1000 invalid ones, then a 200 Hz
+    stream in the IMU's frame whose mount comes 1 s later: /diagnostics keeps its 1 Hz
+    throughout, every sample is integrated once the mount arrives, every transform counted."""
+    namespace = unique_namespace(request)
+    sensor = f'{namespace[1:]}_imu'
+    node = start_node_process(processes, namespace, 'tf_timeout:=30.0')
+    harness, sender, poses = connect(ros, namespace, qos_profile_sensor_data, sensor)
+    arrivals: list[float] = []
+    statuses: list[DiagnosticArray] = []
+
+    def diagnostics(message: DiagnosticArray) -> None:
+        if message.status and message.status[0].name == f'{namespace}/attitude_propagator':
+            arrivals.append(message.header.stamp.sec + message.header.stamp.nanosec * 1e-9)
+            statuses.append(message)
+    harness.node.create_subscription(DiagnosticArray, '/diagnostics', diagnostics, RECORD_QOS)
+    tf_static = harness.node.create_publisher(TFMessage, '/tf_static', LATCHED_QOS)
+    harness.wait_for_connections()
+    for message in junk_transforms():
+        tf_static.publish(message)
+        harness.spin_for(0.3)
+    tf_static.publish(tf_message(*((f'bad_{k}', sensor, (0.0, 0.0, 0.0, 0.0), ZERO)
+                                   for k in range(1000))))
+    started = time.time()  # the node stamps its diagnostics with the system time
+    sender.paced(200.0, 200)
+    tf_static.publish(tf_message(('base_link', sensor, UNIT, ZERO)))
+    sender.paced(200.0, 1000)
+    receive_all(harness, poses, 1000, 10.0)
+    harness.spin_for(1.5)
+    code, stderr = stop_with_sigint(node)
+    assert code == 0, stderr
+    assert missing_stamps(poses, 1000) == []
+    during = [t for t in arrivals if t >= started]
+    assert len(during) >= 4 and max(np.diff([started, *during])) < 1.6, np.diff(during)
+    assert values_of(statuses, 'rejected tf_evicted') == 20_001  # the mount made room too
+    assert values_of(statuses, 'rejected tf_denormalized') == 1000
+    assert 'Traceback' not in stderr
+
+
+def rss_mib(pid: int) -> float:
+    status = Path(f'/proc/{pid}/status').read_text()
+    return int(next(line for line in status.splitlines()
+                    if line.startswith('VmRSS:')).split()[1]) / 1024.0
+
+
+def test_4mb_frame_ids_give_short_log_lines_and_bounded_memory(ros, request, processes):
+    """A hundred Imu messages with a 4 MB ``frame_id`` (escape sequences in it), before and
+    after the IMU's frame is known: each counted (``no_mount``, ``foreign_frame``), the log
+    under 20 kB with no line over 1000 characters, the node's RSS up by at most 50 MiB."""
+    namespace = unique_namespace(request)
+    node = start_node_process(processes, namespace, 'tf_timeout:=0.5',
+                              f'qos_overrides.{namespace}/imu.subscription.reliability:='
+                              'reliable')
+    harness, sender, poses = connect(ros, namespace, DEEP_QOS, 'base_link')
+    statuses = harness.record(DiagnosticArray, '/diagnostics', RECORD_QOS)
+    harness.wait_for_connections()
+    harness.spin_for(1.5)
+    before = rss_mib(node.pid)
+    huge = serialize_message(gyro_message('imu', BASE_NS - MS, '\x1b[31m' + 'x' * 4 * 2**20))
+    shallow = harness.node.create_publisher(Imu, 'imu', QoSProfile(  # 10 x 4 MB kept at most
+        depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE))
+    harness.spin_until(lambda: shallow.get_subscription_count() > 0)
+    for k in range(100):
+        if k == 50:  # the IMU's frame becomes known: the rest are foreign
+            sender.paced(1000.0, 100)
+            receive_all(harness, poses, 100, 10.0)
+        shallow.publish(huge)  # one at a time: the transport's queue is not measured here
+        assert shallow.wait_for_all_acked(Duration(seconds=5.0))
+        harness.spin_for(0.02)
+    harness.spin_until(lambda: bool(statuses) and values_of(statuses, 'rejected foreign_frame')
+                       + values_of(statuses, 'rejected no_mount') >= 100, 20.0)
+    harness.spin_for(1.0)  # the last messages' buffers released: what stays is growth
+    growth = rss_mib(node.pid) - before
+    code, stderr = stop_with_sigint(node)
+    assert code == 0, stderr
+    assert values_of(statuses, 'rejected no_mount') == 50
+    assert values_of(statuses, 'rejected foreign_frame') == 50
+    assert len(stderr) < 20_000 and max(len(line) for line in stderr.splitlines()) < 1000
+    assert '\x1b' not in stderr and 'Traceback' not in stderr
+    assert growth <= 50.0, growth

@@ -19,6 +19,7 @@ from rigid_body_attitude.bag import BagReader
 from rigid_body_attitude.msgs.cdr import header_frame_id
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.tf_message import TF_MESSAGE, decode_tf_message
+from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.decoding import Handler
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.mount import StaticTransforms, drop_no_mount, set_found_mount
@@ -50,17 +51,22 @@ class BagMount:
     missing_frame: str = ''
 
     def apply(self, session: GyroSession) -> None:
-        """Set ``session``'s mount from the transforms when the node would wait for it."""
+        """Set ``session``'s mount from the transforms when the node would wait for it, and
+        its IMU frame (``imu_frame``: records in another frame are refused)."""
         frame = self.sensor_frame
         if not session.mount_needed(frame):
+            if frame:  # records in other frames are refused, as the node refuses them
+                session.imu_frame = frame
             return
         q = self.transforms.rotation(session.body_frame, frame)
         if q is None:
             self.missing_frame = frame
-            self.notes.append(f'no static transform {session.body_frame!r} -> {frame!r} '
+            self.notes.append(f'no static transform {quoted(session.body_frame)} -> '
+                              f'{quoted(frame)} '
                               f'{_WHERE}: gyro samples dropped, counted no_mount ({_REMEDY})')
             return
         set_found_mount(session, frame, q, "the bag's /tf_static")
+        session.imu_frame = frame
 
     def gate(self, session: GyroSession, handle: Handler) -> Handler:
         """The gyro handler: ``handle``, or a :class:`NoMountGate` when the mount is missing."""
@@ -101,12 +107,12 @@ def _static_transforms(reader: BagReader) -> tuple[StaticTransforms, list[str]]:
         except MalformedMessage:
             malformed += 1
             continue
-        refused += transforms.add_all((t.parent_frame, t.child_frame, t.rotation)
-                                      for t in decoded)
+        refused += sum(transforms.add_all(decoded).values())
     notes = [f'{malformed} malformed {TF_STATIC} records ignored'] if malformed else []
     if refused:
-        notes.append(f'{refused} {TF_STATIC} transforms refused (empty or equal frames, a '
-                     f'zero or non-finite rotation, or beyond the table size)')
+        notes.append(f'{refused} {TF_STATIC} transforms refused or dropped (empty, equal or '
+                     f'overlong frames, a non-finite or non-unit rotation, or the oldest beyond '
+                     f'the table size)')
     return transforms, notes
 
 
