@@ -17,7 +17,9 @@ same session, so a replayed bag gives the same numbers.
 * Dynamics scenes advance on a timer of the node clock (``use_sim_time`` works) at
   ``publish_rate``, served by the same gyro loop (timers only); commands arrive on
   ``torque`` (WrenchStamped) and ``rotor_torque`` (Vector3Stamped) when the scene takes them.
-  ``~/reset`` restores the scene's initial state.
+  ``~/reset`` restores the scene's initial state. With ``publish_clock`` or ``lockstep`` the
+  scene is its own clock instead: a :class:`~.step_loop.StepLoop` makes the ticks on sim time
+  (``/clock``, ``real_time_factor``, lockstep; docs/closed-loop.md).
 * Commands (``set_pose``, ``set_pose_with_covariance``, ``torque``, ``rotor_torque``) are
   coalesced: only the newest of each topic matters, so each callback takes every message queued
   behind its own and hands the newest to the session once (the others counted ``superseded``). Log
@@ -47,6 +49,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rosgraph_msgs.msg import Clock as ClockMessage
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
@@ -56,14 +59,17 @@ from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import DECODERS, input_handler, MALFORMED
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.outputs import RosOutputs
-from rigid_body_attitude.ros.qos import COMMAND_QOS, GYRO_QOS, TF_STATIC_QOS
+from rigid_body_attitude.ros.qos import CLOCK_QOS, COMMAND_QOS, GYRO_QOS, TF_STATIC_QOS
+from rigid_body_attitude.ros.step_loop import StepLoop
 from rigid_body_attitude.ros.tf_lookup import MountGate
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
 from rigid_body_attitude.session.settings import (
-    DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, AnySession)
+    DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, AnySession,
+    timer_period_ns)
+from rigid_body_attitude.session.sim_clock import SimClock, sim_clock_problem, uses_sim_clock
 
 __all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor', 'ros_value']
 
@@ -126,11 +132,22 @@ class AttitudePropagatorNode(Node):
         self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro',
                                   values['covariance'])
         self.outputs.hardware_id = self.scene.name
+        self.sim_clock = (SimClock(timer_period_ns(self.publish_rate), values['real_time_factor'],
+                                   values['lockstep'], values['lockstep_timeout'],
+                                   time.monotonic)
+                          if uses_sim_clock(values) else None)
         self.session: AnySession = open_session(
-            self.scene, values, self.outputs, self.clock_ns, time.monotonic)
-        problem = self.session.check(values)
+            self.scene, values, self.outputs,
+            self.sim_clock.now if self.sim_clock is not None else self.clock_ns, time.monotonic)
+        session = self.session
+        commands = session.command_inputs if isinstance(session, DynamicsSession) else ()
+        problem = session.check(values) or sim_clock_problem(values, self.scene, commands)
         if problem:
             raise InputError(problem)
+        if isinstance(session, DynamicsSession):
+            session.sim_clock = self.sim_clock
+        self.clock_publisher = (self.create_publisher(ClockMessage, '/clock', CLOCK_QOS)
+                                if values['publish_clock'] else None)
         self.outputs.set_frames(values['world_frame'], values['body_frame'])
         self.outputs.log_queue.start()
         if values['publish_tf']:
@@ -192,7 +209,7 @@ class AttitudePropagatorNode(Node):
             self.handlers[topic] = handler
             self.subscriptions_by_topic[topic] = self.create_subscription(
                 _MESSAGE_TYPES[topic], topic, handler, GYRO_QOS if gyro else COMMAND_QOS,
-                callback_group=self.loop_group if gyro else None,
+                callback_group=self.loop_group if gyro or self.sim_clock else None,
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(), raw=True)
 
     def _gyro_handler(self, topic: str) -> Callable[[bytes], None]:
@@ -256,7 +273,7 @@ class AttitudePropagatorNode(Node):
         50 Hz)."""
         self.output_timer = (self.create_timer(1.0 / self.publish_rate, self.tick_callback,
                                                self.loop_group)
-                             if self.is_dynamics else None)
+                             if self.is_dynamics and self.sim_clock is None else None)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.diagnostics_timer = self.create_timer(
             DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group, clock=steady)
@@ -264,12 +281,56 @@ class AttitudePropagatorNode(Node):
 
     def gyro_loop(self) -> GyroLoop:
         """A :class:`GyroLoop` serving the gyro subscriptions (gyro scenes) and the timers (in
-        :attr:`loop_group`); creating it takes them away from every executor."""
+        :attr:`loop_group`); creating it takes them away from every executor. On the scene's
+        own sim clock a :class:`StepLoop` (it serves the command subscriptions)."""
+        if self.sim_clock is not None:
+            return self._step_loop(self.sim_clock)
         return GyroLoop(self.context, [
             (self.subscriptions_by_topic[topic], self.handlers[topic])
             for topic in ('imu', 'angular_velocity') if topic in self.subscriptions_by_topic],
             [timer for timer in (self.output_timer, self.diagnostics_timer)
              if timer is not None])
+
+    def _step_loop(self, clock: SimClock) -> StepLoop:
+        """The :class:`StepLoop` of a dynamics scene on its own sim clock."""
+        session = self.session
+        assert isinstance(session, DynamicsSession)
+        served = [(subscription, self.handlers[topic])
+                  for topic, subscription in self.subscriptions_by_topic.items()
+                  if topic in ('torque', 'rotor_torque')]
+        message, publisher, lock = ClockMessage(), self.clock_publisher, self.state_lock
+        tick = session.lockstep_tick if clock.lockstep else session.tick
+
+        def publish_clock(now_ns: int) -> None:
+            if publisher is not None:
+                message.clock.sec, message.clock.nanosec = divmod(now_ns, 1_000_000_000)
+                publisher.publish(message)
+
+        def sim_tick() -> None:
+            with lock:
+                now_ns = clock.next_tick()
+                publish_clock(now_ns)
+                tick(now_ns)
+
+        def repeat() -> None:
+            with lock:
+                publish_clock(clock.now_ns)
+                session.republish()
+
+        def answered() -> bool:
+            if session.lockstep_answered():
+                clock.answered()
+                return True
+            return False
+
+        def timed_out() -> None:
+            with lock:
+                clock.timed_out(self.outputs)
+        self.outputs.log(LEVEL_INFO, 'lockstep: waiting for a controller to answer the first '
+                                     'tick (t=0) on the command topics'
+                         if clock.lockstep else 'sim clock: ticking')
+        return StepLoop(self.context, served, [self.diagnostics_timer], clock, sim_tick,
+                        answered, repeat, timed_out)
 
     # -- parameters -------------------------------------------------------------------------
 

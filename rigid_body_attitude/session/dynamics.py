@@ -6,7 +6,9 @@ works) the state is integrated up to the clock's time under the clock rules
 stamped with the propagated time. Commands (``wrench``: torque and force; ``rotor_torque``)
 are held from their stamp on (:class:`~rigid_body_attitude.session.stream.CommandStream`).
 The session times its own work (the monotonic clock) to report a scene that cannot keep up:
-its real-time factor and its lag behind the clock.
+its real-time factor and its lag behind the clock. On the node's own sim clock
+(:mod:`~rigid_body_attitude.session.sim_clock`: ``publish_clock``, ``lockstep``) the ticks are
+its sim times and, in lockstep, a command counts only when stamped with the current tick.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from rigid_body_attitude.session.base import OutputSink, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.reports import LEVEL_WARN, PeriodCounts, body_frame_velocity
+from rigid_body_attitude.session.sim_clock import SimClock
 from rigid_body_attitude.session.stream import ClockDriver, CommandStream, Outcome
 from rigid_body_attitude.session.times import TimeBase, split_ns, stamp_problem, to_ns
 
@@ -51,6 +54,11 @@ class DynamicsSession(Session):
         inputs = self.propagator.input_names
         #: The WrenchStamped fields the scene takes (``torque``, ``force``).
         self.wrench_inputs = tuple(name for name in ('torque', 'force') if name in inputs)
+        #: The commanded inputs a lockstep tick waits for.
+        self.command_inputs = self.wrench_inputs + (
+            ('rotor_torque',) if 'rotor_torque' in inputs else ())
+        #: The node's own sim clock (``publish_clock``, ``lockstep``), or ``None``.
+        self.sim_clock: SimClock | None = None
         self.tick_period = 1.0 / values['publish_rate']
         self._work = self._simulated = self._lag = 0.0
         #: Command messages used (a WrenchStamped is one, whatever fields the scene takes).
@@ -91,7 +99,8 @@ class DynamicsSession(Session):
     def _command_ns(self, topic: str, sec: int, nanosec: int) -> int | None:
         """The command's time: its stamp, or the receive time (no header stamps, zero
         stamp); None (counted) for an invalid stamp."""
-        if self.use_header_stamps and (sec or nanosec):
+        # In lockstep the zero stamp is a real one: the first tick's, t_0 = 0.
+        if self.use_header_stamps and (sec or nanosec or self.commands.tick_ns is not None):
             problem = stamp_problem(sec, nanosec)
             if not problem:
                 return to_ns(sec, nanosec)
@@ -128,6 +137,21 @@ class DynamicsSession(Session):
             self._clock_rejected(outcome)
         if outcome.moved:
             self._publish()
+
+    def lockstep_tick(self, now_ns: int) -> None:
+        """Lockstep: tick ``now_ns`` of the sim clock, then wait for the commands stamped
+        with it (:meth:`lockstep_answered`)."""
+        self.tick(now_ns)
+        self.commands.tick_ns = now_ns
+
+    def republish(self) -> None:
+        """The outputs of the current state again (lockstep's first tick, until answered)."""
+        if self.clock.started:
+            self._publish()
+
+    def lockstep_answered(self) -> bool:
+        """Lockstep: every commanded input has its command for the current tick."""
+        return self.commands.answered(self.command_inputs)
 
     def _publish(self) -> None:
         sample = self.tracker.sample(self.propagator)
@@ -180,6 +204,8 @@ class DynamicsSession(Session):
         counts.real_time_factor = (self._simulated / self._work if self._work > 0.0
                                    else math.inf)
         counts.lag, counts.tick_period = self._lag, self.tick_period
+        if self.sim_clock is not None:
+            self.sim_clock.report(counts)
         self._work = self._simulated = self._lag = 0.0
 
 
