@@ -34,8 +34,11 @@ __all__ = ['DynamicsSession']
 _DETAIL = {
     'non_finite': 'a non-finite value (NaN or Inf); message ignored',
     'out_of_range': 'a value beyond 1e12 (N, N m); message ignored',
-    'stale_stamp': 'a stamp older than the last command; message ignored (parameter '
+    'stale_stamp': 'a stamp older than the last command (in lockstep: than the current tick, '
+                   'or a second command for it); message ignored (parameter '
                    '`use_header_stamps`)',
+    'future_stamp': 'a stamp after the current lockstep tick; a command must carry the stamp '
+                    'of the tick it answers; message ignored (parameter `lockstep`)',
 }
 
 

@@ -63,8 +63,8 @@ REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
-                'future_stamp', 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame',
-                'no_mount')
+                'future_stamp', 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
+                'wrong_frame', 'no_mount')
 ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
 
 #: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).

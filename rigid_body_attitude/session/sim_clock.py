@@ -22,8 +22,8 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from rigid_body_attitude.core.scene import Scene
-from rigid_body_attitude.session.base import LEVEL_WARN, OutputSink
-from rigid_body_attitude.session.reports import PeriodCounts
+from rigid_body_attitude.session.base import OutputSink
+from rigid_body_attitude.session.reports import LEVEL_WARN, PeriodCounts
 
 __all__ = ['SimClock', 'sim_clock_problem', 'uses_sim_clock']
 
