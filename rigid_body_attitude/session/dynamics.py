@@ -134,8 +134,9 @@ class DynamicsSession(Session):
         if outcome.integrated:
             self._work += self.monotonic() - started
             self._simulated += propagator.state.time - before
-            lag = self.time_base.seconds(self.clock_ns()) - propagator.state.time
-            self._lag = max(self._lag, lag)
+            if self.commands.tick_ns is None:  # (lockstep: the ticks are the clock, no lag)
+                lag = self.time_base.seconds(self.clock_ns()) - propagator.state.time
+                self._lag = max(self._lag, lag)
         if outcome.reason:
             self._clock_rejected(outcome)
         if outcome.moved:
