@@ -14,6 +14,7 @@ Example::
 
     python bench/lockstep_loop.py                 # 100 and 1000 Hz, 6 s each
     python bench/lockstep_loop.py --rates 100 --duration 10
+    python bench/lockstep_loop.py --step 0.01     # one integration step per 100 Hz tick
 """
 
 import argparse
@@ -59,9 +60,10 @@ def diagnostics_reader(domain_id: int):
     from rclpy.context import Context
     from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
     context = Context()
     rclpy.init(context=context, domain_id=domain_id)
-    node = rclpy.node.Node('lockstep_bench', context=context)
+    node = Node('lockstep_bench', context=context)
     periods = []
 
     def take(array) -> None:
@@ -70,7 +72,8 @@ def diagnostics_reader(domain_id: int):
             if 'achieved_real_time_factor' in values:
                 periods.append((float(values['achieved_real_time_factor']),
                                 int(values.get('lockstep_timeouts', '0')),
-                                float(values['sim_time [s]'])))
+                                float(values['sim_time [s]']),
+                                float(values['real_time_factor'])))
     node.create_subscription(DiagnosticArray, '/diagnostics', take, 10)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
@@ -78,7 +81,7 @@ def diagnostics_reader(domain_id: int):
 
 
 def measure(rate_hz: float, duration: float, warmup: float, domain_id: int,
-            scene: str) -> dict:
+            scene: str, step: float) -> dict:
     """One loop at ``rate_hz``: the achieved factors and CPU per tick."""
     env = ros_env(domain_id)
     context, executor, periods = diagnostics_reader(domain_id)
@@ -86,7 +89,7 @@ def measure(rate_hz: float, duration: float, warmup: float, domain_id: int,
     node = subprocess.Popen(node_command() + [
         '--ros-args', '-r', f'__ns:={namespace}', '-p', f'scene:={scene}',
         '-p', 'lockstep:=true', '-p', 'publish_clock:=true', '-p', 'real_time_factor:=0.0',
-        '-p', f'publish_rate:={rate_hz}'], env=env, stdout=subprocess.DEVNULL,
+        '-p', f'publish_rate:={rate_hz}', '-p', f'step:={step}'], env=env, stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE, text=True)
     controller = subprocess.Popen([sys.executable, str(CONTROLLER), '--ros-args', '-r',
                                    f'__ns:={namespace}'], env=env,
@@ -108,15 +111,18 @@ def measure(rate_hz: float, duration: float, warmup: float, domain_id: int,
         node.wait(10)
         executor.shutdown()
         context.try_shutdown()
-    window = periods[skip:]
+    window = [period for period in periods[skip:] if period[0] > 0.0]
     sim_seconds = window[-1][2] - window[0][2] if len(window) > 1 else 0.0
     ticks = sim_seconds * rate_hz
     return {
         'rate_hz': rate_hz,
-        'factors': [round(f, 2) for f, _, _ in window],
-        'median_factor': statistics.median(f for f, _, _ in window) if window else 0.0,
+        'factors': [round(period[0], 2) for period in window],
+        'median_factor': statistics.median(period[0] for period in window) if window else 0.0,
         'timeouts': window[-1][1] if window else -1,
-        'ticks_per_wall_s': statistics.median(f for f, _, _ in window) * rate_hz
+        'ticks_per_wall_s': statistics.median(period[0] for period in window) * rate_hz
+        if window else 0.0,
+        # integrate + publish per tick, from the node's own timing (sim s per s of work)
+        'tick_work_us': 1e6 / rate_hz / statistics.median(period[3] for period in window)
         if window else 0.0,
         'node_cpu_us_per_tick': (cpu1[0] - cpu0[0]) / ticks * 1e6 if ticks else 0.0,
         'controller_cpu_us_per_tick': (cpu1[1] - cpu0[1]) / ticks * 1e6 if ticks else 0.0,
@@ -129,17 +135,20 @@ def main() -> int:
     parser.add_argument('--duration', type=float, default=6.0, help='measured seconds')
     parser.add_argument('--warmup', type=float, default=4.0, help='seconds before measuring')
     parser.add_argument('--domain-id', type=int, default=77)
+    parser.add_argument('--step', type=float, default=0.0,
+                        help='integration step [s] (0 = the scene\'s, 1 ms)')
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         scene = Path(folder) / 'slew.yaml'
         scene.write_text(SCENE)
         for rate in (float(r) for r in args.rates.split(',')):
-            row = measure(rate, args.duration, args.warmup, args.domain_id, str(scene))
+            row = measure(rate, args.duration, args.warmup, args.domain_id, str(scene),
+                          args.step)
             print(f"{row['rate_hz']:6.0f} Hz: real-time factor {row['median_factor']:.1f}x "
                   f"(per second: {row['factors']}), {row['ticks_per_wall_s']:.0f} ticks/s, "
-                  f"lockstep timeouts {row['timeouts']}, CPU per tick: node "
-                  f"{row['node_cpu_us_per_tick']:.0f} us, controller "
-                  f"{row['controller_cpu_us_per_tick']:.0f} us")
+                  f"lockstep timeouts {row['timeouts']}; per tick: node integrate + publish "
+                  f"{row['tick_work_us']:.0f} us, node CPU {row['node_cpu_us_per_tick']:.0f} us, "
+                  f"controller CPU {row['controller_cpu_us_per_tick']:.0f} us")
     return 0
 
 

@@ -58,7 +58,8 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import DECODERS, input_handler, MALFORMED
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
-from rigid_body_attitude.ros.outputs import RosOutputs
+from rigid_body_attitude.msgs.cdr import encode_clock
+from rigid_body_attitude.ros.outputs import RawOutput, RosOutputs
 from rigid_body_attitude.ros.qos import CLOCK_QOS, COMMAND_QOS, GYRO_QOS, TF_STATIC_QOS
 from rigid_body_attitude.ros.step_loop import StepLoop
 from rigid_body_attitude.ros.tf_lookup import MountGate
@@ -298,13 +299,13 @@ class AttitudePropagatorNode(Node):
         served = [(subscription, self.handlers[topic])
                   for topic, subscription in self.subscriptions_by_topic.items()
                   if topic in ('torque', 'rotor_torque')]
-        message, publisher, lock = ClockMessage(), self.clock_publisher, self.state_lock
+        raw = RawOutput(self.clock_publisher) if self.clock_publisher is not None else None
+        lock = self.state_lock
         tick = session.lockstep_tick if clock.lockstep else session.tick
 
         def publish_clock(now_ns: int) -> None:
-            if publisher is not None:
-                message.clock.sec, message.clock.nanosec = divmod(now_ns, 1_000_000_000)
-                publisher.publish(message)
+            if raw is not None and raw.subscription_count():
+                raw.publish(encode_clock(now_ns))
 
         def sim_tick() -> None:
             with lock:
