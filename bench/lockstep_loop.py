@@ -89,8 +89,8 @@ def measure(rate_hz: float, duration: float, warmup: float, domain_id: int,
     node = subprocess.Popen(node_command() + [
         '--ros-args', '-r', f'__ns:={namespace}', '-p', f'scene:={scene}',
         '-p', 'lockstep:=true', '-p', 'publish_clock:=true', '-p', 'real_time_factor:=0.0',
-        '-p', f'publish_rate:={rate_hz}', '-p', f'step:={step}'], env=env, stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE, text=True)
+        '-p', f'publish_rate:={rate_hz}', '-p', f'step:={step}'], env=env,
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     controller = subprocess.Popen([sys.executable, str(CONTROLLER), '--ros-args', '-r',
                                    f'__ns:={namespace}'], env=env,
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)

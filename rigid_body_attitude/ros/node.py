@@ -58,10 +58,9 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import DECODERS, input_handler, MALFORMED
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
-from rigid_body_attitude.msgs.cdr import encode_clock
-from rigid_body_attitude.ros.outputs import RawOutput, RosOutputs
+from rigid_body_attitude.ros.outputs import RosOutputs
 from rigid_body_attitude.ros.qos import CLOCK_QOS, COMMAND_QOS, GYRO_QOS, TF_STATIC_QOS
-from rigid_body_attitude.ros.step_loop import StepLoop
+from rigid_body_attitude.ros.step_loop import step_loop, StepLoop
 from rigid_body_attitude.ros.tf_lookup import MountGate
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds
 from rigid_body_attitude.session.dynamics import DynamicsSession
@@ -299,39 +298,8 @@ class AttitudePropagatorNode(Node):
         served = [(subscription, self.handlers[topic])
                   for topic, subscription in self.subscriptions_by_topic.items()
                   if topic in ('torque', 'rotor_torque')]
-        raw = RawOutput(self.clock_publisher) if self.clock_publisher is not None else None
-        lock = self.state_lock
-        tick = session.lockstep_tick if clock.lockstep else session.tick
-
-        def publish_clock(now_ns: int) -> None:
-            if raw is not None and raw.subscription_count():
-                raw.publish(encode_clock(now_ns))
-
-        def sim_tick() -> None:
-            with lock:
-                now_ns = clock.next_tick()
-                publish_clock(now_ns)
-                tick(now_ns)
-
-        def repeat() -> None:
-            with lock:
-                publish_clock(clock.now_ns)
-                session.republish()
-
-        def answered() -> bool:
-            if session.lockstep_answered():
-                clock.answered()
-                return True
-            return False
-
-        def timed_out() -> None:
-            with lock:
-                clock.timed_out(self.outputs)
-        self.outputs.log(LEVEL_INFO, 'lockstep: waiting for a controller to answer the first '
-                                     'tick (t=0) on the command topics'
-                         if clock.lockstep else 'sim clock: ticking')
-        return StepLoop(self.context, served, [self.diagnostics_timer], clock, sim_tick,
-                        answered, repeat, timed_out)
+        return step_loop(self.context, session, clock, served, [self.diagnostics_timer],
+                         self.clock_publisher, self.state_lock, self.outputs)
 
     # -- parameters -------------------------------------------------------------------------
 

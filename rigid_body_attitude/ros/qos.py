@@ -44,7 +44,8 @@ from __future__ import annotations
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
 
-__all__ = ['CLOCK_QOS', 'COMMAND_QOS', 'GYRO_QOS', 'INPUT_DEPTH', 'OUTPUT_DEPTH', 'OUTPUT_QOS', 'TF_QOS',
+__all__ = ['CLOCK_QOS', 'COMMAND_QOS', 'GYRO_QOS', 'INPUT_DEPTH', 'OUTPUT_DEPTH', 'OUTPUT_QOS',
+           'TF_QOS',
            'TF_STATIC_QOS']
 
 #: Samples an input queue holds while the node cannot take them (5 s at 1 kHz).

@@ -14,18 +14,24 @@ and timers belong to :class:`~.gyro_loop.DedicatedGroup` s, so no executor takes
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+import threading
 import time
 from typing import Any
 
 from rclpy.context import Context
+from rclpy.publisher import Publisher
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 
+from rigid_body_attitude.msgs.cdr import encode_clock
 from rigid_body_attitude.ros.gyro_loop import GyroLoop, Handler
+from rigid_body_attitude.ros.outputs import RawOutput, RosOutputs
 from rigid_body_attitude.ros.rclpy_internals import new_wait_set
+from rigid_body_attitude.session.base import LEVEL_INFO
+from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.sim_clock import SimClock
 
-__all__ = ['READY_POLL_S', 'StepLoop']
+__all__ = ['READY_POLL_S', 'StepLoop', 'step_loop']
 
 #: Wall seconds between two publications of the first tick while lockstep waits for a
 #: controller's first command (outputs are volatile: a controller that subscribed later
@@ -119,3 +125,42 @@ class StepLoop(GyroLoop):
                 handle.call_timer()
                 callback()
         return self.context.ok() and not self._stopping.is_set()
+
+
+def step_loop(context: Context, session: DynamicsSession, clock: SimClock,
+              served: Sequence[tuple[Subscription, Handler]], timers: Sequence[Timer],
+              clock_publisher: Publisher | None, lock: threading.Lock,
+              outputs: RosOutputs) -> StepLoop:
+    """The :class:`StepLoop` of a node: its ticks publish ``/clock`` (raw bytes, when
+    ``clock_publisher`` has subscribers) and tick ``session`` under ``lock``; a lockstep timeout
+    is counted and logged through ``outputs``."""
+    raw = RawOutput(clock_publisher) if clock_publisher is not None else None
+    tick = session.lockstep_tick if clock.lockstep else session.tick
+
+    def publish_clock(now_ns: int) -> None:
+        if raw is not None and raw.subscription_count():
+            raw.publish(encode_clock(now_ns))
+
+    def sim_tick() -> None:
+        with lock:
+            now_ns = clock.next_tick()
+            publish_clock(now_ns)
+            tick(now_ns)
+
+    def repeat() -> None:
+        with lock:
+            publish_clock(clock.now_ns)
+            session.republish()
+
+    def answered() -> bool:
+        if session.lockstep_answered():
+            clock.answered()
+            return True
+        return False
+
+    def timed_out() -> None:
+        with lock:
+            clock.timed_out(outputs)
+    outputs.log(LEVEL_INFO, 'lockstep: waiting for a controller to answer the first tick (t=0) '
+                            'on the command topics' if clock.lockstep else 'sim clock: ticking')
+    return StepLoop(context, served, timers, clock, sim_tick, answered, repeat, timed_out)

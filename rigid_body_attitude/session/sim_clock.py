@@ -89,7 +89,7 @@ class SimClock:
         return self.now_ns
 
     def seconds_to_next(self) -> float:
-        """Wall seconds until the next tick is due (``<= 0``: due now)."""
+        """Wall seconds until the next tick is due (``<= 0``: it is due)."""
         factor, start = self.real_time_factor, self._schedule_start
         if factor <= 0.0 or start is None:
             return 0.0
@@ -118,7 +118,7 @@ class SimClock:
         self._silent = False
 
     def report(self, counts: PeriodCounts) -> None:
-        """The clock's values and problems for the diagnostics period ending now."""
+        """The clock's values and problems for the diagnostics period that ends."""
         wall = self.monotonic()
         factor = math.nan
         if self._period_start is not None:
