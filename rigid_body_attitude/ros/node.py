@@ -60,7 +60,7 @@ from rigid_body_attitude.session.decoding import DECODERS, input_handler, MALFOR
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.outputs import RosOutputs
 from rigid_body_attitude.ros.qos import CLOCK_QOS, COMMAND_QOS, GYRO_QOS, TF_STATIC_QOS
-from rigid_body_attitude.ros.step_loop import step_loop, StepLoop
+from rigid_body_attitude.ros.step_loop import step_loop
 from rigid_body_attitude.ros.tf_lookup import MountGate
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds
 from rigid_body_attitude.session.dynamics import DynamicsSession
@@ -69,7 +69,7 @@ from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_
 from rigid_body_attitude.session.settings import (
     DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, AnySession,
     timer_period_ns)
-from rigid_body_attitude.session.sim_clock import SimClock, sim_clock_problem, uses_sim_clock
+from rigid_body_attitude.session.sim_clock import sim_clock_for, sim_clock_problem
 
 __all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor', 'ros_value']
 
@@ -132,20 +132,15 @@ class AttitudePropagatorNode(Node):
         self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro',
                                   values['covariance'])
         self.outputs.hardware_id = self.scene.name
-        self.sim_clock = (SimClock(timer_period_ns(self.publish_rate), values['real_time_factor'],
-                                   values['lockstep'], values['lockstep_timeout'],
-                                   time.monotonic)
-                          if uses_sim_clock(values) else None)
-        self.session: AnySession = open_session(
-            self.scene, values, self.outputs,
-            self.sim_clock.now if self.sim_clock is not None else self.clock_ns, time.monotonic)
-        session = self.session
-        commands = session.command_inputs if isinstance(session, DynamicsSession) else ()
-        problem = session.check(values) or sim_clock_problem(values, self.scene, commands)
+        self.sim_clock = sim_clock_for(values, timer_period_ns(self.publish_rate), time.monotonic)
+        self.session: AnySession = open_session(self.scene, values, self.outputs, (
+            self.clock_ns if self.sim_clock is None else self.sim_clock.now), time.monotonic)
+        problem = self.session.check(values) or sim_clock_problem(
+            values, self.scene, getattr(self.session, 'command_inputs', ()))
         if problem:
             raise InputError(problem)
-        if isinstance(session, DynamicsSession):
-            session.sim_clock = self.sim_clock
+        if isinstance(self.session, DynamicsSession):
+            self.session.sim_clock = self.sim_clock
         self.clock_publisher = (self.create_publisher(ClockMessage, '/clock', CLOCK_QOS)
                                 if values['publish_clock'] else None)
         self.outputs.set_frames(values['world_frame'], values['body_frame'])
@@ -282,24 +277,18 @@ class AttitudePropagatorNode(Node):
     def gyro_loop(self) -> GyroLoop:
         """A :class:`GyroLoop` serving the gyro subscriptions (gyro scenes) and the timers (in
         :attr:`loop_group`); creating it takes them away from every executor. On the scene's
-        own sim clock a :class:`StepLoop` (it serves the command subscriptions)."""
-        if self.sim_clock is not None:
-            return self._step_loop(self.sim_clock)
+        own sim clock a :class:`StepLoop`, which also serves the commands."""
+        if self.sim_clock is not None and isinstance(self.session, DynamicsSession):
+            return step_loop(self.context, self.session, self.sim_clock, [
+                (subscription, self.handlers[topic])
+                for topic, subscription in self.subscriptions_by_topic.items()
+                if topic in ('torque', 'rotor_torque')], [self.diagnostics_timer],
+                self.clock_publisher, self.state_lock, self.outputs)
         return GyroLoop(self.context, [
             (self.subscriptions_by_topic[topic], self.handlers[topic])
             for topic in ('imu', 'angular_velocity') if topic in self.subscriptions_by_topic],
             [timer for timer in (self.output_timer, self.diagnostics_timer)
              if timer is not None])
-
-    def _step_loop(self, clock: SimClock) -> StepLoop:
-        """The :class:`StepLoop` of a dynamics scene on its own sim clock."""
-        session = self.session
-        assert isinstance(session, DynamicsSession)
-        served = [(subscription, self.handlers[topic])
-                  for topic, subscription in self.subscriptions_by_topic.items()
-                  if topic in ('torque', 'rotor_torque')]
-        return step_loop(self.context, session, clock, served, [self.diagnostics_timer],
-                         self.clock_publisher, self.state_lock, self.outputs)
 
     # -- parameters -------------------------------------------------------------------------
 

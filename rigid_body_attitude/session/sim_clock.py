@@ -25,13 +25,22 @@ from rigid_body_attitude.core.scene import Scene
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.reports import LEVEL_WARN, PeriodCounts
 
-__all__ = ['SimClock', 'sim_clock_problem', 'uses_sim_clock']
+__all__ = ['SimClock', 'sim_clock_for', 'sim_clock_problem', 'uses_sim_clock']
 
 
 def uses_sim_clock(values: Mapping[str, Any]) -> bool:
     """Whether the parameters make the node its own clock (``publish_clock`` or
     ``lockstep``)."""
     return bool(values.get('publish_clock') or values.get('lockstep'))
+
+
+def sim_clock_for(values: Mapping[str, Any], period_ns: int,
+                  monotonic: Callable[[], float]) -> SimClock | None:
+    """The sim clock the parameters ask for (ticks every ``period_ns``), or ``None``."""
+    if not uses_sim_clock(values):
+        return None
+    return SimClock(period_ns, values['real_time_factor'], values['lockstep'],
+                    values['lockstep_timeout'], monotonic)
 
 
 def sim_clock_problem(values: Mapping[str, Any], scene: Scene,
