@@ -9,7 +9,9 @@ of one stamp arrived, publishes on ``torque`` a WrenchStamped with that same sta
 (B. Wie, H. Weiss, A. Arapostathis, "Quaternion feedback regulator for spacecraft eigenaxis
 rotations", J. Guidance 12(3), 1989, eq. 9 with the identity as the target), saturated per
 axis at ``torque_limit`` [N m]. Every tick it receives is answered once, as the lockstep
-contract asks (docs/closed-loop.md).
+contract asks (docs/closed-loop.md). With ``wait_for_subscribers`` N it subscribes to the
+state only once ``torque`` has N matched subscribers (the node and a recorder), so a recorder
+misses none of its commands.
 """
 
 from __future__ import annotations
@@ -37,6 +39,10 @@ class PdController(Node):
         self.pending: dict[tuple[int, int], list[object | None]] = {}
         self.answered: set[tuple[int, int]] = set()
         self.publisher = self.create_publisher(WrenchStamped, 'torque', QOS)
+        self.wait_for_subscribers = int(self.declare_parameter('wait_for_subscribers', 0).value)
+
+    def subscribe(self) -> None:
+        """Subscribe to the state (after :attr:`wait_for_subscribers` matched)."""
         self.create_subscription(QuaternionStamped, 'orientation',
                                  lambda m: self.take(m, 0), QOS)
         self.create_subscription(TwistStamped, 'twist', lambda m: self.take(m, 1), QOS)
@@ -75,6 +81,9 @@ def main() -> int:
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     try:
+        while node.publisher.get_subscription_count() < node.wait_for_subscribers:
+            executor.spin_once(timeout_sec=0.01)
+        node.subscribe()
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -59,9 +59,12 @@ def scene_file(tmp_path: Path) -> str:
     return str(path)
 
 
-def start_controller(namespace: str) -> subprocess.Popen:
+def start_controller(namespace: str, subscribers: int = 2) -> subprocess.Popen:
+    """The PD controller, answering once ``subscribers`` (the node and this process's
+    recorder) subscribed to its torque."""
     return subprocess.Popen([sys.executable, str(PD_CONTROLLER), '--ros-args', '-r',
-                             f'__ns:={namespace}'], stdout=subprocess.DEVNULL,
+                             f'__ns:={namespace}', '-p', f'wait_for_subscribers:={subscribers}'],
+                            stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
 
 
@@ -221,7 +224,7 @@ def test_a_silent_controller_is_warned_about_once_counted_and_the_loop_goes_on(
     try:
         read_until(node, SERVING)
         harness.wait_for_connections()
-        controller = start_controller(namespace)
+        controller = start_controller(namespace, subscribers=1)
         assert harness.spin_until(lambda: len(twist) > 50, timeout=60.0)
         controller.kill()
         controller.wait()
