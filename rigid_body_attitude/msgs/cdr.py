@@ -70,6 +70,7 @@ __all__ = [
     'RATE_DECODERS',
     'TORQUE_DECODERS',
     'Decoder',
+    'encode_clock',
     'encode_float64',
     'encode_imu',
     'encode_pose_stamped',
@@ -504,6 +505,15 @@ def encode_float64(value: float) -> bytes:
         return _FLOAT64_LE.pack(_ENCAPSULATION_LE, value)
     except struct.error as err:
         raise InputError(f'Expected `value` to be a float, got {value!r}') from err
+
+
+_CLOCK_LE = struct.Struct('<4siI')
+
+
+def encode_clock(stamp_ns: int) -> bytes:
+    """CDR bytes of a ``rosgraph_msgs/msg/Clock`` at ``stamp_ns`` (a valid ROS time)."""
+    sec, nanosec = divmod(stamp_ns, 1_000_000_000)
+    return _CLOCK_LE.pack(_ENCAPSULATION_LE, sec, nanosec)
 
 
 def transform_encoder(parent_frame: str, child_frame: str

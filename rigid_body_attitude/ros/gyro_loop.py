@@ -135,21 +135,14 @@ class GyroLoop:
         context, served, timers, events = self.context, self.served, self.timers, self.events
         stopping, monotonic = self._stopping, time.monotonic
         wait_set = new_wait_set(context, len(served), 2, len(timers), len(events))
-        guards = (entity_handle(self._sigint_guard), entity_handle(self._wake_guard))
+        guards = self.guard_handles()
         next_event_check = monotonic()
         try:
             while context.ok() and not stopping.is_set():
                 with_events = monotonic() >= next_event_check
                 self._fill(wait_set, guards, with_events)
                 wait_set.wait(WAIT_TIMEOUT_NS)
-                for _, take, handler in served:
-                    data = take()
-                    while data is not None:
-                        handler(data)
-                        self.handled += 1
-                        data = take()
-                for _, run_if_due in timers:
-                    run_if_due()
+                self.handle_ready()
                 if with_events:
                     next_event_check = monotonic() + EVENT_CHECK_PERIOD
                     for event in events:
@@ -157,6 +150,21 @@ class GyroLoop:
                             _run_event(event)
         finally:
             wait_set.destroy_when_not_in_use()
+
+    def handle_ready(self) -> None:
+        """Hand every queued message to its handler; run the timers that are due."""
+        for _, take, handler in self.served:
+            data = take()
+            while data is not None:
+                handler(data)
+                self.handled += 1
+                data = take()
+        for _, run_if_due in self.timers:
+            run_if_due()
+
+    def guard_handles(self) -> tuple[Any, Any]:
+        """The SIGINT and wake-up guards' handles, for a wait set."""
+        return entity_handle(self._sigint_guard), entity_handle(self._wake_guard)
 
     def _fill(self, wait_set: Any, guards: tuple[Any, Any], with_events: bool) -> None:
         """Put the subscriptions, timers, guards (and with ``with_events`` the QoS events)

@@ -19,7 +19,9 @@ same session, so a replayed bag gives the same numbers.
   ``torque`` (WrenchStamped) and ``rotor_torque`` (Vector3Stamped) when the scene takes them.
   ``~/reset`` restores the scene's initial state. A scene with ``sensors`` also publishes its
   simulated IMU (``sensor_msgs/msg/Imu``, :mod:`rigid_body_attitude.session.sensors`) and the
-  sensor's mount on ``/tf_static``.
+  sensor's mount on ``/tf_static``. With ``publish_clock`` or ``lockstep`` the scene is its own
+  clock instead: a :class:`~.step_loop.StepLoop` makes the ticks on sim time (``/clock``,
+  ``real_time_factor``, lockstep; docs/closed-loop.md).
 * Commands (``set_pose``, ``set_pose_with_covariance``, ``torque``, ``rotor_torque``) are
   coalesced: only the newest of each topic matters, so each callback takes every message queued
   behind its own and hands the newest to the session once (the others counted ``superseded``). Log
@@ -49,25 +51,28 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rosgraph_msgs.msg import Clock as ClockMessage
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
 
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.msgs.errors import MalformedMessage
-from rigid_body_attitude.msgs.tf_message import decode_tf_message
 from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import DECODERS, input_handler, MALFORMED
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.outputs import RosOutputs
-from rigid_body_attitude.ros.qos import COMMAND_QOS, GYRO_QOS, TF_STATIC_LISTENER_QOS
+from rigid_body_attitude.ros.qos import (
+    CLOCK_QOS, COMMAND_QOS, GYRO_QOS, TF_STATIC_LISTENER_QOS)
+from rigid_body_attitude.ros.step_loop import step_loop
 from rigid_body_attitude.ros.tf_lookup import MountGate
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
 from rigid_body_attitude.session.settings import (
-    DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, AnySession)
+    DIAGNOSTICS_PERIOD, input_topics, load_node_scene, NODE_NAME, open_session, AnySession,
+    timer_period_ns)
+from rigid_body_attitude.session.sim_clock import sim_clock_for, sim_clock_problem
 
 __all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor', 'ros_value']
 
@@ -130,11 +135,17 @@ class AttitudePropagatorNode(Node):
         self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro',
                                   values['covariance'])
         self.outputs.hardware_id = self.scene.name
-        self.session: AnySession = open_session(
-            self.scene, values, self.outputs, self.clock_ns, time.monotonic)
-        problem = self.session.check(values)
+        self.sim_clock = sim_clock_for(values, timer_period_ns(self.publish_rate), time.monotonic)
+        self.session: AnySession = open_session(self.scene, values, self.outputs, (
+            self.clock_ns if self.sim_clock is None else self.sim_clock.now), time.monotonic)
+        problem = self.session.check(values) or sim_clock_problem(
+            values, self.scene, getattr(self.session, 'command_inputs', ()))
         if problem:
             raise InputError(problem)
+        if isinstance(self.session, DynamicsSession):
+            self.session.sim_clock = self.sim_clock
+        self.clock_publisher = (self.create_publisher(ClockMessage, '/clock', CLOCK_QOS)
+                                if values['publish_clock'] else None)
         self.outputs.set_frames(values['world_frame'], values['body_frame'])
         self.outputs.log_queue.start()
         if values['publish_tf']:
@@ -202,7 +213,7 @@ class AttitudePropagatorNode(Node):
             self.handlers[topic] = handler
             self.subscriptions_by_topic[topic] = self.create_subscription(
                 _MESSAGE_TYPES[topic], topic, handler, GYRO_QOS if gyro else COMMAND_QOS,
-                callback_group=self.loop_group if gyro else None,
+                callback_group=self.loop_group if gyro or self.sim_clock else None,
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(), raw=True)
             self.takers[topic] = raw_taker(self.subscriptions_by_topic[topic])
 
@@ -251,23 +262,10 @@ class AttitudePropagatorNode(Node):
         return coalesce
 
     def tf_static_callback(self, data: bytes) -> None:
-        """Static transforms for the mount (:class:`~.tf_lookup.MountGate`): decoded with the
-        checked decoder (malformed messages counted per topic), refusals counted, the held
-        samples handed on when their mount arrived."""
+        """Static transforms for the mount (:meth:`~.tf_lookup.MountGate.tf_static`)."""
         gate = self.mount_gate
-        if gate is None or gate.open:
-            return
-        try:
-            transforms = decode_tf_message(data)
-        except MalformedMessage as err:
-            with self.state_lock:
-                self.session.malformed('/tf_static', str(err)[:200])
-            return
-        refused = gate.add_transforms(transforms)
-        with self.state_lock:
-            if refused:
-                gate.count_refused(refused)
-            gate.retry()
+        if gate is not None and not gate.open:
+            gate.tf_static(data, self.state_lock)
 
     def _create_timers(self) -> None:
         """The output timer (node clock; dynamics scenes only) and the diagnostics timer
@@ -276,7 +274,7 @@ class AttitudePropagatorNode(Node):
         50 Hz)."""
         self.output_timer = (self.create_timer(1.0 / self.publish_rate, self.tick_callback,
                                                self.loop_group)
-                             if self.is_dynamics else None)
+                             if self.is_dynamics and self.sim_clock is None else None)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.diagnostics_timer = self.create_timer(
             DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group, clock=steady)
@@ -284,7 +282,14 @@ class AttitudePropagatorNode(Node):
 
     def gyro_loop(self) -> GyroLoop:
         """A :class:`GyroLoop` serving the gyro subscriptions (gyro scenes) and the timers (in
-        :attr:`loop_group`); creating it takes them away from every executor."""
+        :attr:`loop_group`); creating it takes them away from every executor. On the scene's
+        own sim clock a :class:`StepLoop`, which also serves the commands."""
+        if self.sim_clock is not None and isinstance(self.session, DynamicsSession):
+            return step_loop(self.context, self.session, self.sim_clock, [
+                (subscription, self.handlers[topic])
+                for topic, subscription in self.subscriptions_by_topic.items()
+                if topic in ('torque', 'rotor_torque')], [self.diagnostics_timer],
+                self.clock_publisher, self.state_lock, self.outputs)
         return GyroLoop(self.context, [
             (self.subscriptions_by_topic[topic], self.handlers[topic])
             for topic in ('imu', 'angular_velocity') if topic in self.subscriptions_by_topic],
@@ -295,14 +300,7 @@ class AttitudePropagatorNode(Node):
 
     def get_parameters_values(self) -> dict[str, Any]:
         """Current values of the node's own parameters by name."""
-        values = {}
-        for parameter in PARAMETERS:
-            try:
-                value = self.get_parameter(parameter.name).value
-            except ParameterUninitializedException:  # a double array not set
-                value = None
-            values[parameter.name] = ros_value(parameter, value)
-        return values
+        return parameter_values(self)
 
     def parameters_callback(self, parameters: list[RosParameter]) -> SetParametersResult:
         """Refuse run-time values that the parameter table or the session finds unusable."""
@@ -351,3 +349,16 @@ class AttitudePropagatorNode(Node):
         """Write the queued log lines (at most 1 s), then destroy the node."""
         self.outputs.log_queue.stop()
         super().destroy_node()  # type: ignore[no-untyped-call]
+
+
+def parameter_values(node: Node) -> dict[str, Any]:
+    """Current values of ``node``'s parameters of the table by name (``None``: a double
+    array not set)."""
+    values = {}
+    for parameter in PARAMETERS:
+        try:
+            value = node.get_parameter(parameter.name).value
+        except ParameterUninitializedException:  # a double array not set
+            value = None
+        values[parameter.name] = ros_value(parameter, value)
+    return values

@@ -46,8 +46,8 @@ from __future__ import annotations
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
 
-__all__ = ['COMMAND_QOS', 'GYRO_QOS', 'INPUT_DEPTH', 'OUTPUT_DEPTH', 'OUTPUT_QOS', 'TF_QOS',
-           'TF_STATIC_LISTENER_QOS', 'TF_STATIC_QOS']
+__all__ = ['CLOCK_QOS', 'COMMAND_QOS', 'GYRO_QOS', 'INPUT_DEPTH', 'OUTPUT_DEPTH', 'OUTPUT_QOS',
+           'TF_QOS', 'TF_STATIC_LISTENER_QOS', 'TF_STATIC_QOS']
 
 #: Samples an input queue holds while the node cannot take them (5 s at 1 kHz).
 INPUT_DEPTH = 5000
@@ -86,3 +86,9 @@ TF_STATIC_QOS = QoSProfile(
 TF_STATIC_LISTENER_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST, depth=100,
     reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: ``/clock``: reliable, volatile, keep last 1. rclpy's and rclcpp's time sources subscribe
+#: best effort with depth 1 (``rclcpp::ClockQoS``); a reliable writer serves them and reliable
+#: readers (a recorder) alike.
+CLOCK_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=1,
+    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)

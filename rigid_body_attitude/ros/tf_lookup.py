@@ -34,7 +34,7 @@ import threading
 
 from rigid_body_attitude.msgs.cdr import header_frame_id
 from rigid_body_attitude.msgs.errors import MalformedMessage
-from rigid_body_attitude.msgs.tf_message import Transform
+from rigid_body_attitude.msgs.tf_message import decode_tf_message, Transform
 from rigid_body_attitude.ros.qos import INPUT_DEPTH
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.mount import (
@@ -85,6 +85,22 @@ class MountGate:
             refused = self.transforms.add_all(transforms)
             self._mounts = self.transforms.resolved(self.session.body_frame)
         return refused
+
+    def tf_static(self, data: bytes, lock: threading.Lock) -> None:
+        """One ``/tf_static`` message: decoded with the checked decoder (a malformed one
+        counted for the topic), its refusals counted, the held samples handed on when their
+        mount arrived; the session's changes under ``lock``."""
+        try:
+            transforms = decode_tf_message(data)
+        except MalformedMessage as err:
+            with lock:
+                self.session.malformed('/tf_static', str(err)[:200])
+            return
+        refused = self.add_transforms(transforms)
+        with lock:
+            if refused:
+                self.count_refused(refused)
+            self.retry()
 
     def count_refused(self, refused: Counter[str]) -> None:
         """Count the transforms :meth:`add_transforms` refused, warn (throttled)."""

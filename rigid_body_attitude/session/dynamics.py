@@ -8,7 +8,10 @@ are held from their stamp on (:class:`~rigid_body_attitude.session.stream.Comman
 The session times its own work (the monotonic clock) to report a scene that cannot keep up:
 its real-time factor and its lag behind the clock. A scene with a simulated IMU (its
 ``sensors`` section) is integrated through an
-:class:`~rigid_body_attitude.session.sensors.ImuSampler`, which samples it on the way.
+:class:`~rigid_body_attitude.session.sensors.ImuSampler`, which samples it on the way. On the
+node's own sim clock (:mod:`~rigid_body_attitude.session.sim_clock`: ``publish_clock``,
+``lockstep``) the ticks are its sim times and, in lockstep, a command counts only when stamped
+with the current tick.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.reports import LEVEL_WARN, PeriodCounts, body_frame_velocity
 from rigid_body_attitude.session.sensors import ImuSampler
+from rigid_body_attitude.session.sim_clock import SimClock
 from rigid_body_attitude.session.stream import ClockDriver, CommandStream, Outcome
 from rigid_body_attitude.session.times import TimeBase, split_ns, stamp_problem, to_ns
 
@@ -34,8 +38,11 @@ __all__ = ['DynamicsSession']
 _DETAIL = {
     'non_finite': 'a non-finite value (NaN or Inf); message ignored',
     'out_of_range': 'a value beyond 1e12 (N, N m); message ignored',
-    'stale_stamp': 'a stamp older than the last command; message ignored (parameter '
+    'stale_stamp': 'a stamp older than the last command (in lockstep: than the current tick, '
+                   'or a second command for it); message ignored (parameter '
                    '`use_header_stamps`)',
+    'future_stamp': 'a stamp after the current lockstep tick; a command must carry the stamp '
+                    'of the tick it answers; message ignored (parameter `lockstep`)',
 }
 
 
@@ -54,6 +61,11 @@ class DynamicsSession(Session):
         inputs = self.propagator.input_names
         #: The WrenchStamped fields the scene takes (``torque``, ``force``).
         self.wrench_inputs = tuple(name for name in ('torque', 'force') if name in inputs)
+        #: The commanded inputs a lockstep tick waits for.
+        self.command_inputs = self.wrench_inputs + (
+            ('rotor_torque',) if 'rotor_torque' in inputs else ())
+        #: The node's own sim clock (``publish_clock``, ``lockstep``), or ``None``.
+        self.sim_clock: SimClock | None = None
         self.tick_period = 1.0 / values['publish_rate']
         self._work = self._simulated = self._lag = 0.0
         #: Command messages used (a WrenchStamped is one, whatever fields the scene takes).
@@ -100,7 +112,8 @@ class DynamicsSession(Session):
     def _command_ns(self, topic: str, sec: int, nanosec: int) -> int | None:
         """The command's time: its stamp, or the receive time (no header stamps, zero
         stamp); None (counted) for an invalid stamp."""
-        if self.use_header_stamps and (sec or nanosec):
+        # In lockstep the zero stamp is a real one: the first tick's, t_0 = 0.
+        if self.use_header_stamps and (sec or nanosec or self.commands.tick_ns is not None):
             problem = stamp_problem(sec, nanosec)
             if not problem:
                 return to_ns(sec, nanosec)
@@ -131,12 +144,28 @@ class DynamicsSession(Session):
         if outcome.integrated:
             self._work += self.monotonic() - started
             self._simulated += propagator.state.time - before
-            lag = self.time_base.seconds(self.clock_ns()) - propagator.state.time
-            self._lag = max(self._lag, lag)
+            if self.commands.tick_ns is None:  # (lockstep: the ticks are the clock, no lag)
+                lag = self.time_base.seconds(self.clock_ns()) - propagator.state.time
+                self._lag = max(self._lag, lag)
         if outcome.reason:
             self._clock_rejected(outcome)
         if outcome.moved:
             self._publish()
+
+    def lockstep_tick(self, now_ns: int) -> None:
+        """Lockstep: tick ``now_ns`` of the sim clock, then wait for the commands stamped
+        with it (:meth:`lockstep_answered`)."""
+        self.tick(now_ns)
+        self.commands.tick_ns = now_ns
+
+    def republish(self) -> None:
+        """The outputs of the current state again (lockstep's first tick, until answered)."""
+        if self.clock.started:
+            self._publish()
+
+    def lockstep_answered(self) -> bool:
+        """Lockstep: every commanded input has its command for the current tick."""
+        return self.commands.answered(self.command_inputs)
 
     def _publish(self) -> None:
         sample = self.tracker.sample(self.propagator)
@@ -198,6 +227,8 @@ class DynamicsSession(Session):
         counts.real_time_factor = (self._simulated / self._work if self._work > 0.0
                                    else math.inf)
         counts.lag, counts.tick_period = self._lag, self.tick_period
+        if self.sim_clock is not None:
+            self.sim_clock.report(counts)
         self._work = self._simulated = self._lag = 0.0
 
 

@@ -173,6 +173,19 @@ PARAMETERS: tuple[Parameter, ...] = (
               '("" = the scene\'s)', may_be_empty=True),
     Parameter('step', float, 0.0,
               's: integration step of dynamics scenes (0 = the scene\'s)', 0.0, 10.0),
+    # Sim clock and lockstep (dynamics scenes; docs/closed-loop.md).
+    Parameter('publish_clock', bool, False,
+              'dynamics scenes: be the graph\'s clock: sim time from 0 on /clock at each tick, '
+              'outputs stamped with it'),
+    Parameter('real_time_factor', float, 1.0,
+              '1: sim seconds per wall second the ticks are paced at with publish_clock or '
+              'lockstep (0 = as fast as the loop allows)', 0.0, 1.0e6),
+    Parameter('lockstep', bool, False,
+              'dynamics scenes: advance past tick t_k only once the commands stamped t_k '
+              'arrived (sim time from 0)'),
+    Parameter('lockstep_timeout', float, 1.0,
+              's: wall time lockstep waits for a command; then it warns, holds the last '
+              'command, counts it and advances', 0.0, 3600.0, low_open=True),
     # A real IMU: mount, world axes, levelling, bias, calibration (gyro scenes).
     Parameter('mount_rpy', tuple, (),
               'rad: [roll, pitch, yaw] of the IMU (sensor) frame in body_frame, as '

@@ -70,8 +70,9 @@ REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
-                'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose', 'wrong_frame',
-                'no_mount', 'accel_out_of_range', 'invalid_covariance', *TRANSFORM_KEYS)
+                'future_stamp', 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
+                'wrong_frame', 'no_mount', 'accel_out_of_range', 'invalid_covariance',
+                *TRANSFORM_KEYS)
 ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
 
 #: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).
@@ -82,6 +83,7 @@ GOVERNING_PARAMETER = {
     'invalid_pose': 'world_frame', 'wrong_frame': 'world_frame',
     'integration_failed': 'integrator', 'non_finite_result': 'integrator',
     'no_input': 'use_header_stamps', 'behind': 'step', 'no_mount': 'mount_rpy',
+    'future_stamp': 'lockstep',
 }
 DYNAMICS_GOVERNING_PARAMETER = {
     **{key: value for key, value in GOVERNING_PARAMETER.items() if key != 'out_of_range'},
@@ -109,6 +111,9 @@ class PeriodCounts:
             (``inf`` when no work was timed).
         lag: dynamics: the largest delay of the propagated time behind the clock [s].
         tick_period: dynamics: the tick period [s].
+        clock_values: dynamics on the node's own sim clock: its values (achieved real-time
+            factor, lockstep timeouts) for the report.
+        clock_problems: what about that clock makes the status WARN (a silent controller).
     """
 
     elapsed: float
@@ -126,6 +131,8 @@ class PeriodCounts:
     real_time_factor: float = float('inf')
     lag: float = 0.0
     tick_period: float = 0.0
+    clock_values: tuple[tuple[str, str], ...] = ()
+    clock_problems: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -352,6 +359,8 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
     for check in (_input_problems, _timing_problems):
         check_level, check_problems = check(counts, parameters)
         level, problems = max(level, check_level), problems + check_problems
+    if counts.clock_problems:
+        level, problems = max(level, LEVEL_WARN), problems + list(counts.clock_problems)
     scene = propagator.scene
     values = [
         ('scene', scene.name),
@@ -370,7 +379,7 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
     ]
     if not counts.gyro_scene:
         values += [('real_time_factor', f'{counts.real_time_factor:.3g}'),
-                   ('lag [s]', f'{counts.lag:.6f}')]
+                   ('lag [s]', f'{counts.lag:.6f}'), *counts.clock_values]
     values += [(f'rejected {key}', str(counts.rejections.get(key, 0)))
                for key in REJECTION_KEYS]
     values += [(f'malformed {topic}', str(count))

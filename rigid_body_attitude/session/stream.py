@@ -44,7 +44,10 @@ Gyro samples (:class:`GyroStream`)
 
 Commanded inputs (:class:`CommandStream`): not 3 finite numbers → ``non_finite``; a
 magnitude above :data:`COMMAND_LIMIT` → ``out_of_range``; older than the last command of the
-same input → ``stale_stamp``; otherwise passed to the propagator.
+same input → ``stale_stamp``; otherwise passed to the propagator. In lockstep
+(:attr:`CommandStream.tick_ns` set: the tick the commands must answer) a command is used only
+when stamped exactly with that tick, once per input: a later stamp → ``future_stamp``, an
+earlier one or a second one for the tick → ``stale_stamp``.
 
 Clock ticks of dynamics scenes (:class:`ClockDriver`): the first tick sets the scene's start
 time; a backward jump larger than ``time_jump_threshold`` resets (``time_jump``); a forward
@@ -66,7 +69,8 @@ __all__ = ['COMMAND_LIMIT', 'ClockDriver', 'CommandStream', 'GyroStream', 'INTEG
            'JUMP_CONFIRMATIONS', 'Outcome', 'PERIOD_BATCH', 'PeriodLearner', 'REASONS']
 
 #: Rejection reasons of the streams, in the order the diagnostics list them.
-REASONS = ('non_finite', 'out_of_range', 'stale_stamp', 'outlier_stamp', 'gap', 'time_jump')
+REASONS = ('non_finite', 'out_of_range', 'stale_stamp', 'outlier_stamp', 'gap', 'time_jump',
+           'future_stamp')
 
 #: Samples after a jump that must confirm it (each within ``max_dt`` of the one before).
 JUMP_CONFIRMATIONS = 2
@@ -455,6 +459,8 @@ class CommandStream(_Counting):
         super().__init__()
         self.propagator = propagator
         self.last_ns: dict[str, int] = {}
+        #: Lockstep: the tick [ns] a command must be stamped with (``None``: any time).
+        self.tick_ns: int | None = None
 
     def check(self, value: Sequence[float]) -> str:
         """The rejection reason of a command value, or ``''``."""
@@ -475,6 +481,11 @@ class CommandStream(_Counting):
             return self._reject(reason)
         if stamp_ns < self.last_ns.get(input_name, stamp_ns):
             return self._reject('stale_stamp')
+        tick_ns = self.tick_ns
+        if tick_ns is not None and stamp_ns != tick_ns:
+            return self._reject('future_stamp' if stamp_ns > tick_ns else 'stale_stamp')
+        if tick_ns is not None and self.last_ns.get(input_name) == tick_ns:
+            return self._reject('stale_stamp')  # a second answer to the same tick
         self.propagator.command(input_name, time_s, value)
         self.last_ns[input_name] = stamp_ns
         return self._accept(_BASELINE)
@@ -482,6 +493,11 @@ class CommandStream(_Counting):
     def reset(self) -> None:
         """Forget the last stamps (after a time jump or reset)."""
         self.last_ns.clear()
+
+    def answered(self, input_names: Sequence[str]) -> bool:
+        """Lockstep: whether each of ``input_names`` has a command stamped :attr:`tick_ns`."""
+        tick_ns, last_ns = self.tick_ns, self.last_ns
+        return all(last_ns.get(name) == tick_ns for name in input_names)
 
 
 class ClockDriver(_Counting):

@@ -22,7 +22,7 @@ from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.tools.replay import (
     ReplayOptions, attitude_errors, main, replay_bag, summary)
 from rigid_body_attitude.session.parameters import PARAMETERS
-from rigid_body_attitude.tools.replay.options import TF_PARAMETERS
+from rigid_body_attitude.tools.replay.options import TF_PARAMETERS, WALL_PARAMETERS
 from rigid_body_attitude.session.settings import OUTPUT_TOPICS, timer_period_ns
 
 RATE = 1000.0
@@ -48,7 +48,11 @@ def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, 
 
 def test_options_are_the_node_parameters_with_their_defaults():
     options = ReplayOptions().parameters()
-    assert options == {p.name: p.default for p in PARAMETERS if p.name not in TF_PARAMETERS}
+    assert options == {p.name: p.default for p in PARAMETERS
+                       if p.name not in TF_PARAMETERS + WALL_PARAMETERS}
+    # Wall pacing means nothing on a bag's time axis; lockstep does (ticks on command stamps).
+    assert WALL_PARAMETERS == ('publish_clock', 'real_time_factor', 'lockstep_timeout')
+    assert 'lockstep' in options
     assert TF_PARAMETERS == ('publish_tf', 'tf_rate', 'tf_timeout')  # a bag has no TF to read
     assert 'max_angular_rate' in options
     # From Python an integer may stand for a double; a boolean may not.

@@ -7,6 +7,11 @@ As the node runs with ``use_sim_time`` when a player publishes ``/clock`` with t
   ``k P`` (``k ≥ 1``) of its period ``P = timer_period_ns(publish_rate)`` within the bag's time
   span, each before the messages recorded at the same instant (the player publishes
   ``/clock = T`` first): the session integrates to ``T`` and publishes;
+* **lockstep** (parameter ``lockstep``): the ticks follow the command stamps instead, as the
+  node's sim clock made them: ticks at ``k P`` from ``t_0 = 0``; before a command stamped
+  ``s`` is handled, every tick at or before ``s`` runs, so the command answering tick ``k``
+  is held over ``[t_k, t_k+1)``, as in the live loop (docs/closed-loop.md); after the last
+  message, one more tick (the node advanced past the last command);
 * **diagnostics** every second of bag time from the first message, and once more at the next
   second (dynamics: or tick, if later) after the end;
 * **messages**: handed to the node's own input handlers
@@ -26,7 +31,8 @@ from collections.abc import Iterator
 from typing import Protocol
 
 from rigid_body_attitude.bag import BagMessage
-from rigid_body_attitude.session.decoding import Handler, input_handler
+from rigid_body_attitude.msgs.cdr import header_stamp_ns
+from rigid_body_attitude.session.decoding import Handler, input_handler, MALFORMED
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.settings import AnySession, DIAGNOSTICS_PERIOD
@@ -61,15 +67,21 @@ class EventLoop:
     """Feeds one bag's messages and the timers' events to a session, in bag-time order."""
 
     def __init__(self, session: AnySession, sink: BagSink, plan: Plan, period_ns: int,
-                 first_ns: int) -> None:
+                 first_ns: int, lockstep: bool = False) -> None:
         """Ticks every ``period_ns`` and diagnostics every second from ``first_ns``, the bag
-        time of the first message."""
+        time of the first message; with ``lockstep`` the ticks follow the command stamps."""
         self.session = session
         self.sink = sink
         self.plan = plan
         self.period_ns = period_ns
         self.next_tick_ns = (max(-(-first_ns // period_ns), 1) * period_ns
-                             if isinstance(session, DynamicsSession) else _NEVER_NS)
+                             if isinstance(session, DynamicsSession) and not lockstep
+                             else _NEVER_NS)
+        #: Lockstep: the sim time of the next tick (``None``: ticks on bag time).
+        self.lockstep_next_ns: int | None = (
+            0 if lockstep and isinstance(session, DynamicsSession) else None)
+        self.command_topics = frozenset(topic for topic, node_topic in plan.inputs.items()
+                                        if node_topic in ('torque', 'rotor_torque'))
         self.next_diagnostics_ns = first_ns + _DIAGNOSTICS_NS
         #: Messages read per bag topic (the gyro topic's added at the end of the gyro loop).
         self.read: Counter[str] = Counter()
@@ -115,6 +127,16 @@ class EventLoop:
         if len(self.sink.records) >= FLUSH_RECORDS:
             self.sink.flush()
 
+    def lockstep_until(self, stamp_ns: int) -> None:
+        """Lockstep: the ticks at or before a command's ``stamp_ns``."""
+        session, next_ns = self.session, self.lockstep_next_ns
+        assert isinstance(session, DynamicsSession) and next_ns is not None
+        while next_ns <= stamp_ns:
+            session.lockstep_tick(next_ns)
+            self.ticks += 1
+            next_ns += self.period_ns
+        self.lockstep_next_ns = next_ns
+
     def diagnostics(self, now_ns: int) -> None:
         """The node's ``/diagnostics`` at bag time ``now_ns``."""
         self.sink.now_ns = now_ns
@@ -124,6 +146,9 @@ class EventLoop:
         """After the last message: the diagnostics at the next second (dynamics: or the
         next tick, if later)."""
         if isinstance(self.session, GyroSession):
+            self.diagnostics(self.next_diagnostics_ns)
+        elif self.lockstep_next_ns is not None:
+            self.lockstep_until(self.lockstep_next_ns)
             self.diagnostics(self.next_diagnostics_ns)
         else:
             self.diagnostics(max(self.next_diagnostics_ns, self.next_tick_ns))
@@ -150,6 +175,8 @@ class EventLoop:
             sink.now_ns = bag_time_ns
             read[topic] += 1
             handler = handlers.get(topic)
+            if self.lockstep_next_ns is not None and topic in self.command_topics:
+                self._lockstep_ticks(data)
             if handler is not None:
                 handler(data)
             chunk += 1
@@ -158,6 +185,15 @@ class EventLoop:
                 sink.flush()
                 chunk = 0
         progress.update(chunk)
+
+    def _lockstep_ticks(self, data: bytes) -> None:
+        """Lockstep: the ticks up to a command's stamp (a message too short to hold a stamp
+        is left to its handler, which counts it malformed)."""
+        try:
+            stamp_ns = header_stamp_ns(data)
+        except MALFORMED:
+            return
+        self.lockstep_until(stamp_ns)
 
     def _gyro_messages(self, messages: Iterator[BagMessage], progress: Progress) -> int:
         """Gyro scenes (the hot path): per gyro message the node's gyro handler (one decoder

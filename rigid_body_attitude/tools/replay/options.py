@@ -24,14 +24,19 @@ from rigid_body_attitude.session.parameters import PARAMETERS, Parameter, check_
 from rigid_body_attitude.session.settings import (
     OUTPUT_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC)
 
-__all__ = ['NODE_PARAMETERS', 'ReplayOptions', 'TF_PARAMETERS', 'check_options']
+__all__ = ['NODE_PARAMETERS', 'ReplayOptions', 'TF_PARAMETERS', 'WALL_PARAMETERS',
+           'check_options']
 
 #: Node parameters about TF only (a bag has no ``/tf_static`` to wait for, the replay writes
 #: no ``/tf``): the replay does not take them.
 TF_PARAMETERS = ('publish_tf', 'tf_rate', 'tf_timeout')
-#: The node's parameters the replay takes: every one of the table but :data:`TF_PARAMETERS`.
+#: Node parameters about wall time only (a bag is replayed on its own time axis): the replay
+#: does not take them. ``lockstep`` it takes: its ticks then follow the command stamps.
+WALL_PARAMETERS = ('publish_clock', 'real_time_factor', 'lockstep_timeout')
+#: The node's parameters the replay takes: every one of the table but :data:`TF_PARAMETERS`
+#: and :data:`WALL_PARAMETERS`.
 NODE_PARAMETERS: tuple[Parameter, ...] = tuple(
-    p for p in PARAMETERS if p.name not in TF_PARAMETERS)
+    p for p in PARAMETERS if p.name not in TF_PARAMETERS + WALL_PARAMETERS)
 _DEFAULT = {p.name: p.default for p in NODE_PARAMETERS}
 
 
@@ -68,6 +73,7 @@ class ReplayOptions:
     torque_timeout: float = _DEFAULT['torque_timeout']
     integrator: str = _DEFAULT['integrator']
     step: float = _DEFAULT['step']
+    lockstep: bool = _DEFAULT['lockstep']
     mount_rpy: tuple[float, ...] = _DEFAULT['mount_rpy']
     world_axes: str = _DEFAULT['world_axes']
     align_seconds: float = _DEFAULT['align_seconds']

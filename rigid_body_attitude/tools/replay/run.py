@@ -216,7 +216,7 @@ def _replay(reader: BagReader, sink: BagSink, scene: Scene, values: dict[str, An
     try:
         if first is not None:
             loop = EventLoop(session, sink, plan, timer_period_ns(values['publish_rate']),
-                             first[1])
+                             first[1], values['lockstep'])
             if isinstance(session, GyroSession) and loop.gyro_handler is not None:
                 loop.gyro_handler = mount.gate(session, loop.gyro_handler)
             count = loop.run(chain([first], messages), bar)
