@@ -22,7 +22,7 @@ vector operations / chunk size; invariants as RK4 (``|q|`` by projection).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import numpy as np
@@ -322,22 +322,25 @@ class SceneBatch:
 
     def _segment(self, t_end: float) -> int:
         """Steps up to ``t_end`` with no input switch inside (commands pinned once)."""
-        steps = _step_plan(self.time, t_end, self.scene.step)
-        if not steps:
+        t_start = self.time
+        if not _Steps(t_start, t_end, self.scene.step):
             return 0
         for effect in self.switching:
-            effect.begin_step(self.time, t_end)
+            effect.begin_step(t_start, t_end)
+        taken = 0
         try:
             for start in range(0, self.count, self.chunk):
-                self._advance_chunk(slice(start, min(start + self.chunk, self.count)), steps)
+                taken = self._advance_chunk(slice(start, min(start + self.chunk, self.count)),
+                                            t_start, t_end)
         finally:
             for effect in self.switching:
                 effect.end_step()
         self.time = float(t_end)
-        return len(steps)
+        return taken
 
-    def _advance_chunk(self, bodies: slice, steps: list[tuple[float, float]]) -> None:
-        """Every step of ``steps`` on one cache-sized chunk of bodies, in place."""
+    def _advance_chunk(self, bodies: slice, t_start: float, t_end: float) -> int:
+        """Every step from ``t_start`` to ``t_end`` on one cache-sized chunk of bodies, in
+        place (the steps are generated one by one, never listed); returns their number."""
         chunk = _Chunk(self, bodies)
         y = np.empty((7, chunk.mass.shape[0]))  # (q, h = J ω)
         y[:4] = self._state[:4, bodies]
@@ -346,9 +349,11 @@ class SceneBatch:
         if translation:
             position = self.position[:, bodies]
             velocity = self.velocity[:, bodies]
-            force_start = chunk.force(steps[0][0], y[:4])
-        for t, h in steps:
+            force_start = chunk.force(t_start, y[:4])
+        taken = 0
+        for t, h in _Steps(t_start, t_end, self.scene.step):
             chunk.rk4(t, y, h)
+            taken += 1
             if translation:
                 force_end = chunk.force(t + h, y[:4])
                 Translation.batch_advance(h, chunk.mass, position, velocity, force_start,
@@ -359,6 +364,7 @@ class SceneBatch:
         if translation:
             self.position[:, bodies] = position
             self.velocity[:, bodies] = velocity
+        return taken
 
     def kinetic_energy(self) -> FloatArray:
         """(N,) rotational kinetic energies ``½ ωᵀ J ω`` [J]."""
@@ -368,17 +374,26 @@ class SceneBatch:
         return energy
 
 
-def _step_plan(t: float, t_end: float, step: float) -> list[tuple[float, float]]:
-    """``(t, h)`` of the propagator's steps from ``t`` to ``t_end`` (the last shorter)."""
-    plan = []
-    remaining = t_end - t
-    tolerance = 1e-12 * max(1.0, abs(t_end))
-    while remaining > tolerance:
-        h = step if step < remaining else remaining
-        plan.append((t, h))
-        t += h
+class _Steps:
+    """``(t, h)`` of the propagator's steps from ``t`` to ``t_end`` (the last shorter),
+    generated one at a time (a long segment is never held as a list); true when there is at
+    least one."""
+
+    def __init__(self, t: float, t_end: float, step: float) -> None:
+        self.t, self.t_end, self.step = t, t_end, step
+        self.tolerance = 1e-12 * max(1.0, abs(t_end))
+
+    def __bool__(self) -> bool:
+        return self.t_end - self.t > self.tolerance
+
+    def __iter__(self) -> Iterator[tuple[float, float]]:
+        t, t_end, step, tolerance = self.t, self.t_end, self.step, self.tolerance
         remaining = t_end - t
-    return plan
+        while remaining > tolerance:
+            h = step if step < remaining else remaining
+            yield t, h
+            t += h
+            remaining = t_end - t
 
 
 def _tensors(scene: Scene, inertia: ArrayLike | None,

@@ -1,5 +1,6 @@
 """Campaigns on a real Dask LocalCluster (worker processes): identical runs whatever the
-chunking and workers, resume, a killed worker, failed runs, the CLI, fleet replay."""
+chunking and workers, resume, a killed worker, failed runs, the CLI, fleet replay; specs
+bounded by what the engine can hold, and ``--out`` left as found or resumable."""
 
 from __future__ import annotations
 
@@ -7,8 +8,11 @@ import json
 import logging
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
+import tracemalloc
 from typing import Any, Iterator
 
 import numpy as np
@@ -22,6 +26,8 @@ from rigid_body_attitude.core.paths import config_folders
 from rigid_body_attitude.tools.campaign import (
     FAILURE_REASONS, load_spec, local_cluster, main, read_runs, replay_fleet, run_campaign,
     run_chunk, sample_runs, spec_from_mapping, SpecError)
+from rigid_body_attitude.tools.campaign.budget import (
+    budget_problem, estimate, MAX_BODY_STEPS, MAX_STEPS_PER_RUN)
 from rigid_body_attitude.tools.replay import ReplayOptions
 
 SCENE = {'name': 'box', 'rate_source': 'dynamics', 'integrator': 'rk4', 'step': 0.01,
@@ -264,3 +270,107 @@ def test_the_local_cluster_keeps_glibc_thresholds_and_rare_dask_sampling():
             os.environ.get('MALLOC_TRIM_THRESHOLD_'),
             __import__('dask').config.get('distributed.worker.profile.enabled')))
     assert list(seen.values()) == [(None, False)]
+
+
+def one_error_line(err: str, *keys: str) -> None:
+    """stderr is exactly one ``error:`` line naming every key (no traceback)."""
+    assert err.count('\n') == 1 and err.startswith('error: '), err
+    assert 'Traceback' not in err
+    for key in keys:
+        assert key in err, err
+
+
+@pytest.mark.parametrize('change, keys', [
+    ({'output_times': {'every': 1.0e-12}, 'duration': 60.0},
+     ('output_times.every', '6e+13 output times', 'at most 10000')),
+    ({'output_times': {'every': 1.0e-320}}, ('output_times.every', 'at most 10000')),
+    ({'duration': 1.0e+12}, ('duration', 'steps of 0.01 s per run', 'at most 1e+09')),
+    ({'runs': 10 ** 9, 'duration': 1.0e+6}, ('runs', 'body-steps', 'at most 1e+14')),
+    ({'runs': 10 ** 9, 'chunk': 1}, ('chunk', 'tasks', 'at most 100000')),
+    ({'runs': 10 ** 9, 'chunk': 10 ** 5, 'output_times': {'every': 1.0e-4}},
+     ('runs', 'of results; at most', "quarter of this machine's memory")),
+])
+def test_a_spec_beyond_what_the_engine_can_hold_is_refused_in_one_line(tmp_path, capsys,
+                                                                       change, keys):
+    path = tmp_path / 'huge.yaml'
+    path.write_text(yaml.safe_dump({**SPEC, **change}))
+    out = tmp_path / 'out'
+    assert main([str(path), '--out', str(out), '--serial']) == 2
+    one_error_line(capsys.readouterr().err, *keys)
+    assert not out.exists()
+
+
+def test_the_budget_estimates_steps_rows_and_memory_against_the_machine():
+    small = spec()
+    cost = estimate(small)
+    assert cost.steps_per_run == 100 + 2 + 4 and cost.body_steps == 60 * cost.steps_per_run
+    assert cost.chunks == 4 and cost.result_bytes == 60 * cost.row_bytes
+    assert budget_problem(small) == ''
+    # The same campaign on a machine with 64 kB: its results no longer fit.
+    assert budget_problem(small, memory=64_000).startswith('runs: 60 runs of 4 output times')
+    # A task of all 60 runs fits where the gathered results do, but not its working memory.
+    whole = spec(chunk=60)
+    memory = 8 * estimate(whole).result_bytes
+    assert budget_problem(whole, memory=memory).startswith('chunk: 60 runs per task need')
+    assert "eighth of this machine's memory" in budget_problem(whole, memory=memory)
+    assert MAX_STEPS_PER_RUN * 1000 >= MAX_BODY_STEPS
+
+
+def test_a_task_stays_within_its_estimated_memory_and_holds_no_list_of_steps():
+    """tracemalloc sees every NumPy and Python allocation of the task: its peak is within the
+    estimate, and ten times the steps leave it unchanged (no per-step list)."""
+    peaks = []
+    for duration in (2.0, 20.0):
+        long = spec(runs=64, chunk=64, duration=duration, output_times={'every': 0.5})
+        tracemalloc.start()
+        run_chunk(long, range(64))
+        peaks.append(tracemalloc.get_traced_memory()[1])
+        tracemalloc.stop()
+        assert peaks[-1] <= estimate(long).task_bytes
+    assert abs(peaks[1] - peaks[0]) < 0.1 * peaks[0] + 20_000, peaks
+
+
+def test_a_failed_campaign_leaves_out_as_found_and_the_next_one_runs(tmp_path, capsys):
+    path = tmp_path / 'box.yaml'
+    path.write_text(yaml.safe_dump(SPEC))
+    out = tmp_path / 'out'
+    # No scheduler at that address: the campaign fails before any chunk is finished.
+    assert main([str(path), '--out', str(out), '--scheduler', 'tcp://127.0.0.1:9']) == 2
+    one_error_line(capsys.readouterr().err, 'scheduler')
+    assert not out.exists()
+    # A campaign.json without any chunk (a campaign that finished none) is taken over.
+    out.mkdir()
+    (out / 'campaign.json').write_text(json.dumps({'spec_digest': 'another campaign'}))
+    other = tmp_path / 'other.yaml'
+    other.write_text(yaml.safe_dump({**SPEC, 'seed': 12, 'runs': 20}))
+    assert main([str(other), '--out', str(out), '--serial', '--no-progress']) == 0
+    assert '20 runs, 0 failed' in capsys.readouterr().out
+    # Now the folder holds finished chunks of that campaign: another one is refused.
+    assert main([str(path), '--out', str(out), '--serial']) == 2
+    one_error_line(capsys.readouterr().err, 'finished chunks of another campaign')
+
+
+def test_an_interrupted_campaign_process_exits_130_and_resumes(tmp_path):
+    slow = {**SPEC, 'runs': 96, 'chunk': 8, 'duration': 4.0}
+    path = tmp_path / 'slow.yaml'
+    path.write_text(yaml.safe_dump(slow))
+    out = tmp_path / 'out'
+    command = [sys.executable, '-m', 'rigid_body_attitude.tools.campaign', str(path),
+               '--out', str(out), '--serial', '--no-progress']
+    process = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120.0
+    chunks = out / 'chunks'
+    while time.monotonic() < deadline and process.poll() is None and not (
+            chunks.is_dir() and any(chunks.glob('*.parquet'))):
+        time.sleep(0.02)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130
+    one_error_line(err, 'interrupted', 'resume')
+    finished = len(list((out / 'chunks').glob('*.parquet')))
+    assert 1 <= finished < 12
+    assert not list((out / 'chunks').glob('*.tmp'))
+    resumed = run_campaign(spec_from_mapping(slow), out, serial=True, plot=False)
+    assert (resumed.chunks_run, resumed.chunks_resumed) == (12 - finished, finished)
+    assert_same_runs(read_runs(out, spec_from_mapping(slow)),
+                     run_chunk(spec_from_mapping(slow), range(96)))

@@ -19,6 +19,7 @@ import csv
 import json
 import logging
 import os
+import shutil
 import sys
 import time
 from collections.abc import Iterator
@@ -31,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.errors import AttitudeError
+from rigid_body_attitude.tools.campaign.budget import estimate
 from rigid_body_attitude.tools.campaign.plot import write_envelopes
 from rigid_body_attitude.tools.campaign.runner import FAILURE_REASONS, run_chunk
 from rigid_body_attitude.tools.campaign.spec import CampaignSpec
@@ -78,9 +80,9 @@ def default_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)))
 
 
-def chunk_runs(spec: CampaignSpec) -> list[NDArray[np.int64]]:
-    """The run indices of each chunk."""
-    return [np.arange(start, min(start + spec.chunk, spec.runs), dtype=np.int64)
+def chunk_runs(spec: CampaignSpec) -> list[range]:
+    """The run indices of each chunk (ranges: a task receives two numbers, not its runs)."""
+    return [range(start, min(start + spec.chunk, spec.runs))
             for start in range(0, spec.runs, spec.chunk)]
 
 
@@ -160,21 +162,23 @@ def run_campaign(spec: CampaignSpec, out: str | Path, *, scheduler: str = '',
     store = ChunkStore(out, spec)
     chunks = chunk_runs(spec)
     pending = [index for index in range(len(chunks)) if not store.done(index)]
-    done_runs = sum(chunks[index].shape[0] for index in range(len(chunks))
-                    if index not in set(pending))
-    bar = _progress(progress, spec, done_runs)
+    _check_disk(store.folder, spec, sum(len(chunks[index]) for index in pending))
+    bar = _progress(progress, spec, spec.runs - sum(len(chunks[index]) for index in pending))
     kept: dict[int, dict[str, NDArray[Any]]] = {}
     try:
         if serial:
             for index in pending:
                 kept[index] = run_chunk(spec, chunks[index])
                 store.write(index, kept[index])
-                bar.update(chunks[index].shape[0])
+                bar.update(len(chunks[index]))
         elif client is not None:
             _run_on(client, spec, store, chunks, pending, bar, kept)
         elif pending:
             with dask_client(scheduler, workers) as own:
                 _run_on(own, spec, store, chunks, pending, bar, kept)
+    except BaseException:
+        store.abandon()
+        raise
     finally:
         bar.close()
     compute = time.perf_counter() - begin
@@ -184,8 +188,21 @@ def run_campaign(spec: CampaignSpec, out: str | Path, *, scheduler: str = '',
     return result
 
 
+def _check_disk(folder: Path, spec: CampaignSpec, runs: int) -> None:
+    """Refuse when the file system of ``folder`` lacks room for the rows of ``runs`` runs
+    (and as much again for the summary's margin)."""
+    existing = folder.absolute()
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    need = 2 * estimate(spec).row_bytes * runs
+    free = shutil.disk_usage(existing).free
+    if need > free:
+        raise CampaignError(f'--out {str(folder)!r}: {runs} runs need about {need / 2 ** 20:.3g}'
+                            f' MiB on disk; {free / 2 ** 20:.3g} MiB free')
+
+
 def _run_on(client: Any, spec: CampaignSpec, store: ChunkStore,
-            chunks: list[NDArray[np.int64]], pending: list[int], bar: Any,
+            chunks: list[range], pending: list[int], bar: Any,
             kept: dict[int, dict[str, NDArray[Any]]]) -> None:
     """Submit the pending chunks; write each result as it arrives (and keep it in
     ``kept``)."""
@@ -206,7 +223,7 @@ def _run_on(client: Any, spec: CampaignSpec, store: ChunkStore,
         if not store.done(index):
             store.write(index, columns)
         kept[index] = columns
-        bar.update(chunks[index].shape[0])
+        bar.update(len(chunks[index]))
         future.release()
 
 

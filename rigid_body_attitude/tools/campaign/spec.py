@@ -47,6 +47,7 @@ from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.scene import load_scene, Scene, scene_from_mapping
 from rigid_body_attitude.core.yaml_files import quote, read_yaml
+from rigid_body_attitude.tools.campaign.budget import budget_problem
 
 __all__ = ['CampaignSpec', 'CommandDispersion', 'InertiaDispersion', 'MAX_OUTPUT_TIMES',
            'MAX_RUNS', 'Spread', 'SpecError', 'load_spec', 'spec_from_mapping']
@@ -59,6 +60,7 @@ MAX_OUTPUT_TIMES = 10_000
 MAX_COMMANDS = 1000
 DEFAULT_CHUNK = 8192
 COMMAND_EFFECT = 'constant_torque'
+CONTROLLER_EFFECT = 'attitude_pd'
 _TOP_KEYS = {'name', 'description', 'scene', 'runs', 'seed', 'duration', 'output_times',
              'chunk', 'dispersions', 'commands', 'statistics'}
 _DISPERSION_KEYS = {'inertia', 'attitude', 'omega_body', 'effects', 'commands'}
@@ -122,6 +124,11 @@ class CampaignSpec:
     target: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     source: str = ''
 
+    @property
+    def closed_loop(self) -> bool:
+        """Whether the scene runs an attitude controller (settling and torque recorded)."""
+        return any(name == CONTROLLER_EFFECT for name, _ in self.scene.effects)
+
 
 def load_spec(path: str | Path) -> CampaignSpec:
     """Load and validate a campaign spec file; every fault is one :class:`SpecError` whose
@@ -159,7 +166,7 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
     _keys('statistics', statistics, _STATISTICS_KEYS)
     boresight = _direction('statistics.boresight', statistics.get('boresight', [0, 0, 1]))
     default_target = quaternion.rotate(scene.initial_attitude, boresight)
-    return CampaignSpec(
+    spec = CampaignSpec(
         name=_text('name', data.get('name', default_name)),
         description=_text('description', data.get('description', '')),
         scene=scene, runs=_count('runs', data['runs'], MAX_RUNS),
@@ -177,6 +184,10 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
         target=_direction('statistics.target', statistics.get('target',
                                                               default_target.tolist())),
         source=source)
+    problem = budget_problem(spec)
+    if problem:
+        raise SpecError(problem)
+    return spec
 
 
 def _keys(where: str, data: Mapping[Any, Any], valid: set[str],
@@ -317,10 +328,11 @@ def _output_times(value: Any, duration: float) -> tuple[float, ...]:
     if isinstance(value, Mapping):
         _keys('output_times', value, {'every'}, ('every',))
         every = _positive('output_times.every', value['every'])
-        count = math.floor(duration / every * (1 + 1e-12))
-        if count > MAX_OUTPUT_TIMES:
-            raise SpecError(f'Expected output_times.every to give at most {MAX_OUTPUT_TIMES} '
-                            f'times, got {count}')
+        ratio = duration / every  # at most 1e75 / 1e-308: inf, never an error
+        if not ratio <= MAX_OUTPUT_TIMES + 1:
+            raise SpecError(f'output_times.every: {every:g} s gives {ratio:.3g} output times '
+                            f'over {duration:g} s; at most {MAX_OUTPUT_TIMES}')
+        count = min(math.floor(ratio * (1 + 1e-12)), MAX_OUTPUT_TIMES)
         times = [every * k for k in range(1, count + 1)]
     elif isinstance(value, list) and len(value) <= MAX_OUTPUT_TIMES:
         times = [_positive(f'output_times[{k}]', item) for k, item in enumerate(value)]
