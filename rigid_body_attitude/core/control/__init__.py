@@ -1,0 +1,8 @@
+"""Attitude control laws, pure NumPy: what a controller node and the batch engine both run."""
+
+from __future__ import annotations
+
+from rigid_body_attitude.core.control.quaternion_pd import (
+    as_axis_gains, pd_torque_body, pd_torque_floats)
+
+__all__ = ['as_axis_gains', 'pd_torque_body', 'pd_torque_floats']
