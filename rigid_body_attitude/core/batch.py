@@ -31,7 +31,8 @@ from numpy.typing import ArrayLike, NDArray
 from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.batch_rows import cross_rows, matrix_rows_product
 from rigid_body_attitude.core.effects import (
-    BatchChunk, CommandedEffect, Effect, ForceEffect, RotorEffect, TorqueEffect)
+    BatchChunk, CommandedEffect, Effect, ForceEffect, RotorEffect, SampledTorque, TorqueEffect)
+from rigid_body_attitude.core.effects.base import segment_end
 from rigid_body_attitude.core.effects.translation import Translation
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.inertia import Inertia
@@ -261,6 +262,10 @@ class SceneBatch:
             self.position = np.repeat(self.translation.position[:, None], self.count, axis=1)
             self.velocity = np.repeat(self.translation.velocity[:, None], self.count, axis=1)
         self.switching = [e for e in self.effects if isinstance(e, CommandedEffect)]
+        self.sampled = [e for e in self.effects if isinstance(e, SampledTorque)]
+        #: Each effect's own per-body state rows (a controller's held torque), or None.
+        self.effect_states = [np.zeros((e.STATE_ROWS, self.count))
+                              if isinstance(e, SampledTorque) else None for e in self.effects]
         self.input_routes = {name: [e for e in self.effects if name in e.input_names]
                              for e in self.effects for name in e.input_names}
 
@@ -316,14 +321,40 @@ class SceneBatch:
         if self.scene.step * speed > 2.0:
             raise InputError(f'A body turns {self.scene.step * speed:.3g} rad per step of '
                              f'{self.scene.step} s: above RK4\'s limit of 2 rad')
-        switches = sorted({time for effect in self.switching for time in effect.switch_times()
-                           if self.time < time < t_end})
-        return sum(self._segment(boundary) for boundary in switches + [t_end])
+        steps = 0
+        tolerance = 1e-12 * max(1.0, abs(t_end))
+        while t_end - self.time > tolerance:
+            due = [controller for controller in self.sampled if controller.due(self.time)]
+            if due:
+                self._sample(due)
+            steps += self._segment(segment_end(self.time, t_end, self.switching, self.sampled))
+        return steps
+
+    def _sample(self, due: list[SampledTorque]) -> None:
+        """The controllers ``due`` sample every body's state at the current time."""
+        for start in range(0, self.count, self.chunk):
+            bodies = slice(start, min(start + self.chunk, self.count))
+            chunk = _Chunk(self, bodies)
+            for controller, view in chunk.sampled:
+                if controller in due:
+                    controller.sample_batch(self.time, self._state[:4, bodies],
+                                            self._state[4:, bodies], view)
+        for controller in due:
+            controller.sampled(self.time)
+
+    def torque_used(self, name: str) -> tuple[FloatArray, FloatArray]:
+        """``∫|τ| dt`` [N m s] and peak ``|τ|`` [N m] of every body of the controller
+        ``name`` (a :class:`.SampledTorque`) up to now, each (N,)."""
+        for effect, state in zip(self.effects, self.effect_states):
+            if effect.name == name and isinstance(effect, SampledTorque) and state is not None:
+                return effect.batch_torque_used(self.time, state)
+        raise InputError(f'Scene {self.scene.name!r} has no controller {name!r}')
 
     def _segment(self, t_end: float) -> int:
         """Steps up to ``t_end`` with no input switch inside (commands pinned once)."""
         t_start = self.time
         if not _Steps(t_start, t_end, self.scene.step):
+            self.time = float(t_end)
             return 0
         for effect in self.switching:
             effect.begin_step(t_start, t_end)
@@ -423,6 +454,9 @@ def _effect_parameters(effect: Effect, dispersed: Mapping[str, ArrayLike],
     unknown = sorted(set(dispersed) - set(effect.params))
     if unknown:
         raise InputError(f'Effect {effect.name!r} has no parameter {unknown[0]!r}')
+    shared = sorted(set(dispersed) & effect.shared_parameters)
+    if shared:
+        raise InputError(f'Effect {effect.name!r}: {shared[0]!r} is shared by every body')
     result: dict[str, Any] = {}
     for name, value in effect.params.items():
         if name in dispersed:
@@ -463,10 +497,15 @@ class _Chunk:
         self.torques: list[tuple[TorqueEffect, BatchChunk]] = []
         self.rotors: list[tuple[RotorEffect, BatchChunk]] = []
         self.forces: list[tuple[ForceEffect, BatchChunk]] = []
-        for effect, (parameters, dispersed) in zip(batch.effects, batch._parameters):
+        self.sampled: list[tuple[SampledTorque, BatchChunk]] = []
+        for effect, (parameters, dispersed), state in zip(batch.effects, batch._parameters,
+                                                           batch.effect_states):
             sliced = {name: value[..., bodies] if name in dispersed else value
                       for name, value in parameters.items()}
-            view = BatchChunk(self.tensor, self.mass, sliced, self.diagonal)
+            view = BatchChunk(self.tensor, self.mass, sliced, self.diagonal,
+                              state=np.empty((0, 0)) if state is None else state[:, bodies])
+            if isinstance(effect, SampledTorque):
+                self.sampled.append((effect, view))
             if isinstance(effect, TorqueEffect):
                 self.torques.append((effect, view))
             if isinstance(effect, RotorEffect):

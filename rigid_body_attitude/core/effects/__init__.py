@@ -11,11 +11,11 @@ import pkgutil
 
 from rigid_body_attitude.core.effects.base import (
     BatchChunk, BodyProperties, CommandedEffect, ConservativeTorque, Effect, EFFECTS, ForceEffect,
-    RateCorrection, RotorEffect, StatefulEffect, TorqueEffect)
+    RateCorrection, RotorEffect, SampledTorque, StatefulEffect, TorqueEffect)
 
 __all__ = ['BatchChunk', 'BodyProperties', 'CommandedEffect', 'ConservativeTorque', 'EFFECTS',
-           'Effect', 'ForceEffect', 'RateCorrection', 'RotorEffect', 'StatefulEffect',
-           'TorqueEffect']
+           'Effect', 'ForceEffect', 'RateCorrection', 'RotorEffect', 'SampledTorque',
+           'StatefulEffect', 'TorqueEffect']
 
 for _module in pkgutil.iter_modules(__path__):
     if _module.name != 'base':
