@@ -18,6 +18,7 @@ from __future__ import annotations
 import csv
 import json
 import logging
+import math
 import os
 import shutil
 import sys
@@ -36,7 +37,8 @@ from rigid_body_attitude.tools.campaign.budget import estimate
 from rigid_body_attitude.tools.campaign.plot import write_envelopes
 from rigid_body_attitude.tools.campaign.runner import FAILURE_REASONS, run_chunk
 from rigid_body_attitude.tools.campaign.spec import CampaignSpec
-from rigid_body_attitude.tools.campaign.statistics import METRICS, percentile_table
+from rigid_body_attitude.tools.campaign.statistics import (
+    CLOSED_LOOP, METRICS, percentile_table)
 from rigid_body_attitude.tools.campaign.storage import ChunkStore, spec_digest
 
 __all__ = ['CampaignError', 'CampaignResult', 'LOCAL_CLUSTER_CONFIG', 'chunk_runs',
@@ -61,6 +63,7 @@ class CampaignResult:
         elapsed: seconds of computing (chunks) and of the whole call.
         times: ``0`` and the output times [s]; statistics: percentiles (P, T) per metric.
         failures: failed runs by reason.
+        closed_loop: with a controller, :func:`closed_loop_summary` (else empty).
     """
 
     folder: Path
@@ -73,6 +76,7 @@ class CampaignResult:
     times: NDArray[np.float64]
     statistics: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     failures: dict[str, int] = field(default_factory=dict)
+    closed_loop: dict[str, Any] = field(default_factory=dict)
 
 
 def default_workers() -> int:
@@ -256,12 +260,14 @@ def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
     failures = {reason: int(np.sum(arrays['reason'] == index))
                 for index, reason in enumerate(FAILURE_REASONS)}
     _write_statistics(store.folder / 'statistics.csv', times, spec.percentiles, table)
-    summary = {'name': spec.name, 'runs': spec.runs, 'succeeded': int(np.sum(~failed)),
-               'failed': int(np.sum(failed)), 'failures_by_reason': failures,
-               'seed': str(spec.seed), 'times': times.tolist(),
-               'percentiles': list(spec.percentiles),
-               'statistics': {name: table[name].tolist() for name in METRICS},
-               'failed_runs': _failed_runs(arrays, failed)}
+    summary: dict[str, Any] = {
+        'name': spec.name, 'runs': spec.runs, 'succeeded': int(np.sum(~failed)),
+        'failed': int(np.sum(failed)), 'failures_by_reason': failures, 'seed': str(spec.seed),
+        'times': times.tolist(), 'percentiles': list(spec.percentiles),
+        'statistics': {name: table[name].tolist() for name in METRICS},
+        'failed_runs': _failed_runs(arrays, failed)}
+    if spec.closed_loop:
+        summary['closed_loop'] = closed_loop_summary(spec, arrays, failed)
     (store.folder / 'summary.json').write_text(json.dumps(summary, indent=1, allow_nan=True))
     if plot:
         write_envelopes(store.folder / 'summary.png', times, spec.percentiles, table,
@@ -269,7 +275,26 @@ def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
     return CampaignResult(folder=store.folder, runs=spec.runs, failed=int(np.sum(failed)),
                           chunks_run=0, chunks_resumed=chunk_count, compute_seconds=0.0,
                           total_seconds=0.0, times=times, statistics=table,
-                          failures=failures)
+                          failures=failures, closed_loop=summary.get('closed_loop', {}))
+
+
+def closed_loop_summary(spec: CampaignSpec, arrays: dict[str, NDArray[Any]],
+                        failed: NDArray[np.bool_]) -> dict[str, Any]:
+    """The settling threshold, how many succeeded runs settled, and the percentiles of
+    settling time [s] (inf: not settled), torque used [N m s] and peak torque [N m]."""
+    ok = ~failed
+    return {'settling_deg': spec.settling_deg,
+            'settled': int(np.sum(np.isfinite(arrays['settling_time_s'][ok]))),
+            'percentiles': {name: _percentiles(arrays[name][ok], spec.percentiles)
+                            for name in CLOSED_LOOP}}
+
+
+def _percentiles(values: NDArray[np.float64], percentiles: tuple[float, ...]) -> list[float]:
+    """The percentiles of ``values`` (inf counts as the largest), NaN without values."""
+    if values.shape[0] == 0:
+        return [math.nan] * len(percentiles)
+    return [float(value) for value in
+            np.percentile(values, list(percentiles), method='inverted_cdf')]
 
 
 def _failed_runs(arrays: dict[str, NDArray[Any]], failed: NDArray[np.bool_]

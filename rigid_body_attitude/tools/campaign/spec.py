@@ -24,7 +24,9 @@ Format (``config/campaigns/`` ships examples)::
     statistics:
       percentiles: [5, 50, 95]
       boresight: [0, 0, 1]           # body axis for pointing and nutation
-      target: [0, 0, 1]              # world direction (default: boresight at the start)
+      target: [0, 0, 1]              # world direction (default: boresight at the start, or
+                                     # at the attitude_pd controller's target)
+      settling_deg: 1.0              # closed loop: settled once the pointing error stays below
 
 Errors are one :class:`SpecError` naming the file and the key path
 (``dispersions.attitude.cone_deg``), as for scene files (:mod:`rigid_body_attitude.core.scene`:
@@ -44,6 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core import quaternion
+from rigid_body_attitude.core.effects.attitude_pd import AttitudePD
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.scene import load_scene, Scene, scene_from_mapping
 from rigid_body_attitude.core.yaml_files import quote, read_yaml
@@ -60,11 +63,11 @@ MAX_OUTPUT_TIMES = 10_000
 MAX_COMMANDS = 1000
 DEFAULT_CHUNK = 8192
 COMMAND_EFFECT = 'constant_torque'
-CONTROLLER_EFFECT = 'attitude_pd'
+CONTROLLER_EFFECT = AttitudePD.name
 _TOP_KEYS = {'name', 'description', 'scene', 'runs', 'seed', 'duration', 'output_times',
              'chunk', 'dispersions', 'commands', 'statistics'}
 _DISPERSION_KEYS = {'inertia', 'attitude', 'omega_body', 'effects', 'commands'}
-_STATISTICS_KEYS = {'percentiles', 'boresight', 'target'}
+_STATISTICS_KEYS = {'percentiles', 'boresight', 'target', 'settling_deg'}
 
 
 class SpecError(SceneError):
@@ -123,6 +126,7 @@ class CampaignSpec:
     boresight: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     target: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     source: str = ''
+    settling_deg: float = 1.0
 
     @property
     def closed_loop(self) -> bool:
@@ -165,7 +169,7 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
     statistics = _mapping('statistics', data.get('statistics', {}))
     _keys('statistics', statistics, _STATISTICS_KEYS)
     boresight = _direction('statistics.boresight', statistics.get('boresight', [0, 0, 1]))
-    default_target = quaternion.rotate(scene.initial_attitude, boresight)
+    default_target = quaternion.rotate(_controller_target(scene), boresight)
     spec = CampaignSpec(
         name=_text('name', data.get('name', default_name)),
         description=_text('description', data.get('description', '')),
@@ -183,7 +187,7 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
         boresight=boresight,
         target=_direction('statistics.target', statistics.get('target',
                                                               default_target.tolist())),
-        source=source)
+        source=source, settling_deg=_settling(statistics, scene))
     problem = budget_problem(spec)
     if problem:
         raise SpecError(problem)
@@ -348,6 +352,28 @@ def _output_times(value: Any, duration: float) -> tuple[float, ...]:
     return tuple(times)
 
 
+def _controller_target(scene: Scene) -> FloatArray:
+    """The attitude the scene's controller steers to, or the scene's initial attitude."""
+    for effect in scene.build_effects():
+        if isinstance(effect, AttitudePD):
+            return np.array(effect.target)
+    return scene.initial_attitude
+
+
+def _settling(statistics: Mapping[Any, Any], scene: Scene) -> float:
+    """``statistics.settling_deg``: closed-loop scenes only, in (0, 180]."""
+    closed = any(name == CONTROLLER_EFFECT for name, _ in scene.effects)
+    if 'settling_deg' not in statistics:
+        return 1.0
+    if not closed:
+        raise SpecError(f'statistics.settling_deg needs a scene with the {CONTROLLER_EFFECT} '
+                        f'effect (a closed loop)')
+    value = _positive('statistics.settling_deg', statistics['settling_deg'])
+    if value > 180.0:
+        raise SpecError(f'Expected statistics.settling_deg to be at most 180, got {value!r}')
+    return value
+
+
 def _inertia(value: Any) -> InertiaDispersion | None:
     if value is None:
         return None
@@ -419,6 +445,9 @@ def _effects(value: Any, scene: Scene, commands: bool) -> dict[str, dict[str, Sp
         result[name] = {}
         for parameter, spread in parameters.items():
             key = f'dispersions.effects.{name}.{parameter}'
+            if parameter in effects[name].shared_parameters:
+                raise SpecError(f'{key}: every run shares {parameter} (it cannot be '
+                                f'dispersed)')
             nominal = effects[name].params.get(parameter)
             if isinstance(nominal, bool) or not isinstance(nominal, (float, int, np.ndarray)):
                 raise SpecError(f'Expected {key} to name a numeric parameter of {name}; '
