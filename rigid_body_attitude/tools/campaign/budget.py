@@ -8,9 +8,9 @@ output time), the output times and the runs per task (``chunk``), :func:`estimat
 * ``row_bytes``: one run's result row (parameters, final state, each metric at ``t = 0`` and
   every output time); ``result_bytes``: every run's rows, which the client gathers for the
   statistics;
-* ``task_bytes``: the working memory of one task: the engine's state and work arrays per body
-  (:data:`ENGINE_BYTES_PER_BODY`) and three copies of its rows (the metrics, the result sent
-  back, its Parquet table).
+* ``task_bytes``: the working memory of one task: a fixed part (:data:`TASK_FIXED_BYTES`),
+  the engine's state and work arrays per body (:data:`ENGINE_BYTES_PER_BODY`) and three
+  copies of its rows (the metrics, the result sent back, its Parquet table).
 
 :func:`budget_problem` names the first key whose value exceeds a limit: at most
 :data:`MAX_STEPS_PER_RUN` steps per run and :data:`MAX_BODY_STEPS` body-steps in all (time);
@@ -30,7 +30,8 @@ if TYPE_CHECKING:
     from rigid_body_attitude.tools.campaign.spec import CampaignSpec
 
 __all__ = ['ENGINE_BYTES_PER_BODY', 'Estimate', 'MAX_BODY_STEPS', 'MAX_CHUNKS',
-           'MAX_STEPS_PER_RUN', 'budget_problem', 'estimate', 'machine_memory']
+           'MAX_STEPS_PER_RUN', 'TASK_FIXED_BYTES', 'budget_problem', 'estimate',
+           'machine_memory']
 
 #: Most integration steps of one run.
 MAX_STEPS_PER_RUN = 10 ** 9
@@ -41,6 +42,8 @@ MAX_CHUNKS = 100_000
 #: The batch engine's state, work arrays, per-body tensors and the drawn parameters of one
 #: body [bytes], an upper bound (``test/tools/test_campaign.py`` measures a task's peak).
 ENGINE_BYTES_PER_BODY = 2048
+#: A task's memory whatever its size (the scene, its effects, the spec) [bytes], a bound.
+TASK_FIXED_BYTES = 2 ** 20
 #: Metrics recorded per run and output time (:data:`.statistics.METRICS`), and per-run
 #: scalars of closed-loop campaigns (settling time, torque used and peak).
 _METRIC_COLUMNS = 5
@@ -88,7 +91,7 @@ def estimate(spec: CampaignSpec) -> Estimate:
     return Estimate(steps_per_run=steps, body_steps=steps * spec.runs,
                     chunks=-(-spec.runs // spec.chunk), row_bytes=row,
                     result_bytes=row * spec.runs,
-                    task_bytes=per_task * (ENGINE_BYTES_PER_BODY + 3 * row))
+                    task_bytes=TASK_FIXED_BYTES + per_task * (ENGINE_BYTES_PER_BODY + 3 * row))
 
 
 def budget_problem(spec: CampaignSpec, memory: int = 0) -> str:

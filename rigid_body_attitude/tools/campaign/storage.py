@@ -20,10 +20,11 @@ campaign refused or failed before that leaves the folder as it was.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
-import pickle
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -39,8 +40,32 @@ __all__ = ['ChunkStore', 'spec_digest']
 
 
 def spec_digest(spec: CampaignSpec) -> str:
-    """A digest of everything that decides the runs' results (not the file's path)."""
-    return hashlib.sha256(pickle.dumps(replace(spec, source=''), protocol=4)).hexdigest()
+    """A digest of everything that decides the runs' results (not the file's path): of its
+    values, written out exactly (floats in hexadecimal), so the same campaign has the same
+    digest whether read from a file or given as a mapping."""
+    text = json.dumps(_canonical(replace(spec, source='')), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _canonical(value: Any) -> Any:
+    """``value`` as plain JSON values, exactly (a dataclass or object by its fields)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {field.name: _canonical(getattr(value, field.name))
+                for field in dataclasses.fields(value)}
+    if isinstance(value, np.ndarray):
+        return [list(value.shape), [float(item).hex() for item in value.ravel().tolist()]]
+    if isinstance(value, np.generic):
+        return _canonical(value.item())
+    if isinstance(value, float):
+        return value.hex()
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    if isinstance(value, Mapping):
+        return [[str(key), _canonical(item)] for key, item in
+                sorted(value.items(), key=lambda pair: str(pair[0]))]
+    if isinstance(value, (list, tuple)):
+        return [_canonical(item) for item in value]
+    return {type(value).__name__: _canonical(vars(value))}
 
 
 def _column(array: NDArray[Any]) -> pa.Array:
