@@ -32,7 +32,7 @@ from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.batch_rows import cross_rows, matrix_rows_product
 from rigid_body_attitude.core.effects import (
     BatchChunk, CommandedEffect, Effect, ForceEffect, RotorEffect, SampledTorque, TorqueEffect)
-from rigid_body_attitude.core.effects.base import segment_end
+from rigid_body_attitude.core.effects.sampled import segment_end
 from rigid_body_attitude.core.effects.translation import Translation
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.inertia import Inertia
@@ -344,7 +344,8 @@ class SceneBatch:
 
     def torque_used(self, name: str) -> tuple[FloatArray, FloatArray]:
         """``∫|τ| dt`` [N m s] and peak ``|τ|`` [N m] of every body of the controller
-        ``name`` (a :class:`.SampledTorque`) up to now, each (N,)."""
+        ``name`` (a :class:`.SampledTorque`) from its first sample to the batch's time, each
+        (N,)."""
         for effect, state in zip(self.effects, self.effect_states):
             if effect.name == name and isinstance(effect, SampledTorque) and state is not None:
                 return effect.batch_torque_used(self.time, state)
@@ -498,8 +499,9 @@ class _Chunk:
         self.rotors: list[tuple[RotorEffect, BatchChunk]] = []
         self.forces: list[tuple[ForceEffect, BatchChunk]] = []
         self.sampled: list[tuple[SampledTorque, BatchChunk]] = []
+        states = batch.effect_states
         for effect, (parameters, dispersed), state in zip(batch.effects, batch._parameters,
-                                                           batch.effect_states):
+                                                          states):
             sliced = {name: value[..., bodies] if name in dispersed else value
                       for name, value in parameters.items()}
             view = BatchChunk(self.tensor, self.mass, sliced, self.diagonal,

@@ -27,7 +27,8 @@ from rigid_body_attitude.core.dynamics import RigidBodyModel
 from rigid_body_attitude.core.effects import (
     CommandedEffect, ConservativeTorque, Effect, ForceEffect, RateCorrection, RotorEffect,
     SampledTorque, StatefulEffect, TorqueEffect)
-from rigid_body_attitude.core.effects.base import ForceSum, segment_end
+from rigid_body_attitude.core.effects.base import ForceSum
+from rigid_body_attitude.core.effects.sampled import segment_end
 from rigid_body_attitude.core.errors import InputError, IntegratorError
 from rigid_body_attitude.core.integrators import (
     dynamics_integrator, strapdown_method, torque_integrators)

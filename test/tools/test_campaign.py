@@ -451,8 +451,8 @@ def test_a_run_of_a_closed_loop_campaign_is_the_single_body_propagator_with_its_
                           'omega_body': drawn.omega_body[0].tolist()},
         'effects': [{'attitude_pd': pd}]})
     propagator = DynamicsPropagator(scene)
-    for time in (3.0, 12.0):
-        propagator.advance_to(time)
+    for output_time in (3.0, 12.0):
+        propagator.advance_to(output_time)
     error = quaternion.attitude_error(propagator.state.attitude, batch_run['attitude'][0])
     assert float(error) < 1e-12
     assert np.max(np.abs(propagator.state.omega_body - batch_run['omega_body'][0])) < 1e-12

@@ -5,7 +5,7 @@ the body's attitude ``q`` and rate ``ω`` and commands the body torque of
 :func:`~rigid_body_attitude.core.control.quaternion_pd.pd_torque_body`,
 ``τ = −k_p sign(q_err,w) q_err,xyz − k_d ω`` with ``q_err = q_target* ⊗ q``, each component
 clipped to ``±torque_limit``; the torque is held until the next sample (a zero-order hold,
-as a digital controller's actuator command). The law is B. Wie, H. Weiss and
+as a digital controller's actuator command). Source: the regulator of B. Wie, H. Weiss and
 A. Arapostathis, "Quaternion feedback regulator for spacecraft eigenaxis rotations",
 J. Guidance, Control, and Dynamics 12(3):375-380, 1989. The same law, on the same samples,
 runs in the single-body propagator and in the batch engine (every body with its own held
@@ -28,7 +28,8 @@ from rigid_body_attitude.core import quaternion
 from rigid_body_attitude.core.control.quaternion_pd import pd_torque_body, pd_torque_floats
 from rigid_body_attitude.core.effects.base import (
     as_quat, as_vec, BatchChunk, BodyProperties, FloatArray, nonnegative, Parameter, positive,
-    Quat, real, register, REQUIRED, SampledTorque, vector3, Vec)
+    Quat, real, register, REQUIRED, vector3, Vec)
+from rigid_body_attitude.core.effects.sampled import SampledTorque
 
 
 def _axes(value: Any) -> float | FloatArray:
