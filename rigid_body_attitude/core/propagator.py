@@ -27,8 +27,9 @@ from rigid_body_attitude.core.dynamics.diagnostics import Diagnostics, Diagnosti
 from rigid_body_attitude.core.dynamics.euler import RigidBodyModel
 from rigid_body_attitude.core.dynamics.effects import (
     CommandedEffect, ConservativeTorque, Effect, ForceEffect, RateCorrection, RotorEffect,
-    StatefulEffect, TorqueEffect)
+    SampledTorque, StatefulEffect, TorqueEffect)
 from rigid_body_attitude.core.dynamics.effects.base import ForceSum
+from rigid_body_attitude.core.dynamics.effects.sampled import segment_end
 from rigid_body_attitude.core.errors import InputError, IntegratorError
 from rigid_body_attitude.core.attitude.integrators import strapdown_method
 from rigid_body_attitude.core.dynamics.integrators import dynamics_integrator, torque_integrators
@@ -275,6 +276,7 @@ class DynamicsPropagator(_Propagator):
                            and torques and not self.model.has_rotor else [])
         self.force_effects = [e for e in self.effects if isinstance(e, ForceEffect)]
         self.switching = [e for e in self.effects if isinstance(e, CommandedEffect)]
+        self.sampled = [e for e in self.effects if isinstance(e, SampledTorque)]
         #: Sum of the scene's forces at ``(t, q)`` (the one force effect's own, when alone).
         self.force_sum: ForceSum = (self.force_effects[0].force if len(self.force_effects) == 1
                                     else self._force)
@@ -305,6 +307,7 @@ class DynamicsPropagator(_Propagator):
             raise InputError(f'Expected `h` to be a positive finite number of seconds, got {h!r}')
         state = self.state
         t = state.time
+        self._sample_due(t)
         for effect in self.switching:
             effect.begin_step(t, t + h)
         try:
@@ -370,8 +373,10 @@ class DynamicsPropagator(_Propagator):
     def advance_to(self, t_end: float) -> int:
         """Integrate with the scene's step up to ``t_end`` (the last step may be shorter).
 
-        Steps end exactly where a commanded input switches (a new command's stamp, a timeout),
-        so no step straddles a jump of the torque and the integrator keeps its order. Returns
+        Steps end exactly where a commanded input switches (a new command's stamp, a timeout)
+        and at every sample instant of a controller (:class:`.SampledTorque`, which samples
+        the state there), so no step straddles a jump of the torque and the integrator keeps
+        its order. Returns
         the number of steps taken. Raises :class:`InputError` for a non-finite time or one
         needing more than :data:`MAX_STEPS_PER_CALL` steps; the state is unchanged. A step
         that fails (:class:`IntegratorError`) leaves the state after the last good step.
@@ -381,12 +386,25 @@ class DynamicsPropagator(_Propagator):
         if (t_end - self.state.time) / self.scene.step > MAX_STEPS_PER_CALL:
             raise InputError(f'Advancing to t_end={t_end!r} from {self.state.time!r} needs '
                              f'more than {MAX_STEPS_PER_CALL} steps of {self.scene.step} s')
-        start = self.state.time
-        if not self.switching:
+        if not self.switching and not self.sampled:
             return self._advance_steps(t_end)
-        switches = sorted({time for effect in self.switching for time in effect.switch_times()
-                           if start < time < t_end})
-        return sum(self._advance_steps(boundary) for boundary in switches + [t_end])
+        steps = 0
+        tolerance = 1e-12 * max(1.0, abs(t_end))
+        while t_end - self.state.time > tolerance:
+            t = self.state.time
+            self._sample_due(t)
+            boundary = segment_end(t, t_end, self.switching, self.sampled)
+            taken = self._advance_steps(boundary)
+            if not taken:
+                self.state.time = float(boundary)
+            steps += taken
+        return steps
+
+    def _sample_due(self, t: float) -> None:
+        """Controllers whose sample instant ``t`` is take their sample of the state."""
+        for controller in self.sampled:
+            if controller.due(t):
+                controller.sample(t, self.state.attitude_tuple(), self.state.omega_tuple())
 
     def _advance_steps(self, t_end: float) -> int:
         """Steps of the scene's step up to ``t_end``, the last one shorter (no input switches

@@ -83,7 +83,7 @@ def error_model_from(values: Mapping[str, Any],
 def orientation_block(covariance: Sequence[float]) -> tuple[float, ...]:
     """The row-major 3×3 orientation block (rows and columns 3-5) of the 36 row-major values
     of a ``PoseWithCovariance``, checked as the covariance will take it
-    (:func:`~rigid_body_attitude.core.attitude_covariance.checked_attitude_covariance`:
+    (:func:`~rigid_body_attitude.core.imu.attitude_covariance.checked_attitude_covariance`:
     finite, symmetric, positive semi-definite, variances at most π² rad²; else InputError
     saying which), symmetrised and with its diagonal floored."""
     values = tuple(covariance)

@@ -25,6 +25,7 @@ from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
 BODY = BodyProperties(Inertia([0.5, 0.7, 0.9]), 2.0)
 #: Parameters that build each torque effect with a non-zero torque.
 TORQUE_EFFECT_PARAMETERS = {
+    'attitude_pd': {'kp': 1.0, 'kd': 2.0, 'control_period': 0.1},
     'commanded_torque': {'timeout': 10.0},
     'constant_torque': {'torque': [0.1, -0.2, 0.3]},
     'gravity_about_pivot': {'centre_of_mass': [0.01, -0.02, 0.1]},
@@ -54,6 +55,8 @@ def test_effects_declare_whether_their_torque_uses_the_rate():
         effect = EFFECTS[name](params, BODY)
         if name == 'commanded_torque':
             effect.accept_input('torque', 0.0, np.array([0.3, 0.1, -0.2]))
+        if name == 'attitude_pd':  # the torque sampled at 0 and held: not of the rate at 1
+            effect.sample(0.0, tuple(attitude.tolist()), (0.1, 0.2, 0.3))
         slow = effect.torque_body(1.0, attitude, np.array([0.1, 0.2, 0.3]))
         fast = effect.torque_body(1.0, attitude, np.array([-5.0, 3.0, 40.0]))
         assert np.any(slow != 0.0), name

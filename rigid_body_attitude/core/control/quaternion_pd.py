@@ -16,8 +16,9 @@ and ``−q`` (the same attitude) give the same torque. For a rigid body
 ``V = ½ ωᵀ J ω + 2 k_p (1 − |q_err,w|)`` has ``V̇ = −k_d |ω|² ≤ 0`` (their Lyapunov argument,
 with ``q̇_err = ½ q_err ⊗ (0, ω)`` giving ``d|q_err,w|/dt = −½ sign(q_err,w) q_err,xyz · ω``).
 
-Gains ``k_p`` [N m] and ``k_d`` [N m s] are scalars or per-axis ``(3,)`` vectors (body axes).
-``torque_limit`` [N m] is a scalar or ``(3,)``; 0 or ``inf`` means no limit on that axis.
+Gains ``k_p`` [N m] and ``k_d`` [N m s] are scalars or per-axis ``(3,)`` vectors (body axes),
+or ``(..., 3)`` for a batch of bodies each with its own. ``torque_limit`` [N m] likewise;
+0 or ``inf`` means no limit on that axis.
 The quaternions must be of unit norm (the callers check incoming messages); the law itself
 checks shapes and finiteness only.
 """
@@ -39,23 +40,25 @@ FloatArray = NDArray[np.float64]
 Triple = tuple[float, float, float]
 
 
-def as_axis_gains(value: ArrayLike, name: str, allow_inf: bool = False) -> FloatArray:
+def as_axis_gains(value: ArrayLike, name: str, allow_inf: bool = False,
+                  per_body: bool = False) -> FloatArray:
     """``value`` (a scalar or 3 numbers, each ≥ 0) as a ``(3,)`` array, or :class:`InputError`.
 
-    ``allow_inf`` admits ``inf`` (a torque limit that does not limit).
+    ``allow_inf`` admits ``inf`` (a torque limit that does not limit); ``per_body`` admits
+    ``(..., 3)`` (one set per body of a batch), returned as given.
     """
     try:
         array = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as err:
         raise InputError(f'Expected `{name}` to be a number or 3 numbers, got {value!r}') from err
-    if array.shape not in ((), (3,)):
+    if array.shape not in ((), (3,)) and not (per_body and array.shape[-1:] == (3,)):
         raise InputError(f'Expected `{name}` to be a number or 3 numbers, got shape '
                          f'{array.shape}')
     valid = (array >= 0.0) & (np.isfinite(array) | (allow_inf & (array == math.inf)))
     if not np.all(valid):
         bound = '≥ 0 (inf for none)' if allow_inf else 'finite and ≥ 0'
         raise InputError(f'Expected `{name}` to be {bound}, got {array.tolist()!r}')
-    return np.broadcast_to(array, (3,)).astype(np.float64)
+    return np.broadcast_to(array, array.shape if array.ndim else (3,)).astype(np.float64)
 
 
 def pd_torque_body(q_world_body: ArrayLike, omega_body: ArrayLike, q_world_target: ArrayLike,
@@ -70,9 +73,10 @@ def pd_torque_body(q_world_body: ArrayLike, omega_body: ArrayLike, q_world_targe
     q = quaternion.as_quaternion(q_world_body, 'q_world_body')
     omega = quaternion.as_vector(omega_body, 'omega_body')
     target = quaternion.as_quaternion(q_world_target, 'q_world_target')
-    gains = as_axis_gains(kp, 'kp'), as_axis_gains(kd, 'kd')
-    limit = as_axis_gains(torque_limit, 'torque_limit', allow_inf=True)
-    if q.shape == (4,) and omega.shape == (3,) and target.shape == (4,):
+    gains = as_axis_gains(kp, 'kp', per_body=True), as_axis_gains(kd, 'kd', per_body=True)
+    limit = as_axis_gains(torque_limit, 'torque_limit', allow_inf=True, per_body=True)
+    if q.shape == (4,) and omega.shape == (3,) and target.shape == (4,) and \
+            gains[0].shape == gains[1].shape == limit.shape == (3,):
         return np.array(pd_torque_floats(q.tolist(), omega.tolist(), target.tolist(),
                                          gains[0].tolist(), gains[1].tolist(), limit.tolist()))
     try:

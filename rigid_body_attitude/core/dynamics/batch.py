@@ -23,7 +23,7 @@ vector operations / chunk size; invariants as RK4 (``|q|`` by projection).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import numpy as np
@@ -32,7 +32,8 @@ from numpy.typing import ArrayLike, NDArray
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.batch_rows import cross_rows, matrix_rows_product
 from rigid_body_attitude.core.dynamics.effects import (
-    BatchChunk, CommandedEffect, Effect, ForceEffect, RotorEffect, TorqueEffect)
+    BatchChunk, CommandedEffect, Effect, ForceEffect, RotorEffect, SampledTorque, TorqueEffect)
+from rigid_body_attitude.core.dynamics.effects.sampled import segment_end
 from rigid_body_attitude.core.dynamics.effects.translation import Translation
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
@@ -262,6 +263,10 @@ class SceneBatch:
             self.position = np.repeat(self.translation.position[:, None], self.count, axis=1)
             self.velocity = np.repeat(self.translation.velocity[:, None], self.count, axis=1)
         self.switching = [e for e in self.effects if isinstance(e, CommandedEffect)]
+        self.sampled = [e for e in self.effects if isinstance(e, SampledTorque)]
+        #: Each effect's own per-body state rows (a controller's held torque), or None.
+        self.effect_states = [np.zeros((e.STATE_ROWS, self.count))
+                              if isinstance(e, SampledTorque) else None for e in self.effects]
         self.input_routes = {name: [e for e in self.effects if name in e.input_names]
                              for e in self.effects for name in e.input_names}
 
@@ -317,28 +322,58 @@ class SceneBatch:
         if self.scene.step * speed > 2.0:
             raise InputError(f'A body turns {self.scene.step * speed:.3g} rad per step of '
                              f'{self.scene.step} s: above RK4\'s limit of 2 rad')
-        switches = sorted({time for effect in self.switching for time in effect.switch_times()
-                           if self.time < time < t_end})
-        return sum(self._segment(boundary) for boundary in switches + [t_end])
+        steps = 0
+        tolerance = 1e-12 * max(1.0, abs(t_end))
+        while t_end - self.time > tolerance:
+            due = [controller for controller in self.sampled if controller.due(self.time)]
+            if due:
+                self._sample(due)
+            steps += self._segment(segment_end(self.time, t_end, self.switching, self.sampled))
+        return steps
+
+    def _sample(self, due: list[SampledTorque]) -> None:
+        """The controllers ``due`` sample every body's state at the current time."""
+        for start in range(0, self.count, self.chunk):
+            bodies = slice(start, min(start + self.chunk, self.count))
+            chunk = _Chunk(self, bodies)
+            for controller, view in chunk.sampled:
+                if controller in due:
+                    controller.sample_batch(self.time, self._state[:4, bodies],
+                                            self._state[4:, bodies], view)
+        for controller in due:
+            controller.sampled(self.time)
+
+    def torque_used(self, name: str) -> tuple[FloatArray, FloatArray]:
+        """``∫|τ| dt`` [N m s] and peak ``|τ|`` [N m] of every body of the controller
+        ``name`` (a :class:`.SampledTorque`) from its first sample to the batch's time, each
+        (N,)."""
+        for effect, state in zip(self.effects, self.effect_states):
+            if effect.name == name and isinstance(effect, SampledTorque) and state is not None:
+                return effect.batch_torque_used(self.time, state)
+        raise InputError(f'Scene {self.scene.name!r} has no controller {name!r}')
 
     def _segment(self, t_end: float) -> int:
         """Steps up to ``t_end`` with no input switch inside (commands pinned once)."""
-        steps = _step_plan(self.time, t_end, self.scene.step)
-        if not steps:
+        t_start = self.time
+        if not _Steps(t_start, t_end, self.scene.step):
+            self.time = float(t_end)
             return 0
         for effect in self.switching:
-            effect.begin_step(self.time, t_end)
+            effect.begin_step(t_start, t_end)
+        taken = 0
         try:
             for start in range(0, self.count, self.chunk):
-                self._advance_chunk(slice(start, min(start + self.chunk, self.count)), steps)
+                taken = self._advance_chunk(slice(start, min(start + self.chunk, self.count)),
+                                            t_start, t_end)
         finally:
             for effect in self.switching:
                 effect.end_step()
         self.time = float(t_end)
-        return len(steps)
+        return taken
 
-    def _advance_chunk(self, bodies: slice, steps: list[tuple[float, float]]) -> None:
-        """Every step of ``steps`` on one cache-sized chunk of bodies, in place."""
+    def _advance_chunk(self, bodies: slice, t_start: float, t_end: float) -> int:
+        """Every step from ``t_start`` to ``t_end`` on one cache-sized chunk of bodies, in
+        place (the steps are generated one by one, never listed); returns their number."""
         chunk = _Chunk(self, bodies)
         y = np.empty((7, chunk.mass.shape[0]))  # (q, h = J ω)
         y[:4] = self._state[:4, bodies]
@@ -347,9 +382,11 @@ class SceneBatch:
         if translation:
             position = self.position[:, bodies]
             velocity = self.velocity[:, bodies]
-            force_start = chunk.force(steps[0][0], y[:4])
-        for t, h in steps:
+            force_start = chunk.force(t_start, y[:4])
+        taken = 0
+        for t, h in _Steps(t_start, t_end, self.scene.step):
             chunk.rk4(t, y, h)
+            taken += 1
             if translation:
                 force_end = chunk.force(t + h, y[:4])
                 Translation.batch_advance(h, chunk.mass, position, velocity, force_start,
@@ -360,6 +397,7 @@ class SceneBatch:
         if translation:
             self.position[:, bodies] = position
             self.velocity[:, bodies] = velocity
+        return taken
 
     def kinetic_energy(self) -> FloatArray:
         """(N,) rotational kinetic energies ``½ ωᵀ J ω`` [J]."""
@@ -369,17 +407,26 @@ class SceneBatch:
         return energy
 
 
-def _step_plan(t: float, t_end: float, step: float) -> list[tuple[float, float]]:
-    """``(t, h)`` of the propagator's steps from ``t`` to ``t_end`` (the last shorter)."""
-    plan = []
-    remaining = t_end - t
-    tolerance = 1e-12 * max(1.0, abs(t_end))
-    while remaining > tolerance:
-        h = step if step < remaining else remaining
-        plan.append((t, h))
-        t += h
+class _Steps:
+    """``(t, h)`` of the propagator's steps from ``t`` to ``t_end`` (the last shorter),
+    generated one at a time (a long segment is never held as a list); true when there is at
+    least one."""
+
+    def __init__(self, t: float, t_end: float, step: float) -> None:
+        self.t, self.t_end, self.step = t, t_end, step
+        self.tolerance = 1e-12 * max(1.0, abs(t_end))
+
+    def __bool__(self) -> bool:
+        return self.t_end - self.t > self.tolerance
+
+    def __iter__(self) -> Iterator[tuple[float, float]]:
+        t, t_end, step, tolerance = self.t, self.t_end, self.step, self.tolerance
         remaining = t_end - t
-    return plan
+        while remaining > tolerance:
+            h = step if step < remaining else remaining
+            yield t, h
+            t += h
+            remaining = t_end - t
 
 
 def _tensors(scene: Scene, inertia: ArrayLike | None,
@@ -409,6 +456,9 @@ def _effect_parameters(effect: Effect, dispersed: Mapping[str, ArrayLike],
     unknown = sorted(set(dispersed) - set(effect.params))
     if unknown:
         raise InputError(f'Effect {effect.name!r} has no parameter {unknown[0]!r}')
+    shared = sorted(set(dispersed) & effect.shared_parameters)
+    if shared:
+        raise InputError(f'Effect {effect.name!r}: {shared[0]!r} is shared by every body')
     result: dict[str, Any] = {}
     for name, value in effect.params.items():
         if name in dispersed:
@@ -449,10 +499,16 @@ class _Chunk:
         self.torques: list[tuple[TorqueEffect, BatchChunk]] = []
         self.rotors: list[tuple[RotorEffect, BatchChunk]] = []
         self.forces: list[tuple[ForceEffect, BatchChunk]] = []
-        for effect, (parameters, dispersed) in zip(batch.effects, batch._parameters):
+        self.sampled: list[tuple[SampledTorque, BatchChunk]] = []
+        states = batch.effect_states
+        for effect, (parameters, dispersed), state in zip(batch.effects, batch._parameters,
+                                                          states):
             sliced = {name: value[..., bodies] if name in dispersed else value
                       for name, value in parameters.items()}
-            view = BatchChunk(self.tensor, self.mass, sliced, self.diagonal)
+            view = BatchChunk(self.tensor, self.mass, sliced, self.diagonal,
+                              state=np.empty((0, 0)) if state is None else state[:, bodies])
+            if isinstance(effect, SampledTorque):
+                self.sampled.append((effect, view))
             if isinstance(effect, TorqueEffect):
                 self.torques.append((effect, view))
             if isinstance(effect, RotorEffect):

@@ -36,6 +36,8 @@ class BatchChunk:
             off-diagonal products, which are exact zeros). ``tensor`` has shape (3, 3, 1)
             when every body has the same.
         workspace: the kernel's work arrays kept between calls (:meth:`scratch`).
+        state: the effect's own per-body state rows (rows, n), kept by the batch across
+            calls (a sampled controller's held torque); empty for effects without.
     """
 
     tensor: FloatArray
@@ -43,6 +45,8 @@ class BatchChunk:
     parameters: Mapping[str, Any]
     diagonal: bool = False
     workspace: dict[str, FloatArray] = field(default_factory=dict, compare=False, repr=False)
+    state: FloatArray = field(default_factory=lambda: np.empty((0, 0)), compare=False,
+                              repr=False)
 
     def scratch(self, name: str, rows: int) -> FloatArray:
         """A work array ``name`` of shape (rows, n), allocated on first use and then reused

@@ -53,7 +53,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.dynamics.effects import EFFECTS, BodyProperties, Effect
+from rigid_body_attitude.core.dynamics.effects import (
+    EFFECTS, BodyProperties, Effect, SampledTorque)
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.paths import config_folders
@@ -385,11 +386,17 @@ def _check_effects(scene: Scene) -> None:
             if required not in names:
                 raise SceneError(f'Effect {name!r} needs effect {required!r} in the same scene')
     try:
-        scene.build_effects()
+        built = scene.build_effects()
     except SceneError as err:
         raise SceneError(_bounded(str(err))) from err
     except (AttitudeError, TypeError, OverflowError) as err:
         raise SceneError(_bounded(f'effects: {err}')) from err
+    for effect in built:
+        if isinstance(effect, SampledTorque):
+            steps = effect.period / scene.step
+            if not (round(steps) >= 1 and abs(steps - round(steps)) <= 1e-9 * steps):
+                raise SceneError(f'Effect {effect.name!r}: control_period {effect.period!r} s '
+                                 f'must be a whole number of steps of {scene.step!r} s')
 
 
 #: Effects that give the world gravity a simulated accelerometer feels.

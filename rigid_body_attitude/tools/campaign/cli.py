@@ -81,6 +81,13 @@ def _summary(result: CampaignResult) -> str:
     for name in METRICS:
         values = ', '.join(f'{value:.4g}' for value in result.statistics[name][:, -1])
         lines.append(f'{name} at {last:g} s (percentiles) [{UNITS[name]}]: {values}')
+    if result.closed_loop:
+        loop = result.closed_loop
+        lines.append(f'closed loop: {loop["settled"]} of {result.runs - result.failed} runs '
+                     f'settled within {loop["settling_deg"]:g} deg')
+        for name, values in loop['percentiles'].items():
+            shown = ', '.join(f'{value:.4g}' for value in values)
+            lines.append(f'{name} (percentiles) [{UNITS[name]}]: {shown}')
     lines.append(f'wrote {result.folder}/statistics.csv, summary.json, summary.png, chunks/')
     return '\n'.join(lines)
 

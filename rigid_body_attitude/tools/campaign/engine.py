@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import csv
 import json
+import math
+import shutil
 import sys
 import time
 from dataclasses import dataclass, field
@@ -29,10 +31,12 @@ from numpy.typing import NDArray
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.tools.cluster import (
     dask_client, default_workers, LOCAL_CLUSTER_CONFIG, local_cluster)
+from rigid_body_attitude.tools.campaign.budget import estimate
 from rigid_body_attitude.tools.campaign.plot import write_envelopes
 from rigid_body_attitude.tools.campaign.runner import FAILURE_REASONS, run_chunk
 from rigid_body_attitude.tools.campaign.spec import CampaignSpec
-from rigid_body_attitude.tools.campaign.statistics import METRICS, percentile_table
+from rigid_body_attitude.tools.campaign.statistics import (
+    CLOSED_LOOP, METRICS, percentile_table)
 from rigid_body_attitude.tools.campaign.storage import ChunkStore, spec_digest
 
 __all__ = ['CampaignError', 'CampaignResult', 'LOCAL_CLUSTER_CONFIG', 'chunk_runs',
@@ -57,6 +61,7 @@ class CampaignResult:
         elapsed: seconds of computing (chunks) and of the whole call.
         times: ``0`` and the output times [s]; statistics: percentiles (P, T) per metric.
         failures: failed runs by reason.
+        closed_loop: with a controller, :func:`closed_loop_summary` (else empty).
     """
 
     folder: Path
@@ -69,11 +74,12 @@ class CampaignResult:
     times: NDArray[np.float64]
     statistics: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     failures: dict[str, int] = field(default_factory=dict)
+    closed_loop: dict[str, Any] = field(default_factory=dict)
 
 
-def chunk_runs(spec: CampaignSpec) -> list[NDArray[np.int64]]:
-    """The run indices of each chunk."""
-    return [np.arange(start, min(start + spec.chunk, spec.runs), dtype=np.int64)
+def chunk_runs(spec: CampaignSpec) -> list[range]:
+    """The run indices of each chunk (ranges: a task receives two numbers, not its runs)."""
+    return [range(start, min(start + spec.chunk, spec.runs))
             for start in range(0, spec.runs, spec.chunk)]
 
 
@@ -97,21 +103,23 @@ def run_campaign(spec: CampaignSpec, out: str | Path, *, scheduler: str = '',
     store = ChunkStore(out, spec)
     chunks = chunk_runs(spec)
     pending = [index for index in range(len(chunks)) if not store.done(index)]
-    done_runs = sum(chunks[index].shape[0] for index in range(len(chunks))
-                    if index not in set(pending))
-    bar = _progress(progress, spec, done_runs)
+    _check_disk(store.folder, spec, sum(len(chunks[index]) for index in pending))
+    bar = _progress(progress, spec, spec.runs - sum(len(chunks[index]) for index in pending))
     kept: dict[int, dict[str, NDArray[Any]]] = {}
     try:
         if serial:
             for index in pending:
                 kept[index] = run_chunk(spec, chunks[index])
                 store.write(index, kept[index])
-                bar.update(chunks[index].shape[0])
+                bar.update(len(chunks[index]))
         elif client is not None:
             _run_on(client, spec, store, chunks, pending, bar, kept)
         elif pending:
             with dask_client(scheduler, workers) as own:
                 _run_on(own, spec, store, chunks, pending, bar, kept)
+    except BaseException:
+        store.abandon()
+        raise
     finally:
         bar.close()
     compute = time.perf_counter() - begin
@@ -121,8 +129,21 @@ def run_campaign(spec: CampaignSpec, out: str | Path, *, scheduler: str = '',
     return result
 
 
+def _check_disk(folder: Path, spec: CampaignSpec, runs: int) -> None:
+    """Refuse when the file system of ``folder`` lacks room for the rows of ``runs`` runs
+    (and as much again for the summary's margin)."""
+    existing = folder.absolute()
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    need = 2 * estimate(spec).row_bytes * runs
+    free = shutil.disk_usage(existing).free
+    if need > free:
+        raise CampaignError(f'--out {str(folder)!r}: {runs} runs need about {need / 2 ** 20:.3g}'
+                            f' MiB on disk; {free / 2 ** 20:.3g} MiB free')
+
+
 def _run_on(client: Any, spec: CampaignSpec, store: ChunkStore,
-            chunks: list[NDArray[np.int64]], pending: list[int], bar: Any,
+            chunks: list[range], pending: list[int], bar: Any,
             kept: dict[int, dict[str, NDArray[Any]]]) -> None:
     """Submit the pending chunks; write each result as it arrives (and keep it in
     ``kept``)."""
@@ -143,7 +164,7 @@ def _run_on(client: Any, spec: CampaignSpec, store: ChunkStore,
         if not store.done(index):
             store.write(index, columns)
         kept[index] = columns
-        bar.update(chunks[index].shape[0])
+        bar.update(len(chunks[index]))
         future.release()
 
 
@@ -176,12 +197,14 @@ def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
     failures = {reason: int(np.sum(arrays['reason'] == index))
                 for index, reason in enumerate(FAILURE_REASONS)}
     _write_statistics(store.folder / 'statistics.csv', times, spec.percentiles, table)
-    summary = {'name': spec.name, 'runs': spec.runs, 'succeeded': int(np.sum(~failed)),
-               'failed': int(np.sum(failed)), 'failures_by_reason': failures,
-               'seed': str(spec.seed), 'times': times.tolist(),
-               'percentiles': list(spec.percentiles),
-               'statistics': {name: table[name].tolist() for name in METRICS},
-               'failed_runs': _failed_runs(arrays, failed)}
+    summary: dict[str, Any] = {
+        'name': spec.name, 'runs': spec.runs, 'succeeded': int(np.sum(~failed)),
+        'failed': int(np.sum(failed)), 'failures_by_reason': failures, 'seed': str(spec.seed),
+        'times': times.tolist(), 'percentiles': list(spec.percentiles),
+        'statistics': {name: table[name].tolist() for name in METRICS},
+        'failed_runs': _failed_runs(arrays, failed)}
+    if spec.closed_loop:
+        summary['closed_loop'] = closed_loop_summary(spec, arrays, failed)
     (store.folder / 'summary.json').write_text(json.dumps(summary, indent=1, allow_nan=True))
     if plot:
         write_envelopes(store.folder / 'summary.png', times, spec.percentiles, table,
@@ -189,7 +212,26 @@ def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
     return CampaignResult(folder=store.folder, runs=spec.runs, failed=int(np.sum(failed)),
                           chunks_run=0, chunks_resumed=chunk_count, compute_seconds=0.0,
                           total_seconds=0.0, times=times, statistics=table,
-                          failures=failures)
+                          failures=failures, closed_loop=summary.get('closed_loop', {}))
+
+
+def closed_loop_summary(spec: CampaignSpec, arrays: dict[str, NDArray[Any]],
+                        failed: NDArray[np.bool_]) -> dict[str, Any]:
+    """The settling threshold, how many succeeded runs settled, and the percentiles of
+    settling time [s] (inf: not settled), torque used [N m s] and peak torque [N m]."""
+    ok = ~failed
+    return {'settling_deg': spec.settling_deg,
+            'settled': int(np.sum(np.isfinite(arrays['settling_time_s'][ok]))),
+            'percentiles': {name: _percentiles(arrays[name][ok], spec.percentiles)
+                            for name in CLOSED_LOOP}}
+
+
+def _percentiles(values: NDArray[np.float64], percentiles: tuple[float, ...]) -> list[float]:
+    """The percentiles of ``values`` (inf counts as the largest), NaN without values."""
+    if values.shape[0] == 0:
+        return [math.nan] * len(percentiles)
+    return [float(value) for value in
+            np.percentile(values, list(percentiles), method='inverted_cdf')]
 
 
 def _failed_runs(arrays: dict[str, NDArray[Any]], failed: NDArray[np.bool_]

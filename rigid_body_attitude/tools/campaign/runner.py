@@ -1,9 +1,11 @@
 """One campaign task: a set of runs on the batch engine (:class:`.SceneBatch`).
 
 :func:`run_chunk` draws the runs' parameters (:func:`.sample_runs`), builds one
-:class:`~rigid_body_attitude.core.dynamics.batch.SceneBatch`, applies the commands at their times
-and
-advances to every output time, recording each run's metrics (:mod:`.statistics`). A run fails
+:class:`~rigid_body_attitude.core.dynamics.batch.SceneBatch`, applies the commands at their
+times and advances to every output time, recording each run's metrics (:mod:`.statistics`). In a
+closed loop (a scene with ``attitude_pd``) the pointing error is also checked at every
+controller sample instant, for each run's settling time, and the controller's torque used is
+read at the end. A run fails
 without stopping the others when its dispersed effect parameters are outside the effect's
 range, its rate exceeds RK4's limit of 2 rad per step (checked at every output and command
 time) or its state stops being finite: it is taken out of the batch
@@ -19,10 +21,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude.core.dynamics.batch import SceneBatch
-from rigid_body_attitude.core.dynamics.effects import BodyProperties, EFFECTS
+from rigid_body_attitude.core.dynamics.effects import BodyProperties, EFFECTS, SampledTorque
 from rigid_body_attitude.tools.campaign.sampling import RunParameters, sample_runs
-from rigid_body_attitude.tools.campaign.spec import CampaignSpec, COMMAND_EFFECT
-from rigid_body_attitude.tools.campaign.statistics import BodyState, METRICS, metrics
+from rigid_body_attitude.tools.campaign.spec import (
+    CampaignSpec, COMMAND_EFFECT, CONTROLLER_EFFECT)
+from rigid_body_attitude.tools.campaign.statistics import (
+    BodyState, METRICS, metrics, pointing_error_deg)
 
 __all__ = ['FAILURE_REASONS', 'run_chunk']
 
@@ -138,7 +142,12 @@ def _simulate(spec: CampaignSpec, parameters: RunParameters,
     series = {name: np.full((n, 1 + len(spec.output_times)), np.nan) for name in METRICS}
     _record(series, 0, initial, initial, spec, failures)
     _check_dynamics(batch, failures, 0.0)
+    settling = _Settling(spec, n) if spec.closed_loop else None
+    if settling is not None:
+        settling.check(batch, 0.0)
     for time, command, output in _events(spec):
+        if settling is not None:
+            settling.advance(batch, time)
         batch.advance_to(time)
         _check_dynamics(batch, failures, time)
         if command >= 0:
@@ -147,8 +156,52 @@ def _simulate(spec: CampaignSpec, parameters: RunParameters,
         if output >= 0:
             state = BodyState(batch.attitude, batch.omega_body, inertia)
             _record(series, output + 1, state, initial, spec, failures)
-    return {**series, 'attitude': np.where(failures.failed[:, None], np.nan, batch.attitude),
+    closed = {} if settling is None else settling.columns(batch, spec, failures)
+    return {**series, **closed,
+            'attitude': np.where(failures.failed[:, None], np.nan, batch.attitude),
             'omega_body': np.where(failures.failed[:, None], np.nan, batch.omega_body)}
+
+
+class _Settling:
+    """Closed loop: the pointing error checked at every controller sample instant; the last
+    time it was above ``statistics.settling_deg`` (no list of checks is kept)."""
+
+    def __init__(self, spec: CampaignSpec, n: int) -> None:
+        self.period = next(effect.period for effect in spec.scene.build_effects()
+                           if isinstance(effect, SampledTorque))
+        self.spec = spec
+        self.checks = 0
+        self.last_above = np.full(n, -np.inf)
+
+    def check(self, batch: SceneBatch, time: float) -> None:
+        """Record the runs above the threshold at ``time`` (the batch is there)."""
+        error = pointing_error_deg(batch.attitude, self.spec.boresight, self.spec.target)
+        self.last_above[~(error <= self.spec.settling_deg)] = time
+
+    def advance(self, batch: SceneBatch, until: float) -> None:
+        """Advance through the sample instants before ``until``, checking at each."""
+        while True:
+            time = (self.checks + 1) * self.period
+            if time >= until * (1.0 - 1e-12):
+                return
+            batch.advance_to(time)
+            self.checks += 1
+            self.check(batch, time)
+
+    def columns(self, batch: SceneBatch, spec: CampaignSpec,
+                failures: _Failures) -> dict[str, FloatArray]:
+        """Per run (NaN for failed runs): ``settling_time_s``, the first check after the
+        last one above the threshold (0: never above; inf: above at the end),
+        ``torque_integral`` ``∫|τ| dt`` [N m s] and ``torque_peak`` [N m]."""
+        self.check(batch, spec.duration)
+        above = self.last_above
+        settling = np.where(above >= spec.duration, np.inf,
+                            np.where(above < 0.0, 0.0,
+                                     np.minimum(above + self.period, spec.duration)))
+        integral, peak = batch.torque_used(CONTROLLER_EFFECT)
+        return {name: np.where(failures.failed, np.nan, value) for name, value in
+                (('settling_time_s', settling), ('torque_integral', integral),
+                 ('torque_peak', peak))}
 
 
 def _record(series: dict[str, FloatArray], column: int, state: BodyState, initial: BodyState,

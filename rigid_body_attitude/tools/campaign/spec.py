@@ -24,7 +24,9 @@ Format (``config/campaigns/`` ships examples)::
     statistics:
       percentiles: [5, 50, 95]
       boresight: [0, 0, 1]           # body axis for pointing and nutation
-      target: [0, 0, 1]              # world direction (default: boresight at the start)
+      target: [0, 0, 1]              # world direction (default: boresight at the start, or
+                                     # at the attitude_pd controller's target)
+      settling_deg: 1.0              # closed loop: settled once the pointing error stays below
 
 Errors are one :class:`SpecError` naming the file and the key path
 (``dispersions.attitude.cone_deg``), as for scene files
@@ -45,9 +47,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.dynamics.effects.attitude_pd import AttitudePD
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.dynamics.scene import load_scene, Scene, scene_from_mapping
 from rigid_body_attitude.core.yaml_files import quote, read_yaml
+from rigid_body_attitude.tools.campaign.budget import budget_problem
 
 __all__ = ['CampaignSpec', 'CommandDispersion', 'InertiaDispersion', 'MAX_OUTPUT_TIMES',
            'MAX_RUNS', 'Spread', 'SpecError', 'load_spec', 'spec_from_mapping']
@@ -60,10 +64,11 @@ MAX_OUTPUT_TIMES = 10_000
 MAX_COMMANDS = 1000
 DEFAULT_CHUNK = 8192
 COMMAND_EFFECT = 'constant_torque'
+CONTROLLER_EFFECT = AttitudePD.name
 _TOP_KEYS = {'name', 'description', 'scene', 'runs', 'seed', 'duration', 'output_times',
              'chunk', 'dispersions', 'commands', 'statistics'}
 _DISPERSION_KEYS = {'inertia', 'attitude', 'omega_body', 'effects', 'commands'}
-_STATISTICS_KEYS = {'percentiles', 'boresight', 'target'}
+_STATISTICS_KEYS = {'percentiles', 'boresight', 'target', 'settling_deg'}
 
 
 class SpecError(SceneError):
@@ -122,6 +127,12 @@ class CampaignSpec:
     boresight: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     target: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     source: str = ''
+    settling_deg: float = 1.0
+
+    @property
+    def closed_loop(self) -> bool:
+        """Whether the scene runs an attitude controller (settling and torque recorded)."""
+        return any(name == CONTROLLER_EFFECT for name, _ in self.scene.effects)
 
 
 def load_spec(path: str | Path) -> CampaignSpec:
@@ -159,8 +170,8 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
     statistics = _mapping('statistics', data.get('statistics', {}))
     _keys('statistics', statistics, _STATISTICS_KEYS)
     boresight = _direction('statistics.boresight', statistics.get('boresight', [0, 0, 1]))
-    default_target = quaternion.rotate(scene.initial_attitude, boresight)
-    return CampaignSpec(
+    default_target = quaternion.rotate(_controller_target(scene), boresight)
+    spec = CampaignSpec(
         name=_text('name', data.get('name', default_name)),
         description=_text('description', data.get('description', '')),
         scene=scene, runs=_count('runs', data['runs'], MAX_RUNS),
@@ -177,7 +188,11 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
         boresight=boresight,
         target=_direction('statistics.target', statistics.get('target',
                                                               default_target.tolist())),
-        source=source)
+        source=source, settling_deg=_settling(statistics, scene))
+    problem = budget_problem(spec)
+    if problem:
+        raise SpecError(problem)
+    return spec
 
 
 def _keys(where: str, data: Mapping[Any, Any], valid: set[str],
@@ -318,10 +333,11 @@ def _output_times(value: Any, duration: float) -> tuple[float, ...]:
     if isinstance(value, Mapping):
         _keys('output_times', value, {'every'}, ('every',))
         every = _positive('output_times.every', value['every'])
-        count = math.floor(duration / every * (1 + 1e-12))
-        if count > MAX_OUTPUT_TIMES:
-            raise SpecError(f'Expected output_times.every to give at most {MAX_OUTPUT_TIMES} '
-                            f'times, got {count}')
+        ratio = duration / every  # at most 1e75 / 1e-308: inf, never an error
+        if not ratio <= MAX_OUTPUT_TIMES + 1:
+            raise SpecError(f'output_times.every: {every:g} s gives {ratio:.3g} output times '
+                            f'over {duration:g} s; at most {MAX_OUTPUT_TIMES}')
+        count = min(math.floor(ratio * (1 + 1e-12)), MAX_OUTPUT_TIMES)
         times = [every * k for k in range(1, count + 1)]
     elif isinstance(value, list) and len(value) <= MAX_OUTPUT_TIMES:
         times = [_positive(f'output_times[{k}]', item) for k, item in enumerate(value)]
@@ -335,6 +351,28 @@ def _output_times(value: Any, duration: float) -> tuple[float, ...]:
         times.append(duration)
     times[-1] = duration
     return tuple(times)
+
+
+def _controller_target(scene: Scene) -> FloatArray:
+    """The attitude the scene's controller steers to, or the scene's initial attitude."""
+    for effect in scene.build_effects():
+        if isinstance(effect, AttitudePD):
+            return np.array(effect.target)
+    return scene.initial_attitude
+
+
+def _settling(statistics: Mapping[Any, Any], scene: Scene) -> float:
+    """``statistics.settling_deg``: closed-loop scenes only, in (0, 180]."""
+    closed = any(name == CONTROLLER_EFFECT for name, _ in scene.effects)
+    if 'settling_deg' not in statistics:
+        return 1.0
+    if not closed:
+        raise SpecError(f'statistics.settling_deg needs a scene with the {CONTROLLER_EFFECT} '
+                        f'effect (a closed loop)')
+    value = _positive('statistics.settling_deg', statistics['settling_deg'])
+    if value > 180.0:
+        raise SpecError(f'Expected statistics.settling_deg to be at most 180, got {value!r}')
+    return value
 
 
 def _inertia(value: Any) -> InertiaDispersion | None:
@@ -408,6 +446,9 @@ def _effects(value: Any, scene: Scene, commands: bool) -> dict[str, dict[str, Sp
         result[name] = {}
         for parameter, spread in parameters.items():
             key = f'dispersions.effects.{name}.{parameter}'
+            if parameter in effects[name].shared_parameters:
+                raise SpecError(f'{key}: every run shares {parameter} (it cannot be '
+                                f'dispersed)')
             nominal = effects[name].params.get(parameter)
             if isinstance(nominal, bool) or not isinstance(nominal, (float, int, np.ndarray)):
                 raise SpecError(f'Expected {key} to name a numeric parameter of {name}; '

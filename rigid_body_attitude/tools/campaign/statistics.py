@@ -24,13 +24,17 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
 
-__all__ = ['METRICS', 'UNITS', 'BodyState', 'metrics', 'percentile_table']
+__all__ = ['CLOSED_LOOP', 'METRICS', 'UNITS', 'BodyState', 'metrics', 'percentile_table',
+           'pointing_error_deg']
 
 FloatArray = NDArray[np.float64]
 
 METRICS = ('pointing_error_deg', 'nutation_deg', 'momentum_change', 'energy_change', 'rate')
+#: Per-run results of closed-loop campaigns (a scene with ``attitude_pd``).
+CLOSED_LOOP = ('settling_time_s', 'torque_integral', 'torque_peak')
 UNITS = {'pointing_error_deg': 'deg', 'nutation_deg': 'deg', 'momentum_change': 'N m s',
-         'energy_change': 'J', 'rate': 'rad/s'}
+         'energy_change': 'J', 'rate': 'rad/s', 'settling_time_s': 's',
+         'torque_integral': 'N m s', 'torque_peak': 'N m'}
 
 
 class BodyState:
@@ -58,17 +62,25 @@ def _angle_deg(a: FloatArray, b: FloatArray) -> FloatArray:
     return result
 
 
+def pointing_error_deg(attitude: FloatArray, boresight: FloatArray,
+                       target: FloatArray) -> FloatArray:
+    """Angle [deg] between the boresight (body axes) turned into the world frame by each
+    ``attitude`` (n, 4) and the ``target`` direction (world), shape (n,)."""
+    n = attitude.shape[0]
+    pointing = quaternion.rotate(attitude, np.broadcast_to(boresight, (n, 3)))
+    return _angle_deg(pointing, np.broadcast_to(target, (n, 3)))
+
+
 def metrics(state: BodyState, initial: BodyState, boresight: FloatArray,
             target: FloatArray) -> dict[str, FloatArray]:
     """Every metric of :data:`METRICS` for each run, shape (n,)."""
     n = state.attitude.shape[0]
-    pointing = quaternion.rotate(state.attitude, np.broadcast_to(boresight, (n, 3)))
     momentum = np.linalg.norm(state.momentum_body, axis=1)
     nutation = np.where(momentum > 0.0,
                         _angle_deg(np.broadcast_to(boresight, (n, 3)), state.momentum_body),
                         0.0)
     return {
-        'pointing_error_deg': _angle_deg(pointing, np.broadcast_to(target, (n, 3))),
+        'pointing_error_deg': pointing_error_deg(state.attitude, boresight, target),
         'nutation_deg': nutation,
         'momentum_change': np.linalg.norm(state.momentum_world - initial.momentum_world,
                                           axis=1),

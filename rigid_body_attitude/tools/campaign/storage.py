@@ -14,15 +14,17 @@ random doubles hardly compress nor repeat, and writing stays cheap. A
 chunk file exists only once its chunk is complete (written to a temporary name, then
 renamed, which is atomic on one file system), so a campaign interrupted anywhere resumes by
 running the chunks without a file; the manifest must match the spec, or the folder belongs to
-another campaign and is refused.
+another campaign and is refused. Nothing is written before the first chunk is finished: a
+campaign refused or failed before that leaves the folder as it was.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
-import pickle
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -38,8 +40,32 @@ __all__ = ['ChunkStore', 'spec_digest']
 
 
 def spec_digest(spec: CampaignSpec) -> str:
-    """A digest of everything that decides the runs' results (not the file's path)."""
-    return hashlib.sha256(pickle.dumps(replace(spec, source=''), protocol=4)).hexdigest()
+    """A digest of everything that decides the runs' results (not the file's path): of its
+    values, written out exactly (floats in hexadecimal), so the same campaign has the same
+    digest whether read from a file or given as a mapping."""
+    text = json.dumps(_canonical(replace(spec, source='')), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _canonical(value: Any) -> Any:
+    """``value`` as plain JSON values, exactly (a dataclass or object by its fields)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {field.name: _canonical(getattr(value, field.name))
+                for field in dataclasses.fields(value)}
+    if isinstance(value, np.ndarray):
+        return [list(value.shape), [float(item).hex() for item in value.ravel().tolist()]]
+    if isinstance(value, np.generic):
+        return _canonical(value.item())
+    if isinstance(value, float):
+        return value.hex()
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    if isinstance(value, Mapping):
+        return [[str(key), _canonical(item)] for key, item in
+                sorted(value.items(), key=lambda pair: str(pair[0]))]
+    if isinstance(value, (list, tuple)):
+        return [_canonical(item) for item in value]
+    return {type(value).__name__: _canonical(vars(value))}
 
 
 def _column(array: NDArray[Any]) -> pa.Array:
@@ -69,29 +95,41 @@ def arrays_of(table: pa.Table) -> dict[str, NDArray[Any]]:
 
 
 class ChunkStore:
-    """The results folder of one campaign (see the module's layout)."""
+    """The results folder of one campaign (see the module's layout).
+
+    Nothing is created until the first chunk is written (:meth:`write` creates the folder
+    and the manifest first), so a campaign refused or failed before it finished a chunk
+    leaves ``--out`` as it found it (:meth:`abandon` removes its temporary files); one that
+    finished some chunks resumes when run again.
+    """
 
     def __init__(self, folder: str | Path, spec: CampaignSpec) -> None:
-        """Open or create ``folder`` for ``spec``; refuse a folder of another campaign."""
+        """Open ``folder`` for ``spec``; refuse a folder holding another campaign's chunks (a
+        manifest without any chunk, left by a campaign that finished none, is taken over)."""
         self.folder = Path(folder)
         self.chunks = self.folder / 'chunks'
+        self.manifest_path = self.folder / 'campaign.json'
         self.manifest = {'name': spec.name, 'runs': spec.runs, 'chunk': spec.chunk,
                          'seed': str(spec.seed), 'output_times': list(spec.output_times),
                          'spec_digest': spec_digest(spec), 'source': spec.source}
-        path = self.folder / 'campaign.json'
-        if path.is_file():
+        self.claimed = False
+        if self.manifest_path.is_file():
             try:
-                found = json.loads(path.read_text())
+                found = json.loads(self.manifest_path.read_text())
             except (ValueError, UnicodeError) as err:
-                raise SpecError(f'{path} is not a campaign manifest: {err}') from None
-            if not isinstance(found, dict) or found.get('spec_digest') != \
-                    self.manifest['spec_digest']:
-                raise SpecError(f'{self.folder} holds results of another campaign (its '
-                                f'campaign.json differs from this spec); choose another --out')
-        else:
-            self.chunks.mkdir(parents=True, exist_ok=True)
-            _write_atomic(path, json.dumps(self.manifest, indent=1).encode())
-        self.chunks.mkdir(parents=True, exist_ok=True)
+                raise SpecError(f'{self.manifest_path} is not a campaign manifest: '
+                                f'{str(err)[:100]}') from None
+            self.claimed = isinstance(found, dict) and \
+                found.get('spec_digest') == self.manifest['spec_digest']
+            written = self.written()
+            if not self.claimed and written:
+                raise SpecError(f'{self.folder} holds {written} finished chunks of another '
+                                f'campaign (its campaign.json differs from this spec); choose '
+                                f'another --out')
+
+    def written(self) -> int:
+        """Chunk files in the folder."""
+        return sum(1 for _ in self.chunks.glob('*.parquet')) if self.chunks.is_dir() else 0
 
     def path(self, index: int) -> Path:
         """The file of chunk ``index``."""
@@ -102,12 +140,23 @@ class ChunkStore:
         return self.path(index).is_file()
 
     def write(self, index: int, columns: dict[str, NDArray[Any]]) -> None:
-        """Write chunk ``index`` whole (temporary file, then an atomic rename)."""
+        """Write chunk ``index`` whole (temporary file, then an atomic rename); the first
+        write creates the folder and the manifest."""
+        if not self.claimed:
+            self.chunks.mkdir(parents=True, exist_ok=True)
+            _write_atomic(self.manifest_path, json.dumps(self.manifest, indent=1).encode())
+            self.claimed = True
         target = self.path(index)
         temporary = target.with_suffix(f'.{os.getpid()}.tmp')
         pq.write_table(table_of(columns), temporary, compression='none', use_dictionary=False,
                        write_statistics=False)
         os.replace(temporary, target)
+
+    def abandon(self) -> None:
+        """After a failure: remove this process's temporary files (finished chunks stay)."""
+        if self.chunks.is_dir():
+            for temporary in self.chunks.glob(f'*.{os.getpid()}.tmp'):
+                temporary.unlink(missing_ok=True)
 
     def read_all(self, chunk_count: int, kept: dict[int, dict[str, NDArray[Any]]] | None = None
                  ) -> dict[str, NDArray[Any]]:

@@ -12,11 +12,12 @@ import pkgutil
 from rigid_body_attitude.core.dynamics.effects.base import (
     BatchChunk, BodyProperties, CommandedEffect, ConservativeTorque, Effect, EFFECTS, ForceEffect,
     RateCorrection, RotorEffect, StatefulEffect, TorqueEffect)
+from rigid_body_attitude.core.dynamics.effects.sampled import SampledTorque
 
 __all__ = ['BatchChunk', 'BodyProperties', 'CommandedEffect', 'ConservativeTorque', 'EFFECTS',
-           'Effect', 'ForceEffect', 'RateCorrection', 'RotorEffect', 'StatefulEffect',
-           'TorqueEffect']
+           'Effect', 'ForceEffect', 'RateCorrection', 'RotorEffect', 'SampledTorque',
+           'StatefulEffect', 'TorqueEffect']
 
 for _module in pkgutil.iter_modules(__path__):
-    if _module.name != 'base':
+    if _module.name not in ('base', 'sampled'):
         importlib.import_module(f'{__name__}.{_module.name}')

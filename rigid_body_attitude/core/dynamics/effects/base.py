@@ -12,7 +12,9 @@ dynamic effectors and effectors with state of their own):
 * :class:`RateCorrection` — ``corrected_rate(t, attitude, ω_measured)`` [rad/s, body] for
   measured gyro rates (strapdown scenes);
 * :class:`StatefulEffect` — an integrated state of its own (centre-of-mass motion);
-* :class:`CommandedEffect` — driven by a held commanded input whose switch times end steps.
+* :class:`CommandedEffect` — driven by a held commanded input whose switch times end steps;
+* :class:`~.sampled.SampledTorque` — a digital controller's torque: computed from the state
+  at sample instants a whole number of steps apart, held in between (zero-order hold).
 
 Hot paths take and return plain-float tuples (``Quat`` = (w, x, y, z), ``Vec``): a NumPy call
 costs about 1 µs, more than a whole torque. ``torque_body``, ``rotor_momentum`` and
@@ -164,6 +166,8 @@ class Effect:
     rate_sources: ClassVar[frozenset[str]] = frozenset({'dynamics'})
     inputs: ClassVar[Mapping[str, str]] = {}
     requires: ClassVar[tuple[str, ...]] = ()
+    #: Parameters every body of a batch shares (not dispersed per body).
+    shared_parameters: ClassVar[frozenset[str]] = frozenset()
 
     def __init__(self, params: Mapping[str, Any], body: BodyProperties) -> None:
         """Validate ``params`` against :attr:`parameters`; keep ``body``."""
