@@ -45,6 +45,7 @@ SOURCE_DIR = Path(__file__).resolve().parent
 # script; ``make test`` (test/test_packaging.py) checks that the two agree.
 EXECUTABLES = {
     'propagation_node': 'rigid_body_attitude.ros.serve:main',
+    'managed_propagation_node': 'rigid_body_attitude.ros.managed_node:main',
     'replay': 'rigid_body_attitude.tools.replay:main',
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
     'imu_noise': 'rigid_body_attitude.tools.allan:main',

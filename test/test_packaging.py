@@ -34,6 +34,7 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 # What `ros2 run rigid_body_attitude <name>` starts, and the function it runs.
 EXECUTABLES = {
     'propagation_node': 'rigid_body_attitude.ros.serve:main',
+    'managed_propagation_node': 'rigid_body_attitude.ros.managed_node:main',
     'replay': 'rigid_body_attitude.tools.replay:main',
     'accuracy_study': 'rigid_body_attitude.tools.study:main',
     'imu_noise': 'rigid_body_attitude.tools.allan:main',

@@ -31,13 +31,13 @@ from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, RCLError
 
-__all__ = ['SERVING_LINE', 'main', 'spin']
+__all__ = ['SERVING_LINE', 'error_text', 'main', 'spin']
 
 #: The log line after which the node serves its topics (the last of the start-up).
 SERVING_LINE = 'serving'
 
 
-def _error_text(err: BaseException) -> str:
+def error_text(err: BaseException) -> str:
     """The first line of an error, without rcl's source locations."""
     return str(err).splitlines()[0].split(', at /')[0] if str(err) else type(err).__name__
 
@@ -170,7 +170,7 @@ def main(args: list[str] | None = None) -> int:
     try:
         rclpy.init(args=args)
     except RuntimeError as err:  # rcl could not parse the ROS arguments
-        print(f'error: {_error_text(err)}', file=sys.stderr)
+        print(f'error: {error_text(err)}', file=sys.stderr)
         return 2
     node = None
     try:
@@ -178,7 +178,7 @@ def main(args: list[str] | None = None) -> int:
         node.get_logger().info(middleware_note)
         spin(node)
     except (AttitudeError, ParameterException, OSError) as err:
-        print(f'error: {_error_text(err)}', file=sys.stderr)
+        print(f'error: {error_text(err)}', file=sys.stderr)
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -197,6 +197,11 @@ class Session(ABC):
     def reset(self) -> None:
         """Back to the scene's initial state (the ``~/reset`` service)."""
 
+    @abstractmethod
+    def resume(self) -> None:
+        """Keep the state and let the next input start a new baseline: nothing is integrated
+        across a pause (a managed node reactivated)."""
+
     # -- warnings and diagnostics -----------------------------------------------------------
 
     def warn(self, reason: str, text: str) -> None:

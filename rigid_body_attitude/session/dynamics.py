@@ -206,6 +206,10 @@ class DynamicsSession(Session):
         if self.imu is not None:
             self.imu.reset()
 
+    def resume(self) -> None:
+        """The state kept; the next tick is a new baseline (the scene paused meanwhile)."""
+        self.clock.resume()
+
     def _pose_set(self, orientation_covariance: tuple[float, ...] | None) -> None:
         """A pose was set: the simulated IMU's next sample instant is a new baseline."""
         if self.imu is not None:

@@ -249,6 +249,10 @@ class GyroSession(ImuStart):
         self.stream.reset()
         self._restart_uncertainty()
 
+    def resume(self) -> None:
+        """The attitude kept; the next sample is a new baseline."""
+        self.stream.resume()
+
     def accepted_count(self) -> int:
         """Gyro samples (levelling included) and poses used so far."""
         return self.stream.accepted + self.poses_accepted + self._align_samples

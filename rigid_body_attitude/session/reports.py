@@ -34,7 +34,7 @@ from rigid_body_attitude.session.stream import REASONS
 __all__ = [
     'DRIFT_ERROR_THRESHOLD', 'DRIFT_WARN_THRESHOLD', 'DiagnosticReport', 'GOVERNING_PARAMETER',
     'LEVEL_ERROR', 'LEVEL_OK', 'LEVEL_WARN', 'NOT_ALIGNED', 'PeriodCounts', 'REJECTION_KEYS',
-    'TRANSFORM_KEYS',
+    'TRANSFORM_KEYS', 'inactive_report',
     'StrapdownState', 'WARN_REASONS', 'alignment_state', 'body_frame_velocity', 'body_summary',
     'body_values',
     'diagnostic_report', 'gyro_bias_text', 'rotation_from_initial_deg', 'stale_command_count',
@@ -61,12 +61,13 @@ TRANSFORM_KEYS = ('foreign_frame', 'tf_bad_frames', 'tf_non_finite', 'tf_denorma
                   'tf_evicted')
 #: Rejection counters reported, in order: the stream reasons, the session's own (malformed
 #: messages, invalid or zero stamps, poses), expired commands, refused integrations, gyro
-#: samples dropped without a mount, commands superseded by a newer one before use and
-#: Imu samples whose specific force is beyond any accelerometer's range.
+#: samples dropped without a mount, commands superseded by a newer one before use, Imu
+#: samples whose specific force is beyond any accelerometer's range and inputs that reached a
+#: managed node while it was not active.
 REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
                   'invalid_covariance', 'wrong_frame', 'stale_torque', 'integration_failed',
                   'non_finite_result', 'internal_error', 'no_mount', 'superseded',
-                  'accel_out_of_range', *TRANSFORM_KEYS)
+                  'accel_out_of_range', 'inactive', *TRANSFORM_KEYS)
 
 #: Rejections that make the status WARN / ERROR when they happened during the last period.
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
@@ -390,3 +391,13 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
         problems.insert(0, state.alignment)
     message = '; '.join(problems) or 'propagating'
     return DiagnosticReport(level, message, tuple(values))
+
+
+def inactive_report(report: DiagnosticReport) -> DiagnosticReport:
+    """``report`` of a managed node that is not active: nothing is integrated, so the level is
+    at least WARN and the message starts ``inactive``."""
+    message = 'inactive: inputs are not integrated until the node is activated'
+    if report.message != 'propagating':
+        message += '; ' + report.message
+    return DiagnosticReport(max(report.level, LEVEL_WARN), message,
+                            (('lifecycle_state', 'inactive'), *report.values))

@@ -370,6 +370,11 @@ class GyroStream(_Counting):
         self.propagator.reset()
         self.pending.clear()
 
+    def resume(self) -> None:
+        """Keep the state; the next sample is a new baseline (after a pause in which the
+        samples were not for this stream: nothing is integrated across it)."""
+        self.propagator.has_sample = False
+
     def add(self, stamp_ns: int, omega_body: Sequence[float]) -> Outcome:
         """Process one gyro sample stamped ``stamp_ns`` with rate ``omega_body`` [rad/s]."""
         try:
@@ -380,7 +385,9 @@ class GyroStream(_Counting):
         if not squared <= self.max_rate_squared:  # NaN, Inf, overflow and too fast alike
             return self._reject('out_of_range' if _vector(omega_body) else 'non_finite')
         if not self.propagator.has_sample:
-            self.epoch_ns = stamp_ns
+            # After a reset the propagator's time is 0; after resume() it goes on from its
+            # time: the pause is not part of the time axis.
+            self.epoch_ns = stamp_ns - round(self.propagator.state.time * 1e9)
             self._start(stamp_ns, (float(x), float(y), float(z)))
             return self._accept(_BASELINE)
         if self.pending:
@@ -509,6 +516,7 @@ class ClockDriver(_Counting):
         self.propagator = propagator
         self.time_jump_threshold = time_jump_threshold
         self.started = False
+        self.resuming = False
         #: Integrates up to a time [s]: the propagator's ``advance_to``, or a simulated
         #: sensor's (:class:`~rigid_body_attitude.session.sensors.ImuSampler`) that samples
         #: on the way.
@@ -523,6 +531,11 @@ class ClockDriver(_Counting):
             propagator.reset(time=now)
             self.started = True
             return self._accept(_BASELINE)
+        if self.resuming:
+            self.resuming = False
+            if now > propagator.state.time:
+                propagator.state.time = now  # the pause: not integrated across
+                return self._accept(_BASELINE)
         last = propagator.state.time
         if now < last - self.time_jump_threshold:
             propagator.reset(time=now)
@@ -538,3 +551,8 @@ class ClockDriver(_Counting):
     def reset(self) -> None:
         """The next tick starts the scene again."""
         self.started = False
+
+    def resume(self) -> None:
+        """Keep the state; the next tick is a new baseline (nothing integrated across the
+        pause before it)."""
+        self.resuming = True
