@@ -215,3 +215,38 @@ def test_clock_driver_rules():
     assert dict(clock.rejected) == {'non_finite': 1, 'stale_stamp': 2, 'gap': 1, 'time_jump': 1}
     clock.reset()
     assert clock.tick(3.0).accepted and propagator.state.time == 3.0
+
+
+# --- resume (a managed node reactivated) ------------------------------------------------------
+
+def test_gyro_stream_resume_keeps_the_attitude_and_integrates_nothing_across_the_pause():
+    stream = gyro_stream()
+    for k in range(11):                                  # 0.1 s at 2 rad/s about z
+        stream.add(BASE + k * 10 * MS, OMEGA)
+    held = attitude(stream).copy()
+    assert quat.attitude_error(held, z_rotation(0.2)) <= 1e-14
+    stream.resume()
+    outcome = stream.add(BASE + 30 * 10 * MS, OMEGA)     # 0.2 s later (< max_dt: not a gap)
+    assert outcome.accepted and not outcome.integrated and not outcome.reason
+    np.testing.assert_array_equal(attitude(stream), held)
+    assert stream.propagator.state.time == pytest.approx(0.1, abs=1e-15)  # no pause in it
+    assert stream.add(BASE + 31 * 10 * MS, OMEGA).integrated
+    assert quat.attitude_error(attitude(stream), z_rotation(0.22)) <= 1e-14
+    assert stream.propagator.state.time == pytest.approx(0.11, abs=1e-15)
+    assert not stream.rejected
+
+
+def test_clock_driver_resume_skips_the_pause_without_counting_it():
+    propagator = dynamics_propagator()
+    clock = ClockDriver(propagator, time_jump_threshold=JUMP)
+    clock.tick(50.0)
+    clock.tick(50.1)
+    held = propagator.state.attitude.copy()
+    clock.resume()
+    outcome = clock.tick(50.6)                           # 0.5 s later (< JUMP: not a gap)
+    assert outcome.accepted and not outcome.integrated and not outcome.reason
+    np.testing.assert_array_equal(propagator.state.attitude, held)
+    assert propagator.state.time == 50.6
+    assert clock.tick(50.7).integrated
+    assert quat.attitude_error(propagator.state.attitude, z_rotation(0.2)) <= 1e-13
+    assert not clock.rejected
