@@ -191,6 +191,11 @@ def test_configure_activate_deactivate_reactivate_cleanup_shutdown(ros, request,
     assert np.max(np.abs(wxyz(after_pause[0]) - wxyz(before_pause[-1]))) <= 1e-12
     assert seconds(after_pause[0]) - seconds(before_pause[-1]) >= 50 * PERIOD_NS * 1e-9
     check_constant_rate(after_pause, omega)
+    diagnostics.clear()
+    assert harness.spin_until(lambda: bool(diagnostics), 5.0)
+    message, values = status_values(diagnostics)
+    assert not message.startswith('inactive') and 'lifecycle_state' not in values
+    assert values['rejected gap'] == '0' and values['rejected outlier_stamp'] == '0'
 
     # Cleanup releases the subscriptions and publishers; shutdown finalizes.
     assert lifecycle.change(Transition.TRANSITION_DEACTIVATE)
