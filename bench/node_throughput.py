@@ -163,9 +163,9 @@ class Process:
 
 
 def default_targets(calibration: Path) -> Dict[str, List[str]]:
-    """Return the built-in targets: the node, ``node_full`` and ``node_nocov`` (when the node
-    exists; their calibration file is written to ``calibration``), the relay and the fast
-    relay."""
+    """Return the built-in targets: the node, ``node_full``, ``node_nocov`` and ``node_stock``
+    (when the node exists; their calibration file is written to ``calibration``), the relay and
+    the fast relay."""
     python = sys.executable
     targets = {}
     node = None
@@ -178,7 +178,9 @@ def default_targets(calibration: Path) -> Dict[str, List[str]]:
         full = node + ['-p', f'mount_rpy:={FULL_NODE_MOUNT_RPY}',
                        '-p', f'calibration_file:={calibration}']
         targets.update(node=node, node_full=full,
-                       node_nocov=full + ['-p', 'covariance:=false'])
+                       node_nocov=full + ['-p', 'covariance:=false'],
+                       # the default node served by rclpy's stock executor (its fallback)
+                       node_stock=['env', 'RIGID_BODY_ATTITUDE_STOCK_EXECUTOR=1'] + node)
     targets['relay'] = [python, str(BENCH / 'relay.py')]
     targets['fast_relay'] = [python, str(BENCH / 'fast_relay.py')]
     return targets
@@ -445,7 +447,7 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         help='seconds after the last publish a pose may still arrive '
                              '(default %(default)s)')
     parser.add_argument('--targets', default=None,
-                        help='comma-separated built-in targets: node, node_full, node_nocov, '
+                        help='comma-separated built-in targets: node, node_full, node_nocov, node_stock, '
                              'relay, fast_relay (default: node, relay, fast_relay; "none": '
                              'only the --target ones)')
     parser.add_argument('--target', action='append', default=[], metavar='LABEL=COMMAND',
