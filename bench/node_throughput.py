@@ -447,9 +447,9 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         help='seconds after the last publish a pose may still arrive '
                              '(default %(default)s)')
     parser.add_argument('--targets', default=None,
-                        help='comma-separated built-in targets: node, node_full, node_nocov, node_stock, '
-                             'relay, fast_relay (default: node, relay, fast_relay; "none": '
-                             'only the --target ones)')
+                        help='comma-separated built-in targets: node, node_full, node_nocov, '
+                             'node_stock, relay, fast_relay (default: node, relay, fast_relay; '
+                             '"none": only the --target ones)')
     parser.add_argument('--target', action='append', default=[], metavar='LABEL=COMMAND',
                         help='an extra target command line (repeatable)')
     parser.add_argument('--node-cmd', default=None,
