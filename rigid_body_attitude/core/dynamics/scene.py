@@ -57,11 +57,10 @@ from rigid_body_attitude.core.dynamics.effects import (
     EFFECTS, BodyProperties, Effect, SampledTorque)
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
-from rigid_body_attitude.core.fields import Fields
 from rigid_body_attitude.core.paths import config_folders
 from rigid_body_attitude.core.sensors.imu import ImuSpec, sensors_spec
 from rigid_body_attitude.core.yaml_files import (
-    bounded as _bounded, MAGNITUDE_LIMIT, quote, read_yaml, real)
+    bounded as _bounded, Fields, MAGNITUDE_LIMIT, quote, read_yaml, real)
 
 __all__ = ['MAX_DESCRIPTION_CHARS', 'MAX_NAME_CHARS', 'RATE_SOURCES', 'SCALE_LIMIT', 'Scene',
            'builtin_scenes', 'load_scene', 'scene_from_mapping', 'scene_path']

@@ -43,8 +43,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.errors import CalibrationError
-from rigid_body_attitude.core.fields import Fields
-from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml
+from rigid_body_attitude.core.yaml_files import (
+    bounded as _bounded, Fields, quote, read_yaml)
 
 __all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'KIND_NAMES', 'calibration_summary',
            'calibration_terms', 'ImuNoise', 'NOISE_BOUNDS', 'ORTHONORMAL_TOLERANCE',
@@ -396,8 +396,8 @@ def _noise(data: Mapping[Any, Any], prefix: str, required: tuple[str, ...] = ())
     values: dict[str, float | None] = {}
     for key in NOISE_KEYS:
         values[key] = (None if data.get(key) is None
-                       else _FIELDS.number(data[key], f'{prefix}{key}', 0.0, NOISE_BOUNDS[key],
-                                            low_open=True))
+                       else _FIELDS.number(data[key], f'{prefix}{key}', 0.0,
+                                           NOISE_BOUNDS[key], low_open=True))
     rate = data.get('update_rate')
     topic = data.get('rostopic', '')
     if not isinstance(topic, str):

@@ -51,8 +51,7 @@ from numpy.typing import NDArray
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel
-from rigid_body_attitude.core.fields import Fields
-from rigid_body_attitude.core.yaml_files import quote
+from rigid_body_attitude.core.yaml_files import Fields, quote
 
 __all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'imu_spec', 'sensors_spec']
 

@@ -50,8 +50,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.effects.attitude_pd import AttitudePD
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.dynamics.scene import load_scene, Scene, scene_from_mapping
-from rigid_body_attitude.core.fields import Fields
-from rigid_body_attitude.core.yaml_files import quote, read_yaml
+from rigid_body_attitude.core.yaml_files import Fields, quote, read_yaml
 from rigid_body_attitude.tools.campaign.budget import budget_problem
 
 __all__ = ['CampaignSpec', 'CommandDispersion', 'InertiaDispersion', 'MAX_OUTPUT_TIMES',

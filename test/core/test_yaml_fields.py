@@ -1,4 +1,4 @@
-"""The field checks shared by scene, calibration and campaign files (core/fields.py)."""
+"""The field checks shared by scene, calibration and campaign files (yaml_files.Fields)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import pytest
 
 from rigid_body_attitude.core.errors import CalibrationError, SceneError
-from rigid_body_attitude.core.fields import Fields
+from rigid_body_attitude.core.yaml_files import Fields
 
 FIELDS = Fields(CalibrationError)
 
