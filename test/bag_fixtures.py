@@ -7,12 +7,15 @@ arrays into a bag, usable for any user data) together with the closed-form attit
 truth (``geometry_msgs/QuaternionStamped`` on ``ground_truth``), so ``replay --ground-truth``
 reports the error against the exact solution directly.
 
-Cases (physics.md §2):
+Cases (closed forms of the quaternion kinematics q̇ = ½ q ⊗ (0, ω): Shuster, "A survey of attitude
+representations", J. Astronaut. Sci. 41(4), 1993):
 
 * ``constant_rate`` (gyro): ``q(τ) = q₀ ⊗ exp(τ ω)`` — the exponential map is exact.
-* ``coning`` (gyro): classical coning, half-angle ``a``, frequency ``Ω`` (§2.3).
+* ``coning`` (gyro): classical coning, half-angle ``a``, frequency ``Ω`` (Savage, "Strapdown
+inertial navigation integration algorithm design, part 1: attitude algorithms", JGCD 21(1), 1998).
 * ``generic_rate`` (gyro): ``q(τ) = exp(f(τ) â) ⊗ q₀ ⊗ exp(g(τ) b̂)`` with non-linear ``f, g``
-  (the two-axis composition of §2.2 with varying rates); its body rate
+  (a regular precession, Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36, with varying rates);
+  its body rate
   ``ω = f′ R(q)ᵀ â + g′ b̂`` changes magnitude and direction, so it is not a coning motion.
 * ``torque_free`` (dynamics): the Hairer–Vilmart body tumbling torque-free; exact solution
   from :class:`~rigid_body_attitude.core.dynamics.integrators.exact_torque_free.TorqueFreeMotion`.
@@ -160,7 +163,7 @@ def constant_rate_case() -> AnalyticCase:
 
 
 def coning_case() -> AnalyticCase:
-    """Classical coning (physics.md §2.3): half-angle 0.2 rad at 1.5 Hz."""
+    """Classical coning (Savage 1998): half-angle 0.2 rad at 1.5 Hz."""
     half_angle, frequency = 0.2, 2.0 * np.pi * 1.5
     stamps = _exact_stamps(250.0, GYRO_RATE, GYRO_SAMPLES)
     tau = _relative_times(stamps)
@@ -234,7 +237,8 @@ def torque_free_case() -> AnalyticCase:
     moments, omega0 = [0.6, 0.8, 1.0], [3.0, 0.5, -0.9]
     motion = TorqueFreeMotion(moments, [1.0, 0.0, 0.0, 0.0], omega_body=omega0)
     stamps = _exact_stamps(100.0, GYRO_RATE, GYRO_SAMPLES)
-    # RK4's global error ∝ h⁴ (physics.md §5: 2.6e−9 at h = 6.25e−3 over T = 10); at
+    # RK4's global error ∝ h⁴ (2.6e−9 at h = 6.25e−3 over T = 10 on the Hairer–Vilmart body,
+    # test_integrators_dynamics); at
     # h = 1e−3 over 2 s that scales to 2.6e−9 · (1/6.25)⁴ · 2/10 = 3.4e−13; round-off of
     # 2000 steps adds ~2000 · 10 ulps = 4.4e−12.
     tolerance = 1e-11

@@ -12,7 +12,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from rigid_body_attitude.session.parameters import Parameter, PARAMETERS
+from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, values_problem
 
 __all__ = ['CONTROLLER_PARAMETERS', 'UNIT_TOLERANCE', 'check_controller_values',
            'controller_defaults']
@@ -60,16 +60,9 @@ def check_controller_values(values: Mapping[str, Any]) -> str:
     and ``target_quaternion``, and a target quaternion of unit norm within
     :data:`UNIT_TOLERANCE`.
     """
-    for name, value in values.items():
-        parameter = _BY_NAME.get(name)
-        if parameter is None:
-            return f'Unknown parameter `{name}`; parameters: {", ".join(_BY_NAME)}'
-        problem = parameter.problem(value)
-        if problem:
-            return problem
-    if values.get('world_frame', 'world') == values.get('body_frame', 'base_link'):
-        return (f'Expected `world_frame` and `body_frame` to differ, both are '
-                f'{values["world_frame"]!r}')
+    problem = values_problem(values, _BY_NAME)
+    if problem:
+        return problem
     if values.get('target_rpy') and values.get('target_quaternion'):
         return ('Expected at most one of `target_rpy` and `target_quaternion`, got both: '
                 f'{list(values["target_rpy"])} and {list(values["target_quaternion"])}')

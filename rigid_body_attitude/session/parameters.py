@@ -17,8 +17,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel
+from rigid_body_attitude.msgs.untrusted import QUOTED_CHARACTERS, quoted
 
-__all__ = ['PARAMETERS', 'Parameter', 'check_values', 'defaults']
+__all__ = ['PARAMETERS', 'Parameter', 'check_values', 'defaults', 'values_problem']
 
 
 @dataclass(frozen=True)
@@ -101,7 +102,8 @@ class Parameter:
             return (f'Expected parameter `{self.name}` to be one of '
                     f'{", ".join(map(repr, self.choices))}, got {_quoted(value)}')
         if not self.may_be_empty and not value.strip():
-            return f'Expected parameter `{self.name}` to be a non-empty name, got {value!r}'
+            return (f'Expected parameter `{self.name}` to be a non-empty name, got '
+                    f'{_quoted(value)}')
         if len(value) > MAX_TEXT_LENGTH:
             return (f'Expected parameter `{self.name}` to be at most {MAX_TEXT_LENGTH} '
                     f'characters, got {len(value)}')
@@ -131,9 +133,18 @@ def _number_text(value: float) -> str:
 
 
 def _quoted(value: Any) -> str:
-    """``repr`` of a value, cut to 100 characters (a hostile value may be huge)."""
+    """A value as an error quotes it: a string as :func:`~rigid_body_attitude.msgs.untrusted.
+    quoted` writes it (a short prefix, non-printables escaped, the length of what was cut),
+    anything else as ``repr`` cut to 100 characters (a hostile value may be huge)."""
+    if isinstance(value, str):
+        return quoted(value)
     text = repr(value)
     return text if len(text) <= 100 else text[:97] + '...'
+
+
+def _plain(name: Any) -> bool:
+    """Whether ``name`` can be shown as it is: a short printable string."""
+    return isinstance(name, str) and len(name) <= QUOTED_CHARACTERS and name.isprintable()
 
 
 _GYRO_DEFAULTS = GyroErrorModel()
@@ -253,6 +264,24 @@ def defaults() -> dict[str, Any]:
     return {p.name: p.default for p in PARAMETERS}
 
 
+def values_problem(values: Mapping[str, Any], declared: Mapping[str, Parameter]) -> str:
+    """The first value of ``values`` that is not a valid value of its parameter in
+    ``declared`` (or names none), then distinct ``world_frame`` and ``body_frame``; ``''``
+    when there is none. Strings are quoted as untrusted (:func:`_quoted`)."""
+    for name, value in values.items():
+        parameter = declared.get(name)
+        if parameter is None:
+            shown = f'`{name}`' if _plain(name) else _quoted(name)
+            return f'Unknown parameter {shown}; parameters: {", ".join(declared)}'
+        problem = parameter.problem(value)
+        if problem:
+            return problem
+    if values.get('world_frame', 'world') == values.get('body_frame', 'base_link'):
+        return (f'Expected `world_frame` and `body_frame` to differ, both are '
+                f'{_quoted(values["world_frame"])}')
+    return ''
+
+
 def check_values(values: Mapping[str, Any], dynamics_step: float = 0.0,
                  max_steps_per_tick: int = 0) -> str:
     """Why these parameter values are unusable, or ``''`` when they are fine.
@@ -262,16 +291,9 @@ def check_values(values: Mapping[str, Any], dynamics_step: float = 0.0,
     below ``time_jump_threshold`` (integrated in one tick) stays within
     ``max_steps_per_tick`` steps.
     """
-    for name, value in values.items():
-        parameter = _BY_NAME.get(name)
-        if parameter is None:
-            return f'Unknown parameter `{name}`; parameters: {", ".join(_BY_NAME)}'
-        problem = parameter.problem(value)
-        if problem:
-            return problem
-    if values.get('world_frame', 'world') == values.get('body_frame', 'base_link'):
-        return (f'Expected `world_frame` and `body_frame` to differ, both are '
-                f'{values["world_frame"]!r}')
+    problem = values_problem(values, _BY_NAME)
+    if problem:
+        return problem
     threshold = values.get('time_jump_threshold', 0.0)
     if dynamics_step > 0.0 and max_steps_per_tick and (
             threshold / dynamics_step > max_steps_per_tick):

@@ -1,7 +1,8 @@
 """Tests of the propagators (propagator.py): conservation, energy balance, time stepping, inputs.
 
 Tolerances: RK4's local error is O((h|ω|)⁵); at h = 1 ms and |ω| ≤ 1 rad/s the invariants move
-by ~1e−15 per step, far inside Basilisk's 1e−10 requirement (physics.md §7), which is asserted
+by ~1e−15 per step, far inside Basilisk's 1e−10 requirement (Kenneally, Piggott & Schaub, J.
+Aerosp. Inf. Syst. 17(9), 2020), which is asserted
 as is. The energy balance T − T₀ − ∫ω·M dt uses Simpson's rule per step (O(h⁵)), so with a
 piecewise-constant torque switched on step boundaries it closes to round-off; 1e−9 relative is
 the issue's requirement.

@@ -1,6 +1,7 @@
 """Hard case 6: Euler (ZXZ) and Bryant (XYZ) angle kinematics at their singularities.
 
-The angle rates of seed 000 (eq. 21, ψ̇ = (ω_x sin φ + ω_y cos φ)/sin θ; eq. 25,
+The angle rates (Wittenburg, *Dynamics of Multibody Systems*, 2nd ed., 2008, §2.2; Euler, ψ̇ = (ω_x
+sin φ + ω_y cos φ)/sin θ; Bryant,
 α̇₁ = (ω_x cos α₃ − ω_y sin α₃)/cos α₂) divide by sin θ and cos α₂. A naive integrator of
 these forms returns inf/NaN on the singularity and garbage near it (rates of order
 |ω|/δ for a closest approach δ). The package's angle forms
@@ -57,9 +58,11 @@ FORMS = {
 
 
 def integrate_three_ways(form, q0):
-    """Angles (RK4 on eq. 21/25), quaternion (RK4 on q̇) and DCM (RK4 on Ȧ = A ω̃), STEPS steps.
+    """Angles (RK4 on the Euler and Bryant rate forms), quaternion (RK4 on q̇) and DCM (RK4 on Ȧ =
+    A ω̃), STEPS steps.
 
-    Returns the three attitude errors against the closed form q₀ ⊗ exp(ω t) (physics.md §2.1)
+    Returns the three attitude errors against the closed form q₀ ⊗ exp(ω t) (Shuster, "A survey of
+    attitude representations", J. Astronaut. Sci. 41(4), 1993)
     and the largest angle rate met; the angle error is None if the step was refused.
     """
     to_angles, from_angles, rates, angle_step = FORMS[form]

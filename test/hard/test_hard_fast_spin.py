@@ -1,6 +1,7 @@
 """Hard case 1: fast spin, |ω| = 100 and 1000 rad/s with h|ω| up to 2 (docs/hard-cases.md §1).
 
-What breaks naively (physics.md §6): raw Euler grows |q| by (h|ω|)²/8 per step, RK4 shrinks it
+What breaks naively (Hairer, Lubich & Wanner, *Geometric Numerical Integration*, 2nd ed., 2006,
+§IV.2): raw Euler grows |q| by (h|ω|)²/8 per step, RK4 shrinks it
 by (h|ω|)⁶/9216, Euler + normalise lags (h|ω|)³/12 rad per step, and explicit RK4 on Euler's
 equations diverges once h|λ| > 2√2 (|λ| ≤ |ω| for a torque-free body).
 
@@ -131,7 +132,7 @@ def test_every_strapdown_method_follows_its_step_formula_at_fast_spin(name):
 
 
 def coning_rate(t, cone_angle, frequency):
-    """Classical coning body rate (physics.md §2.3)."""
+    """Classical coning body rate (Savage 1998)."""
     return (-2.0 * frequency * math.sin(0.5 * cone_angle) ** 2,
             -frequency * math.sin(cone_angle) * math.sin(frequency * t),
             frequency * math.sin(cone_angle) * math.cos(frequency * t))

@@ -142,7 +142,8 @@ def test_exact_solution_on_extreme_bodies(body):
 
 def mpmath_reference(moments, attitude, momentum, duration, digits=60):
     """q(t), m(t) of the torque-free body with ascending principal moments (body axes) by
-    mpmath at ``digits``: mp.ellipfun / mp.ellipf for m(t) (physics.md §2.5), and the phase
+    mpmath at ``digits``: mp.ellipfun / mp.ellipf for m(t) (Celledoni, Fassò, Säfström & Zanna,
+    SIAM J. Sci. Comput. 30(4), 2008: Jacobi elliptic functions), and the phase
     ψ = ∫ [G/J_a − Δ_a/(J_a (G + σ m_a))] dt (the textbook form, cancelling, harmless at 60
     digits) by mp.quad — an implementation independent of the package's."""
     mpmath.mp.dps = digits

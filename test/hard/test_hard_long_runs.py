@@ -1,6 +1,7 @@
 """Hard case 2: long runs, 10⁷ strapdown steps and 10⁶ dynamics steps (docs/hard-cases.md §2).
 
-What breaks naively (physics.md §6): an unnormalised quaternion drifts off the unit sphere
+What breaks naively (Hairer, Lubich & Wanner, *Geometric Numerical Integration*, 2nd ed., 2006,
+§IV.2): an unnormalised quaternion drifts off the unit sphere
 linearly in the number of steps; RK4's energy and momentum errors grow linearly in time;
 implicit midpoint loses world H; round-off alone, if biased, accumulates like N·ε.
 

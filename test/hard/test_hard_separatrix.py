@@ -3,7 +3,8 @@
 The body flips every 2K/|λ| = 36.7 s (Dzhanibekov effect). m₀ sits 1e−8 inside the separatrix
 (Δ₂ = G² − 2T J₂ = −1e−8 with G² = 4): a method whose energy or |m| error moves Δ₂ by more than
 that crosses to the other side and flips about the other axis; a smaller error δΔ₂ still
-shifts every flip by δt ≈ (1/|λ|) δΔ₂/|Δ₂| (physics.md §6), an amplification of 1.7e8 s per
+shifts every flip by δt ≈ (1/|λ|) δΔ₂/|Δ₂| (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §37: the
+flip period 2K/|λ|), an amplification of 1.7e8 s per
 unit relative error. That amplification also applies to round-off: 10⁵ steps with a few ε of
 invariant round-off each move the flips by ~1e−5 s whatever the method's order.
 
@@ -81,12 +82,12 @@ def numerical_flips(name, h, model=None, integrator=None):
 
 
 @pytest.mark.parametrize('name, h, bound', [
-    # Order 4: RK4 (and RKMK4, whose m is the same RK4) 3.6e−5 s at h = 0.1 (physics.md:
-    # 4.8e−5 s with another flip definition), 2.7e−6 s at h = 0.05.
+    # Order 4: RK4 (and RKMK4, whose m is the same RK4) 3.6e−5 s at h = 0.1 (4.8e−5 s
+    # with another flip definition), 2.7e−6 s at h = 0.05.
     ('rk4', 0.1, 5e-5), ('rk4', 0.05, 5e-5 / 10), ('rkmk4', 0.1, 5e-5),
     # Order 4 composition of Strang: 1.8e−3 s at 0.1, 1.3e−4 s at 0.05.
     ('yoshida4', 0.1, 2.5e-3), ('yoshida4', 0.05, 2.5e-3 / 10),
-    # Order 2: 0.17 s at 0.1, 0.043 s at 0.05; 0.70 s at 0.2 (physics.md: 0.7 s).
+    # Order 2: 0.17 s at 0.1, 0.043 s at 0.05; 0.70 s at 0.2 (0.7 s with another flip definition).
     ('strang', 0.2, 1.0), ('strang', 0.1, 0.25), ('strang', 0.05, 0.25 / 3.5),
     # Method error far below the round-off floor (orders 6, 8, adaptive rtol 1e−9, exact):
     # 734..3670 steps leave δΔ₂/|Δ₂| of a few 1e−6 → 1e−6..7e−5 s (measured 2.0e−5, 4.0e−5,
@@ -130,7 +131,8 @@ def test_dzhanibekov_scene_default_never_crosses_the_separatrix():
 
 def test_exact_flip_period():
     # Consecutive flips are 2K/|λ| apart: |λ| = √(Δ₃(J₁ − J₂)/(J₁J₂J₃)) = 1/√3, K from the
-    # complementary parameter 1 − k² = Δ₂(J₃ − J₁)/(Δ₃(J₂ − J₁)) = 1e−8 (physics.md §2.6).
+    # complementary parameter 1 − k² = Δ₂(J₃ − J₁)/(Δ₃(J₂ − J₁)) = 1e−8 (Landau & Lifshitz 1976,
+    # §37).
     d1, d2, d3 = torque_free_invariants(INERTIA, MOMENTUM)
     rate = np.sqrt(d3 * (INERTIA[0] - INERTIA[1]) / np.prod(INERTIA))
     period = 2.0 * ellipkm1(d2 * (INERTIA[2] - INERTIA[0]) / (d3 * (INERTIA[1] - INERTIA[0])))

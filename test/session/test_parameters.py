@@ -64,3 +64,22 @@ def test_the_steps_of_one_tick_are_bounded():
     assert check_values(values, 0.001, 10_000_000) == (
         'Expected parameter `time_jump_threshold` to be at most 10000 s (10000000 steps of '
         '0.001 s in one tick), got 20000.0')
+
+
+def test_untrusted_strings_are_quoted_short_in_every_parameter_error():
+    """A frame name of 4 000 characters (within the length bound), with terminal escapes,
+    is quoted as the network's strings are: 64 characters, escaped, its length named."""
+    frame = '\x1b[31m' + 'w' * 3995
+    values = defaults()
+    values['world_frame'] = values['body_frame'] = frame
+    problem = check_values(values)
+    assert problem.startswith('Expected `world_frame` and `body_frame` to differ, both are ')
+    assert problem.endswith('... (4000 characters)') and len(problem) < 200, problem
+    assert '\x1b' not in problem and '\\x1b[31m' in problem
+    values = defaults()
+    values['scene'] = ' ' * 4000
+    problem = check_values(values)
+    assert '`scene` to be a non-empty name' in problem and problem.endswith('(4000 characters)')
+    unknown = check_values({'\x1b' + 'n' * 5000: 1.0})
+    assert unknown.startswith("Unknown parameter '\\x1bnnn") and '(5001 characters)' in unknown
+    assert len(unknown.split(';')[0]) < 120 and '\x1b' not in unknown

@@ -12,7 +12,8 @@ truth at the first motion sample (``--start-from-ground-truth``). The attitude e
 the ground truth is then gyro-limited: with 77 rad of rotation in the first 10 s of trial 07
 (25 rad/s peaks), a scale-factor or axis-misalignment error of 0.1–0.2 % — typical of MEMS
 gyros — gives 4–9°, and the higher-order update (trapezoid + coning term) removes only the
-integrator's share (physics.md §3). Our measurements (deterministic: same data, same code):
+integrator's share (Savage, "Strapdown inertial navigation integration algorithm design, part 1:
+attitude algorithms", JGCD 21(1), 1998). Our measurements (deterministic: same data, same code):
 
 ========  ================  ==================  ==================
 trial     method            max error, 10 s      max error, whole

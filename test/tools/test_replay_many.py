@@ -9,6 +9,7 @@ from pathlib import Path
 from bag_fixtures import build_case, write_case_bag, write_scene
 from rigid_body_attitude.bag import write_bag
 from rigid_body_attitude.tools.replay.cli import is_many_bags, main
+from rigid_body_attitude.tools.replay.fleet import DYNAMICS_COLUMNS
 
 
 def _bags(tmp_path: Path) -> tuple[Path, Path]:
@@ -28,6 +29,13 @@ def _table(path: Path) -> dict[str, dict[str, str]]:
         return {Path(row['bag']).name: row for row in csv.DictReader(file)}
 
 
+def _header(printed: str) -> str:
+    """The printed table's header line."""
+    headers = [line for line in printed.splitlines() if line.startswith('| bag | status |')]
+    assert len(headers) == 1, printed
+    return headers[0]
+
+
 def test_a_folder_of_bags_is_replayed_on_a_local_cluster_into_one_table(tmp_path, capsys):
     bags, scene = _bags(tmp_path)
     out = tmp_path / 'out'
@@ -44,6 +52,29 @@ def test_a_folder_of_bags_is_replayed_on_a_local_cluster_into_one_table(tmp_path
     assert float(rows['with_truth']['error_max_deg']) < 1e-6
     assert (out / 'with_truth_replayed' / 'metadata.yaml').is_file()
     assert (out / 'no_truth_replayed' / 'metadata.yaml').is_file()
+    # A gyro scene simulates no body: no energy or momentum drift columns.
+    header = _header(printed)
+    assert 'error_max_deg' in header
+    for column in DYNAMICS_COLUMNS:
+        assert column not in printed and column not in rows['with_truth']
+
+
+def test_a_dynamics_scene_fleet_table_has_the_drift_columns(tmp_path, capsys):
+    case = build_case('torque_free')
+    scene = write_scene(case, tmp_path)
+    bags = tmp_path / 'bags'
+    bags.mkdir()
+    for name in ('first', 'second'):
+        write_case_bag(case, bags / name)
+    out = tmp_path / 'out'
+    code = main([str(bags), '-o', str(out), '--serial', '--scene', str(scene),
+                 '--ground-truth', 'ground_truth', '--no-progress'])
+    printed = capsys.readouterr().out
+    assert code == 0 and printed.count('| ok |') == 2
+    header = _header(printed)
+    assert '| energy_drift | momentum_drift |' in header, printed
+    for row in _table(out / 'fleet.csv').values():
+        assert abs(float(row['energy_drift'])) < 1e-9 and abs(float(row['momentum_drift'])) < 1e-9
 
 
 def test_a_glob_pattern_replays_the_matching_bags_only(tmp_path, capsys):

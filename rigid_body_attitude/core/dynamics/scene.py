@@ -60,7 +60,7 @@ from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.paths import config_folders
 from rigid_body_attitude.core.sensors.imu import ImuSpec, sensors_spec
 from rigid_body_attitude.core.yaml_files import (
-    bounded as _bounded, MAGNITUDE_LIMIT, quote, read_yaml, real)
+    bounded as _bounded, Fields, MAGNITUDE_LIMIT, quote, read_yaml, real)
 
 __all__ = ['MAX_DESCRIPTION_CHARS', 'MAX_NAME_CHARS', 'RATE_SOURCES', 'SCALE_LIMIT', 'Scene',
            'builtin_scenes', 'load_scene', 'scene_from_mapping', 'scene_path']
@@ -75,6 +75,7 @@ _BODY_KEYS = {'mass', 'inertia'}
 _STATE_KEYS = {'attitude', 'omega_body'}
 _SHAPES = ('tensor', 'moments', 'box', 'cylinder', 'sphere')
 _DEFAULT_INTEGRATOR = {'dynamics': 'rk4', 'gyro': 'delta_single'}
+_FIELDS = Fields(SceneError)
 
 #: Longest ``name`` and ``description`` [characters].
 MAX_NAME_CHARS = 256
@@ -189,7 +190,7 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
     if not isinstance(data, Mapping):
         raise SceneError(f'Expected a scene to be a mapping with keys '
                          f'{", ".join(sorted(_TOP_KEYS))}, got {quote(data)}')
-    _check_keys('scene', data, _TOP_KEYS, _REQUIRED_TOP_KEYS)
+    _FIELDS.keys(data, _TOP_KEYS, 'scene', _REQUIRED_TOP_KEYS)
     rate_source = data['rate_source']
     if rate_source not in RATE_SOURCES:
         raise SceneError(f'Unknown rate_source {quote(rate_source)}; valid choices: '
@@ -214,18 +215,6 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
     _check_effects(scene)
     _check_sensors(scene)
     return scene
-
-
-def _check_keys(where: str, data: Mapping[Any, Any], valid: set[str],
-                required: tuple[str, ...] = ()) -> None:
-    for key in data:
-        if key not in valid:
-            raise SceneError(f'Unknown key {quote(key)} in {where}; valid keys: '
-                             f'{", ".join(sorted(valid))}')
-    for key in required:
-        if key not in data:
-            raise SceneError(f'Missing key {key!r} in {where}; valid keys: '
-                             f'{", ".join(sorted(valid))}')
 
 
 def _text(key: str, value: Any) -> str:
@@ -266,10 +255,7 @@ def _check_step(value: Any) -> float:
 
 
 def _body(data: Any) -> tuple[Inertia, float]:
-    if not isinstance(data, Mapping):
-        raise SceneError(f'Expected body to be a mapping with keys mass, inertia; got '
-                         f'{quote(data)}')
-    _check_keys('body', data, _BODY_KEYS, ('inertia',))
+    data = _FIELDS.mapping(data, 'body', _BODY_KEYS, ('inertia',))
     mass = _number('body.mass', data.get('mass', 1.0))
     if not np.isfinite(mass) or mass <= 0.0:
         raise SceneError(f'Expected body.mass to be a positive number [kg], got {mass!r}')
@@ -313,9 +299,7 @@ def _within_scale(key: str, value: float, positive: bool = False) -> None:
 
 
 def _initial_state(data: Any, inertia: Inertia) -> tuple[FloatArray, FloatArray]:
-    if not isinstance(data, Mapping):
-        raise SceneError(f'Expected initial_state to be a mapping, got {quote(data)}')
-    _check_keys('initial_state', data, _STATE_KEYS)
+    data = _FIELDS.mapping(data, 'initial_state', _STATE_KEYS)
     try:
         raw_attitude = quaternion.as_quaternion(data.get('attitude', [1.0, 0.0, 0.0, 0.0]),
                                                 'initial_state.attitude')

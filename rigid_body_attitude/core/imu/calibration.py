@@ -43,7 +43,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.errors import CalibrationError
-from rigid_body_attitude.core.yaml_files import bounded as _bounded, quote, read_yaml, real
+from rigid_body_attitude.core.yaml_files import (
+    bounded as _bounded, Fields, quote, read_yaml)
 
 __all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'KIND_NAMES', 'calibration_summary',
            'calibration_terms', 'ImuNoise', 'NOISE_BOUNDS', 'ORTHONORMAL_TOLERANCE',
@@ -86,6 +87,7 @@ MAX_MISALIGNMENT = 0.1
 #: Keys a kalibr ``imu.yaml`` (the noise model alone) must give: those the node uses.
 REQUIRED_NOISE_KEYS = ('gyroscope_noise_density', 'gyroscope_random_walk', 'update_rate')
 _IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+_FIELDS = Fields(CalibrationError)
 
 
 @dataclass(frozen=True)
@@ -339,11 +341,12 @@ def _kalibr_result(data: Mapping[Any, Any], key: str, source: str) -> ImuCalibra
 
 
 def _kalibr(section: Mapping[Any, Any], prefix: str, source: str) -> ImuCalibration:
-    _check_keys(section, _KALIBR_KEYS | {'rx_i', 'ry_i', 'rz_i'}, prefix)
+    _FIELDS.keys(section, _KALIBR_KEYS | {'rx_i', 'ry_i', 'rz_i'}, prefix.rstrip('.'))
     noise_only = not any(key in section for key in ('gyroscopes', 'accelerometers'))
     noise = _noise(section, prefix, REQUIRED_NOISE_KEYS if noise_only else ())
-    gyros = _mapping(section.get('gyroscopes', {}), f'{prefix}gyroscopes', {'M', 'A', 'C_gyro_i'})
-    accs = _mapping(section.get('accelerometers', {}), f'{prefix}accelerometers', {'M'})
+    gyros = _FIELDS.mapping(section.get('gyroscopes', {}), f'{prefix}gyroscopes',
+                            {'M', 'A', 'C_gyro_i'})
+    accs = _FIELDS.mapping(section.get('accelerometers', {}), f'{prefix}accelerometers', {'M'})
     m_gyro = _invertible(gyros.get('M', _IDENTITY), f'{prefix}gyroscopes.M')
     c_gyro = _rotation(gyros.get('C_gyro_i', _IDENTITY), f'{prefix}gyroscopes.C_gyro_i')
     a_gyro = _matrix(gyros.get('A', np.zeros((3, 3))), f'{prefix}gyroscopes.A',
@@ -357,7 +360,7 @@ def _kalibr(section: Mapping[Any, Any], prefix: str, source: str) -> ImuCalibrat
 
 
 def _plain(data: Mapping[Any, Any], source: str) -> ImuCalibration:
-    _check_keys(data, _PLAIN_KEYS, '')
+    _FIELDS.keys(data, _PLAIN_KEYS)
     scale_value = data.get('scale', [1.0, 1.0, 1.0])
     if isinstance(scale_value, list) and len(scale_value) == 3 and not any(
             isinstance(item, list) for item in scale_value):
@@ -377,33 +380,6 @@ def _plain(data: Mapping[Any, Any], source: str) -> ImuCalibration:
         noise=_noise(data, ''), kind='plain', source=source)
 
 
-def _check_keys(data: Mapping[Any, Any], valid: set[str], prefix: str) -> None:
-    for key in data:
-        if key not in valid:
-            raise CalibrationError(f'Unknown key {prefix}{quote(key)}; valid keys: '
-                                   f'{", ".join(sorted(valid))}')
-
-
-def _mapping(value: Any, key: str, valid: set[str]) -> Mapping[Any, Any]:
-    if not isinstance(value, Mapping):
-        raise CalibrationError(f'Expected {key} to be a mapping with keys '
-                               f'{", ".join(sorted(valid))}, got {quote(value)}')
-    _check_keys(value, valid, f'{key}.')
-    return value
-
-
-def _number(value: Any, key: str, low: float, high: float) -> float:
-    """A number in ``[low, high]`` (``low`` excluded when it is 0)."""
-    try:
-        number = real(value)
-    except (TypeError, ValueError) as err:
-        raise CalibrationError(f'Expected {key} to be {err}, got {quote(value)}') from None
-    if not (low < number if low == 0.0 else low <= number) or number > high:
-        bound = f'in (0, {high:g}]' if low == 0.0 else f'in [{low:g}, {high:g}]'
-        raise CalibrationError(f'Expected {key} to be {bound}, got {number!r}')
-    return number
-
-
 def _noise(data: Mapping[Any, Any], prefix: str, required: tuple[str, ...] = ()) -> ImuNoise:
     """The noise figures of ``data``: each in its :data:`NOISE_BOUNDS`, densities and random
     walks in pairs, the keys ``required`` present (else one error naming the key)."""
@@ -420,48 +396,25 @@ def _noise(data: Mapping[Any, Any], prefix: str, required: tuple[str, ...] = ())
     values: dict[str, float | None] = {}
     for key in NOISE_KEYS:
         values[key] = (None if data.get(key) is None
-                       else _number(data[key], f'{prefix}{key}', 0.0, NOISE_BOUNDS[key]))
+                       else _FIELDS.number(data[key], f'{prefix}{key}', 0.0,
+                                           NOISE_BOUNDS[key], low_open=True))
     rate = data.get('update_rate')
     topic = data.get('rostopic', '')
     if not isinstance(topic, str):
         raise CalibrationError(f'Expected {prefix}rostopic to be a topic name, got {quote(topic)}')
     return ImuNoise(
-        update_rate=None if rate is None else _number(rate, f'{prefix}update_rate',
-                                                      MIN_UPDATE_RATE, MAX_UPDATE_RATE),
+        update_rate=None if rate is None else _FIELDS.number(
+            rate, f'{prefix}update_rate', MIN_UPDATE_RATE, MAX_UPDATE_RATE),
         rostopic=topic, **values)
 
 
-def _array(value: Any, key: str, shape: tuple[int, ...], bound: float) -> FloatArray:
-    nested = value.tolist() if isinstance(value, np.ndarray) else value
-    rows = nested if len(shape) == 2 else [nested]
-    width = shape[-1]
-    described = '3x3 matrix (a list of 3 rows of 3 numbers)' if len(shape) == 2 else (
-        '3 numbers')
-    if not isinstance(rows, (list, tuple)) or len(rows) != (shape[0] if len(shape) == 2 else 1) \
-            or any(not isinstance(row, (list, tuple)) or len(row) != width for row in rows):
-        raise CalibrationError(f'Expected {key} to be a {described}, got {quote(value)}')
-    numbers = [[_entry(item, key, bound) for item in row] for row in rows]
-    return np.array(numbers if len(shape) == 2 else numbers[0], dtype=np.float64)
-
-
-def _entry(value: Any, key: str, bound: float) -> float:
-    try:
-        number = real(value)
-    except (TypeError, ValueError) as err:
-        raise CalibrationError(f'Expected every entry of {key} to be {err}, got '
-                               f'{quote(value)}') from None
-    if abs(number) > bound:
-        raise CalibrationError(f'Expected every entry of {key} to be at most {bound:g} in '
-                               f'magnitude, got {number!r}')
-    return number
-
-
 def _vector(value: Any, key: str, bound: float) -> FloatArray:
-    return _array(value, key, (3,), bound)
+    return np.array(_FIELDS.vector(value, key, 3, bound), dtype=np.float64)
 
 
 def _matrix(value: Any, key: str, bound: float) -> FloatArray:
-    return _array(value, key, (3, 3), bound)
+    rows = value.tolist() if isinstance(value, np.ndarray) else value
+    return np.array(_FIELDS.matrix(rows, key, 3, 3, bound), dtype=np.float64)
 
 
 def _conditioned(matrix: FloatArray, key: str) -> FloatArray:

@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -52,7 +51,7 @@ from numpy.typing import NDArray
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel
-from rigid_body_attitude.core.yaml_files import quote
+from rigid_body_attitude.core.yaml_files import Fields, quote
 
 __all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'imu_spec', 'sensors_spec']
 
@@ -84,6 +83,7 @@ _BOUNDS: dict[str, tuple[float, float, float]] = {
     'accelerometer_resolution': (0.0, 0.0, 100.0),
 }
 _OTHER_KEYS = {'frame_id', 'topic', 'mount_rpy', 'seed', 'gravity'}
+_FIELDS = Fields(SceneError)
 #: Largest |mount angle| [rad] and |gravity component| [m/s²].
 _ANGLE_LIMIT, _GRAVITY_LIMIT = 10.0, 1000.0
 
@@ -161,25 +161,13 @@ def sensors_spec(data: Any) -> ImuSpec | None:
     """The scene's ``sensors`` section (``None`` or a mapping with the key ``imu``)."""
     if data is None:
         return None
-    if not isinstance(data, Mapping):
-        raise SceneError(f'Expected sensors to be a mapping with the key imu, got {quote(data)}')
-    for key in data:
-        if key != 'imu':
-            raise SceneError(f'Unknown key {quote(key)} in sensors; valid keys: imu')
+    data = _FIELDS.mapping(data, 'sensors', {'imu'})
     return imu_spec(data['imu']) if 'imu' in data else None
 
 
 def imu_spec(data: Any) -> ImuSpec:
     """Validate a ``sensors.imu`` mapping; one :class:`SceneError` naming the key otherwise."""
-    if not isinstance(data, Mapping):
-        raise SceneError(f'Expected sensors.imu to be a mapping, got {quote(data)}')
-    valid = set(_BOUNDS) | _OTHER_KEYS
-    for key in data:
-        if key not in valid:
-            raise SceneError(f'Unknown key {quote(key)} in sensors.imu; valid keys: '
-                             f'{", ".join(sorted(valid))}')
-    if 'rate' not in data:
-        raise SceneError('Missing key \'rate\' in sensors.imu (sample rate [Hz])')
+    data = _FIELDS.mapping(data, 'sensors.imu', set(_BOUNDS) | _OTHER_KEYS, ('rate',))
     numbers: dict[str, Any] = {key: _bounded_number(key, data[key]) for key in _BOUNDS
                                if key in data}
     spec = replace(ImuSpec(rate=numbers.pop('rate')), **numbers)
@@ -201,19 +189,9 @@ def imu_spec(data: Any) -> ImuSpec:
 
 
 def _bounded_number(key: str, value: Any) -> float:
+    """A number in the key's bounds (``rate``: above 0)."""
     _, low, high = _BOUNDS[key]
-    number = value if isinstance(value, (int, float)) and not isinstance(value, bool) else None
-    if number is not None:
-        try:
-            number = float(number)
-        except OverflowError:
-            number = None
-    positive = key == 'rate'
-    if number is None or not (low < number <= high if positive else low <= number <= high):
-        interval = f'({low:g}, {high:g}]' if positive else f'[{low:g}, {high:g}]'
-        raise SceneError(f'Expected sensors.imu.{key} to be a number in {interval}, got '
-                         f'{quote(value)}')
-    return number
+    return _FIELDS.number(value, f'sensors.imu.{key}', low, high, low_open=key == 'rate')
 
 
 def _matching(key: str, value: Any, pattern: re.Pattern[str]) -> str:
@@ -225,13 +203,8 @@ def _matching(key: str, value: Any, pattern: re.Pattern[str]) -> str:
 
 
 def _triple(key: str, value: Any, limit: float) -> Vector:
-    if isinstance(value, (list, tuple)) and len(value) == 3 and all(
-            isinstance(item, (int, float)) and not isinstance(item, bool)
-            and abs(float(item)) <= limit for item in value):
-        a, b, c = (float(item) for item in value)
-        return a, b, c
-    raise SceneError(f'Expected sensors.imu.{key} to be 3 numbers of magnitude at most '
-                     f'{limit:g}, got {quote(value)}')
+    a, b, c = _FIELDS.vector(value, f'sensors.imu.{key}', 3, limit)
+    return a, b, c
 
 
 class ImuModel:

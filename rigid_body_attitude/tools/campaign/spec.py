@@ -50,7 +50,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.effects.attitude_pd import AttitudePD
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.dynamics.scene import load_scene, Scene, scene_from_mapping
-from rigid_body_attitude.core.yaml_files import quote, read_yaml
+from rigid_body_attitude.core.yaml_files import Fields, quote, read_yaml
 from rigid_body_attitude.tools.campaign.budget import budget_problem
 
 __all__ = ['CampaignSpec', 'CommandDispersion', 'InertiaDispersion', 'MAX_OUTPUT_TIMES',
@@ -73,6 +73,9 @@ _STATISTICS_KEYS = {'percentiles', 'boresight', 'target', 'settling_deg'}
 
 class SpecError(SceneError):
     """A campaign spec is malformed (the message names the key)."""
+
+
+_FIELDS = Fields(SpecError)
 
 
 @dataclass(frozen=True)
@@ -158,17 +161,15 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
     if not isinstance(data, Mapping):
         raise SpecError(f'Expected a campaign to be a mapping with keys '
                         f'{", ".join(sorted(_TOP_KEYS))}, got {quote(data)}')
-    _keys('campaign', data, _TOP_KEYS, ('scene', 'runs', 'duration'))
+    _FIELDS.keys(data, _TOP_KEYS, 'campaign', ('scene', 'runs', 'duration'))
     scene = _scene(data['scene'], base)
     duration = _positive('duration', data['duration'])
     commands = _commands(data.get('commands', []), duration)
     if commands:
         scene = _with_command_effect(scene)
-    dispersions = _mapping('dispersions', data.get('dispersions', {}))
-    _keys('dispersions', dispersions, _DISPERSION_KEYS)
+    dispersions = _mapping('dispersions', data.get('dispersions'), _DISPERSION_KEYS)
     attitude, cone = _attitude(dispersions.get('attitude', 'nominal'))
-    statistics = _mapping('statistics', data.get('statistics', {}))
-    _keys('statistics', statistics, _STATISTICS_KEYS)
+    statistics = _mapping('statistics', data.get('statistics'), _STATISTICS_KEYS)
     boresight = _direction('statistics.boresight', statistics.get('boresight', [0, 0, 1]))
     default_target = quaternion.rotate(_controller_target(scene), boresight)
     spec = CampaignSpec(
@@ -195,24 +196,10 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
     return spec
 
 
-def _keys(where: str, data: Mapping[Any, Any], valid: set[str],
-          required: tuple[str, ...] = ()) -> None:
-    for key in data:
-        if key not in valid:
-            raise SpecError(f'Unknown key {quote(key)} in {where}; valid keys: '
-                            f'{", ".join(sorted(valid))}')
-    for key in required:
-        if key not in data:
-            raise SpecError(f'Missing key {key!r} in {where}; valid keys: '
-                            f'{", ".join(sorted(valid))}')
-
-
-def _mapping(key: str, value: Any) -> Mapping[Any, Any]:
-    if value is None:
-        return {}
-    if not isinstance(value, Mapping):
-        raise SpecError(f'Expected {key} to be a mapping, got {quote(value)}')
-    return value
+def _mapping(key: str, value: Any, valid: set[str] | None = None,
+             required: tuple[str, ...] = ()) -> Mapping[Any, Any]:
+    """A mapping (``None``: empty) with keys among ``valid`` and the ``required`` ones."""
+    return _FIELDS.mapping(value, key, valid, required, none_is_empty=True)
 
 
 def _text(key: str, value: Any) -> str:
@@ -222,31 +209,12 @@ def _text(key: str, value: Any) -> str:
     return value
 
 
-def _real(key: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise SpecError(f'Expected {key} to be a number, got {quote(value)}')
-    try:
-        number = float(value)
-    except OverflowError:
-        number = math.inf
-    if not math.isfinite(number) or abs(number) > 1e75:
-        raise SpecError(f'Expected {key} to be a finite number of magnitude at most 1e75, '
-                        f'got {quote(value)}')
-    return number
-
-
 def _positive(key: str, value: Any) -> float:
-    number = _real(key, value)
-    if number <= 0.0:
-        raise SpecError(f'Expected {key} to be a number > 0, got {quote(value)}')
-    return number
+    return _FIELDS.number(value, key, 0.0, low_open=True)
 
 
 def _nonnegative(key: str, value: Any) -> float:
-    number = _real(key, value)
-    if number < 0.0:
-        raise SpecError(f'Expected {key} to be a number >= 0, got {quote(value)}')
-    return number
+    return _FIELDS.number(value, key, 0.0)
 
 
 def _count(key: str, value: Any, limit: int) -> int:
@@ -264,12 +232,10 @@ def _seed(value: Any) -> int:
 
 
 def _vector(key: str, value: Any, size: int = 3) -> FloatArray:
+    """``size`` numbers, or one number for all (``sigma: 0.1``)."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         value = [value] * size
-    if not isinstance(value, list) or len(value) != size:
-        raise SpecError(f'Expected {key} to be a number or a list of {size} numbers, got '
-                        f'{quote(value)}')
-    return np.array([_real(f'{key}[{index}]', item) for index, item in enumerate(value)])
+    return np.array(_FIELDS.vector(value, key, size))
 
 
 def _direction(key: str, value: Any) -> FloatArray:
@@ -319,8 +285,7 @@ def _commands(value: Any, duration: float) -> tuple[tuple[float, FloatArray], ..
     commands: list[tuple[float, FloatArray]] = []
     for index, item in enumerate(value):
         key = f'commands[{index}]'
-        item = _mapping(key, item)
-        _keys(key, item, {'time', 'torque'}, ('time', 'torque'))
+        item = _mapping(key, item, {'time', 'torque'}, ('time', 'torque'))
         time = _nonnegative(f'{key}.time', item['time'])
         if time >= duration or (commands and time <= commands[-1][0]):
             raise SpecError(f'Expected {key}.time to increase and be below duration, got '
@@ -331,7 +296,7 @@ def _commands(value: Any, duration: float) -> tuple[tuple[float, FloatArray], ..
 
 def _output_times(value: Any, duration: float) -> tuple[float, ...]:
     if isinstance(value, Mapping):
-        _keys('output_times', value, {'every'}, ('every',))
+        _FIELDS.keys(value, {'every'}, 'output_times', ('every',))
         every = _positive('output_times.every', value['every'])
         ratio = duration / every  # at most 1e75 / 1e-308: inf, never an error
         if not ratio <= MAX_OUTPUT_TIMES + 1:
@@ -378,8 +343,8 @@ def _settling(statistics: Mapping[Any, Any], scene: Scene) -> float:
 def _inertia(value: Any) -> InertiaDispersion | None:
     if value is None:
         return None
-    value = _mapping('dispersions.inertia', value)
-    _keys('dispersions.inertia', value, {'second_moments_sigma', 'axes', 'tensor_sigma'})
+    value = _mapping('dispersions.inertia', value,
+                     {'second_moments_sigma', 'axes', 'tensor_sigma'})
     if 'tensor_sigma' in value and len(value) > 1:
         raise SpecError('Expected dispersions.inertia to be either tensor_sigma or '
                         'second_moments_sigma with axes, not both')
@@ -470,8 +435,7 @@ def _command_dispersion(value: Any, commands: tuple[tuple[float, FloatArray], ..
         return None
     if not commands:
         raise SpecError('dispersions.commands needs commands to disperse')
-    value = _mapping('dispersions.commands', value)
-    _keys('dispersions.commands', value, {'sigma'}, ('sigma',))
+    value = _mapping('dispersions.commands', value, {'sigma'}, ('sigma',))
     sigma = _vector('dispersions.commands.sigma', value['sigma'])
     if np.any(sigma < 0.0):
         raise SpecError(f'Expected dispersions.commands.sigma to be >= 0, got '
@@ -483,7 +447,8 @@ def _percentiles(value: Any) -> tuple[float, ...]:
     if not isinstance(value, list) or not 1 <= len(value) <= 99:
         raise SpecError(f'Expected statistics.percentiles to be a list of 1 to 99 numbers, '
                         f'got {quote(value)}')
-    result = tuple(_real(f'statistics.percentiles[{k}]', item) for k, item in enumerate(value))
+    result = tuple(_FIELDS.number(item, f'statistics.percentiles[{k}]')
+                   for k, item in enumerate(value))
     if any(not 0.0 <= p <= 100.0 for p in result):
         raise SpecError(f'Expected statistics.percentiles within [0, 100], got {quote(value)}')
     return result

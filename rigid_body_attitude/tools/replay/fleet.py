@@ -6,7 +6,8 @@ Bags are named by a folder (its bags: sub-folders with ``metadata.yaml``, ``.db3
 ``OUT/<bag name>_replayed``; a ground-truth topic is compared where the bag has it and skipped
 where it does not. A bag that cannot be replayed (unreadable, wrong topics) gives a row with
 its error, and the others go on. The table (:data:`COLUMNS`) is printed and written to
-``OUT/fleet.csv``.
+``OUT/fleet.csv``; the energy and momentum drift columns (:data:`DYNAMICS_COLUMNS`) are left
+out for a gyro scene, which simulates no body.
 """
 
 from __future__ import annotations
@@ -28,11 +29,14 @@ from rigid_body_attitude.tools.cluster import dask_client
 from rigid_body_attitude.tools.replay.options import ReplayOptions
 from rigid_body_attitude.tools.replay.run import ReplayResult, replay_bag
 
-__all__ = ['COLUMNS', 'find_bags', 'format_table', 'replay_fleet', 'replay_one']
+__all__ = ['COLUMNS', 'DYNAMICS_COLUMNS', 'find_bags', 'format_table', 'replay_fleet',
+           'replay_one', 'table_columns']
 
 COLUMNS = ('bag', 'status', 'gyro_messages', 'used', 'rejected', 'energy_drift',
            'momentum_drift', 'truth_samples', 'error_max_deg', 'error_mean_deg',
            'error_rms_deg', 'error_final_deg', 'seconds', 'output', 'error')
+#: The columns of a dynamics scene only (a gyro scene simulates no body).
+DYNAMICS_COLUMNS = ('energy_drift', 'momentum_drift')
 _BAG_SUFFIXES = ('.db3', '.mcap')
 
 
@@ -72,11 +76,12 @@ def _output_names(bags: Sequence[Path]) -> list[str]:
 def _row(bag: Path, result: ReplayResult, seconds: float) -> dict[str, Any]:
     errors = result.errors
     degrees = np.degrees(errors.errors) if errors is not None and errors.count else None
+    drifts = {} if result.scene.rate_source != 'dynamics' else {
+        'energy_drift': result.diagnostics.energy_drift,
+        'momentum_drift': result.diagnostics.momentum_drift}
     return {
         'bag': str(bag), 'status': 'ok', 'gyro_messages': result.gyro_messages,
-        'used': result.used, 'rejected': sum(result.rejected.values()),
-        'energy_drift': result.diagnostics.energy_drift,
-        'momentum_drift': result.diagnostics.momentum_drift,
+        'used': result.used, 'rejected': sum(result.rejected.values()), **drifts,
         'truth_samples': 0 if errors is None else errors.count,
         'error_max_deg': math.nan if degrees is None else float(degrees.max()),
         'error_mean_deg': math.nan if degrees is None else float(degrees.mean()),
@@ -101,7 +106,8 @@ def replay_one(bag: str | Path, output: str | Path,
         result = replay_bag(bag, output, options, progress=False, keep_series=False)
     except (AttitudeError, OSError, UnicodeError) as err:
         text = str(err).splitlines()[0] if str(err) else type(err).__name__
-        row: dict[str, Any] = {name: math.nan for name in COLUMNS}
+        row: dict[str, Any] = {name: math.nan for name in COLUMNS
+                               if name not in DYNAMICS_COLUMNS}
         row.update(bag=str(bag), status='error', output='', error=text,
                    seconds=time.perf_counter() - begin)
         return row
@@ -150,13 +156,21 @@ def _on_cluster(client: Any, paths: list[Path], outputs: list[Path], options: Re
     return rows
 
 
+def table_columns(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """:data:`COLUMNS`, without :data:`DYNAMICS_COLUMNS` unless a row has them (a bag
+    replayed with a dynamics scene)."""
+    dynamics = any(name in row for row in rows for name in DYNAMICS_COLUMNS)
+    return [name for name in COLUMNS if dynamics or name not in DYNAMICS_COLUMNS]
+
+
 def write_table(rows: Sequence[dict[str, Any]], path: Path) -> None:
-    """The rows as CSV (:data:`COLUMNS`)."""
+    """The rows as CSV (:func:`table_columns`)."""
+    columns = table_columns(rows)
     with path.open('w', newline='') as file:
-        writer = csv.DictWriter(file, fieldnames=list(COLUMNS))
+        writer = csv.DictWriter(file, fieldnames=columns)
         writer.writeheader()
         for row in rows:
-            writer.writerow({name: row.get(name, '') for name in COLUMNS})
+            writer.writerow({name: row.get(name, '') for name in columns})
 
 
 def _cell(value: Any) -> str:
@@ -167,7 +181,7 @@ def _cell(value: Any) -> str:
 
 def format_table(rows: Sequence[dict[str, Any]]) -> str:
     """A Markdown table of the rows (errors last)."""
-    shown = [name for name in COLUMNS if name not in ('output',)]
+    shown = [name for name in table_columns(rows) if name != 'output']
     lines = ['| ' + ' | '.join(shown) + ' |', '|' + '---|' * len(shown)]
     for row in rows:
         lines.append('| ' + ' | '.join(_cell(row.get(name, '')) for name in shown) + ' |')

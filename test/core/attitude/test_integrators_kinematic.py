@@ -65,7 +65,8 @@ def test_integrate_constant_rate_is_exact_for_exponential_methods():
 
 
 def test_magnus4_coning_drift_gauss_points():
-    # Coning (physics.md §2.3), a = 1e−3, Ωh = 2π/12. Leading order in a, exact in θ = Ωh:
+    # Coning (Savage, "Strapdown inertial navigation integration algorithm design, part 1: attitude
+    # algorithms", JGCD 21(1), 1998), a = 1e−3, Ωh = 2π/12. Leading order in a, exact in θ = Ωh:
     # drift = a²Ω (θ/2 − c − (A²/4) cot(θ/2))/θ with A = θ cos(θ/(2√3)), c = (√3/12) θ²
     # sin(θ/√3) (see test_integrators_strapdown.rate_method_drift) → +a²Ω θ⁴/1440.
     a, frequency, per_cycle = 1e-3, 2.0 * math.pi, 12
@@ -117,7 +118,8 @@ def test_angle_forms_fourth_order_away_from_singularity(step, to_quaternion, fro
                                                         reference):
     errors = [quat.attitude_error(integrate_angles(step, to_quaternion, from_quaternion, n),
                                   reference) for n in (192, 384, 768)]
-    # Same reference as above; also checks seed 000 eqs. 21/25 against our conventions (a
+    # Same reference as above; also checks the Euler and Bryant angle rates (Wittenburg 2008, §2.2)
+    # against our conventions (a
     # sign slip there would leave an O(1) error, not order 4).
     assert all(abs(order - 4.0) <= 0.3 for order in measured_orders(errors)), errors
 

@@ -1,7 +1,8 @@
 """Tests of the strapdown stream methods (integrators/strapdown.py).
 
 Orders are measured on a generic, non-coning rate against DOP853 at rtol 2.3e−14; coning
-drift on the classical coning motion of physics.md §2.3 against closed forms.
+drift on the classical coning motion (Savage, "Strapdown inertial navigation integration algorithm
+design, part 1: attitude algorithms", JGCD 21(1), 1998) against closed forms.
 """
 
 import math
@@ -70,7 +71,8 @@ def test_propagate_order_on_generic_rate(name, generic_reference):
         errors, orders)
 
 
-# The torque-free triaxial body (Hairer–Vilmart, physics.md §2.5) in its exact motion: the
+# The torque-free triaxial body (Hairer & Vilmart, "Preprocessed discrete Moser–Veselov algorithm
+# for the full dynamics of a rigid body", J. Phys. A 39, 2006) in its exact motion: the
 # body rate a gyro on it would read, and the exact attitude to compare with.
 TORQUE_FREE_MOMENTS = (0.6, 0.8, 1.0)
 TORQUE_FREE_OMEGA = (1.8 / 0.6, 0.4 / 0.8, -0.9 / 1.0)
@@ -123,7 +125,7 @@ def test_propagate_keeps_unit_norm_over_many_steps():
         assert abs(math.sqrt(sum(x * x for x in q)) - 1.0) <= 1e-14, name
 
 
-# Classical coning (physics.md §2.3) with a small half-angle: the a⁴ residual
+# Classical coning (Savage 1998) with a small half-angle: the a⁴ residual
 # (~7e−3 a⁴Ω(ΩT)⁴) is then far below every coefficient tested.
 CONE_ANGLE = 1e-3
 CONE_FREQUENCY = 2.0 * math.pi
@@ -192,7 +194,8 @@ def test_propagate_coning_drift_matches_documented_coefficient(name):
 
 
 def test_magnus4_gauss_points_coning_drift():
-    # kinematic.magnus4_step (ω(t) at the Gauss points): +a²Ω(Ωh)⁴/1440 (physics.md §3),
+    # kinematic.magnus4_step (ω(t) at the Gauss points): +a²Ω(Ωh)⁴/1440 (Ignagni, JGCD 13(2),
+    # 1990),
     # the figure strapdown.Magnus4's docstring quotes for comparison.
     samples_per_cycle = 24
     drift = measured_drift(lambda q, k, h: magnus4_step(q, coning_rate, k * h, h),

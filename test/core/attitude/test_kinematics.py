@@ -1,7 +1,9 @@
 """Tests of the attitude kinematics q̇ = ½ q ⊗ (0, ω_body) (kinematics.py).
 
-References: physics.md §2.1 (fixed body axis, any rate profile: q(t) = q₀ ⊗ exp(θ(t) e)) and
-§2.2 (regular precession, seed 001: q(t) = exp(ω_p t ĥ) ⊗ q₀ ⊗ exp(ω_s t e_b), body rate
+References: Shuster, "A survey of attitude representations", J. Astronaut. Sci. 41(4), 1993 (fixed
+body axis, any rate profile: q(t) = q₀ ⊗ exp(θ(t) e)) and
+Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36 (regular precession: q(t) = exp(ω_p t ĥ) ⊗ q₀ ⊗
+exp(ω_s t e_b), body rate
 ω = ω_p R(q)ᵀ ĥ + ω_s e_b). Convergence orders are measured from errors at halved steps:
 for an order-p method the ratio is 2ᵖ up to O(h) corrections.
 """
@@ -24,7 +26,7 @@ STEP_COUNTS = (40, 80, 160, 320)
 
 
 def fixed_axis_angle(t):
-    """θ(t) of a time-varying rate about a fixed body axis (physics.md §2.1)."""
+    """θ(t) of a time-varying rate about a fixed body axis (Shuster 1993)."""
     return 0.8 * t + 0.5 * math.sin(1.3 * t)
 
 
@@ -37,7 +39,7 @@ def fixed_axis_attitude(t):
     return quat.multiply(Q0, quat.exp(fixed_axis_angle(t) * AXIS))
 
 
-# regular precession (physics.md §2.2)
+# regular precession (Landau & Lifshitz 1976, §36)
 SPIN_AXIS_BODY = np.array([0.0, 0.0, 1.0])
 PRECESSION_AXIS_WORLD = np.array([0.0, 0.6, 0.8])
 PRECESSION_RATE, SPIN_RATE = 0.7, 2.3
@@ -81,7 +83,7 @@ def test_quaternion_rate_is_half_q_times_pure_omega():
     for index in range(2):
         np.testing.assert_array_equal(batch[index], quaternion_rate(attitudes[index],
                                                                     rates[index]))
-    # q̇ is orthogonal to q, so |q| is a first integral of the exact flow (seed 001)
+    # q̇ is orthogonal to q, so |q| is a first integral of the exact flow (Shuster 1993)
     assert abs(Q0 @ quaternion_rate(Q0, omega)) <= 1e-16
 
 
@@ -132,7 +134,7 @@ def test_rk4_regular_precession_order_four():
 
 
 def test_regular_precession_rate_satisfies_poisson_equation():
-    # seed 001: the closed form and its body rate obey q̇ = ½ q ⊗ (0, ω)
+    # Landau & Lifshitz 1976, §36: the closed form and its body rate obey q̇ = ½ q ⊗ (0, ω)
     for t in (0.0, 0.9, 3.1):
         delta = 1e-5  # central difference: truncation δ²|q'''|/6 ≈ 2e−10, round-off 1e−11
         derivative = (precession_attitude(t + delta) - precession_attitude(t - delta)) / (

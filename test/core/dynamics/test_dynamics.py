@@ -1,8 +1,11 @@
 """Tests of Euler's equations and the RK4 baseline (dynamics.py) against closed forms.
 
-References (physics.md): §2.1 fixed body axis with a constant torque, θ = ω₀ t + M t²/(2 J_k);
-§2.2/§2.4 the axisymmetric torque-free body, a regular precession; §2.7 the seed's box about
-a corner; §5 the RK4 column of the Hairer–Vilmart table. RK4 is order 4: its global error is
+References (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36): fixed body axis with a constant
+torque, θ = ω₀ t + M t²/(2 J_k);
+the axisymmetric torque-free body, a regular precession; the box about a corner (Goldstein,
+Poole & Safko, *Classical Mechanics*, 3rd ed., 2002, §5.3); RK4 on the test body of Hairer &
+Vilmart, "Preprocessed discrete Moser–Veselov algorithm for the full dynamics of a rigid body", J.
+Phys. A 39, 2006. RK4 is order 4: its global error is
 C h⁴, so halving h divides it by 16; the bounds below are the measured error at the stated
 step with a margin below the next power of two, and the ratio is checked too.
 """
@@ -78,7 +81,8 @@ def test_model_sums_torques_and_rotors():
         euler_rate(inertia, omega, np.array([1.9, -0.2, -0.3]), momentum, rate), rtol=1e-15)
 
 
-# --- RK4 on the Hairer–Vilmart body (physics.md §5) ------------------------------------------
+# --- RK4 on the Hairer–Vilmart body (Hairer & Vilmart 2006)
+# ------------------------------------------
 
 def test_rk4_reproduces_the_reference_table():
     # J = (0.6, 0.8, 1.0), m₀ = (1.8, 0.4, −0.9), q₀ = 1, T = 10; reference q(10) from §2.5.
@@ -98,7 +102,8 @@ def test_rk4_reproduces_the_reference_table():
         assert quat.norm_error(attitude) <= 4.4e-16
 
 
-# --- fixed axis, constant torque (physics.md §2.1) -------------------------------------------
+# --- fixed axis, constant torque (Landau & Lifshitz 1976, §36)
+# -------------------------------------------
 
 @pytest.mark.parametrize('step, bound', [(0.01, 5e-10), (0.005, 5e-10 / 16)])
 def test_constant_torque_about_principal_axis(step, bound):
@@ -118,7 +123,8 @@ def test_constant_torque_about_principal_axis(step, bound):
                                rtol=0, atol=1e-13)
 
 
-# --- axisymmetric torque-free body: regular precession (physics.md §2.2, §2.4) ----------------
+# --- axisymmetric torque-free body: regular precession (Landau & Lifshitz 1976, §36)
+# ----------------
 
 TRANSVERSE, AXIAL = 2.0, 3.0
 AXI_OMEGA0 = np.array([0.4, -0.3, 2.0])
@@ -161,7 +167,7 @@ def test_axisymmetric_torque_free_dynamics_order_four():
     assert 14.0 <= errors[0] / errors[1] <= 18.0
 
 
-# --- box about a corner (physics.md §2.7): full tensor, principal decomposition -------------
+# --- box about a corner (Goldstein 2002, §5.3): full tensor, principal decomposition -------------
 
 BOX_EDGES = [0.1, 0.2, 0.3]
 BOX_OMEGA0 = np.array([1.0, -2.0, 3.0])

@@ -1,6 +1,7 @@
 """Tests of the closed-form torque-free motion (integrators/exact_torque_free.py).
 
-References: Hairer & Vilmart (2006) numbers in physics.md §2.5, conservation laws, the ODEs
+References: the test body and its numbers of Hairer & Vilmart, "Preprocessed discrete Moser–Veselov
+algorithm for the full dynamics of a rigid body", J. Phys. A 39, 2006, conservation laws, the ODEs
 themselves (finite differences) and scipy's DOP853 at rtol 1e−13 on Euler + Poisson equations.
 """
 
@@ -84,7 +85,7 @@ def test_world_momentum_and_energy_constant_over_1000_s():
     ([2.0, 1.0, 1.0], [1.3, 0.2, -0.4], 'axisymmetric'),         # unsorted moments
     ([1.0, 1.0, 1.0], [0.3, -0.2, 0.5], 'steady'),               # sphere
     ([1.0, 2.0, 3.0], [0.0, 1.0, 0.0], 'steady'),                # intermediate-axis equilibrium
-    ([1.0, 2.0, 3.0], [1e-4, 1.0, 0.0], 'minor_axis'),           # physics.md §6 case
+    ([1.0, 2.0, 3.0], [1e-4, 1.0, 0.0], 'minor_axis'),           # near the separatrix
     ([1.0, 2.0, 3.0], [0.0, 1.0, 1e-4], 'major_axis'),
     ([1.0, 2.0, 3.0], [1e-4, 1.0, 2e-4 / 3.0], 'major_axis'),        # Δ2 = 1/3e−8
     ([3.0, 3.75, 5.0], [0.5 / 3.0, 1.0 / 3.75, 0.1], 'separatrix'),  # Δ2 = 0 exactly

@@ -58,7 +58,8 @@ class MpTorqueFree:
         twice_energy = sum(m[i] ** 2 / j[i] for i in range(3))
         self.norm = mpmath.sqrt(sum(x * x for x in m))
         delta = [self.norm ** 2 - twice_energy * j[i] for i in range(3)]
-        # circulation about the minor (Δ₂ < 0) or the major axis, physics.md §2.5
+        # circulation about the minor (Δ₂ < 0) or the major axis (Landau & Lifshitz, *Mechanics*,
+        # 1976, §37)
         a, b, c = (0, 1, 2) if delta[1] < 0 else (2, 1, 0)
         self.axes, self.j = (a, b, c), j
         self.polar = (1, 2, 0) if a == 0 else (0, 1, 2)  # cyclic: right-handed
@@ -146,7 +147,7 @@ def test_state_nearly_axisymmetric_at_1e4_s(delta, shape, omega_body):
 
 
 @pytest.mark.parametrize('moments, omega_body', [
-    ([0.6, 0.8, 1.0], [3.0, 0.5, -0.9]),   # Hairer–Vilmart body (physics.md §2.5)
+    ([0.6, 0.8, 1.0], [3.0, 0.5, -0.9]),   # Hairer–Vilmart body (J. Phys. A 39, 2006)
     ([1.0, 2.0, 3.0], [1.0, 0.2, 0.3]),    # minor-axis circulation
     ([1.0, 2.0, 3.0], [0.2, 0.3, 1.0]),    # major-axis circulation
 ])

@@ -1,4 +1,5 @@
-"""Tests of Inertia: validation, the shapes of seed 002 §8 / physics.md §2.7, principal axes.
+"""Tests of Inertia: validation, the shapes (Goldstein, Poole & Safko, *Classical Mechanics*, 3rd
+ed., 2002, §5.3), principal axes.
 
 Tolerances: the tensors are a few products and sums of the inputs, so they agree with the
 closed forms to a few 1e−16 relative; the eigen-decomposition (LAPACK) is backward stable, so
@@ -33,7 +34,8 @@ def test_box_centre_closed_form():
 
 
 def test_box_corner_seed_formula():
-    # seed 002, example 8.1: J = M [[(b²+c²)/3, −ab/4, −ac/4], [−ab/4, (c²+a²)/3, −bc/4], ...]
+    # a box about a corner (Goldstein 2002, §5.3): J = M [[(b²+c²)/3, −ab/4, −ac/4], [−ab/4,
+    # (c²+a²)/3, −bc/4], ...]
     a, b, c = EDGES
     expected = MASS * np.array([[(b * b + c * c) / 3, -a * b / 4, -a * c / 4],
                                 [-a * b / 4, (c * c + a * a) / 3, -b * c / 4],

@@ -1,7 +1,10 @@
 """Tests of the dynamics integrators (rk4, rkmk4, strang, yoshida4, dopri45, exact).
 
-References: the Hairer–Vilmart table of physics.md §5, the exact torque-free motion,
-closed forms with torque (physics.md §2.1), conservation laws of the gyrostat, and DOP853 at
+References: errors at T = 10 on the test body of Hairer & Vilmart, "Preprocessed discrete
+Moser–Veselov algorithm for the full dynamics of a rigid body", J. Phys. A 39, 2006, the exact
+torque-free motion,
+closed forms with torque (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36), conservation laws of
+the gyrostat, and DOP853 at
 rtol 1e−13 for the heavy top.
 """
 
@@ -21,7 +24,7 @@ HV_OMEGA = np.array([1.8, 0.4, -0.9]) / HV_MOMENTS
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 TORQUE_METHODS = ['rk4', 'rkmk4', 'strang', 'yoshida4', 'dopri45']
 
-# physics.md §5: error at T = 10 for N = 100 / 400 / 1600 steps.
+# Hairer–Vilmart body (Hairer & Vilmart 2006): error at T = 10 for N = 100 / 400 / 1600 steps.
 HV_TABLE = {
     'rk4': (1.7e-4, 6.7e-7, 2.6e-9),
     'rkmk4': (2.1e-5, 7.9e-8, 3.0e-10),
@@ -45,7 +48,7 @@ def test_integrate_hairer_vilmart_table(name, hv_exact):
                                                    steps, model)
         errors.append(quat.attitude_error(q, hv_exact[0]))
         # Same method, same body: within 2× of the published errors (the splitting's sweep
-        # order changes its constant by up to ~3×, physics.md §5; ours is 0.6× the table).
+        # order changes its constant by up to ~3×; ours is 0.6× the table).
         assert published / 2.0 <= errors[-1] <= 2.0 * published, (steps, errors)
     order = math.log(errors[1] / errors[2]) / math.log(4.0)
     assert abs(order - dynamics_integrator(name).order) <= 0.3, errors
@@ -68,7 +71,8 @@ def test_splitting_keeps_world_momentum_and_norm(name):
         assert abs(np.linalg.norm(q) - 1.0) <= 1e-15
         worst_energy = max(worst_energy,
                            abs(0.5 * np.sum(HV_MOMENTS * omega * omega) / energy - 1.0))
-    # Symplectic: energy error bounded (physics.md §6: 4.4e−4 at h = 0.05 over 1000 s).
+    # Symplectic: energy error bounded (Hairer, Lubich & Wanner 2006, §IX.8: 4.4e−4 at h = 0.05
+    # over 1000 s).
     assert worst_energy <= 1e-3
 
 
@@ -104,7 +108,8 @@ def test_exact_refuses_torque_and_rotor():
 
 @pytest.mark.parametrize('name', ['rkmk4', 'strang', 'yoshida4'])
 def test_step_constant_torque_about_principal_axis_exact(name):
-    # physics.md §2.1: ω ∥ e₂ and M ∥ e₂ keep the axis fixed, θ = ω₀ t + M t²/(2J₂). RKMK4
+    # Landau & Lifshitz 1976, §36: ω ∥ e₂ and M ∥ e₂ keep the axis fixed, θ = ω₀ t + M t²/(2J₂).
+    # RKMK4
     # integrates θ̇ = ω (linear in t) exactly, and the splitting's kick is exact for a constant
     # torque, so only round-off remains.
     model = SimpleBodyModel([1.0, 2.0, 2.5], torque_body=lambda t, q, w: np.array([0, 0.6, 0]))

@@ -25,7 +25,7 @@ EFFECTS = {
 
 
 def triaxial_scene(effect, integrator):
-    """The Hairer–Vilmart body (physics.md §2.5) with one effect."""
+    """The Hairer–Vilmart body (Hairer & Vilmart, J. Phys. A 39, 2006) with one effect."""
     return scene_from_mapping({
         'rate_source': 'dynamics', 'integrator': integrator, 'step': 0.01,
         'body': {'mass': 1.0, 'inertia': {'moments': [0.6, 0.8, 1.0]}},

@@ -242,7 +242,8 @@ def test_load_calibration_refuses_a_c_gyro_that_is_not_a_rotation(tmp_path):
 
 def test_load_calibration_refuses_unknown_keys_and_non_mappings(tmp_path):
     _refused(tmp_path, 'bias: [0.0, 0.0, 0.0]\nbais: 1\n', r"Unknown key 'bais'")
-    _refused(tmp_path, _replace('  model:', '  modle: x\n  model:'), r"imu0\.'modle'")
+    _refused(tmp_path, _replace('  model:', '  modle: x\n  model:'),
+             r"Unknown key 'modle' in imu0; valid keys: ")
     _refused(tmp_path, '[1, 2, 3]\n', r'Expected a mapping')
     _refused(tmp_path, 'hello: 1\n', r'Expected kalibr keys')
     _refused(tmp_path, 'imu0:\n  gyroscopes: [1, 2]\n', r'imu0\.gyroscopes.*mapping')

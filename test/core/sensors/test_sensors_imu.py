@@ -44,7 +44,7 @@ def test_a_full_section_is_read_with_defaults_from_the_gyro_error_model():
 @pytest.mark.parametrize('section, words', [
     ({'rate': 200.0, 'lever_arm': [0, 0, 0]}, "Unknown key 'lever_arm' in sensors.imu"),
     ({'frame_id': 'imu'}, "Missing key 'rate'"),
-    ({'rate': 0.0}, 'sensors.imu.rate to be a number in (0, 10000]'),
+    ({'rate': 0.0}, 'sensors.imu.rate to be in (0, 10000]'),
     ({'rate': 200.0, 'gyroscope_noise_density': -1e-3}, 'gyroscope_noise_density'),
     ({'rate': 200.0, 'gyroscope_noise_density': '1e-3'}, 'gyroscope_noise_density'),
     ({'rate': 200.0, 'accelerometer_range': math.inf}, 'accelerometer_range'),

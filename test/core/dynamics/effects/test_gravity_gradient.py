@@ -1,8 +1,10 @@
 """Tests of gravity_gradient: M = 3μ/r³ r̂_b × (J r̂_b), r̂_b = R(q)ᵀ r̂_w(t) on a circular orbit.
 
 The torque is checked against the formula evaluated independently (rotation matrix, explicit
-cross product) to 1e−12 relative, as Basilisk's GravityGradientEffector test does (physics.md
-§7); the orbit geometry (unit radial vector turning at the mean motion n = √(μ/r³) about the
+cross product) to 1e−12 relative, as Basilisk's GravityGradientEffector test does (Kenneally,
+Piggott & Schaub, "Basilisk: a flexible, scalable and modular astrodynamics simulation framework",
+J. Aerosp. Inf. Syst. 17(9), 2020); the orbit geometry (unit radial vector turning at the mean
+motion n = √(μ/r³) about the
 normal) and the energy balance of a propagated satellite are checked too.
 """
 

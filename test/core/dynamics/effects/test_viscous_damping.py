@@ -1,7 +1,8 @@
 """Tests of viscous_damping: M = −c ∘ ω.
 
 For a sphere (J = j I) Euler's equations decouple into ω̇ = −(c/j) ω, so ω(t) = ω₀ e^{−ct/j}
-and T(t) = T₀ e^{−2ct/j}, about a fixed axis (physics.md §2.1: q(t) = q₀ ⊗ exp(θ(t) e) with
+and T(t) = T₀ e^{−2ct/j}, about a fixed axis (Shuster, "A survey of attitude representations", J.
+Astronaut. Sci. 41(4), 1993: q(t) = q₀ ⊗ exp(θ(t) e) with
 θ = |ω₀| j/c (1 − e^{−ct/j})). RK4 reproduces the exponential with relative error
 (ch/j)⁵/120 per step: at c h/j = 1e−3 over 2000 steps that is ~2e−16 per step, so round-off
 (1e−13 bound) dominates.
