@@ -250,6 +250,7 @@ class ImuModel:
         root = math.sqrt(dt)
         self._gyro_limits = spec.gyroscope_range, spec.gyroscope_resolution
         self._acc_limits = spec.accelerometer_range, spec.accelerometer_resolution
+        self._limits = any(self._gyro_limits + self._acc_limits)
         self._sigmas = (spec.gyroscope_noise_density / root, spec.gyroscope_random_walk * root,
                         spec.accelerometer_noise_density / root,
                         spec.accelerometer_random_walk * root)
@@ -314,10 +315,10 @@ class ImuModel:
         """The gyro [rad/s] and accelerometer [m/s²] sample (sensor frame) of one interval of
         the nominal period, from the attitudes (w, x, y, z) at its ends and the change of the
         world velocity over it (plain floats throughout: the arithmetic of
-        :func:`~rigid_body_attitude.core.attitude.quaternion.scalar_step_rate`,
-        :func:`~rigid_body_attitude.core.attitude.quaternion.scalar_exp_step` and
-        :func:`~rigid_body_attitude.core.attitude.quaternion.rotate_inverse_floats`, written
-        out)."""
+        :func:`~rigid_body_attitude.core.attitude.quaternion.scalar_step_rate` and
+        :func:`~rigid_body_attitude.core.attitude.quaternion.rotate_inverse_floats` written
+        out; the attitude half way through from the square root of the increment, no sine or
+        cosine)."""
         dt = self._dt
         # ω̄ = log(q_start* ⊗ q_end) / Δt, the shorter way round
         qw, qx, qy, qz = q_start
@@ -333,24 +334,18 @@ class ImuModel:
             k = 2.0 / abs(w) * (1.0 - sine * sine / (3.0 * w * w))
         k = math.copysign(k, w) / dt
         rx, ry, rz = k * x, k * y, k * z
-        # q_mid = q_start ⊗ exp(½ Δt ω̄), normalised
-        half = 0.5 * dt
-        vx, vy, vz = rx * half, ry * half, rz * half
-        angle = math.sqrt(vx * vx + vy * vy + vz * vz)
-        if not math.isfinite(angle):
+        # q_mid = q_start ⊗ √(Δq), the half rotation: (|Δq| + w, x, y, z) normalised, w ≥ 0
+        if not math.isfinite(k * sine):
             raise InputError(f'Expected finite attitudes, got {q_start!r} and {q_end!r}')
-        if angle < quaternion.SERIES_THRESHOLD:
-            a2 = angle * angle
-            scale = 0.5 - a2 / 48.0 + a2 * a2 / 3840.0
-        else:
-            scale = math.sin(0.5 * angle) / angle
-        ew, ex, ey, ez = math.cos(0.5 * angle), vx * scale, vy * scale, vz * scale
+        if w < 0.0:
+            w, x, y, z = -w, -x, -y, -z
+        w += math.sqrt(w * w + sine * sine)
+        inv = 1.0 / math.sqrt(w * w + sine * sine)
+        ew, ex, ey, ez = w * inv, x * inv, y * inv, z * inv
         w = qw * ew - qx * ex - qy * ey - qz * ez
         x = qw * ex + qx * ew + qy * ez - qz * ey
         y = qw * ey - qx * ez + qy * ew + qz * ex
         z = qw * ez + qx * ey - qy * ex + qz * ew
-        inv = 1.0 / math.sqrt(w * w + x * x + y * y + z * z)
-        w, x, y, z = w * inv, x * inv, y * inv, z * inv
         # specific force in the body frame: R(q_mid)ᵀ (Δv/Δt − g)
         gx, gy, gz = self.gravity_world
         dvx, dvy, dvz = velocity_change_world
@@ -375,13 +370,13 @@ class ImuModel:
                                                                                offset)
         self._offset = offset + _ERROR_ROW.size
         (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = self._gyro_matrix
-        gyro = _limited(m00 * x + m01 * y + m02 * z + b0 + n0,
-                        m10 * x + m11 * y + m12 * z + b1 + n1,
-                        m20 * x + m21 * y + m22 * z + b2 + n2, *self._gyro_limits)
+        gyro = (m00 * x + m01 * y + m02 * z + b0 + n0, m10 * x + m11 * y + m12 * z + b1 + n1,
+                m20 * x + m21 * y + m22 * z + b2 + n2)
         (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = self._acc_matrix
-        acc = _limited(m00 * fx + m01 * fy + m02 * fz + c0 + a0,
-                       m10 * fx + m11 * fy + m12 * fz + c1 + a1,
-                       m20 * fx + m21 * fy + m22 * fz + c2 + a2, *self._acc_limits)
+        acc = (m00 * fx + m01 * fy + m02 * fz + c0 + a0, m10 * fx + m11 * fy + m12 * fz + c1 + a1,
+               m20 * fx + m21 * fy + m22 * fz + c2 + a2)
+        if self._limits:
+            return _limited(*gyro, *self._gyro_limits), _limited(*acc, *self._acc_limits)
         return gyro, acc
 
 
