@@ -3,7 +3,8 @@
 * **Per sample** [µs]: :meth:`ImuModel.sample` (mean rate from the attitude increment, the
   specific force, every error term, saturation and quantisation on) and the Imu encoding
   (:func:`~rigid_body_attitude.msgs.cdr.simulated_imu_encoder`), ``timeit`` on CPU time, best
-  of ``--repeats``.
+  of ``--repeats``; beside them one plain-float strapdown step, the run's yardstick (a busy
+  machine slows every figure: compare the ratio).
 * **Per simulated second** [ms]: a dynamics session (rk4, 1 ms step, a tumbling box, ticks of
   20 ms) without sensors and with a 200 Hz and a 1 kHz IMU, the samples handed to a sink that
   drops them; the ratio to the session without sensors. The three sessions run in turn
@@ -44,8 +45,9 @@ class DroppingSink:
         return lambda *args: None
 
 
-def per_sample(repeats: int) -> tuple[float, float]:
-    """µs per :meth:`ImuModel.sample` and per encoded Imu."""
+def per_sample(repeats: int) -> tuple[float, float, float]:
+    """µs per :meth:`ImuModel.sample`, per encoded Imu and per plain-float strapdown step
+    (``scalar_exp_step``: the yardstick of this run, priced alone in docs/performance.md)."""
     spec = ImuSpec(rate=200.0, seed=1, mount_rpy=(0.1, 0.2, 0.3), gyroscope_range=35.0,
                    gyroscope_resolution=1e-4, accelerometer_range=160.0,
                    accelerometer_resolution=1e-3, accelerometer_random_walk=1e-3)
@@ -60,7 +62,10 @@ def per_sample(repeats: int) -> tuple[float, float]:
     gyro, acc = model.sample(q0, q1)
     encoded = min(timeit.repeat(lambda: encode(1, 2, gyro, acc), number=count,
                                 repeat=repeats, timer=time.process_time)) / count * 1e6
-    return sample, encoded
+    omega = (0.3, 2.0, 0.1)
+    step = min(timeit.repeat(lambda: quaternion.scalar_exp_step(q1, omega, 0.005), number=count,
+                             repeat=repeats, timer=time.process_time)) / count * 1e6
+    return sample, encoded, step
 
 
 def session_cost(rate: float | None, seconds: float) -> float:
@@ -86,8 +91,9 @@ def main() -> None:
     parser.add_argument('--seconds', type=float, default=10.0)
     parser.add_argument('--repeats', type=int, default=5)
     args = parser.parse_args()
-    sample, encoded = per_sample(args.repeats)
-    print(f'ImuModel.sample: {sample:.2f} us per sample; Imu encoding: {encoded:.2f} us')
+    sample, encoded, step = per_sample(args.repeats)
+    print(f'ImuModel.sample: {sample:.2f} us per sample; Imu encoding: {encoded:.2f} us; '
+          f'one strapdown step (scalar_exp_step): {step:.2f} us, the sample {sample / step:.1f}x')
     rates = (None, 200.0, 1000.0)
     costs = [min(run) for run in zip(*([session_cost(rate, args.seconds) for rate in rates]
                                        for _ in range(args.repeats)))]
