@@ -81,9 +81,9 @@ class GyroState(PropagatorState):
     The gyro hot path (:meth:`GyroPropagator.advance`, once per sample) and the dynamics steps
     (:meth:`DynamicsPropagator.advance_to`, once per call: once per sample of a simulated IMU)
     write tuples with :meth:`set_sample` and read them with :meth:`attitude_tuple` /
-    :meth:`omega_tuple`, so no array is built per sample (each costs about 1 µs, more with a cold cache). ``attitude``
-    and ``omega_body`` are built when read and are read-only: assign a new value to change
-    them.
+    :meth:`omega_tuple`, so no array is built per sample (each costs about 1 µs, more with a
+    cold cache). ``attitude`` and ``omega_body`` are built when read and are read-only: assign
+    a new value to change them.
     """
 
     _attitude_floats: tuple[float, float, float, float]

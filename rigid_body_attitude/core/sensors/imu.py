@@ -375,8 +375,8 @@ class ImuModel:
         if offset == len(self._errors):
             self._draw_block()
             offset = 0
-        b0, b1, b2, n0, n1, n2, c0, c1, c2, a0, a1, a2 = _ERROR_ROW.unpack_from(self._errors,
-                                                                               offset)
+        row = _ERROR_ROW.unpack_from(self._errors, offset)
+        b0, b1, b2, n0, n1, n2, c0, c1, c2, a0, a1, a2 = row
         self._offset = offset + _ERROR_ROW.size
         (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = self._gyro_matrix
         gyro = (m00 * x + m01 * y + m02 * z + b0 + n0, m10 * x + m11 * y + m12 * z + b1 + n1,
