@@ -2,13 +2,15 @@
 
 * **Per sample** [µs]: :meth:`ImuModel.sample` (mean rate from the attitude increment, the
   specific force, every error term, saturation and quantisation on) and the Imu encoding
-  (:func:`~rigid_body_attitude.msgs.cdr.simulated_imu_encoder`), ``timeit``, best of
-  ``--repeats``.
+  (:func:`~rigid_body_attitude.msgs.cdr.simulated_imu_encoder`), ``timeit`` on CPU time, best
+  of ``--repeats``; beside them one plain-float strapdown step, the run's yardstick (a busy
+  machine slows every figure: compare the ratio).
 * **Per simulated second** [ms]: a dynamics session (rk4, 1 ms step, a tumbling box, ticks of
   20 ms) without sensors and with a 200 Hz and a 1 kHz IMU, the samples handed to a sink that
-  drops them; the ratio to the session without sensors.
+  drops them; the ratio to the session without sensors. The three sessions run in turn
+  ``--repeats`` times and each keeps its best, so a busy machine slows all three alike.
 
-Usage: ``python bench/sensor_costs.py [--seconds 20] [--repeats 5]``.
+Usage: ``python bench/sensor_costs.py [--seconds 10] [--repeats 5]``.
 """
 
 from __future__ import annotations
@@ -43,8 +45,9 @@ class DroppingSink:
         return lambda *args: None
 
 
-def per_sample(repeats: int) -> tuple[float, float]:
-    """µs per :meth:`ImuModel.sample` and per encoded Imu."""
+def per_sample(repeats: int) -> tuple[float, float, float]:
+    """µs per :meth:`ImuModel.sample`, per encoded Imu and per plain-float strapdown step
+    (``scalar_exp_step``: the yardstick of this run, priced alone in docs/performance.md)."""
     spec = ImuSpec(rate=200.0, seed=1, mount_rpy=(0.1, 0.2, 0.3), gyroscope_range=35.0,
                    gyroscope_resolution=1e-4, accelerometer_range=160.0,
                    accelerometer_resolution=1e-3, accelerometer_random_walk=1e-3)
@@ -53,12 +56,16 @@ def per_sample(repeats: int) -> tuple[float, float]:
     q1 = tuple(quaternion.exp([0.004, -0.002, 0.003]).tolist())
     count = 20_000
     sample = min(timeit.repeat(lambda: model.sample(q0, q1, (0.0, 0.0, 0.01)),
-                               number=count, repeat=repeats)) / count * 1e6
+                               number=count, repeat=repeats, timer=time.process_time)
+                 ) / count * 1e6
     encode = simulated_imu_encoder('imu_link', *spec.sample_variances())
     gyro, acc = model.sample(q0, q1)
     encoded = min(timeit.repeat(lambda: encode(1, 2, gyro, acc), number=count,
-                                repeat=repeats)) / count * 1e6
-    return sample, encoded
+                                repeat=repeats, timer=time.process_time)) / count * 1e6
+    omega = (0.3, 2.0, 0.1)
+    step = min(timeit.repeat(lambda: quaternion.scalar_exp_step(q1, omega, 0.005), number=count,
+                             repeat=repeats, timer=time.process_time)) / count * 1e6
+    return sample, encoded, step
 
 
 def session_cost(rate: float | None, seconds: float) -> float:
@@ -81,15 +88,19 @@ def session_cost(rate: float | None, seconds: float) -> float:
 def main() -> None:
     """Print the two tables."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--seconds', type=float, default=20.0)
+    parser.add_argument('--seconds', type=float, default=10.0)
     parser.add_argument('--repeats', type=int, default=5)
     args = parser.parse_args()
-    sample, encoded = per_sample(args.repeats)
-    print(f'ImuModel.sample: {sample:.2f} us per sample; Imu encoding: {encoded:.2f} us')
-    bare = session_cost(None, args.seconds)
+    sample, encoded, step = per_sample(args.repeats)
+    print(f'ImuModel.sample: {sample:.2f} us per sample; Imu encoding: {encoded:.2f} us; '
+          f'one strapdown step (scalar_exp_step): {step:.2f} us, the sample {sample / step:.1f}x')
+    rates = (None, 200.0, 1000.0)
+    costs = [min(run) for run in zip(*([session_cost(rate, args.seconds) for rate in rates]
+                                       for _ in range(args.repeats)))]
+    bare = costs[0]
     print(f'dynamics session, no sensors: {bare:.1f} ms CPU per simulated second')
-    for rate in (200.0, 1000.0):
-        cost = session_cost(rate, args.seconds)
+    for rate, cost in zip(rates[1:], costs[1:]):
+        assert rate is not None
         print(f'with an IMU at {rate:g} Hz: {cost:.1f} ms per simulated second, '
               f'{cost / bare:.3f}x; {(cost - bare) * 1e3 / rate:.1f} us per sample in the '
               f'session')

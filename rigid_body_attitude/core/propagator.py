@@ -78,11 +78,12 @@ class PropagatorState:
 class GyroState(PropagatorState):
     """A :class:`PropagatorState` that keeps attitude and rate as float tuples.
 
-    The gyro hot path (:meth:`GyroPropagator.advance`, once per sample) writes tuples with
-    :meth:`set_sample` and reads them with :meth:`attitude_tuple` / :meth:`omega_tuple`, so no
-    array is built per sample (each costs about 1 µs, more with a cold cache). ``attitude``
-    and ``omega_body`` are built when read and are read-only: assign a new value to change
-    them.
+    The gyro hot path (:meth:`GyroPropagator.advance`, once per sample) and the dynamics steps
+    (:meth:`DynamicsPropagator.advance_to`, once per call: once per sample of a simulated IMU)
+    write tuples with :meth:`set_sample` and read them with :meth:`attitude_tuple` /
+    :meth:`omega_tuple`, so no array is built per sample (each costs about 1 µs, more with a
+    cold cache). ``attitude`` and ``omega_body`` are built when read and are read-only: assign
+    a new value to change them.
     """
 
     _attitude_floats: tuple[float, float, float, float]
@@ -262,6 +263,9 @@ class _Propagator:
 class DynamicsPropagator(_Propagator):
     """Integrates Euler's equations and the attitude with the scene's integrator and step."""
 
+    _state_type = GyroState
+    state: GyroState
+
     def __init__(self, scene: Scene) -> None:
         """Build the scene's effects, the body model and the integrator."""
         if scene.rate_source != 'dynamics':
@@ -363,9 +367,9 @@ class DynamicsPropagator(_Propagator):
         return new_q, new_omega, work
 
     def _store(self, time: float, q: Quat, omega: Vec, work: float) -> None:
-        """Write the propagated state (arrays built once) and the work done."""
+        """Write the propagated state (arrays built when read) and the work done."""
         state = self.state
-        state.time, state.attitude, state.omega_body = time, np.array(q), np.array(omega)
+        state.set_sample(time, q, omega)
         self.tracker.add_work(work)
         if self.stateful:
             self._sync_position()

@@ -477,18 +477,21 @@ def simulated_imu_encoder(frame_id: str, angular_velocity_variance: float,
     """``encode(sec, nanosec, angular_velocity, linear_acceleration)``: a simulated
     ``sensor_msgs/msg/Imu`` in ``frame_id`` without orientation (``orientation_covariance[0]
     = −1``, REP-145) and with diagonal rate and acceleration covariances of the given
-    per-sample variances. The header bytes are packed once; each call is one ``struct``
-    call."""
-    pack, constant = _header_struct(frame_id, '4d9d3d9d3d9d')
-    gyro_covariance = _diagonal(angular_velocity_variance)
-    acc_covariance = _diagonal(linear_acceleration_variance)
+    per-sample variances. The header, the orientation and the covariances are packed once;
+    each call is one ``struct`` call of the stamp and the six measured values."""
+    _, constant = _header_struct(frame_id, '')
+    fixed = Struct('<4d9d').pack(*_IDENTITY_XYZW, *_NOT_PROVIDED)
+    gyro_covariance = Struct('<9d').pack(*_diagonal(angular_velocity_variance))
+    acc_covariance = Struct('<9d').pack(*_diagonal(linear_acceleration_variance))
+    pack = Struct(f'<4siI{len(constant) + len(fixed)}s3d{len(gyro_covariance)}s3d'
+                  f'{len(acc_covariance)}s').pack
+    constant += fixed
 
     def encode(sec: int, nanosec: int, angular_velocity: Sequence[float],
                linear_acceleration: Sequence[float]) -> bytes:
         try:
-            return pack(_ENCAPSULATION_LE, sec, nanosec, constant, *_IDENTITY_XYZW,
-                        *_NOT_PROVIDED, *angular_velocity, *gyro_covariance,
-                        *linear_acceleration, *acc_covariance)
+            return pack(_ENCAPSULATION_LE, sec, nanosec, constant, *angular_velocity,
+                        gyro_covariance, *linear_acceleration, acc_covariance)
         except struct.error as err:
             raise _stamp_error(sec, nanosec) from err
     return encode

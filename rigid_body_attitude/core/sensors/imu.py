@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 import re
+import struct
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -49,11 +50,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.errors import SceneError
+from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.core.yaml_files import Fields, quote
 
-__all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'imu_spec', 'sensors_spec']
+__all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'NODE_TOPICS', 'imu_spec', 'sensors_spec']
 
 FloatArray = NDArray[np.float64]
 Vector = tuple[float, float, float]
@@ -63,6 +64,8 @@ Quat = tuple[float, float, float, float]
 MAX_RATE = 10_000.0
 #: Unit normals drawn at a time (12 per sample).
 NOISE_BLOCK = 1024
+#: One sample's error terms in a block (native doubles).
+_ERROR_ROW = struct.Struct('=12d')
 _DEFAULTS = GyroErrorModel()
 _NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
 _FRAME = re.compile(r'[A-Za-z0-9_./-]{1,256}')
@@ -84,6 +87,13 @@ _BOUNDS: dict[str, tuple[float, float, float]] = {
 }
 _OTHER_KEYS = {'frame_id', 'topic', 'mount_rpy', 'seed', 'gravity'}
 _FIELDS = Fields(SceneError)
+
+#: The node's own topics in a dynamics scene (relative names; ``diagnostics``, ``clock`` and
+#: ``tf_static`` are what ``/diagnostics``, ``/clock`` and ``/tf_static`` are in the root
+#: namespace): the IMU may not publish on any of them.
+NODE_TOPICS = ('orientation', 'pose', 'twist', 'energy', 'angular_momentum', 'diagnostics',
+               'clock', 'tf_static', 'torque', 'rotor_torque', 'set_pose',
+               'set_pose_with_covariance')
 #: Largest |mount angle| [rad] and |gravity component| [m/s²].
 _ANGLE_LIMIT, _GRAVITY_LIMIT = 10.0, 1000.0
 
@@ -175,6 +185,9 @@ def imu_spec(data: Any) -> ImuSpec:
         spec = replace(spec, frame_id=_matching('frame_id', data['frame_id'], _FRAME))
     if 'topic' in data:
         spec = replace(spec, topic=_matching('topic', data['topic'], _NAME))
+        if spec.topic in NODE_TOPICS:
+            raise SceneError(f'Expected sensors.imu.topic to be none of the node\'s own topics '
+                             f'({", ".join(NODE_TOPICS)}), got {quote(spec.topic)}')
     if 'mount_rpy' in data:
         spec = replace(spec, mount_rpy=_triple('mount_rpy', data['mount_rpy'], _ANGLE_LIMIT))
     if 'gravity' in data:
@@ -216,8 +229,11 @@ class ImuModel:
         self.gravity_world = gravity_world
         #: Body components → sensor components.
         self.body_to_sensor = quaternion.to_matrix(spec.mount()).T
-        dt = spec.period
+        dt = self._dt = spec.period
         root = math.sqrt(dt)
+        self._gyro_limits = spec.gyroscope_range, spec.gyroscope_resolution
+        self._acc_limits = spec.accelerometer_range, spec.accelerometer_resolution
+        self._limits = any(self._gyro_limits + self._acc_limits)
         self._sigmas = (spec.gyroscope_noise_density / root, spec.gyroscope_random_walk * root,
                         spec.accelerometer_noise_density / root,
                         spec.accelerometer_random_walk * root)
@@ -227,71 +243,137 @@ class ImuModel:
         """A new run of the same unit: generator re-seeded, constants drawn again (the same)."""
         spec = self.spec
         rng = np.random.default_rng(spec.seed)
-        self.gyro_bias = (rng.standard_normal(3) * spec.gyroscope_turn_on_bias).tolist()
-        self.accelerometer_bias = (rng.standard_normal(3)
-                                   * spec.accelerometer_turn_on_bias).tolist()
+        gyro_bias = rng.standard_normal(3) * spec.gyroscope_turn_on_bias
+        accelerometer_bias = rng.standard_normal(3) * spec.accelerometer_turn_on_bias
         intrinsic_stddev = np.sqrt(spec.error_model().intrinsic_variances())
         #: Scale factors and misalignment ``E`` (sensor frame).
         self.intrinsic = (rng.standard_normal(9) * intrinsic_stddev).reshape(3, 3)
         self._gyro_matrix = ((np.eye(3) + self.intrinsic) @ self.body_to_sensor).tolist()
         self._acc_matrix = self.body_to_sensor.tolist()
         self._rng = rng
-        self._noise: list[list[float]] = []
-        self._next = 0
+        #: The biases after the last sample (gyro, accelerometer), where the next block starts.
+        self._biases = np.concatenate([gyro_bias, accelerometer_bias])
+        self._errors = b''
+        self._offset = 0
+
+    @property
+    def gyro_bias(self) -> list[float]:
+        """The gyro bias [rad/s, sensor frame] of the last sample (the turn-on bias before)."""
+        return self._last_biases()[:3]
+
+    @property
+    def accelerometer_bias(self) -> list[float]:
+        """The accelerometer bias [m/s², sensor frame] of the last sample (turn-on before)."""
+        return self._last_biases()[3:]
+
+    def _last_biases(self) -> list[float]:
+        if self._offset == 0:  # none taken from this block: where it starts
+            return list(self._biases.tolist())
+        row = _ERROR_ROW.unpack_from(self._errors, self._offset - _ERROR_ROW.size)
+        return [*row[0:3], *row[6:9]]
+
+    def _draw_block(self) -> None:
+        """The error terms of the next :data:`NOISE_BLOCK` samples, one row each: gyro bias,
+        gyro white noise, accelerometer bias, accelerometer white noise. The bias walks are
+        running sums from the last bias (``np.cumsum`` adds in order: the same floats as
+        adding sample by sample)."""
+        noise = self._rng.standard_normal((NOISE_BLOCK, 12))
+        white, walk, white_a, walk_a = self._sigmas
+        steps = np.empty((NOISE_BLOCK + 1, 6))
+        steps[0] = self._biases
+        np.multiply(noise[:, 3:6], walk, out=steps[1:, :3])
+        np.multiply(noise[:, 9:12], walk_a, out=steps[1:, 3:])
+        biases = np.cumsum(steps, axis=0)[1:]
+        self._biases = biases[-1].copy()
+        errors = np.empty((NOISE_BLOCK, 12))
+        errors[:, 0:3] = biases[:, :3]
+        np.multiply(noise[:, 0:3], white, out=errors[:, 3:6])
+        errors[:, 6:9] = biases[:, 3:]
+        np.multiply(noise[:, 6:9], white_a, out=errors[:, 9:12])
+        self._errors = errors.tobytes()  # unpacked row by row: no list of 12 288 floats
+        self._offset = 0
 
     def sample(self, q_start: Quat, q_end: Quat,
                velocity_change_world: Vector = (0.0, 0.0, 0.0)) -> tuple[Vector, Vector]:
         """The gyro [rad/s] and accelerometer [m/s²] sample (sensor frame) of one interval of
         the nominal period, from the attitudes (w, x, y, z) at its ends and the change of the
-        world velocity over it."""
-        dt = self.spec.period
-        rate = quaternion.scalar_step_rate(q_start, q_end, dt)
-        q_mid = quaternion.scalar_exp_step(q_start, rate, 0.5 * dt)
+        world velocity over it (plain floats throughout: the arithmetic of
+        :func:`~rigid_body_attitude.core.attitude.quaternion.scalar_step_rate` and
+        :func:`~rigid_body_attitude.core.attitude.quaternion.rotate_inverse_floats` written
+        out; the attitude half way through from the square root of the increment, no sine or
+        cosine)."""
+        dt = self._dt
+        # ω̄ = log(q_start* ⊗ q_end) / Δt, the shorter way round
+        qw, qx, qy, qz = q_start
+        w1, x1, y1, z1 = q_end
+        w = qw * w1 + qx * x1 + qy * y1 + qz * z1
+        x = qw * x1 - qx * w1 - qy * z1 + qz * y1
+        y = qw * y1 + qx * z1 - qy * w1 - qz * x1
+        z = qw * z1 - qx * y1 + qy * x1 - qz * w1
+        sine = math.sqrt(x * x + y * y + z * z)
+        if sine > quaternion.SERIES_THRESHOLD * abs(w):
+            k = 2.0 * math.atan2(sine, abs(w)) / sine
+        else:
+            k = 2.0 / abs(w) * (1.0 - sine * sine / (3.0 * w * w))
+        k = math.copysign(k, w) / dt
+        rx, ry, rz = k * x, k * y, k * z
+        # q_mid = q_start ⊗ √(Δq), the half rotation: (|Δq| + w, x, y, z) normalised, w ≥ 0
+        if not math.isfinite(k * sine):
+            raise InputError(f'Expected finite attitudes, got {q_start!r} and {q_end!r}')
+        if w < 0.0:
+            w, x, y, z = -w, -x, -y, -z
+        w += math.sqrt(w * w + sine * sine)
+        inv = 1.0 / math.sqrt(w * w + sine * sine)
+        ew, ex, ey, ez = w * inv, x * inv, y * inv, z * inv
+        w = qw * ew - qx * ex - qy * ey - qz * ez
+        x = qw * ex + qx * ew + qy * ez - qz * ey
+        y = qw * ey - qx * ez + qy * ew + qz * ex
+        z = qw * ez + qx * ey - qy * ex + qz * ew
+        # specific force in the body frame: R(q_mid)ᵀ (Δv/Δt − g)
         gx, gy, gz = self.gravity_world
         dvx, dvy, dvz = velocity_change_world
-        force = quaternion.rotate_inverse_floats(q_mid, (dvx / dt - gx, dvy / dt - gy,
-                                                         dvz / dt - gz))
-        return self.measure(rate, force)
+        fx, fy, fz = dvx / dt - gx, dvy / dt - gy, dvz / dt - gz
+        tx, ty, tz = 2.0 * (z * fy - y * fz), 2.0 * (x * fz - z * fx), 2.0 * (y * fx - x * fy)
+        return self._measured(rx, ry, rz, fx + w * tx + (z * ty - y * tz),
+                              fy + w * ty + (x * tz - z * tx), fz + w * tz + (y * tx - x * ty))
 
     def measure(self, rate_body: Vector, specific_force_body: Vector) -> tuple[Vector, Vector]:
         """One sample of a true mean body rate and specific force (body frame): errors added,
         saturated, quantised (sensor frame)."""
-        if self._next == len(self._noise):
-            self._noise = self._rng.standard_normal((NOISE_BLOCK, 12)).tolist()
-            self._next = 0
-        n = self._noise[self._next]
-        self._next += 1
-        white, walk, white_a, walk_a = self._sigmas
-        spec = self.spec
-        b = self.gyro_bias
-        ba = self.accelerometer_bias
-        for axis in range(3):
-            b[axis] += walk * n[3 + axis]
-            ba[axis] += walk_a * n[9 + axis]
-        gyro = _limited(_product(self._gyro_matrix, rate_body, b, white, n[0:3]),
-                        spec.gyroscope_range, spec.gyroscope_resolution)
-        acc = _limited(_product(self._acc_matrix, specific_force_body, ba, white_a, n[6:9]),
-                       spec.accelerometer_range, spec.accelerometer_resolution)
+        return self._measured(*rate_body, *specific_force_body)
+
+    def _measured(self, x: float, y: float, z: float, fx: float, fy: float,
+                  fz: float) -> tuple[Vector, Vector]:
+        """:meth:`measure` of the rate ``(x, y, z)`` and specific force ``(fx, fy, fz)``."""
+        offset = self._offset
+        if offset == len(self._errors):
+            self._draw_block()
+            offset = 0
+        row = _ERROR_ROW.unpack_from(self._errors, offset)
+        b0, b1, b2, n0, n1, n2, c0, c1, c2, a0, a1, a2 = row
+        self._offset = offset + _ERROR_ROW.size
+        (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = self._gyro_matrix
+        gyro = (m00 * x + m01 * y + m02 * z + b0 + n0, m10 * x + m11 * y + m12 * z + b1 + n1,
+                m20 * x + m21 * y + m22 * z + b2 + n2)
+        (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = self._acc_matrix
+        acc = (m00 * fx + m01 * fy + m02 * fz + c0 + a0, m10 * fx + m11 * fy + m12 * fz + c1 + a1,
+               m20 * fx + m21 * fy + m22 * fz + c2 + a2)
+        if self._limits:
+            return _limited(*gyro, *self._gyro_limits), _limited(*acc, *self._acc_limits)
         return gyro, acc
 
 
-def _product(matrix: list[list[float]], vector: Vector, bias: list[float], sigma: float,
-             noise: list[float]) -> Vector:
-    """``matrix @ vector + bias + sigma * noise`` on plain floats."""
-    x, y, z = vector
-    r0, r1, r2 = matrix
-    return (r0[0] * x + r0[1] * y + r0[2] * z + bias[0] + sigma * noise[0],
-            r1[0] * x + r1[1] * y + r1[2] * z + bias[1] + sigma * noise[1],
-            r2[0] * x + r2[1] * y + r2[2] * z + bias[2] + sigma * noise[2])
-
-
-def _limited(values: Vector, full_scale: float, resolution: float) -> Vector:
+def _limited(x: float, y: float, z: float, full_scale: float,
+             resolution: float) -> Vector:
     """Clipped to ``±full_scale`` and rounded to a multiple of ``resolution`` (0: not)."""
-    x, y, z = values
     if full_scale > 0.0:
-        x, y, z = (min(max(v, -full_scale), full_scale) for v in (x, y, z))
+        low = -full_scale
+        x = full_scale if x > full_scale else low if x < low else x
+        y = full_scale if y > full_scale else low if y < low else y
+        z = full_scale if z > full_scale else low if z < low else z
     if resolution > 0.0:
-        x, y, z = (resolution * round(v / resolution) for v in (x, y, z))
+        x, y, z = (resolution * round(x / resolution), resolution * round(y / resolution),
+                   resolution * round(z / resolution))
     return x, y, z
 
 
