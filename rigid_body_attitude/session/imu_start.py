@@ -73,6 +73,9 @@ class ImuStart(Session):
     #: ``body_frame``, a static transform); ``None`` until then. Samples in another frame are
     #: refused (:meth:`foreign_frame`).
     imu_frame: str | None = None
+    #: Gyro topic -> the IMU's frame, once a sample on the topic came in it (one IMU per
+    #: topic; :meth:`frame_refused`).
+    topic_frames: dict[str, str]
 
     def _start_imu(self, values: Mapping[str, Any]) -> None:
         """Read the calibration file and set up mount and levelling from ``values``."""
@@ -82,6 +85,7 @@ class ImuStart(Session):
         self._calibration = calibration
         mount_rpy = values['mount_rpy']
         self._mount_given = bool(mount_rpy)
+        self.topic_frames = {}
         self.sample_map = SampleMap(calibration, rpy_quaternion(*mount_rpy) if mount_rpy
                                     else None)
         gyro_noise = calibration.noise.gyro_sigma() if calibration is not None else None
@@ -130,6 +134,25 @@ class ImuStart(Session):
         """Whether the mount must come from TF: ``mount_rpy`` is not set and the Imu's frame
         ``sensor_frame`` (not empty) differs from ``body_frame``."""
         return not self._mount_given and bool(sensor_frame) and sensor_frame != self.body_frame
+
+    def frame_refused(self, topic: str, frame: str) -> bool:
+        """Whether a gyro sample on ``topic`` in ``frame`` is refused (``foreign_frame``,
+        counted) once :attr:`imu_frame` is known: one IMU per topic. Until a sample on
+        ``topic`` came in :attr:`imu_frame`, samples in a frame that needs no mount (an empty
+        frame, ``body_frame``) are taken too; after it, only those in :attr:`imu_frame`."""
+        expected = self.topic_frames.get(topic)
+        if expected is None and self.imu_frame is not None:
+            if frame == self.imu_frame:
+                self.topic_frames[topic] = frame
+                return False
+            if self.mount_needed(frame):
+                self.foreign_frame(frame)
+                return True
+            return False
+        if expected is not None and frame != expected:
+            self.foreign_frame(frame)
+            return True
+        return False
 
     def foreign_frame(self, frame: str) -> None:
         """A gyro sample in ``frame``, not :attr:`imu_frame`: refused (``foreign_frame``)."""
