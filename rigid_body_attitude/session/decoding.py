@@ -31,6 +31,7 @@ from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.types import IMU
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.imu_start import frame_refused
 from rigid_body_attitude.session.settings import GYRO_TOPICS, AnySession
 
 __all__ = ['DECODERS', 'Decoded', 'GyroDecoded', 'Handler', 'MALFORMED', 'RATE_DECODERS',
@@ -142,9 +143,9 @@ def _gyro_handler(session: GyroSession, topic: str, decode: Callable[[bytes], An
     """:func:`input_handler` of a gyro topic (the hot path: one decoder call and
     ``session.gyro`` with the Imu bytes, if any, for ``imu/data``, and the specific force).
     Once the session knows its IMU's frame (``imu_frame``), samples in another frame are
-    refused (``foreign_frame``: :meth:`~.imu_start.ImuStart.frame_refused`)."""
+    refused (``foreign_frame``: :func:`~.imu_start.frame_refused`)."""
     gyro, malformed, internal_error = session.gyro, session.malformed, session.internal_error
-    frame_refused, topic_frames = session.frame_refused, session.topic_frames
+    topic_frames = session.topic_frames
 
     def handle(data: bytes) -> None:
         try:
@@ -152,7 +153,7 @@ def _gyro_handler(session: GyroSession, topic: str, decode: Callable[[bytes], An
         except MALFORMED as err:
             malformed(topic, str(err)[:200])
             return
-        if topic_frames.get(topic) != frame and frame_refused(topic, frame):
+        if topic_frames.get(topic) != frame and frame_refused(session, topic, frame):
             return
         try:
             gyro(sec, nanosec, rate, imu, accel)

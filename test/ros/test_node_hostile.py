@@ -319,13 +319,20 @@ def at_rest_message(at_ns: int, accel: tuple[float, float, float] | None = None)
     return message
 
 
-def hostile_specific_forces() -> list[Imu]:
-    """Specific forces far beyond any accelerometer (their squares overflow, or just above
-    the limit), NaN and Inf, while the node levels."""
-    forces = [(1e200, 0.0, 0.0), (0.0, -1e155, 0.0), (0.0, 0.0, 1e154), (1e308, 1e308, 1e308),
-              (0.0, 0.0, 1.5 * SPECIFIC_FORCE_LIMIT), (math.nan, 0.0, 9.8),
-              (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf)]
+def at_rest_cases(forces: list[tuple[float, float, float]]) -> list[Imu]:
+    """Imu samples at rest with the specific ``forces``, between those of the good stream."""
     return [at_rest_message(BASE_NS + k * MS + MS // 2, force) for k, force in enumerate(forces)]
+
+
+def absurd_specific_forces() -> list[Imu]:
+    """Specific forces far beyond any accelerometer (squares or sums that overflow, or just
+    above the limit), while the node levels."""
+    return at_rest_cases([(1e200, 0.0, 0.0), (0.0, -1e155, 0.0), (0.0, 0.0, 1e154),
+                          (1e308, 1e308, 1e308), (0.0, 0.0, 1.5 * SPECIFIC_FORCE_LIMIT)])
+
+
+def non_finite_specific_forces() -> list[Imu]:
+    return at_rest_cases([(math.nan, 0.0, 9.8), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf)])
 
 
 _TF = dict(imu_frame='imu_link', latched=True, before_last=send_mount)
@@ -339,8 +346,10 @@ SURFACES = [
             ('malformed',), **_TF),
     Surface('/tf_static: 30 000 junk transforms', '/tf_static', TFMessage, junk_transforms,
             ('tf_evicted',), counted=20_001, **_TF),  # the mount makes room too
-    Surface('imu: specific force absurd, NaN or Inf while levelling', 'imu', Imu,
-            hostile_specific_forces, ('accel_out_of_range', 'non_finite'), at_rest=True,
+    Surface('imu: specific force absurd while levelling', 'imu', Imu, absurd_specific_forces,
+            ('accel_out_of_range',), at_rest=True, parameters=dict(align_seconds=0.3)),
+    Surface('imu: specific force NaN or Inf while levelling', 'imu', Imu,
+            non_finite_specific_forces, ('non_finite',), at_rest=True,
             parameters=dict(align_seconds=0.3)),
 ]
 

@@ -140,18 +140,18 @@ def test_a_first_record_in_a_foreign_frame_holds_up_nothing(tmp_path):
     those before the first ``imu_link`` one and those after it."""
     mount = YAW * ROLL
     rate_sensor = tuple(mount.inv().apply(OMEGA_BODY).tolist())
-    records = [('/tf_static', START_NS - 1000, static_transforms(('base_link', 'imu_link',
-                                                                   mount)))]
-    records += [('imu', START_NS - 2000 + k, encode_imu(START_NS - 2000 + k, 'other_imu',
-                                                          (9.0, 9.0, 9.0))) for k in range(2)]
+    mount_record = static_transforms(('base_link', 'imu_link', mount))
+    records = [('/tf_static', START_NS - 1000, mount_record)]
+    foreign = (9.0, 9.0, 9.0)
+    records += [('imu', START_NS - 2000 + k,
+                 encode_imu(START_NS - 2000 + k, 'other_imu', foreign)) for k in range(2)]
     records += [('imu', START_NS + k * PERIOD_NS,
                  encode_imu(START_NS + k * PERIOD_NS, 'imu_link', rate_sensor))
                 for k in range(COUNT)]
     records.append(('imu', START_NS + COUNT * PERIOD_NS,
-                    encode_imu(START_NS + COUNT * PERIOD_NS, 'other_imu', (9.0, 9.0, 9.0))))
+                    encode_imu(START_NS + COUNT * PERIOD_NS, 'other_imu', foreign)))
     write_records(tmp_path / 'in', {'imu': IMU, '/tf_static': TF_MESSAGE}, records)
-    write_mounted_bag(tmp_path / 'clean', 'imu_link', mount,
-                      [static_transforms(('base_link', 'imu_link', mount))])
+    write_mounted_bag(tmp_path / 'clean', 'imu_link', mount, [mount_record])
     result = replay_bag(tmp_path / 'in', tmp_path / 'out', ReplayOptions(**OPTIONS))
     clean = replay_bag(tmp_path / 'clean', tmp_path / 'ref', ReplayOptions(**OPTIONS))
     assert result.used == clean.used == COUNT
