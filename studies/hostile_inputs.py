@@ -215,6 +215,8 @@ class Surface:
         imu_frame: the frame of the good gyro stream.
         latched: publish as ``/tf_static`` is published (transient local).
         before_last: called before the last good sample (e.g. publishes the mount).
+        at_rest: the good stream is :data:`GOOD_AT_REST` samples of a body at rest tilted
+            by :data:`TILT_RPY` (the node levels from them), not a constant rate.
     """
 
     name: str
@@ -225,6 +227,7 @@ class Surface:
     imu_frame: str = 'base_link'
     latched: bool = False
     before_last: Callable[['RunningNode'], None] | None = None
+    at_rest: bool = False
 
 
 def attack(domain: int, surface: Surface, hostile: AttackClass) -> Result:
@@ -247,11 +250,13 @@ def attack(domain: int, surface: Surface, hostile: AttackClass) -> Result:
         running.stop()
         return Result(name, len(attacks), hostile.reasons, 'node did not connect', 0.0, 0.0)
     rss_start = running.rss_mib()
-    good = len(attacks) + 1
+    good = max(len(attacks) + 1, GOOD_AT_REST if surface.at_rest else 0)
     for k in range(good):
         if k == good - 1 and surface.before_last is not None:
             surface.before_last(running)
-        running.publishers['imu'].publish(imu(BASE_NS + k * MS, frame=surface.imu_frame))
+        running.publishers['imu'].publish(
+            imu_at_rest(BASE_NS + k * MS) if surface.at_rest
+            else imu(BASE_NS + k * MS, frame=surface.imu_frame))
         if k < len(attacks):
             running.publishers[surface.topic].publish(attacks[k])
         if k % 200 == 0 or surface.latched:  # /tf_static is read 100 deep (as tf2_ros)
@@ -261,7 +266,10 @@ def attack(domain: int, surface: Surface, hostile: AttackClass) -> Result:
     def counted() -> int:
         values = running.diagnostics()
         return sum(int(values.get(f'rejected {key}', 0)) for key in reasons)
-    running.spin_until(lambda: counted() >= expected and len(orientations) >= good, 60.0)
+    # Levelling: the rest window's samples are accepted, not integrated (no output).
+    running.spin_until(lambda: counted() >= expected and (
+        running.diagnostics().get('accepted') == str(good) if surface.at_rest
+        else len(orientations) >= good), 60.0)
     running.spin_until(lambda: False, 1.5)  # a last diagnostics period
     rss_growth = running.rss_mib() - rss_start
     found = counted()
@@ -279,12 +287,26 @@ def attack(domain: int, surface: Surface, hostile: AttackClass) -> Result:
                  for m in orientations]
     if not all(math.isfinite(v) for q in attitudes for v in q):
         problems.append('non-finite output')
-    if len(attitudes) != good or _error(attitudes[-1], (good - 1) * 1e-3) > 1e-12:
-        problems.append(f'state changed ({len(attitudes)} outputs of {good})')
-    outcome = ('survived; all counted; outputs finite; state unchanged' if not problems
-               else 'FAILED: ' + '; '.join(problems))
+    problems += _state_problems(attitudes, good, surface.at_rest)
+    outcome = ('survived; all counted; outputs finite; '
+               + ('levelled tilt within 0.05 deg' if surface.at_rest else 'state unchanged')
+               if not problems else 'FAILED: ' + '; '.join(problems))
     return Result(name, len(attacks), hostile.reasons, outcome, time.monotonic() - started,
                   rss_growth)
+
+
+def _state_problems(attitudes: list[tuple[float, ...]], good: int, at_rest: bool
+                    ) -> list[str]:
+    """What is wrong with the outputs of ``good`` samples: a constant rate's must end at
+    exp(ω t); a body at rest's must be levelled to the true tilt (within 0.05 deg)."""
+    if at_rest:
+        if not attitudes:
+            return ['not levelled (no output)']
+        tilt = _tilt_deg(attitudes[-1])
+        return [f'levelled {tilt:.3g} deg off in tilt'] if not tilt < 0.05 else []
+    if len(attitudes) != good or _error(attitudes[-1], (good - 1) * 1e-3) > 1e-12:
+        return [f'state changed ({len(attitudes)} outputs of {good})']
+    return []
 
 
 def _error(attitude: tuple[float, ...], seconds: float) -> float:
@@ -293,6 +315,55 @@ def _error(attitude: tuple[float, ...], seconds: float) -> float:
     half = 0.5 * norm * seconds
     expected = (math.cos(half), *(math.sin(half) * w / norm for w in OMEGA))
     return max(abs(a - b) for a, b in zip(attitude, expected))
+
+
+#: The tilt of the body at rest (roll, pitch [rad]) and its samples: 0.6 s at 1 kHz, past
+#: ``align_seconds`` 0.3 s of rest.
+TILT_RPY = (0.3, -0.2)
+GOOD_AT_REST = 600
+GRAVITY = 9.80665
+
+
+def _up_in_body(roll: float, pitch: float) -> tuple[float, float, float]:
+    """The world's up (ENU z) in the body frame of a body at ``roll``, ``pitch``, no yaw
+    (R = Rz Ry Rx: the third row of R)."""
+    return (-math.sin(pitch), math.cos(pitch) * math.sin(roll),
+            math.cos(pitch) * math.cos(roll))
+
+
+def imu_at_rest(at_ns: int, accel: tuple[float, float, float] | None = None) -> Any:
+    """An Imu of the body at rest tilted by TILT_RPY (zero rate, the specific force of
+    gravity), or with the specific force ``accel``."""
+    message = imu(at_ns, (0.0, 0.0, 0.0))
+    f = message.linear_acceleration
+    f.x, f.y, f.z = accel or tuple(GRAVITY * u for u in _up_in_body(*TILT_RPY))
+    return message
+
+
+def _tilt_deg(attitude: tuple[float, ...]) -> float:
+    """Angle [deg] between the world's up seen in the body by ``attitude`` (w, x, y, z) and
+    the true one (TILT_RPY)."""
+    w, x, y, z = attitude
+    seen = (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y))
+    true = _up_in_body(*TILT_RPY)
+    dot = sum(a * b for a, b in zip(seen, true))
+    cross = (seen[1] * true[2] - seen[2] * true[1], seen[2] * true[0] - seen[0] * true[2],
+             seen[0] * true[1] - seen[1] * true[0])
+    return math.degrees(math.atan2(math.sqrt(sum(c * c for c in cross)), dot))
+
+
+def accel_classes(seed: int) -> Iterator[AttackClass]:
+    """The accelerometer while the node levels: specific forces beyond any accelerometer
+    (squares that overflow, or just above the limit of 1e4 m/s²), NaN and Inf."""
+    absurd = [(1e200, 0.0, 0.0), (0.0, -1e155, 0.0), (0.0, 0.0, 1e154), (1e308, 1e308, 1e308),
+              (-1e308, 0.0, 0.0), (0.0, 0.0, 1.5e4)]
+    yield AttackClass('specific force finite but absurd, while levelling', [
+        imu_at_rest(BASE_NS + k * MS + MS // 2, f) for k, f in enumerate(absurd)],
+        'accel_out_of_range')
+    non_finite = [(math.nan, 0.0, 9.8), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf)] * 4
+    yield AttackClass('NaN and Inf specific force, while levelling', [
+        imu_at_rest(BASE_NS + k * MS + MS // 2, f) for k, f in enumerate(non_finite)],
+        'non_finite')
 
 
 def imu_classes(seed: int) -> Iterator[AttackClass]:
@@ -450,6 +521,8 @@ SURFACES = [
     Surface('/tf_static', '/tf_static', _tf_type, tf_static_classes,
             parameters=('tf_timeout:=60.0',), imu_frame='imu_link', latched=True,
             before_last=send_mount),
+    Surface('imu accelerometer', 'imu', _imu_type, accel_classes,
+            parameters=('align_seconds:=0.3',), at_rest=True),
 ]
 
 

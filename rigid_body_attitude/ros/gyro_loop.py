@@ -105,7 +105,9 @@ class GyroLoop:
         self.context = context
         self.served = [(entity_handle(subscription), raw_taker(subscription, True), handler)
                        for subscription, handler in served]
-        self.timers = [(entity_handle(timer), timer_runner(timer)) for timer in timers]
+        #: (binding handle, callback) of each timer served.
+        self.timers = [(entity_handle(timer), timer.callback) for timer in timers]
+        self._run_if_due = [timer_runner(timer) for timer in timers]
         self.handled = 0
         self._stopping = threading.Event()
         self._sigint_guard = SignalHandlerGuardCondition(context)
@@ -159,7 +161,7 @@ class GyroLoop:
                 handler(data)
                 self.handled += 1
                 data = take()
-        for _, run_if_due in self.timers:
+        for run_if_due in self._run_if_due:
             run_if_due()
 
     def guard_handles(self) -> tuple[Any, Any]:

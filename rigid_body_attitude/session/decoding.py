@@ -31,6 +31,7 @@ from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.types import IMU
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.imu_start import frame_refused
 from rigid_body_attitude.session.settings import GYRO_TOPICS, AnySession
 
 __all__ = ['DECODERS', 'Decoded', 'GyroDecoded', 'Handler', 'MALFORMED', 'RATE_DECODERS',
@@ -141,9 +142,10 @@ def _gyro_handler(session: GyroSession, topic: str, decode: Callable[[bytes], An
                   reraise: tuple[type[Exception], ...]) -> Handler:
     """:func:`input_handler` of a gyro topic (the hot path: one decoder call and
     ``session.gyro`` with the Imu bytes, if any, for ``imu/data``, and the specific force).
-    Once the session knows its IMU's frame (``imu_frame``), samples in any other frame are
-    refused (``foreign_frame``)."""
+    Once the session knows its IMU's frame (``imu_frame``), samples in another frame are
+    refused (``foreign_frame``: :func:`~.imu_start.frame_refused`)."""
     gyro, malformed, internal_error = session.gyro, session.malformed, session.internal_error
+    topic_frames = session.topic_frames
 
     def handle(data: bytes) -> None:
         try:
@@ -151,9 +153,7 @@ def _gyro_handler(session: GyroSession, topic: str, decode: Callable[[bytes], An
         except MALFORMED as err:
             malformed(topic, str(err)[:200])
             return
-        expected = session.imu_frame
-        if expected is not None and frame != expected:
-            session.foreign_frame(frame)
+        if topic_frames.get(topic) != frame and frame_refused(session, topic, frame):
             return
         try:
             gyro(sec, nanosec, rate, imu, accel)

@@ -30,7 +30,7 @@ from rigid_body_attitude.session.reports import (
 from rigid_body_attitude.session.stream import GyroStream
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND
 
-__all__ = ['ImuStart', 'REJECTION_DETAIL']
+__all__ = ['ImuStart', 'REJECTION_DETAIL', 'frame_refused']
 
 #: Why a gyro sample was ignored, by rejection reason (the warning texts).
 REJECTION_DETAIL = {
@@ -73,6 +73,8 @@ class ImuStart(Session):
     #: ``body_frame``, a static transform); ``None`` until then. Samples in another frame are
     #: refused (:meth:`foreign_frame`).
     imu_frame: str | None = None
+    #: Gyro topic -> the IMU's frame, once a sample on it came in it (:func:`frame_refused`).
+    topic_frames: dict[str, str]
 
     def _start_imu(self, values: Mapping[str, Any]) -> None:
         """Read the calibration file and set up mount and levelling from ``values``."""
@@ -82,6 +84,7 @@ class ImuStart(Session):
         self._calibration = calibration
         mount_rpy = values['mount_rpy']
         self._mount_given = bool(mount_rpy)
+        self.topic_frames = {}
         self.sample_map = SampleMap(calibration, rpy_quaternion(*mount_rpy) if mount_rpy
                                     else None)
         gyro_noise = calibration.noise.gyro_sigma() if calibration is not None else None
@@ -300,6 +303,24 @@ class ImuStart(Session):
         return text if scene_bias == 'none' else f'{text}; scene gyro_bias {scene_bias}'
 
 
+def frame_refused(start: ImuStart, topic: str, frame: str) -> bool:
+    """Whether a gyro sample on ``topic`` in ``frame`` is refused (``foreign_frame``,
+    counted) once ``start.imu_frame`` is known: one IMU per topic. Until a sample on ``topic``
+    came in the IMU's frame, samples in a frame that needs no mount (an empty frame,
+    ``body_frame``) are taken too; after it, only those in the IMU's frame."""
+    expected = start.topic_frames.get(topic)
+    if expected is None and start.imu_frame is not None:
+        if frame == start.imu_frame:
+            start.topic_frames[topic] = frame
+            return False
+        refused = start.mount_needed(frame)
+    else:
+        refused = expected is not None and frame != expected
+    if refused:
+        start.foreign_frame(frame)
+    return refused
+
+
 def _alignment_text(start: ImuStart) -> str:
     """:meth:`ImuStart.alignment_text`: levelling, waiting, or the alignment's status."""
     if start._aligning:
@@ -321,8 +342,8 @@ def _sample_problem(rate: Sequence[float], accel: Sequence[float],
         wx, wy, wz = (float(value) for value in rate)
     except (TypeError, ValueError):
         return 'non_finite'
-    if not math.isfinite(wx + wy + wz):
-        return 'non_finite'
+    if not (math.isfinite(wx) and math.isfinite(wy) and math.isfinite(wz)):
+        return 'non_finite'  # each: the sum of finite values may overflow
     reason = _accel_problem(accel)
     if reason:
         return reason
@@ -339,8 +360,8 @@ def _accel_problem(accel: Sequence[float]) -> str:
         ax, ay, az = (float(value) for value in accel)
     except (TypeError, ValueError):
         return 'non_finite'
-    if not math.isfinite(ax + ay + az):
-        return 'non_finite'
+    if not (math.isfinite(ax) and math.isfinite(ay) and math.isfinite(az)):
+        return 'non_finite'  # each: the sum of finite values may overflow
     # Each component first: a square that overflows is out of range, never NaN.
     if not (abs(ax) <= SPECIFIC_FORCE_LIMIT and abs(ay) <= SPECIFIC_FORCE_LIMIT
             and abs(az) <= SPECIFIC_FORCE_LIMIT

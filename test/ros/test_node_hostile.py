@@ -43,6 +43,10 @@ from test_input_qos import connect, missing_stamps, receive_all, RECORD_QOS
 from test_input_qos import start_node as start_node_process
 from test_node_subprocess import stop_with_sigint
 
+from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
+from rigid_body_attitude.core.imu.alignment import tilt_angle, world_up
+from rigid_body_attitude.core.imu.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 
 BASE_NS = 1_700_000_000 * 10**9 + 123_456_789
@@ -232,7 +236,9 @@ class Surface:
     ``cases()`` builds the messages (or raw bytes) sent on ``topic``, one after each good
     ``imu`` sample in ``imu_frame``; all must be counted under ``reasons`` (``counted`` in
     all, default one each). ``before_last(harness)`` runs before the last good sample (the
-    mount, when the stream waits for one); ``parameters`` go to the node.
+    mount, when the stream waits for one); ``parameters`` go to the node. The good stream is
+    a constant rate, ending at ``exp(ω t)``; or, with ``at_rest``, :data:`GOOD_AT_REST`
+    samples of a body at rest tilted by :data:`TILT` (the node levels from them).
     """
 
     name: str
@@ -245,6 +251,7 @@ class Surface:
     latched: bool = False
     before_last: Callable[[Harness], None] | None = None
     parameters: dict[str, Any] = field(default_factory=dict)
+    at_rest: bool = False
 
 
 def tf_message(*transforms: tuple[str, str, tuple[float, ...], tuple[float, ...]]
@@ -295,6 +302,39 @@ def foreign_frames() -> list[Imu]:
             for k, frame in enumerate(frames)]
 
 
+#: The tilt of the body at rest (levelling surfaces), roll and pitch [rad].
+TILT = rpy_quaternion(0.3, -0.2, 0.0)
+#: Samples of the body at rest: 0.6 s at 1 kHz, past ``align_seconds`` 0.3 s of rest.
+GOOD_AT_REST = 600
+
+
+def at_rest_message(at_ns: int, accel: tuple[float, float, float] | None = None) -> Imu:
+    """An Imu of the body at rest tilted by TILT (zero rate, gravity's specific force), or
+    with the specific force ``accel``."""
+    message = gyro_message('imu', at_ns)
+    message.angular_velocity.x = message.angular_velocity.y = message.angular_velocity.z = 0.0
+    up = quaternion.rotate_inverse(TILT, np.array(world_up('enu')) * 9.80665)
+    f = message.linear_acceleration
+    f.x, f.y, f.z = up.tolist() if accel is None else accel
+    return message
+
+
+def at_rest_cases(forces: list[tuple[float, float, float]]) -> list[Imu]:
+    """Imu samples at rest with the specific ``forces``, between those of the good stream."""
+    return [at_rest_message(BASE_NS + k * MS + MS // 2, force) for k, force in enumerate(forces)]
+
+
+def absurd_specific_forces() -> list[Imu]:
+    """Specific forces far beyond any accelerometer (squares or sums that overflow, or just
+    above the limit), while the node levels."""
+    return at_rest_cases([(1e200, 0.0, 0.0), (0.0, -1e155, 0.0), (0.0, 0.0, 1e154),
+                          (1e308, 1e308, 1e308), (0.0, 0.0, 1.5 * SPECIFIC_FORCE_LIMIT)])
+
+
+def non_finite_specific_forces() -> list[Imu]:
+    return at_rest_cases([(math.nan, 0.0, 9.8), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf)])
+
+
 _TF = dict(imu_frame='imu_link', latched=True, before_last=send_mount)
 #: Every surface and hostile class the in-process node is fed. Add an entry to cover a new
 #: input (its topic, message type, cases and the reasons they must be counted under).
@@ -306,6 +346,11 @@ SURFACES = [
             ('malformed',), **_TF),
     Surface('/tf_static: 30 000 junk transforms', '/tf_static', TFMessage, junk_transforms,
             ('tf_evicted',), counted=20_001, **_TF),  # the mount makes room too
+    Surface('imu: specific force absurd while levelling', 'imu', Imu, absurd_specific_forces,
+            ('accel_out_of_range',), at_rest=True, parameters=dict(align_seconds=0.3)),
+    Surface('imu: specific force NaN or Inf while levelling', 'imu', Imu,
+            non_finite_specific_forces, ('non_finite',), at_rest=True,
+            parameters=dict(align_seconds=0.3)),
 ]
 
 
@@ -328,26 +373,38 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
     orientations = harness.record(QuaternionStamped, 'orientation')
     harness.wait_for_connections()
     cases = surface.cases()
-    good = len(cases) + 1
+    good = max(len(cases) + 1, GOOD_AT_REST if surface.at_rest else 0)
     for k in range(good):
         if k == good - 1 and surface.before_last is not None:
             surface.before_last(harness)
-        harness.publishers['imu'].publish(gyro_message('imu', BASE_NS + k * MS,
-                                                       surface.imu_frame))
+        harness.publishers['imu'].publish(
+            at_rest_message(BASE_NS + k * MS) if surface.at_rest
+            else gyro_message('imu', BASE_NS + k * MS, surface.imu_frame))
         if k < len(cases):
             harness.publishers[surface.topic].publish(cases[k])
-        harness.spin_for(0.01)
+        harness.spin_for(0.01 if k < len(cases) + 1 or k % 50 == 0 else 0.0)
     counts = node.session.rejection_counts
     expected = len(cases) if surface.counted is None else surface.counted
+    # Levelling: the samples of the rest window are accepted, not integrated (no output).
+    session = node.session
     assert harness.spin_until(
         lambda: sum(counts()[reason] for reason in surface.reasons) >= expected
-        and len(orientations) >= good, 30.0), (counts(), len(orientations))
+        and session.accepted_count() >= good
+        and len(orientations) >= max(session.stream.accepted, 1), 30.0), (
+            counts(), len(orientations))
     harness.spin_for(0.2)
     assert sum(counts()[reason] for reason in surface.reasons) == expected
-    assert len(orientations) == good and node.session.accepted_count() == good
+    assert counts()['internal_error'] == 0 and session.accepted_count() == good
+    assert len(orientations) == session.stream.accepted
+    assert (0 < session.stream.accepted < good) if surface.at_rest else (
+        session.stream.accepted == good)
     last = orientations[-1].quaternion
-    expected_q = _exp((good - 1) * 1e-3 * np.array(OMEGA))
-    assert np.max(np.abs(np.array([last.w, last.x, last.y, last.z]) - expected_q)) <= 1e-14
+    q = np.array([last.w, last.x, last.y, last.z])
+    if surface.at_rest:  # levelled from the clean samples: the true tilt, up to round-off
+        assert node.session.alignment.at_rest
+        assert math.degrees(tilt_angle(tuple(q.tolist()), TILT)) < 0.05
+    else:
+        assert np.max(np.abs(q - _exp((good - 1) * 1e-3 * np.array(OMEGA)))) <= 1e-14
     assert lines and max(len(line) for line in lines) < 600
     assert not any('\x1b' in line or '\n' in line for line in lines)
 

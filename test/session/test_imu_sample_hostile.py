@@ -40,7 +40,8 @@ def rest_imus(count, rng, start=0):
 
 
 @pytest.mark.parametrize('absurd', [(1e200, 0.0, 0.0), (0.0, -1e155, 0.0),
-                                    (0.0, 0.0, 1e154), (0.0, 0.0, 1.5 * SPECIFIC_FORCE_LIMIT)])
+                                    (0.0, 0.0, 1e154), (0.0, 0.0, 1.5 * SPECIFIC_FORCE_LIMIT),
+                                    (1e308, 1e308, 1e308)])  # (a sum that overflows)
 def test_one_absurd_specific_force_is_refused_and_levelling_keeps_the_tilt(open_scene, clocks,
                                                                            absurd):
     session, sink = open_scene('strapdown')
@@ -58,6 +59,16 @@ def test_one_absurd_specific_force_is_refused_and_levelling_keeps_the_tilt(open_
     assert math.degrees(tilt_angle(session.alignment.attitude, TRUTH)) < 0.05
     assert sink.attitudes
     assert any('accelerometer' in text and 'out of range' in text for _, text in sink.logs)
+
+
+def test_finite_rates_whose_sum_overflows_are_out_of_range_while_levelling(open_scene):
+    session, _ = open_scene('strapdown')
+    handle = input_handler(session, 'imu')
+    for k, (stamp, rate, acc) in enumerate(rest_imus(400, random.Random(8))):
+        handle(encode_imu(stamp, 'imu_link', (1e308, 1e308, 1e308) if k == 30 else rate, acc))
+    rejected = session.rejection_counts()
+    assert rejected['out_of_range'] == 1 and rejected['non_finite'] == 0
+    assert math.degrees(tilt_angle(session.alignment.attitude, TRUTH)) < 0.05
 
 
 def test_non_finite_specific_force_is_refused_as_non_finite(open_scene):

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 from conftest import BASE_NS, MS
-from rigid_body_attitude.msgs import encode_imu
+from rigid_body_attitude.msgs import encode_imu, encode_vector3_stamped
 from rigid_body_attitude.msgs.tf_message import Transform
 from rigid_body_attitude.msgs.untrusted import QUOTED_CHARACTERS, quoted
 from rigid_body_attitude.ros.tf_lookup import HELD_SAMPLES, MountGate, PENDING_FRAMES
@@ -65,6 +65,24 @@ def test_a_foreign_frame_never_holds_up_the_mounted_stream(open_scene, clocks):
     assert session.received_count() == 1002
     warnings = [text for _, text in sink.logs if 'foreign' in text or 'not the IMU' in text]
     assert warnings and "'other_imu'" in warnings[0] and "'imu_link'" in warnings[0]
+
+
+def test_one_imu_per_topic_a_frame_needing_no_mount_on_the_other_topic(open_scene, clocks):
+    """The IMU's frame ``base_link`` named on ``imu``: on ``angular_velocity`` samples in an
+    empty frame are taken until one comes in ``base_link``, then only those; on ``imu`` an
+    empty frame is foreign at once, and so is a frame without a mount on either topic."""
+    session, _, gate, sample = gated(open_scene, clocks)
+    rates = input_handler(session, 'angular_velocity')
+    sample(encode_imu(BASE_NS, 'base_link', RATE))
+    rates(encode_vector3_stamped(BASE_NS + MS, '', RATE))
+    rates(encode_vector3_stamped(BASE_NS + 2 * MS, 'other_imu', RATE))
+    sample(encode_imu(BASE_NS + 3 * MS, '', RATE))
+    assert session.accepted_count() == 2
+    assert session.rejection_counts()['foreign_frame'] == 2
+    rates(encode_vector3_stamped(BASE_NS + 4 * MS, 'base_link', RATE))
+    rates(encode_vector3_stamped(BASE_NS + 5 * MS, '', RATE))
+    assert session.accepted_count() == 3
+    assert session.rejection_counts()['foreign_frame'] == 3
 
 
 def test_samples_held_until_the_mount_arrives_only_their_frame_integrated(open_scene, clocks):

@@ -130,3 +130,33 @@ def test_a_bag_without_the_transform_drops_every_sample_with_one_clear_line(
     assert ('1 malformed /tf_static records ignored' in captured.out) == bool(tf_static)
     with BagReader(tmp_path / 'out') as reader:
         assert reader.message_counts.get('orientation', 0) == 0
+
+
+def test_a_first_record_in_a_foreign_frame_holds_up_nothing(tmp_path):
+    """The first gyro records in ``other_imu`` (no mount in the bag), then the stream in
+    ``imu_link`` (mounted by the bag's ``/tf_static``): as in the node, ``imu_link`` is the
+    IMU's frame (the first with a known mount), every one of its records is used and the
+    attitude equals the clean bag's; the ``other_imu`` records are refused ``foreign_frame``,
+    those before the first ``imu_link`` one and those after it."""
+    mount = YAW * ROLL
+    rate_sensor = tuple(mount.inv().apply(OMEGA_BODY).tolist())
+    mount_record = static_transforms(('base_link', 'imu_link', mount))
+    records = [('/tf_static', START_NS - 1000, mount_record)]
+    foreign = (9.0, 9.0, 9.0)
+    records += [('imu', START_NS - 2000 + k,
+                 encode_imu(START_NS - 2000 + k, 'other_imu', foreign)) for k in range(2)]
+    records += [('imu', START_NS + k * PERIOD_NS,
+                 encode_imu(START_NS + k * PERIOD_NS, 'imu_link', rate_sensor))
+                for k in range(COUNT)]
+    records.append(('imu', START_NS + COUNT * PERIOD_NS,
+                    encode_imu(START_NS + COUNT * PERIOD_NS, 'other_imu', foreign)))
+    write_records(tmp_path / 'in', {'imu': IMU, '/tf_static': TF_MESSAGE}, records)
+    write_mounted_bag(tmp_path / 'clean', 'imu_link', mount, [mount_record])
+    result = replay_bag(tmp_path / 'in', tmp_path / 'out', ReplayOptions(**OPTIONS))
+    clean = replay_bag(tmp_path / 'clean', tmp_path / 'ref', ReplayOptions(**OPTIONS))
+    assert result.used == clean.used == COUNT
+    assert result.rejected == {**clean.rejected, 'foreign_frame': 3}
+    body, imu_data = outputs(tmp_path / 'out')
+    reference_body, _ = outputs(tmp_path / 'ref')
+    assert len(body) == COUNT and np.array_equal(body, reference_body)
+    assert {message.header.frame_id for message in imu_data} == {'imu_link'}

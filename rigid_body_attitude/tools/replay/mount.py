@@ -1,18 +1,22 @@
 """The sensor's mount in a replay: from ``mount_rpy``, or from the bag's ``/tf_static``.
 
-As the node does (:mod:`rigid_body_attitude.ros.tf_lookup`): when ``mount_rpy`` is not given
-and the first decodable gyro sample's frame (the sensor frame, REP-145) differs from
-``body_frame``, the mount is the static transform ``body_frame`` -> sensor frame, a chain
-composed if need be (:class:`~rigid_body_attitude.session.mount.StaticTransforms`, the node's
-table), here from every ``tf2_msgs/msg/TFMessage`` recorded on ``/tf_static`` (the node
-receives them whenever they were published: transient local). Malformed records and refused
-transforms are counted and said in a note. Without such a transform the replay behaves as the
-node after ``tf_timeout``: every gyro sample from the first decodable one on is dropped and
-counted ``no_mount`` (:class:`NoMountGate`), with a warning and a note naming both frames.
+As the node does (:mod:`rigid_body_attitude.ros.tf_lookup`): the IMU's frame (the sensor
+frame, REP-145) is the first decodable gyro record's frame with a known mount: any frame when
+``mount_rpy`` is given, else ``body_frame`` itself, an empty frame, or a frame the static
+transforms connect to ``body_frame`` (a chain composed if need be:
+:class:`~rigid_body_attitude.session.mount.StaticTransforms`, the node's table), here from
+every ``tf2_msgs/msg/TFMessage`` recorded on ``/tf_static`` (the node receives them whenever
+they were published: transient local). Records in any other frame are refused
+(``foreign_frame``), before and after it, as the node refuses the samples it held. Malformed
+records and refused transforms are counted and said in a note. When no frame has a mount the
+replay behaves as the node after ``tf_timeout``: every gyro sample from the first decodable
+one on is dropped and counted ``no_mount`` (:class:`NoMountGate`), with a warning and a note
+naming the first record's frame and ``body_frame``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 from rigid_body_attitude.bag import BagReader
@@ -37,7 +41,8 @@ class BagMount:
     """The bag's sensor frame and static transforms, and how the replay's samples are mounted.
 
     Attributes:
-        sensor_frame: the first decodable gyro record's frame (``''``: none).
+        sensor_frame: the first decodable gyro record's frame with a known mount, else the
+            first decodable one's (``''``: none).
         transforms: the bag's ``/tf_static`` transforms.
         notes: remarks for the user (malformed or refused ``/tf_static`` records, a
             missing transform).
@@ -73,23 +78,32 @@ class BagMount:
         return NoMountGate(session, handle, self.missing_frame) if self.missing_frame else handle
 
 
-def read_bag_mount(reader: BagReader, gyro_topic: str) -> BagMount:
-    """The sensor frame of ``gyro_topic`` and, if it has one, the bag's static transforms."""
-    frame = _first_frame(reader, gyro_topic) if gyro_topic else None
-    if frame is None:
+def read_bag_mount(reader: BagReader, gyro_topic: str, body_frame: str,
+                   mount_given: bool) -> BagMount:
+    """The sensor frame of ``gyro_topic`` (:attr:`BagMount.sensor_frame`) and the bag's
+    static transforms; ``mount_given``: ``mount_rpy`` is set (every frame has a mount)."""
+    if not gyro_topic:
         return BagMount('', StaticTransforms(), [])
     transforms, notes = _static_transforms(reader)
-    return BagMount(frame, transforms, notes)
+    mounted = transforms.resolved(body_frame)  # body_frame itself included
+    first: str | None = None
+    for frame in _frames(reader, gyro_topic):
+        if mount_given or not frame or frame in mounted:
+            return BagMount(frame, transforms, notes)
+        if first is None:
+            first = frame
+    if first is None:
+        return BagMount('', StaticTransforms(), [])
+    return BagMount(first, transforms, notes)
 
 
-def _first_frame(reader: BagReader, gyro_topic: str) -> str | None:
-    """The header frame of the first gyro record that has a decodable one."""
+def _frames(reader: BagReader, gyro_topic: str) -> Iterator[str]:
+    """The header frames of the gyro records that have a decodable one, in order."""
     for _, _, _, data in reader.messages([gyro_topic]):
         try:
-            return header_frame_id(data)
+            yield header_frame_id(data)
         except MalformedMessage:
             continue
-    return None
 
 
 def _static_transforms(reader: BagReader) -> tuple[StaticTransforms, list[str]]:

@@ -189,7 +189,8 @@ def _replay(reader: BagReader, sink: BagSink, scene: Scene, values: dict[str, An
             truth: GroundTruth | None, options: ReplayOptions, bar: Progress) -> _Run:
     """Build the session on the bag's clock, mount its sensor and run the event loop over the
     bag's messages."""
-    mount = read_bag_mount(reader, plan.gyro_topic)
+    mount = read_bag_mount(reader, plan.gyro_topic, values['body_frame'],
+                           bool(values['mount_rpy']))
     messages = reader.messages(plan.read_topics(reader.topics))
     first = next(messages, None)
     if first is not None:
