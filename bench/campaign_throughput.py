@@ -7,15 +7,20 @@ damping coefficients. ``--runs`` runs (default 10⁵) are advanced ``--steps`` s
 ``--outputs`` output times.
 
 * **bare batch**: one :class:`SceneBatch` of every run in this process, the parameters drawn
-  beforehand (not timed), advanced through the output times: the engine alone.
+  beforehand (not timed), advanced through the output times: the engine alone, in the CPU
+  seconds of the thread that runs it (the idle cluster's scheduler threads in this process
+  are not the engine's).
 * **campaign, N workers**: :func:`run_campaign` on a :func:`local_cluster` of N
   single-threaded worker processes (what ``campaign`` starts), started beforehand (its
   start-up is reported apart): drawing the parameters, the chunk tasks, sending results
   back, the Parquet files, gathering the runs and the statistics (the PNG is timed apart: a
   fixed cost of matplotlib).
 
-Each is timed ``--repeats`` times, interleaved, in wall-clock and CPU seconds (a campaign's:
-its worker processes' and this process's, which holds the client and the scheduler); the best
+One cluster is alive at a time (the 1-worker one, then the 2-worker one), so a campaign is
+billed for its own cluster only. The bare batch and the 1-worker campaign are timed
+``--repeats`` times, interleaved, then the 2-worker campaign, in wall-clock and CPU seconds
+(a campaign's: this process's, which holds the client and the scheduler, and every process it
+started: the workers and their nannies); the best
 of each gives the ratios: the campaign's overhead on one worker against the bare batch (at
 most 15 % at 10⁵ runs is the target), and the speed-up from 1 to 2 workers. CPU seconds
 are what other processes on a shared machine disturb least (the load average is printed).
@@ -39,15 +44,14 @@ import time
 from typing import Any
 
 import numpy as np
+import psutil
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from distributed import Client  # noqa: E402
-
 from rigid_body_attitude.core.dynamics.batch import SceneBatch  # noqa: E402
 from rigid_body_attitude.tools.campaign import (  # noqa: E402
-    METRICS, local_cluster, read_runs, run_campaign, sample_runs, spec_from_mapping)
+    dask_client, METRICS, read_runs, run_campaign, sample_runs, spec_from_mapping)
 from rigid_body_attitude.tools.campaign.plot import write_envelopes  # noqa: E402
 
 STEP = 1e-3
@@ -76,28 +80,35 @@ def bare_batch(spec: Any) -> tuple[float, float]:
     """Wall and CPU seconds of the batch engine alone on every run (parameters drawn
     beforehand)."""
     parameters = sample_runs(spec, np.arange(spec.runs))
-    start, cpu = time.perf_counter(), time.process_time()
+    start, cpu = time.perf_counter(), time.thread_time()
     batch = SceneBatch(spec.scene, parameters.attitude, parameters.omega_body,
                        inertia=parameters.inertia, effect_parameters=parameters.effects)
     for output_time in spec.output_times:
         batch.advance_to(output_time)
-    return time.perf_counter() - start, time.process_time() - cpu
+    return time.perf_counter() - start, time.thread_time() - cpu
 
 
-def _workers_cpu(client: Any) -> float:
-    """CPU seconds the cluster's worker processes have used so far."""
-    return float(sum(client.run(time.process_time).values()))
+def _children_cpu() -> float:
+    """CPU seconds the living processes started by this one (workers, nannies) have used."""
+    total = 0.0
+    for child in psutil.Process().children(recursive=True):
+        try:
+            times = child.cpu_times()
+        except psutil.Error:
+            continue
+        total += times.user + times.system
+    return total
 
 
 def campaign(spec: Any, client: Any, folder: Path) -> tuple[float, float]:
-    """Wall and CPU seconds (workers, and this process: client and scheduler) of a whole
-    campaign (without the PNG) on ``client``'s workers."""
+    """Wall and CPU seconds (this process: client and scheduler; its workers and nannies)
+    of a whole campaign (without the PNG) on ``client``'s workers."""
     shutil.rmtree(folder, ignore_errors=True)
-    workers = _workers_cpu(client)
+    children = _children_cpu()
     start, cpu = time.perf_counter(), time.process_time()
     run_campaign(spec, folder, client=client, plot=False)
     wall, own = time.perf_counter() - start, time.process_time() - cpu
-    return wall, own + _workers_cpu(client) - workers
+    return wall, own + _children_cpu() - children
 
 
 def _median(values: list[float]) -> float:
@@ -125,8 +136,9 @@ def markdown(args: argparse.Namespace, times: dict[str, list[float]],
         f'`run_campaign` on a `local_cluster` of single-threaded worker processes started '
         f'beforehand: drawing the parameters, the chunk tasks (8192 runs each), the results '
         f'sent back, written as Parquet, checked and summarised (the PNG apart). {repeats}, '
-        f'wall-clock and CPU seconds (a campaign\'s: its workers\' and the client\'s, which '
-        f'also holds the scheduler); {len(os.sched_getaffinity(0))} CPUs shared with other '
+        f'wall-clock and CPU seconds (the bare batch\'s: its thread\'s; a campaign\'s: the '
+        f'client process, which also holds the scheduler, and the workers and nannies, one '
+        f'cluster alive at a time); {len(os.sched_getaffinity(0))} CPUs shared with other '
         f'users (load average {load} over 1, 5 and 15 minutes at the end), so wall-clock '
         f'times are those of a busy machine and CPU seconds the steadier measure.', '',
         '| engine | best [s] | median [s] | body-steps/s (best) | CPU [s] (best) |',
@@ -167,21 +179,18 @@ def main(argv: list[str] | None = None) -> int:
     times: dict[str, list[float]] = {'bare': [], '1 worker': [], '2 workers': []}
     cpu: dict[str, list[float]] = {name: [] for name in times}
     startup: dict[str, float] = {}
-    clusters = {}
     try:
-        for workers in (1, 2):
+        for workers, name in ((1, '1 worker'), (2, '2 workers')):
             begin = time.perf_counter()
-            cluster = local_cluster(workers)
-            clusters[workers] = (cluster, Client(cluster))
-            clusters[workers][1].run(lambda: __import__('rigid_body_attitude.tools.campaign'))
-            startup[f'{workers} worker{"s" if workers > 1 else ""}'] = \
-                time.perf_counter() - begin
-        for _ in range(args.repeats):
-            for name, (wall, seconds) in [('bare', bare_batch(spec))] + [
-                    (f'{n} worker{"s" if n > 1 else ""}',
-                     campaign(spec, clusters[n][1], work / f'{n} workers')) for n in (1, 2)]:
-                times[name].append(wall)
-                cpu[name].append(seconds)
+            with dask_client(workers=workers) as client:
+                client.run(lambda: __import__('rigid_body_attitude.tools.campaign'))
+                startup[name] = time.perf_counter() - begin
+                for _ in range(args.repeats):
+                    measured = [('bare', bare_batch(spec))] if workers == 1 else []
+                    measured.append((name, campaign(spec, client, work / f'{workers} workers')))
+                    for label, (wall, seconds) in measured:
+                        times[label].append(wall)
+                        cpu[label].append(seconds)
         one, two = read_runs(work / '1 workers', spec), read_runs(work / '2 workers', spec)
         identical = all(np.array_equal(one[k], two[k], equal_nan=one[k].dtype.kind == 'f')
                         for k in one)
@@ -191,9 +200,6 @@ def main(argv: list[str] | None = None) -> int:
                                            for name in one if name in METRICS}, 'bench')
         plot_seconds = time.perf_counter() - begin
     finally:
-        for cluster, client in clusters.values():
-            client.close()
-            cluster.close()
         shutil.rmtree(work, ignore_errors=True)
     text = '\n'.join(markdown(args, times, cpu, startup, plot_seconds, identical)) + '\n'
     if args.output is None:

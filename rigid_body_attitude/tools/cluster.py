@@ -42,20 +42,27 @@ def dask_client(scheduler: str = '', workers: int = 0) -> Iterator[Any]:
         with client:
             yield client
         return
-    with local_cluster(workers) as cluster, Client(cluster) as client:
+    import dask
+    with local_cluster(workers) as cluster, dask.config.set(LOCAL_CLUSTER_CONFIG), \
+            Client(cluster) as client:
         yield client
 
 
-#: Dask settings of :func:`local_cluster`: glibc's adaptive allocation thresholds kept in the
-#: workers, and Dask's own sampling (the workers' statistical profiler, event-loop ticks,
-#: system and memory monitors) made rare: campaign tasks are few and long, and at Dask's
-#: defaults this sampling takes CPU from the chunks in every process of the cluster.
+#: Dask settings of :func:`local_cluster` (and of :func:`dask_client`'s client of it): glibc's
+#: adaptive allocation thresholds kept in the workers, and Dask's own sampling (the workers'
+#: statistical profiler, event-loop ticks, system and memory monitors, the client's polling of
+#: the scheduler) made rare, and no active memory manager (tasks share no data but the
+#: scattered spec, which every worker keeps): campaign tasks are few and long, and at Dask's
+#: defaults this bookkeeping takes CPU from the chunks in every process of the cluster, the
+#: longer the busier the machine.
 LOCAL_CLUSTER_CONFIG = {
     'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None,
     'distributed.worker.profile.enabled': False,
     'distributed.admin.tick.interval': '1s',
-    'distributed.admin.system-monitor.interval': '2s',
+    'distributed.admin.system-monitor.interval': '10s',
     'distributed.worker.memory.monitor-interval': '1s',
+    'distributed.scheduler.active-memory-manager.start': False,
+    'distributed.client.scheduler-info-interval': '10s',
 }
 
 

@@ -94,8 +94,9 @@ def percentile_table(values: dict[str, FloatArray], ok: NDArray[np.bool_],
     """Percentiles (len(percentiles), T) of each metric's (n, T) values over the runs with
     ``ok``; NaN where no run succeeded."""
     table: dict[str, FloatArray] = {}
+    every = bool(np.all(ok))
     for name, array in values.items():
-        good = array[ok]
+        good = array if every else array[ok]
         if good.shape[0] == 0:
             table[name] = np.full((len(percentiles), array.shape[1]), np.nan)
         else:
