@@ -307,7 +307,7 @@ def test_hostile_parameters_are_refused_naming_the_parameter(name, value, match)
 
 
 @pytest.mark.parametrize('text, match', [
-    ('bias: [0.1, 0.0]\n', 'Expected bias to be a 3 numbers'),
+    ('bias: [0.1, 0.0]\n', 'Expected bias to be 3 numbers'),
     ('scale: [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]\n',
      r'scale factors \(diagonal\) of scale to be in \[0.5, 2\]'),
     ('imu0:\n  gyroscopes:\n    C_gyro_i: [[2.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0]]\n',
