@@ -37,7 +37,7 @@ from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
 from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import parameter_descriptor, ros_value
 from rigid_body_attitude.ros.serve import SERVING_LINE
-from rigid_body_attitude.ros.qos import COMMAND_QOS, OUTPUT_QOS
+from rigid_body_attitude.ros.qos import COMMAND_QOS, CONTROLLER_OUTPUT_QOS, OUTPUT_QOS
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
     CONTROLLER_PARAMETERS, check_controller_values)
@@ -68,7 +68,8 @@ class AttitudeControllerNode(Node):
         if problem:
             raise InputError(problem)
         self.session = ControllerSession(values, self, time.monotonic)
-        self.torque_publisher = self.create_publisher(WrenchStamped, 'torque', OUTPUT_QOS)
+        self.torque_publisher = self.create_publisher(WrenchStamped, 'torque',
+                                                       CONTROLLER_OUTPUT_QOS)
         self.diagnostics_publisher = self.create_publisher(
             DiagnosticArray, '/diagnostics', OUTPUT_QOS)
         self.inputs = [

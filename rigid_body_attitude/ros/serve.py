@@ -9,7 +9,8 @@ sleeps in ``rcl_wait`` (GIL released) nearly all the time;
 the scheduling policy and CPUs the process was started with (``chrt``, ``taskset``). That
 fast path uses rclpy's private parts (:mod:`~rigid_body_attitude.ros.rclpy_internals`); without
 them, rclpy's stock executor serves every entity on the main thread instead (one log line says
-so).
+so), except a scene on its own sim clock (``publish_clock``, ``lockstep``), whose step loop
+needs the fast path: the node then stops with one ``error:`` line.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import uninstall_signal_handlers
 
 from rigid_body_attitude.console import closed_pipe_safe
-from rigid_body_attitude.core.errors import AttitudeError
+from rigid_body_attitude.core.errors import AttitudeError, InputError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
 from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
@@ -115,6 +116,10 @@ def spin(node: AttitudePropagatorNode) -> None:
     gc.freeze()
     problem = fast_path_problem()
     if problem is not None:
+        if node.sim_clock is not None:
+            raise InputError(f'publish_clock and lockstep need the node\'s own step loop, '
+                             f'which rclpy\'s stock executor cannot serve ({problem}); run '
+                             f'without them on this path')
         _spin_stock(node, problem)
         return
     # Claims the gyro subscriptions and the timers before any executor spins.
