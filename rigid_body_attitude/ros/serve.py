@@ -22,6 +22,7 @@ import threading
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
 from rclpy.signals import uninstall_signal_handlers
 
 from rigid_body_attitude.console import closed_pipe_safe
@@ -32,7 +33,7 @@ from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, RCLError
 
-__all__ = ['SERVING_LINE', 'main', 'spin']
+__all__ = ['SERVING_LINE', 'main', 'serve_beside_executor', 'spin']
 
 #: The log line after which the node serves its topics (the last of the start-up).
 SERVING_LINE = 'serving'
@@ -55,8 +56,7 @@ class _ExecutorThread:
     set that may still be waiting (rclpy issue #968).
     """
 
-    def __init__(self, executor: SingleThreadedExecutor, node: AttitudePropagatorNode,
-                 loop: GyroLoop) -> None:
+    def __init__(self, executor: SingleThreadedExecutor, node: Node, loop: GyroLoop) -> None:
         """Serve ``node``'s remaining entities with ``executor``; stop ``loop`` on failure."""
         self.executor, self.node, self.loop = executor, node, loop
         self.failures: list[BaseException] = []
@@ -123,7 +123,14 @@ def spin(node: AttitudePropagatorNode) -> None:
         _spin_stock(node, problem)
         return
     # Claims the gyro subscriptions and the timers before any executor spins.
-    loop = node.gyro_loop()
+    serve_beside_executor(node, node.gyro_loop())
+
+
+def serve_beside_executor(node: Node, loop: GyroLoop) -> None:
+    """Run ``loop`` on this thread and serve the rest of ``node`` (services, parameters) with
+    a ``SingleThreadedExecutor`` in a daemon thread, until SIGINT or shutdown; logs
+    :data:`SERVING_LINE` once both serve. An exception of a callback in either thread ends
+    both and propagates."""
     executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)
     rest = _ExecutorThread(executor, node, loop)
