@@ -91,7 +91,7 @@ class ControllerSession:
         self._period_rejections: Counter[str] = Counter()
         self.last_stamp: int | None = None
         self.held: tuple[int, Vector] | None = None  # (control interval, torque)
-        self.pointing_error = math.nan
+        self._last_sample: tuple[Sequence[float], Quaternion] | None = None
         self.apply(values)
 
     def apply(self, values: Mapping[str, Any]) -> None:
@@ -204,7 +204,7 @@ class ControllerSession:
         while self._targets and self._targets[0][0] <= stamp_ns:
             self.target = self._targets.pop(0)[1]
         self.computed += 1
-        self.pointing_error = float(quaternion.attitude_error(attitude, self.target))
+        self._last_sample = (attitude, self.target)  # the pointing error: in report()
         return pd_torque_floats(attitude, rate, self.target, self.kp, self.kd, self.limit)
 
     def _drop_pending(self, drop: Callable[[int], bool]) -> None:
@@ -226,6 +226,14 @@ class ControllerSession:
         if now - self._last_warning.get(key, -math.inf) >= WARNING_INTERVAL:
             self._last_warning[key] = now
             self.sink.log(level, text)
+
+    @property
+    def pointing_error(self) -> float:
+        """The angle [rad] between the last computed-on attitude and its target (NaN before
+        the first), computed when asked (the diagnostics), not every tick."""
+        if self._last_sample is None:
+            return math.nan
+        return float(quaternion.attitude_error(*self._last_sample))
 
     def report(self) -> DiagnosticReport:
         """This period's diagnostics; WARN while no tick was answered or inputs were

@@ -9,8 +9,8 @@ batch engine (:class:`SceneBatch`) and by the single-body propagator. The contro
 recomputes at the first tick of each control interval ``[n T, (n+1) T)`` and holds in
 between; the effect samples at ``n T`` from ``t = 0``; the node ends its steps at each tick,
 the core at each sample instant. Over 60 s of sim time the attitudes at every tick agree to
-1e-9 rad (one run measured 3.3e-16 rad against the batch engine, 4.1e-16 rad against the propagator;
-the test prints both).
+1e-9 rad (one run measured 3.3e-16 rad against the batch engine, 4.1e-16 rad against the
+propagator; the test prints both).
 """
 
 from __future__ import annotations
