@@ -2,9 +2,8 @@
 
 For each control rate (``--rates``, default 100 and 1000 Hz) it starts, as a user would, the
 node (``propagation_node``, a slew scene of the ``commanded_torque`` kind, ``lockstep``,
-``real_time_factor`` 0: as fast as the loop allows, ``publish_clock`` on) and a
-quaternion-feedback PD controller process (``test/pd_controller.py``: orientation + twist
-in, torque out, a plain rclpy node on a ``SingleThreadedExecutor``), lets the loop warm up, then
+``real_time_factor`` 0: as fast as the loop allows, ``publish_clock`` on) and the
+package's ``attitude_controller`` (orientation + twist in, torque out), lets the loop warm up, then
 reads the node's ``/diagnostics`` for ``--duration`` seconds: the achieved real-time factor of
 each one-second period (sim seconds per wall second) and the lockstep timeouts. Per rate it
 prints the median factor, the ticks per wall second, and each process's CPU per tick
@@ -28,8 +27,6 @@ import time
 
 from _common import cpu_seconds, ros_env
 
-REPO = Path(__file__).resolve().parents[1]
-CONTROLLER = REPO / 'test' / 'pd_controller.py'
 SCENE = """name: slew_under_pd
 description: a box 60 deg from the identity, driven by commanded torques
 rate_source: dynamics
@@ -47,11 +44,9 @@ effects:
 """
 
 
-def node_command() -> list:
-    """``propagation_node`` as installed (console script), else the module."""
-    found = shutil.which('propagation_node') or str(Path(sys.executable).parent
-                                                    / 'propagation_node')
-    return [found]
+def command(name: str) -> list:
+    """An installed console script (``propagation_node``, ``attitude_controller``)."""
+    return [shutil.which(name) or str(Path(sys.executable).parent / name)]
 
 
 def diagnostics_reader(domain_id: int):
@@ -86,13 +81,13 @@ def measure(rate_hz: float, duration: float, warmup: float, domain_id: int,
     env = ros_env(domain_id)
     context, executor, periods = diagnostics_reader(domain_id)
     namespace = f'/lockstep_{int(rate_hz)}'
-    node = subprocess.Popen(node_command() + [
+    node = subprocess.Popen(command('propagation_node') + [
         '--ros-args', '-r', f'__ns:={namespace}', '-p', f'scene:={scene}',
         '-p', 'lockstep:=true', '-p', 'publish_clock:=true', '-p', 'real_time_factor:=0.0',
         '-p', f'publish_rate:={rate_hz}', '-p', f'step:={step}'], env=env,
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    controller = subprocess.Popen([sys.executable, str(CONTROLLER), '--ros-args', '-r',
-                                   f'__ns:={namespace}'], env=env,
+    controller = subprocess.Popen(command('attitude_controller') + [
+        '--ros-args', '-r', f'__ns:={namespace}', '-p', 'torque_limit:=0.02'], env=env,
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         deadline = time.monotonic() + warmup

@@ -5,15 +5,21 @@ Subscribes (raw CDR, decoded by the package's checked decoders) to ``orientation
 angular part in body_frame) and ``target`` (geometry_msgs/QuaternionStamped, world_frame), and
 publishes ``torque`` (geometry_msgs/WrenchStamped, body_frame, zero force) and
 ``/diagnostics``. Remap ``orientation`` and ``twist`` to read an estimator instead of the
-plant's truth. Everything else (pairing by stamp, sample and hold, checks, counts) is
+plant's truth. The inputs are served by the package's raw-take loop
+(:class:`~rigid_body_attitude.ros.gyro_loop.GyroLoop`, every queued message per wake-up) and
+the parameter services by an executor in a second thread; on rclpy's stock executor path
+(:mod:`~rigid_body_attitude.ros.rclpy_internals`) one executor serves all. Everything else
+(pairing by stamp, sample and hold, checks, counts) is
 :class:`~rigid_body_attitude.session.controller.ControllerSession`'s. QoS: inputs as the
-propagation node's commands, ``torque`` as its outputs (reliable, keep last;
-:mod:`~rigid_body_attitude.ros.qos`), so the two connect either way round.
+propagation node's commands, ``torque`` reliable, keep last and transient local
+(:mod:`~rigid_body_attitude.ros.qos`), so the two connect either way round and a recorder
+that matches late still gets every command.
 """
 
 from __future__ import annotations
 
 import sys
+import threading
 import time
 from typing import Any
 
@@ -36,8 +42,10 @@ from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow, wants_help
 from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import parameter_descriptor, ros_value
-from rigid_body_attitude.ros.serve import SERVING_LINE
-from rigid_body_attitude.ros.qos import COMMAND_QOS, OUTPUT_QOS
+from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
+from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, RCLError
+from rigid_body_attitude.ros.serve import serve_beside_executor, SERVING_LINE
+from rigid_body_attitude.ros.qos import COMMAND_QOS, CONTROLLER_OUTPUT_QOS, OUTPUT_QOS
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
     CONTROLLER_PARAMETERS, check_controller_values)
@@ -68,18 +76,24 @@ class AttitudeControllerNode(Node):
         if problem:
             raise InputError(problem)
         self.session = ControllerSession(values, self, time.monotonic)
-        self.torque_publisher = self.create_publisher(WrenchStamped, 'torque', OUTPUT_QOS)
+        #: The inputs and the diagnostics timer: served by :meth:`loop`'s raw-take loop (or,
+        #: on rclpy's stock executor, as any callback group); the parameter callbacks run in
+        #: the executor's thread, so the session is changed under this lock.
+        self.loop_group = DedicatedGroup()
+        self.session_lock = threading.Lock()
+        self.torque_publisher = self.create_publisher(
+            WrenchStamped, 'torque', CONTROLLER_OUTPUT_QOS)
         self.diagnostics_publisher = self.create_publisher(
             DiagnosticArray, '/diagnostics', OUTPUT_QOS)
         self.inputs = [
             self.create_subscription(QuaternionStamped, 'orientation', self.orientation_callback,
-                                     COMMAND_QOS, raw=True),
+                                     COMMAND_QOS, callback_group=self.loop_group, raw=True),
             self.create_subscription(TwistStamped, 'twist', self.twist_callback, COMMAND_QOS,
-                                     raw=True),
+                                     callback_group=self.loop_group, raw=True),
             self.create_subscription(QuaternionStamped, 'target', self.target_callback,
-                                     COMMAND_QOS, raw=True)]
+                                     COMMAND_QOS, callback_group=self.loop_group, raw=True)]
         self.diagnostics_timer = self.create_timer(
-            DIAGNOSTICS_PERIOD, self.session.publish_diagnostics,
+            DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group,
             clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.add_on_set_parameters_callback(self.parameters_callback)
         self.add_post_set_parameters_callback(self.parameters_set_callback)
@@ -121,7 +135,22 @@ class AttitudeControllerNode(Node):
 
     def parameters_set_callback(self, parameters: list[RosParameter]) -> None:
         """Apply accepted run-time changes (frames, target, gains, limit, period)."""
-        self.session.apply(self.parameter_values())
+        values = self.parameter_values()
+        with self.session_lock:
+            self.session.apply(values)
+
+    def loop(self) -> GyroLoop:
+        """The package's raw-take loop serving the inputs and the diagnostics timer (one
+        reused wait set, every queued message taken per wake-up); creating it takes them
+        away from every executor."""
+        return GyroLoop(self.context, list(zip(self.inputs, (
+            self.orientation_callback, self.twist_callback, self.target_callback))),
+            [self.diagnostics_timer])
+
+    def diagnostics_callback(self) -> None:
+        """Publish this period's diagnostics."""
+        with self.session_lock:
+            self.session.publish_diagnostics()
 
     # -- inputs (raw CDR) -------------------------------------------------------------------
 
@@ -130,27 +159,33 @@ class AttitudeControllerNode(Node):
         try:
             sec, nanosec, frame_id, attitude = decode_quaternion_stamped(data)
         except MalformedMessage as err:
-            self.session.malformed('orientation', err.reason)
+            with self.session_lock:
+                self.session.malformed('orientation', err.reason)
             return
-        self.session.orientation(sec, nanosec, frame_id, attitude)
+        with self.session_lock:
+            self.session.orientation(sec, nanosec, frame_id, attitude)
 
     def twist_callback(self, data: bytes) -> None:
         """``twist``: the plant's body rate (the angular part)."""
         try:
             sec, nanosec, frame_id, _, angular = decode_twist_stamped(data)
         except MalformedMessage as err:
-            self.session.malformed('twist', err.reason)
+            with self.session_lock:
+                self.session.malformed('twist', err.reason)
             return
-        self.session.twist(sec, nanosec, frame_id, angular)
+        with self.session_lock:
+            self.session.twist(sec, nanosec, frame_id, angular)
 
     def target_callback(self, data: bytes) -> None:
         """``target``: a new target attitude."""
         try:
             sec, nanosec, frame_id, attitude = decode_quaternion_stamped(data)
         except MalformedMessage as err:
-            self.session.malformed('target', err.reason)
+            with self.session_lock:
+                self.session.malformed('target', err.reason)
             return
-        self.session.target_message(sec, nanosec, frame_id, attitude)
+        with self.session_lock:
+            self.session.target_message(sec, nanosec, frame_id, attitude)
 
     # -- the session's sink -----------------------------------------------------------------
 
@@ -213,13 +248,20 @@ def main(args: list[str] | None = None) -> int:
     node = None
     try:
         node = AttitudeControllerNode()
-        node.get_logger().info(SERVING_LINE)
-        rclpy.spin(node)
+        if fast_path_problem() is None:
+            serve_beside_executor(node, node.loop())
+        else:
+            node.get_logger().info(SERVING_LINE)
+            rclpy.spin(node)
     except (AttitudeError, ParameterException) as err:
         print(f'error: {_first_line(err)}', file=sys.stderr)
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except RCLError:
+        # SIGINT shut the context down while an input was being taken or a torque published.
+        if rclpy.ok():
+            raise
     finally:
         if node is not None:
             node.destroy_node()

@@ -46,8 +46,8 @@ from __future__ import annotations
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
 
-__all__ = ['CLOCK_QOS', 'COMMAND_QOS', 'GYRO_QOS', 'INPUT_DEPTH', 'OUTPUT_DEPTH', 'OUTPUT_QOS',
-           'TF_QOS', 'TF_STATIC_LISTENER_QOS', 'TF_STATIC_QOS']
+__all__ = ['CLOCK_QOS', 'COMMAND_QOS', 'CONTROLLER_OUTPUT_QOS', 'GYRO_QOS', 'INPUT_DEPTH',
+           'OUTPUT_DEPTH', 'OUTPUT_QOS', 'TF_QOS', 'TF_STATIC_LISTENER_QOS', 'TF_STATIC_QOS']
 
 #: Samples an input queue holds while the node cannot take them (5 s at 1 kHz).
 INPUT_DEPTH = 5000
@@ -69,6 +69,14 @@ COMMAND_QOS = QoSProfile(
 OUTPUT_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
     reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+
+#: A controller's commands (``attitude_controller``'s ``torque``): as :data:`OUTPUT_QOS` but
+#: transient local, so a recorder that matches the controller late (a transient-local
+#: subscription, as ``ros2 bag record`` makes for such a writer) still gets every command
+#: from the first tick on; volatile subscribers (the propagation node) are served as before.
+CONTROLLER_OUTPUT_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
+    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 #: ``/tf``: as tf2_ros's TransformBroadcaster (reliable, volatile, keep last 100).
 TF_QOS = QoSProfile(

@@ -9,7 +9,8 @@ sleeps in ``rcl_wait`` (GIL released) nearly all the time;
 the scheduling policy and CPUs the process was started with (``chrt``, ``taskset``). That
 fast path uses rclpy's private parts (:mod:`~rigid_body_attitude.ros.rclpy_internals`); without
 them, rclpy's stock executor serves every entity on the main thread instead (one log line says
-so).
+so), except a scene on its own sim clock (``publish_clock``, ``lockstep``), whose step loop
+needs the fast path: the node then stops with one ``error:`` line.
 """
 
 from __future__ import annotations
@@ -21,17 +22,18 @@ import threading
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
 from rclpy.signals import uninstall_signal_handlers
 
 from rigid_body_attitude.console import closed_pipe_safe
-from rigid_body_attitude.core.errors import AttitudeError
+from rigid_body_attitude.core.errors import AttitudeError, InputError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
 from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, RCLError
 
-__all__ = ['SERVING_LINE', 'error_text', 'main', 'spin']
+__all__ = ['SERVING_LINE', 'error_text', 'main', 'serve_beside_executor', 'spin']
 
 #: The log line after which the node serves its topics (the last of the start-up).
 SERVING_LINE = 'serving'
@@ -54,8 +56,7 @@ class _ExecutorThread:
     set that may still be waiting (rclpy issue #968).
     """
 
-    def __init__(self, executor: SingleThreadedExecutor, node: AttitudePropagatorNode,
-                 loop: GyroLoop) -> None:
+    def __init__(self, executor: SingleThreadedExecutor, node: Node, loop: GyroLoop) -> None:
         """Serve ``node``'s remaining entities with ``executor``; stop ``loop`` on failure."""
         self.executor, self.node, self.loop = executor, node, loop
         self.failures: list[BaseException] = []
@@ -115,10 +116,21 @@ def spin(node: AttitudePropagatorNode) -> None:
     gc.freeze()
     problem = fast_path_problem()
     if problem is not None:
+        if node.sim_clock is not None:
+            raise InputError(f'publish_clock and lockstep need the node\'s own step loop, '
+                             f'which rclpy\'s stock executor cannot serve ({problem}); run '
+                             f'without them on this path')
         _spin_stock(node, problem)
         return
     # Claims the gyro subscriptions and the timers before any executor spins.
-    loop = node.gyro_loop()
+    serve_beside_executor(node, node.gyro_loop())
+
+
+def serve_beside_executor(node: Node, loop: GyroLoop) -> None:
+    """Run ``loop`` on this thread and serve the rest of ``node`` (services, parameters) with
+    a ``SingleThreadedExecutor`` in a daemon thread, until SIGINT or shutdown; logs
+    :data:`SERVING_LINE` once both serve. An exception of a callback in either thread ends
+    both and propagates."""
     executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)
     rest = _ExecutorThread(executor, node, loop)

@@ -12,8 +12,11 @@ stamped ``t_k`` (sample and hold). The law is
 Every input is checked: decodable (``malformed``), a valid stamp (``invalid_stamp``), finite
 (``non_finite``), quaternions of unit norm within
 :data:`~.controller_parameters.UNIT_TOLERANCE` (``non_unit``), the expected frame
-(``wrong_frame``), a stamp not older than the last answered tick (``stale_stamp``; equal:
-``duplicate_stamp``) and an input whose partner of the same stamp never came (``unpaired``).
+(``wrong_frame``), a target not older than the one in force (``stale_stamp``) and an input
+whose partner of the same stamp never came (``unpaired``). A tick the plant publishes again
+(a lockstep plant repeats its first tick until a command arrives, in case the first answer
+went to a writer it had not yet matched) is answered again with the torque already sent for
+it, counted in ``ticks answered again``.
 Rejections are counted by reason and warned about, at most every
 :data:`~.base.WARNING_INTERVAL` seconds per reason. A complete pair stamped before the last
 answered tick means the plant's time went back (a reset): the hold is cleared and the pair
@@ -83,12 +86,12 @@ class ControllerSession:
         self._targets: list[tuple[int, Quaternion]] = []
         self._target_stamp = -1
         self._last_warning: dict[str, float] = {}
-        self.answered = self.computed = self.time_jumps_back = 0
+        self.answered = self.computed = self.time_jumps_back = self.repeated = 0
         self._period_answered = 0
         self._period_rejections: Counter[str] = Counter()
         self.last_stamp: int | None = None
         self.held: tuple[int, Vector] | None = None  # (control interval, torque)
-        self.pointing_error = math.nan
+        self._last_sample: tuple[Sequence[float], Quaternion] | None = None
         self.apply(values)
 
     def apply(self, values: Mapping[str, Any]) -> None:
@@ -162,9 +165,6 @@ class ControllerSession:
     # -- pairing and answering --------------------------------------------------------------
 
     def _pend(self, topic: str, stamp_ns: int, value: tuple[float, ...]) -> None:
-        if stamp_ns == self.last_stamp:
-            self._reject('duplicate_stamp', f'{topic}: a second input for the tick answered')
-            return
         waiting = self.pending[topic]
         waiting[stamp_ns] = value
         if len(waiting) > MAX_PENDING:
@@ -188,6 +188,8 @@ class ControllerSession:
                                          'plant restarted; hold cleared')
         else:
             self._drop_pending(lambda stamp: stamp < stamp_ns)
+        if stamp_ns == self.last_stamp:
+            self.repeated += 1  # the held torque of this tick's interval is sent again
         self.last_stamp = stamp_ns
         interval = stamp_ns // self.period_ns if self.period_ns else stamp_ns
         if self.held is None or self.held[0] != interval:
@@ -202,7 +204,7 @@ class ControllerSession:
         while self._targets and self._targets[0][0] <= stamp_ns:
             self.target = self._targets.pop(0)[1]
         self.computed += 1
-        self.pointing_error = float(quaternion.attitude_error(attitude, self.target))
+        self._last_sample = (attitude, self.target)  # the pointing error: in report()
         return pd_torque_floats(attitude, rate, self.target, self.kp, self.kd, self.limit)
 
     def _drop_pending(self, drop: Callable[[int], bool]) -> None:
@@ -225,6 +227,14 @@ class ControllerSession:
             self._last_warning[key] = now
             self.sink.log(level, text)
 
+    @property
+    def pointing_error(self) -> float:
+        """The angle [rad] between the last computed-on attitude and its target (NaN before
+        the first), computed when asked (the diagnostics), not every tick."""
+        if self._last_sample is None:
+            return math.nan
+        return float(quaternion.attitude_error(*self._last_sample))
+
     def report(self) -> DiagnosticReport:
         """This period's diagnostics; WARN while no tick was answered or inputs were
         rejected. Starts the next period."""
@@ -235,6 +245,7 @@ class ControllerSession:
                                'stamps')
         values = (
             ('ticks answered', str(self.answered)), ('torques computed', str(self.computed)),
+            ('ticks answered again', str(self.repeated)),
             ('pointing error [deg]', f'{math.degrees(self.pointing_error):.6g}'),
             ('torque [N m]', str(self.held[1] if self.held else None)),
             ('target (w, x, y, z)', str(self.target)),

@@ -78,6 +78,7 @@ def test_closed_loop_with_the_propagation_node_settles(ros, request, processes, 
     processes.append(plant)
     harness = Harness(ros, namespace)
     orientations = harness.record(QuaternionStamped, 'orientation')
+    harness.wait_for_connections(START_TIMEOUT)  # every tick the controller sees recorded
     torques = harness.record(WrenchStamped, 'torque')
     controller = start('attitude_controller', '--ros-args', '-r', f'__ns:={namespace}')
     processes.append(controller)

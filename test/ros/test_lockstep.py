@@ -1,23 +1,26 @@
-"""The sim clock and lockstep over real topics: the installed node, a PD controller process
-(test/pd_controller.py), a recorder in this process; bit-identical trajectories at any
-real-time factor and under CPU load; a follower with ``use_sim_time``; a silent controller."""
+"""The sim clock and lockstep over real topics: the installed node, the installed
+``attitude_controller`` (a process of its own), a recorder in this process; bit-identical
+trajectories at any real-time factor and under CPU load; a follower with ``use_sim_time``; a
+silent controller."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
+import os
 from pathlib import Path
 import re
 import subprocess
 import sys
 import time
 
+from ament_index_python.packages import get_package_prefix
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
 import pytest
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rclpy.serialization import serialize_message
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message, serialize_message
 from ros_helpers import Harness, ros_session, RosContext, unique_namespace
 from rosgraph_msgs.msg import Clock
 from test_node_subprocess import read_until, SERVING, start, stop_with_sigint
@@ -26,7 +29,10 @@ from rigid_body_attitude.bag import BagReader, BagWriter
 from rigid_body_attitude.msgs.cdr import twist_angular
 from rigid_body_attitude.tools.replay import ReplayOptions, replay_bag
 
-PD_CONTROLLER = Path(__file__).resolve().parents[1] / 'pd_controller.py'
+CONTROLLER = Path(get_package_prefix('rigid_body_attitude')) / 'lib' / 'rigid_body_attitude' \
+    / 'attitude_controller'
+#: Gains [N m, N m s] and limit [N m] of the slew: saturated at first, settled within 4 s.
+GAINS = ('-p', 'kp:=0.05', '-p', 'kd:=0.04', '-p', 'torque_limit:=0.02')
 #: 60 degrees about (1, 1, 1) / sqrt(3), at rest: the controller's slew to the identity.
 SCENE = """name: slew_under_pd
 description: a box 60 deg from the identity, driven by commanded torques
@@ -59,13 +65,12 @@ def scene_file(tmp_path: Path) -> str:
     return str(path)
 
 
-def start_controller(namespace: str, subscribers: int = 2) -> subprocess.Popen:
-    """The PD controller, answering once ``subscribers`` (the node and this process's
-    recorder) subscribed to its torque."""
-    return subprocess.Popen([sys.executable, str(PD_CONTROLLER), '--ros-args', '-r',
-                             f'__ns:={namespace}', '-p', f'wait_for_subscribers:={subscribers}'],
-                            stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True)
+def start_controller(namespace: str) -> subprocess.Popen:
+    """The installed ``attitude_controller`` in ``namespace``, the slew's gains."""
+    assert CONTROLLER.is_file() and os.access(CONTROLLER, os.X_OK), CONTROLLER
+    return subprocess.Popen([str(CONTROLLER), '--ros-args', '-r', f'__ns:={namespace}',
+                             *GAINS], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True)
 
 
 def stop(process: subprocess.Popen) -> None:
@@ -104,9 +109,13 @@ def run_loop(ros: RosContext, namespace: str, scene: str, rtf: float, ticks: int
     received: list[tuple[str, int, object]] = []
     for topic, kind in (('orientation', QuaternionStamped), ('twist', TwistStamped),
                         ('torque', WrenchStamped)):
+        # torque transient local, as ros2 bag record subscribes to the controller's
+        # transient-local writer: every command from tick 0 on, however late it matched
         harness.node.create_subscription(
             kind, topic, lambda m, t=topic: received.append((t, time.time_ns(), m)),
-            QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE))
+            QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL if topic == 'torque'
+                       else DurabilityPolicy.VOLATILE))
     node = start('--ros-args', '-r', f'__ns:={namespace}', '-p', f'scene:={scene}',
                  '-p', 'lockstep:=true', '-p', 'publish_rate:=100.0',
                  '-p', f'real_time_factor:={rtf}', *extra)
@@ -120,8 +129,12 @@ def run_loop(ros: RosContext, namespace: str, scene: str, rtf: float, ticks: int
             return len(by_stamp(twist, 'twist')) >= ticks and len(
                 by_stamp(orientation, 'quaternion')) >= ticks
         assert harness.spin_until(done, timeout=60.0), f'{len(twist)} ticks recorded'
-        if bag is not None:
-            harness.spin_for(0.5)  # the commands answering the last ticks recorded too
+        if bag is not None:  # the commands answering every recorded tick recorded too
+            def answered() -> bool:
+                stamps = {m.header.stamp.sec * 10**9 + m.header.stamp.nanosec
+                          for topic, _, m in received if topic == 'torque'}
+                return all(k * PERIOD_NS in stamps for k in range(ticks))
+            assert harness.spin_until(answered, timeout=60.0), 'torques missing'
     finally:
         code, stderr = stop_with_sigint(node)  # first: the loop stops with its controller on
         if controller is not None:
@@ -180,7 +193,15 @@ def test_lockstep_trajectories_are_bit_identical_at_any_rate_and_under_load(
             if stamp in unpaced and len(replayed[stamp]) == 4:
                 replayed[stamp] = replayed[stamp] + tuple(rate)
     assert {stamp: replayed[stamp] for stamp in unpaced} == unpaced
-    assert result.rejected['future_stamp'] == result.rejected['stale_stamp'] == 0
+    # A torque stamped like an earlier one: the controller answered tick 0 again when the
+    # node repeated it (waiting for its first command); the replay counts it, as the node did.
+    with BagReader(bag) as reader:
+        torques = [deserialize_message(data, WrenchStamped)
+                   for _, _, _, data in reader.messages(['torque'])]
+    torque_stamps = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in torques]
+    repeated = len(torque_stamps) - len(set(torque_stamps))
+    assert result.rejected['future_stamp'] == 0
+    assert result.rejected['stale_stamp'] == repeated
 
 
 def test_a_node_with_use_sim_time_follows_the_published_clock(ros, request):
@@ -224,7 +245,7 @@ def test_a_silent_controller_is_warned_about_once_counted_and_the_loop_goes_on(
     try:
         read_until(node, SERVING)
         harness.wait_for_connections()
-        controller = start_controller(namespace, subscribers=1)
+        controller = start_controller(namespace)
         assert harness.spin_until(lambda: len(twist) > 50, timeout=60.0)
         controller.kill()
         controller.wait()
@@ -246,3 +267,18 @@ def test_a_silent_controller_is_warned_about_once_counted_and_the_loop_goes_on(
     warned = [status for array in diagnostics for status in array.status
               if 'lockstep_timeout' in status.message]
     assert warned and warned[-1].level == b'\x01'
+
+
+@pytest.mark.parametrize('parameter', ['lockstep', 'publish_clock'])
+def test_the_stock_executor_path_refuses_the_sim_clock_with_one_error_line(
+        processes, scene_file, parameter):
+    process = start('--ros-args', '-p', f'scene:={scene_file}', '-p', f'{parameter}:=true',
+                    path='stock')
+    processes.append(process)
+    _, stderr = process.communicate(timeout=30.0)
+    assert process.returncode == 2 and 'Traceback' not in stderr, stderr
+    errors = [line for line in stderr.splitlines() if line.startswith('error:')]
+    assert errors == [
+        "error: publish_clock and lockstep need the node's own step loop, which rclpy's stock "
+        'executor cannot serve (RIGID_BODY_ATTITUDE_STOCK_EXECUTOR=1); run without them on '
+        'this path'], stderr

@@ -23,7 +23,7 @@ from rigid_body_attitude.core.dynamics.scene import (
 from rigid_body_attitude.session.stream import GyroStream
 
 SHIPPED = {'commanded_torque', 'dzhanibekov', 'free_flyer', 'gravity_gradient_satellite',
-           'gyrostat', 'heavy_top', 'strapdown', 'torque_free_box'}
+           'gyrostat', 'heavy_top', 'slew', 'slew_commanded', 'strapdown', 'torque_free_box'}
 BODY = '{inertia: {moments: [1.0, 2.0, 3.0]}}'
 
 

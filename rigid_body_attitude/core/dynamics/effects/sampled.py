@@ -23,9 +23,12 @@ __all__ = ['SampledTorque', 'segment_end']
 
 class SampledTorque(TorqueEffect, ABC):
     """A digital controller's torque [N m, body]: computed by :meth:`control` from the state
-    at the sample instants ``t₀ + k T`` (``T`` = :attr:`period`, a whole number of the
-    scene's steps; ``t₀`` the time of the first advance after a reset) and held until the
-    next (zero-order hold), with the torque used so far.
+    at the first advance after a reset and then at every whole multiple ``n T`` of the period
+    (``T`` = :attr:`period`, a whole number of the scene's steps), held until the next
+    (zero-order hold), with the torque used so far. This is the rule of
+    ``attitude_controller`` (:mod:`rigid_body_attitude.session.controller`): recompute at the
+    first tick of each interval ``[n T, (n+1) T)``, hold otherwise; so a scene started at
+    ``t = 0`` samples where the controller, ticked at the same instants, recomputes.
 
     The propagators end a step at every sample instant and call :meth:`sample` there
     (:meth:`sample_batch` for a batch, with each body's own held torque), so within a step
@@ -60,15 +63,15 @@ class SampledTorque(TorqueEffect, ABC):
     def reset(self) -> None:
         """Nothing held, no sample taken, no torque used."""
         self.held: Vec = _ZERO
-        self.origin: float | None = None
-        self.samples = 0
+        self.origin: float | None = None  # the first sample's time
+        self.samples = 0  # the next sample is at samples · T
         self.last_sample = 0.0
         self.integral = 0.0
         self.peak = 0.0
 
     def next_sample(self) -> float:
         """The next sample instant [s] (−inf before the first: a sample is due)."""
-        return -math.inf if self.origin is None else self.origin + self.samples * self.period
+        return -math.inf if self.origin is None else self.samples * self.period
 
     def due(self, t: float) -> bool:
         """Whether a sample is due at ``t`` (a sample instant, within round-off)."""
@@ -77,9 +80,10 @@ class SampledTorque(TorqueEffect, ABC):
     def _mark(self, t: float) -> None:
         """Record a sample taken at ``t`` (every body of a batch sampled)."""
         if self.origin is None:
-            self.origin, self.samples = t, 1
-        else:
-            self.samples = int(round((t - self.origin) / self.period)) + 1
+            self.origin = t
+        # the next multiple of T after t (t itself a multiple within round-off, or the start)
+        ratio = t / self.period
+        self.samples = math.floor(ratio + 1e-6 + 1e-12 * abs(ratio)) + 1
         self.last_sample = t
 
     def sample(self, t: float, q: Quat, omega: Vec) -> None:
