@@ -30,21 +30,20 @@ from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import (
     InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 from rcl_interfaces.msg import SetParametersResult
 
-from rigid_body_attitude.core.errors import AttitudeError, InputError
+from rigid_body_attitude.console import closed_pipe_safe
+from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.msgs.cdr import encode_wrench_stamped
 from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_twist_stamped
 from rigid_body_attitude.msgs.errors import MalformedMessage
-from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow, wants_help
-from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
+from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
 from rigid_body_attitude.ros.node import parameter_descriptor, ros_value
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
-from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, RCLError
-from rigid_body_attitude.ros.serve import serve_beside_executor, SERVING_LINE
+from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
+from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
 from rigid_body_attitude.ros.qos import COMMAND_QOS, CONTROLLER_OUTPUT_QOS, OUTPUT_QOS
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
@@ -210,11 +209,6 @@ class AttitudeControllerNode(Node):
         (logger.warning if level == LEVEL_WARN else logger.info)(text)
 
 
-def _first_line(err: BaseException) -> str:
-    """The first line of an error, without rcl's source locations."""
-    return str(err).splitlines()[0].split(', at /')[0] if str(err) else type(err).__name__
-
-
 def controller_usage() -> str:
     """``attitude_controller --help``: the parameters, from the one table."""
     rows = [ParameterRow(p.name, 'double array' if p.type is tuple else
@@ -233,40 +227,22 @@ def controller_usage() -> str:
         format_parameter_help(rows)])
 
 
+@closed_pipe_safe
 def main(args: list[str] | None = None) -> int:
-    """Run the controller until SIGINT (exit 0); bad parameters: ``error: ...``, exit 2."""
-    arguments = sys.argv if args is None else args
-    if wants_help(arguments[1:]):
-        print(controller_usage())
-        return 0
-    use_packaged_fastdds_profile()
-    try:
-        rclpy.init(args=arguments)
-    except RuntimeError as err:  # rcl could not parse the ROS arguments
-        print(f'error: {_first_line(err)}', file=sys.stderr)
-        return 2
-    node = None
-    try:
-        node = AttitudeControllerNode()
-        if fast_path_problem() is None:
-            serve_beside_executor(node, node.loop())
-        else:
-            node.get_logger().info(SERVING_LINE)
-            rclpy.spin(node)
-    except (AttitudeError, ParameterException) as err:
-        print(f'error: {_first_line(err)}', file=sys.stderr)
-        return 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except RCLError:
-        # SIGINT shut the context down while an input was being taken or a torque published.
-        if rclpy.ok():
-            raise
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Run the controller until SIGINT (exit 0); bad parameters: ``error: ...``, exit 2
+    (:func:`~.serve.run_executable`)."""
+    return run_executable(args, controller_usage, AttitudeControllerNode, _serve)
+
+
+def _serve(node: Node) -> None:
+    """The controller's inputs on the raw-take loop beside an executor for the rest (the
+    fast path), else everything on rclpy's stock executor."""
+    assert isinstance(node, AttitudeControllerNode)
+    if fast_path_problem() is None:
+        serve_beside_executor(node, node.loop())
+    else:
+        node.get_logger().info(SERVING_LINE)
+        rclpy.spin(node)
 
 
 if __name__ == '__main__':

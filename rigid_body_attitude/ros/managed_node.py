@@ -33,18 +33,17 @@ import sys
 from typing import Any
 
 from lifecycle_msgs.srv import ChangeState
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import AttitudeError, InputError
-from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
-from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
+from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text
 from rigid_body_attitude.ros.propagator_base import parameter_values, PropagatorMixin
 from rigid_body_attitude.ros.rclpy_internals import RCLError
-from rigid_body_attitude.ros.serve import error_text, SERVING_LINE
+from rigid_body_attitude.ros.serve import error_text, run_executable, SERVING_LINE
 from rigid_body_attitude.session.parameters import PARAMETERS
 from rigid_body_attitude.session.reports import inactive_report
 from rigid_body_attitude.session.settings import NODE_NAME
@@ -226,34 +225,18 @@ def _refusing(callback: Callable[[Any, Any], Any], node: LifecycleNode
 
 @closed_pipe_safe
 def main(args: list[str] | None = None) -> int:
-    """Run the managed node until SIGINT (exit 0); ``-h``/``--help`` prints the parameters.
+    """Run the managed node until SIGINT (exit 0); ``-h``/``--help`` prints the parameters
+    (:func:`~.serve.run_executable`)."""
+    return run_executable(args, lambda: usage_text(node_parameter_rows()),
+                          ManagedPropagatorNode, _serve)
 
-    ``args`` as ``sys.argv`` (program name first; default ``sys.argv``).
-    """
-    if wants_help((sys.argv if args is None else args)[1:]):
-        print(usage_text(node_parameter_rows()))
-        return 0
-    middleware_note = use_packaged_fastdds_profile()  # before the participant exists
-    try:
-        rclpy.init(args=args)
-    except RuntimeError as err:  # rcl could not parse the ROS arguments
-        print(f'error: {error_text(err)}', file=sys.stderr)
-        return 2
-    node = None
-    try:
-        node = ManagedPropagatorNode()
-        node.get_logger().info(middleware_note)
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        node.get_logger().info(f'{SERVING_LINE} (unconfigured: configure, then activate)')
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+
+def _serve(node: Node) -> None:
+    """Every entity on rclpy's stock executor, from the unconfigured state on."""
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    node.get_logger().info(f'{SERVING_LINE} (unconfigured: configure, then activate)')
+    executor.spin()
 
 
 if __name__ == '__main__':

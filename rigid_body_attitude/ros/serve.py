@@ -15,6 +15,7 @@ needs the fast path: the node then stops with one ``error:`` line.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 import gc
 import sys
 import threading
@@ -33,7 +34,8 @@ from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, RCLError
 
-__all__ = ['SERVING_LINE', 'error_text', 'main', 'serve_beside_executor', 'spin']
+__all__ = ['SERVING_LINE', 'error_text', 'main', 'run_executable', 'serve_beside_executor',
+           'spin']
 
 #: The log line after which the node serves its topics (the last of the start-up).
 SERVING_LINE = 'serving'
@@ -167,16 +169,17 @@ def _spin_stock(node: AttitudePropagatorNode, problem: str) -> None:
         executor.shutdown()
 
 
-@closed_pipe_safe
-def main(args: list[str] | None = None) -> int:
-    """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2.
+def run_executable(args: list[str] | None, usage: Callable[[], str],
+                   build: Callable[[], Node], serve: Callable[[Node], None]) -> int:
+    """The body of every executable's ``main``: ``-h``/``--help`` prints ``usage()`` before
+    anything of ROS starts (exit 0); otherwise rclpy starts with the packaged Fast DDS
+    profile, ``build()`` makes the node and ``serve(node)`` serves it until SIGINT (exit 0).
+    Bad ROS arguments, parameters or scene: one ``error: ...`` line, exit 2.
 
-    ``args`` as ``sys.argv`` (program name first; default ``sys.argv``). With ``-h`` or
-    ``--help`` outside the ROS arguments it prints the parameters and returns 0 before
-    anything of ROS starts.
+    ``args`` as ``sys.argv`` (program name first; default ``sys.argv``).
     """
     if wants_help((sys.argv if args is None else args)[1:]):
-        print(usage_text(node_parameter_rows()))
+        print(usage())
         return 0
     middleware_note = use_packaged_fastdds_profile()  # before the participant exists
     try:
@@ -186,16 +189,16 @@ def main(args: list[str] | None = None) -> int:
         return 2
     node = None
     try:
-        node = AttitudePropagatorNode()
+        node = build()
         node.get_logger().info(middleware_note)
-        spin(node)
+        serve(node)
     except (AttitudeError, ParameterException, OSError) as err:
         print(f'error: {error_text(err)}', file=sys.stderr)
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RCLError:
-        # SIGINT shut the context down while a gyro message was being taken or published.
+        # SIGINT shut the context down while a message was being taken or published.
         if rclpy.ok():
             raise
     finally:
@@ -203,6 +206,20 @@ def main(args: list[str] | None = None) -> int:
             node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+@closed_pipe_safe
+def main(args: list[str] | None = None) -> int:
+    """Run the node until SIGINT (exit 0); bad parameters or scene: ``error: ...``, exit 2
+    (:func:`run_executable`)."""
+    return run_executable(args, lambda: usage_text(node_parameter_rows()),
+                          AttitudePropagatorNode, _spin_any)
+
+
+def _spin_any(node: Node) -> None:
+    """:func:`spin` for the propagation node."""
+    assert isinstance(node, AttitudePropagatorNode)
+    spin(node)
 
 
 if __name__ == '__main__':
