@@ -26,6 +26,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
 import numpy as np
 import pytest
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from ros_helpers import Harness, unique_namespace
 import yaml
 
@@ -34,6 +35,10 @@ from rigid_body_attitude.core.control import pd_torque_floats
 from rigid_body_attitude.msgs.cdr import encode_quaternion_stamped
 
 PACKAGE = 'rigid_body_attitude'
+#: A reader of the controller's transient-local torque writer that gets its whole history.
+LATCHED_QOS = QoSProfile(depth=5000, history=HistoryPolicy.KEEP_LAST,
+                         reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
 START_TIMEOUT = 30.0
 SETTLING_BOUND = 3.63 + 2.0  # s of plant time after the first torque (module docstring)
 
@@ -79,7 +84,9 @@ def test_closed_loop_with_the_propagation_node_settles(ros, request, processes, 
     harness = Harness(ros, namespace)
     orientations = harness.record(QuaternionStamped, 'orientation')
     harness.wait_for_connections(START_TIMEOUT)  # every tick the controller sees recorded
-    torques = harness.record(WrenchStamped, 'torque')
+    # the controller's writer is transient local: every torque from the first, however late
+    # this reader matches it
+    torques = harness.record(WrenchStamped, 'torque', LATCHED_QOS)
     controller = start('attitude_controller', '--ros-args', '-r', f'__ns:={namespace}')
     processes.append(controller)
     harness.wait_for_connections(START_TIMEOUT)
