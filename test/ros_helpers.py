@@ -14,6 +14,8 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+import os
+from pathlib import Path
 import re
 import time
 from typing import Any
@@ -136,3 +138,29 @@ def stamp(nanoseconds: int) -> Time:
     """A builtin_interfaces/Time of integer nanoseconds."""
     sec, nanosec = divmod(nanoseconds, 10**9)
     return Time(sec=sec, nanosec=nanosec)
+
+
+def remove_stale_fastdds_shm(shm: Path = Path('/dev/shm')) -> int:
+    """Remove the Fast DDS shared-memory files that no live process has open or mapped; the
+    count removed.
+
+    A participant killed without its clean-up (a test that kills a process) leaves its
+    segments and port files behind, and a later participant that reuses such a port starts
+    from the stale listener state: its shared-memory listener then misses the wake-up period
+    of the packaged profile. Files a live process holds are kept.
+    """
+    held: set[str] = set()
+    for proc in Path('/proc').iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            held.update(target for target in (os.readlink(fd) for fd in (proc / 'fd').iterdir())
+                        if target.startswith(str(shm)))
+            held.update(line[line.index(str(shm)):].split(' (deleted)')[0]
+                        for line in (proc / 'maps').read_text().splitlines() if str(shm) in line)
+        except OSError:  # the process ended meanwhile, or is not ours to read
+            continue
+    stale = [path for path in shm.glob('*fastrtps*') if str(path) not in held]
+    for path in stale:
+        path.unlink(missing_ok=True)
+    return len(stale)

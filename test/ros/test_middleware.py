@@ -15,6 +15,7 @@ import time
 import xml.etree.ElementTree as ElementTree
 
 import pytest
+from ros_helpers import remove_stale_fastdds_shm
 from test_node_subprocess import executable, read_until, SERVING, start, stop_with_sigint
 
 from rigid_body_attitude.ros.middleware import (
@@ -107,6 +108,7 @@ def test_the_nodes_idle_shared_memory_listener_wakes_every_10_ms_with_the_profil
                          '"http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>'
                          '</profiles></dds>\n')
         monkeypatch.setenv('FASTRTPS_DEFAULT_PROFILES_FILE', str(empty))
+    remove_stale_fastdds_shm()  # a port left by a killed participant keeps the stale state
     process = start('--ros-args', '-p', 'scene:=strapdown')
     processes.append(process)
     lines = read_until(process, SERVING)
