@@ -116,9 +116,12 @@ def run_loop(ros: RosContext, namespace: str, scene: str, rtf: float, ticks: int
             QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.TRANSIENT_LOCAL if topic == 'torque'
                        else DurabilityPolicy.VOLATILE))
+    # A controller stalled by the machine must be waited for, never timed out: the run
+    # compares trajectories, and a tick advanced without its command is another trajectory
+    # (the timeout itself: test_a_silent_controller_...).
     node = start('--ros-args', '-r', f'__ns:={namespace}', '-p', f'scene:={scene}',
                  '-p', 'lockstep:=true', '-p', 'publish_rate:=100.0',
-                 '-p', f'real_time_factor:={rtf}', *extra)
+                 '-p', f'real_time_factor:={rtf}', '-p', 'lockstep_timeout:=60.0', *extra)
     controller = None
     try:
         read_until(node, SERVING)
