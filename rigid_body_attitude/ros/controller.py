@@ -28,8 +28,6 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import (
-    InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 from rcl_interfaces.msg import SetParametersResult
@@ -40,7 +38,8 @@ from rigid_body_attitude.msgs.cdr import encode_wrench_stamped
 from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_twist_stamped
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
-from rigid_body_attitude.ros.node import parameter_descriptor, ros_value
+from rigid_body_attitude.ros.node import ros_value
+from rigid_body_attitude.ros.propagator_base import declare_table_parameter, parameter_values
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
 from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
@@ -98,30 +97,12 @@ class AttitudeControllerNode(Node):
         self.add_post_set_parameters_callback(self.parameters_set_callback)
 
     def _declare_parameters(self) -> dict[str, Any]:
-        values = {}
-        for parameter in CONTROLLER_PARAMETERS:
-            default = (RosParameter.Type.DOUBLE_ARRAY if parameter.type is tuple
-                       else parameter.default)
-            try:
-                values[parameter.name] = ros_value(parameter, self.declare_parameter(
-                    parameter.name, default, parameter_descriptor(parameter)).value)
-            except InvalidParameterTypeException as err:
-                raise InputError(f'Expected parameter `{parameter.name}` to be a '
-                                 f'{parameter.type_text}: {str(err)[:200]}') from err
-            except ParameterException as err:
-                raise InputError(f'Bad parameter `{parameter.name}`: {str(err)[:200]}') from err
-        return values
+        return {parameter.name: declare_table_parameter(self, parameter)
+                for parameter in CONTROLLER_PARAMETERS}
 
     def parameter_values(self) -> dict[str, Any]:
         """Current values of the controller's parameters by name."""
-        values = {}
-        for parameter in CONTROLLER_PARAMETERS:
-            try:
-                value = self.get_parameter(parameter.name).value
-            except ParameterUninitializedException:  # a double array not set
-                value = None
-            values[parameter.name] = ros_value(parameter, value)
-        return values
+        return parameter_values(self, CONTROLLER_PARAMETERS)
 
     def parameters_callback(self, parameters: list[RosParameter]) -> SetParametersResult:
         """Refuse run-time values the parameter table finds unusable."""

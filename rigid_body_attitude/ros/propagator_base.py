@@ -13,7 +13,7 @@ from __future__ import annotations
 import array
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from geometry_msgs.msg import (
@@ -47,7 +47,8 @@ from rigid_body_attitude.session.settings import (
     timer_period_ns)
 from rigid_body_attitude.session.sim_clock import SimClock, sim_clock_for, sim_clock_problem
 
-__all__ = ['LOG_EVERY_PERIODS', 'PropagatorMixin', 'parameter_descriptor', 'parameter_values',
+__all__ = ['LOG_EVERY_PERIODS', 'PropagatorMixin', 'declare_table_parameter',
+           'parameter_descriptor', 'parameter_values',
            'ros_value']
 
 #: Diagnostics periods between INFO log lines.
@@ -81,17 +82,36 @@ def ros_value(parameter: Parameter, value: Any) -> Any:
     return tuple(value) if isinstance(value, (list, tuple, array.array)) else value
 
 
-def parameter_values(node: Node) -> dict[str, Any]:
-    """Current values of ``node``'s parameters of the table by name (``None``: a double
+def parameter_values(node: Node, table: Sequence[Parameter] = PARAMETERS) -> dict[str, Any]:
+    """Current values of ``node``'s parameters of ``table`` by name (``None``: a double
     array not set)."""
     values = {}
-    for parameter in PARAMETERS:
+    for parameter in table:
         try:
             value = node.get_parameter(parameter.name).value
         except ParameterUninitializedException:  # a double array not set
             value = None
         values[parameter.name] = ros_value(parameter, value)
     return values
+
+
+def declare_table_parameter(node: Node, parameter: Parameter, ignore_override: bool = False
+                            ) -> Any:
+    """Declare ``parameter`` of a table on ``node`` (with the value given at start unless
+    ``ignore_override``); its value, or :class:`InputError` naming it."""
+    # A double array without a value ([]: not set) is declared by its type (an empty list
+    # would make it a byte array); unset, it reads as the table's default.
+    default = (RosParameter.Type.DOUBLE_ARRAY if parameter.type is tuple
+               else parameter.default)
+    try:
+        return ros_value(parameter, node.declare_parameter(
+            parameter.name, default, parameter_descriptor(parameter),
+            ignore_override=ignore_override).value)
+    except InvalidParameterTypeException as err:
+        raise InputError(f'Expected parameter `{parameter.name}` to be a '
+                         f'{parameter.type_text}: {str(err)[:200]}') from err
+    except ParameterException as err:
+        raise InputError(f'Bad parameter `{parameter.name}`: {str(err)[:200]}') from err
 
 
 class PropagatorMixin(Node):
@@ -168,21 +188,8 @@ class PropagatorMixin(Node):
 
     def declare_table_parameter(self, parameter: Parameter, ignore_override: bool = False
                                 ) -> Any:
-        """Declare ``parameter`` (with the value given at start unless ``ignore_override``);
-        its value, or :class:`InputError` naming it."""
-        # A double array without a value ([]: not set) is declared by its type (an empty
-        # list would make it a byte array); unset, it reads as the table's default.
-        default = (RosParameter.Type.DOUBLE_ARRAY if parameter.type is tuple
-                   else parameter.default)
-        try:
-            return ros_value(parameter, self.declare_parameter(
-                parameter.name, default, parameter_descriptor(parameter),
-                ignore_override=ignore_override).value)
-        except InvalidParameterTypeException as err:
-            raise InputError(f'Expected parameter `{parameter.name}` to be a '
-                             f'{parameter.type_text}: {str(err)[:200]}') from err
-        except ParameterException as err:
-            raise InputError(f'Bad parameter `{parameter.name}`: {str(err)[:200]}') from err
+        """Declare ``parameter`` (:func:`declare_table_parameter`)."""
+        return declare_table_parameter(self, parameter, ignore_override)
 
     def _create_inputs(self) -> None:
         """Raw subscriptions for the inputs the scene uses (and set_pose); ``/tf_static``
