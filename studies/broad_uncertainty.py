@@ -39,8 +39,8 @@ from pathlib import Path
 import numpy as np
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.imu.attitude_covariance import AttitudeCovariance
-from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.core.estimation.attitude_covariance import AttitudeCovariance
+from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel, initial_covariance
 from rigid_body_attitude.core.attitude.integrators.strapdown import (
     STRAPDOWN_METHODS, strapdown_method)
 from rigid_body_attitude.core.attitude.quaternion import scalar_step_rate

@@ -17,10 +17,10 @@ from typing import Any
 
 import numpy as np
 
-from rigid_body_attitude.core.imu.calibration import (
+from rigid_body_attitude.core.estimation.calibration import (
     calibration_noise, calibration_summary, calibration_values, load_calibration)
 from rigid_body_attitude.core.propagator import GyroPropagator
-from rigid_body_attitude.core.imu.rest import SPECIFIC_FORCE_LIMIT
+from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
 from rigid_body_attitude.session.levelling import (
@@ -354,7 +354,7 @@ def _sample_problem(rate: Sequence[float], accel: Sequence[float],
 
 def _accel_problem(accel: Sequence[float]) -> str:
     """``'non_finite'``, ``'accel_out_of_range'`` (a magnitude above
-    :data:`~rigid_body_attitude.core.imu.rest.SPECIFIC_FORCE_LIMIT`) or ``''`` for a specific
+    :data:`~rigid_body_attitude.core.estimation.rest.SPECIFIC_FORCE_LIMIT`) or ``''`` for a specific
     force [m/s²]."""
     try:
         ax, ay, az = (float(value) for value in accel)

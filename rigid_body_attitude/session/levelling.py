@@ -2,18 +2,18 @@
 
 Per sample, in this order (:class:`~rigid_body_attitude.session.gyro.GyroSession` calls it):
 
-1. **calibration** (:mod:`rigid_body_attitude.core.imu.calibration`), in the sensor frame (the
+1. **calibration** (:mod:`rigid_body_attitude.core.estimation.calibration`), in the sensor frame (the
    Imu's ``frame_id``): ``a_i = N (a − b_a)``, ``ω_i = K (ω − b_g − G a_i)``;
 2. **mount**: ``v_body = R v_sensor`` with ``R`` the rotation of the sensor frame in the
    body frame (:func:`rpy_quaternion` of ``mount_rpy``, as ``static_transform_publisher``
    takes roll, pitch and yaw; or the transform ``body_frame`` → sensor frame from TF);
 3. **levelling** at start (:class:`Levelling`, around
-   :class:`~rigid_body_attitude.core.imu.alignment.GravityAligner`): nothing is integrated until
+   :class:`~rigid_body_attitude.core.estimation.alignment.GravityAligner`): nothing is integrated until
    the body rested ``align_seconds`` (or ``align_timeout`` passed); the roll and pitch come
    from gravity, the yaw from ``initial_yaw`` or a ``set_pose`` received meanwhile, and the
    window's mean rate is the gyro bias estimate ``b`` (body frame);
 4. **bias**: ``ω_body − b``, optionally refined whenever the body is at rest
-   (:class:`~rigid_body_attitude.core.imu.rest.RestBiasEstimator`).
+   (:class:`~rigid_body_attitude.core.estimation.rest.RestBiasEstimator`).
 
 After levelling the whole map is one affine map of the measured rate, ``ω = A ω_measured +
 c`` with ``A = R K`` and ``c = −R K b_g − b`` (:attr:`SampleMap.affine`: 12 floats, 9
@@ -31,10 +31,10 @@ import numpy as np
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
-from rigid_body_attitude.core.imu.alignment import ALIGNED, GravityAligner
-from rigid_body_attitude.core.imu.calibration import ImuCalibration
+from rigid_body_attitude.core.estimation.alignment import ALIGNED, GravityAligner
+from rigid_body_attitude.core.estimation.calibration import ImuCalibration
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.imu.rest import RestBiasEstimator, RestDetector
+from rigid_body_attitude.core.estimation.rest import RestBiasEstimator, RestDetector
 
 __all__ = ['AlignmentResult', 'Levelling', 'SampleMap', 'heading', 'rpy_quaternion']
 

@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel
+from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.msgs.untrusted import QUOTED_CHARACTERS, quoted
 
 __all__ = ['PARAMETERS', 'Parameter', 'check_values', 'defaults', 'values_problem']

@@ -1,6 +1,6 @@
 """The attitude uncertainty of a gyro session: the covariance carried with the attitude.
 
-:class:`Uncertainty` owns a :class:`~rigid_body_attitude.core.imu.attitude_covariance.
+:class:`Uncertainty` owns a :class:`~rigid_body_attitude.core.estimation.attitude_covariance.
 AttitudeCovariance` and feeds it each integrated strapdown step (the session's
 ``_after_step``). It starts from the levelling's uncertainty when levelling completes
 (:meth:`Uncertainty.aligned`), or, without levelling, from the scene's attitude with the
@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from rigid_body_attitude.core.imu.attitude_covariance import (
+from rigid_body_attitude.core.estimation.attitude_covariance import (
     AttitudeCovariance, checked_attitude_covariance)
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel, initial_covariance
 from rigid_body_attitude.session.levelling import AlignmentResult
 
 __all__ = ['BATCH_SIZE', 'FOLD_SECONDS', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE',
@@ -83,7 +83,7 @@ def error_model_from(values: Mapping[str, Any],
 def orientation_block(covariance: Sequence[float]) -> tuple[float, ...]:
     """The row-major 3×3 orientation block (rows and columns 3-5) of the 36 row-major values
     of a ``PoseWithCovariance``, checked as the covariance will take it
-    (:func:`~rigid_body_attitude.core.imu.attitude_covariance.checked_attitude_covariance`:
+    (:func:`~rigid_body_attitude.core.estimation.attitude_covariance.checked_attitude_covariance`:
     finite, symmetric, positive semi-definite, variances at most π² rad²; else InputError
     saying which), symmetrised and with its diagonal floored."""
     values = tuple(covariance)

@@ -238,9 +238,9 @@ def kalibr_yaml(recording: Recording, gyro: NoiseFit, acc: NoiseFit | None,
 def checked_yaml(text: str) -> None:
     """Refuse (InputError) an ``imu.yaml`` text the node would refuse as a calibration file:
     read back and checked by the node's own checker
-    (:func:`~rigid_body_attitude.core.imu.calibration.calibration_from_mapping`)."""
+    (:func:`~rigid_body_attitude.core.estimation.calibration.calibration_from_mapping`)."""
     import yaml
-    from rigid_body_attitude.core.imu.calibration import calibration_from_mapping
+    from rigid_body_attitude.core.estimation.calibration import calibration_from_mapping
     from rigid_body_attitude.core.errors import CalibrationError
     try:
         calibration_from_mapping(yaml.safe_load(text))

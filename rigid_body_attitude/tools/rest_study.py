@@ -2,7 +2,7 @@
 
 Two measurements, each fed sample by sample exactly as a session feeds the core:
 
-* **Levelling** (:func:`levelling_error`): a :class:`~rigid_body_attitude.core.imu.alignment.\
+* **Levelling** (:func:`levelling_error`): a :class:`~rigid_body_attitude.core.estimation.alignment.\
 GravityAligner` from the trial's first sample; the tilt of its attitude is compared with the
   ground truth's at the first sample with optical data from the moment it is aligned on,
   inside the initial rest phase (the body does not move there, and the cameras see it only
@@ -12,8 +12,8 @@ GravityAligner` from the trial's first sample; the tilt of its attitude is compa
   method of :mod:`rigid_body_attitude.core.attitude.integrators.strapdown`, the gyro bias either
   fixed
   at the alignment window's mean or refined while the
-  :class:`~rigid_body_attitude.core.imu.rest.RestDetector` reports rest
-  (:class:`~rigid_body_attitude.core.imu.rest.RestBiasEstimator`). The attitude error against the
+  :class:`~rigid_body_attitude.core.estimation.rest.RestDetector` reports rest
+  (:class:`~rigid_body_attitude.core.estimation.rest.RestBiasEstimator`). The attitude error against the
   ground truth is summarised over the motion phase.
 
 Command line: ``python -m rigid_body_attitude.tools.rest_study [DATA_DIR] [--method-table]``
@@ -32,11 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rigid_body_attitude.core.imu.alignment import GravityAligner, levelled_attitude, tilt_angle
+from rigid_body_attitude.core.estimation.alignment import GravityAligner, levelled_attitude, tilt_angle
 from rigid_body_attitude.core.attitude.integrators.strapdown import (
     STRAPDOWN_METHODS, strapdown_method)
 from rigid_body_attitude.core.attitude.quaternion import attitude_error, to_matrix
-from rigid_body_attitude.core.imu.rest import RestBiasEstimator, RestDetector
+from rigid_body_attitude.core.estimation.rest import RestBiasEstimator, RestDetector
 from rigid_body_attitude.tools.broad import BroadTrial, load_trial
 
 __all__ = ['DEFAULT_DATA_DIR', 'LevellingResult', 'StrapdownResult', 'TRIALS', 'align',

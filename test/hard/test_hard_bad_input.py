@@ -308,7 +308,7 @@ def test_attitude_covariance_set_pose_refuses_without_changing_the_covariance(bl
     whole when it is not a finite symmetric positive semi-definite 3×3 with variances at most
     π² rad², the largest floats included (no overflow, no linear-algebra error), and the
     15×15 covariance is bit-for-bit what it was."""
-    from rigid_body_attitude.core.imu.attitude_covariance import AttitudeCovariance
+    from rigid_body_attitude.core.estimation.attitude_covariance import AttitudeCovariance
     covariance = AttitudeCovariance(batch_size=4)
     for _ in range(6):
         covariance.add_sample(tuple(Q0), tuple(OMEGA), 1e-3)

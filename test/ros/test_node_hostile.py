@@ -45,8 +45,8 @@ from test_node_subprocess import stop_with_sigint
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
-from rigid_body_attitude.core.imu.alignment import tilt_angle, world_up
-from rigid_body_attitude.core.imu.rest import SPECIFIC_FORCE_LIMIT
+from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
+from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 
 BASE_NS = 1_700_000_000 * 10**9 + 123_456_789

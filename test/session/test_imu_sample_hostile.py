@@ -14,8 +14,8 @@ import pytest
 from conftest import BASE_NS, MS
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.imu.alignment import tilt_angle, world_up
-from rigid_body_attitude.core.imu.rest import SPECIFIC_FORCE_LIMIT
+from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
+from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs import encode_imu
 from rigid_body_attitude.session.decoding import input_handler
 from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion

@@ -16,7 +16,7 @@ import pytest
 from conftest import BASE_NS, MS
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.imu.alignment import tilt_angle, world_up
+from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
 from rigid_body_attitude.core.errors import CalibrationError
 from rigid_body_attitude.msgs import encode_imu, encode_vector3_stamped
 from rigid_body_attitude.session.base import LEVEL_INFO

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from conftest import BASE_NS, MS
 
-from rigid_body_attitude.core.imu.attitude_covariance import AttitudeCovariance
+from rigid_body_attitude.core.estimation.attitude_covariance import AttitudeCovariance
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel, initial_covariance
 from rigid_body_attitude.core.attitude.quaternion import scalar_exp_step, scalar_step_rate
 from rigid_body_attitude.session.levelling import FROM_GRAVITY, FROM_TIMEOUT, AlignmentResult
 from rigid_body_attitude.session.parameters import defaults

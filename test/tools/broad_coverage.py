@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.imu.attitude_covariance import AttitudeCovariance
-from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.core.estimation.attitude_covariance import AttitudeCovariance
+from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel, initial_covariance
 from rigid_body_attitude.tools.broad import BroadTrial, load_trial
 
 REPO_ROOT = Path(__file__).resolve().parents[2]

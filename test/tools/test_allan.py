@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from rigid_body_attitude.bag import write_bag
-from rigid_body_attitude.core.imu.calibration import load_calibration
+from rigid_body_attitude.core.estimation.calibration import load_calibration
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.tools import allan
 

@@ -6,7 +6,7 @@ sensors sit at the body frame's origin (no lever arm), in the sensor frame of th
 ``mount_rpy`` (roll, pitch, yaw of the sensor frame in the body frame, tf2's ``setRPY``).
 
 **Gyroscope** (sensor frame, rad/s), the model of
-:mod:`~rigid_body_attitude.core.imu.gyro_error_model` with its names and units (kalibr's)::
+:mod:`~rigid_body_attitude.core.estimation.gyro_error_model` with its names and units (kalibr's)::
 
     ω_m,k = (I + E) C ω̄_k + b_k + σ_d n_k,    b_k = b_{k−1} + σ_bd w_k
 
@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import InputError, SceneError
-from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel
+from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.core.yaml_files import Fields, quote
 
 __all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'NODE_TOPICS', 'imu_spec', 'sensors_spec']

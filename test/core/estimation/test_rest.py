@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.imu.rest import RestBiasEstimator, RestDetector
+from rigid_body_attitude.core.estimation.rest import RestBiasEstimator, RestDetector
 from rigid_body_attitude.tools.broad import load_trial
 
 RATE_HZ = 200.0

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.imu.alignment import (
+from rigid_body_attitude.core.estimation.alignment import (
     ALIGNED, ALIGNED_WITHOUT_REST, ALIGNING, GravityAligner, levelled_attitude, tilt_angle,
     WAITING, world_up)
 from rigid_body_attitude.core.errors import InputError

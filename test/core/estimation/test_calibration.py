@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 import pytest
 
-from rigid_body_attitude.core.imu.calibration import (
+from rigid_body_attitude.core.estimation.calibration import (
     calibration_from_mapping, ImuCalibration, load_calibration)
 from rigid_body_attitude.core.errors import CalibrationError
 from rigid_body_attitude.core.yaml_files import MAX_ERROR_CHARS, MAX_FILE_BYTES

@@ -14,7 +14,7 @@ says nothing about heading): with ``s = +1`` for a z-up world and ``−1`` for a
 ``roll = atan2(s f_y, s f_z)`` and ``pitch = atan2(−s f_x, √(f_y² + f_z²))``.
 
 :class:`GravityAligner` is the state machine a session feeds sample by sample: it waits until
-its :class:`~rigid_body_attitude.core.imu.rest.RestDetector` reports rest, averages
+its :class:`~rigid_body_attitude.core.estimation.rest.RestDetector` reports rest, averages
 ``align_seconds`` of rest samples (the rest must hold throughout, else it waits again), then
 gives the levelled attitude and the window's mean rate as the initial gyro bias estimate. A
 body that never rests (a node restarted in flight) is aligned after ``align_timeout`` seconds
@@ -28,7 +28,7 @@ import math
 
 from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.core.imu.rest import RestDetector
+from rigid_body_attitude.core.estimation.rest import RestDetector
 
 __all__ = ['ALIGNED', 'ALIGNED_WITHOUT_REST', 'ALIGNING', 'GravityAligner', 'WAITING',
            'WORLD_AXES', 'levelled_attitude', 'tilt_angle', 'world_up']

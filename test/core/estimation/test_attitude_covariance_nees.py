@@ -16,8 +16,8 @@ import pytest
 from scipy.stats import chi2
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.imu.attitude_covariance import AttitudeCovariance
-from rigid_body_attitude.core.imu.gyro_error_model import GyroErrorModel, initial_covariance
+from rigid_body_attitude.core.estimation.attitude_covariance import AttitudeCovariance
+from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel, initial_covariance
 
 import gyro_simulation as sim
 
