@@ -38,7 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rigid_body_attitude.core.estimation.attitude_covariance import AttitudeCovariance, DEFAULT_BATCH_SIZE
+from rigid_body_attitude.core.estimation.attitude_covariance import (
+    AttitudeCovariance, DEFAULT_BATCH_SIZE)
 from rigid_body_attitude.core.attitude.quaternion import scalar_exp_step, scalar_step_rate
 from rigid_body_attitude.session.parameters import defaults
 from rigid_body_attitude.session.uncertainty import BATCH_SIZE, FOLD_SECONDS, Uncertainty

@@ -72,8 +72,8 @@ DEFAULT_TARGETS = ('node', 'relay', 'fast_relay')
 #: ``--imu-accel``): this mount and a calibration file (:data:`CALIBRATION`, written to a
 #: temporary folder); ``node_nocov`` is the same without the covariance.
 FULL_NODE_MOUNT_RPY = '[0.02, -0.03, 1.5707963]'
-#: A plain calibration file (``rigid_body_attitude.core.estimation.calibration``): gyro bias, scale and
-#: misalignment, applied by the node's inline affine map.
+#: A plain calibration file (``rigid_body_attitude.core.estimation.calibration``): gyro bias,
+#: scale and misalignment, applied by the node's inline affine map.
 CALIBRATION = ('bias: [0.001, -0.002, 0.0005]\nscale: [1.01, 0.99, 1.0]\n'
                'misalignment: [[1.0, 0.002, 0.0], [0.0, 1.0, -0.001], [0.0, 0.0, 1.0]]\n')
 CLOCK_TICKS = os.sysconf('SC_CLK_TCK')

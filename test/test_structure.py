@@ -148,14 +148,16 @@ def test_the_cycle_check_sees_a_cycle_through_a_function_level_import(tmp_path):
 
 #: What each room of core/ may import besides the standard library, NumPy, SciPy, PyYAML and
 #: the shared modules (errors, registry, paths, yaml_files): attitude math at the bottom; the
-#: IMU's models, sensors and control laws over it; rigid-body dynamics (a scene: the body, its
-#: effects, its sensors and controllers) over those; the propagators at the top.
+#: environment (world axes, magnetic field, orbit), the IMU's models, sensors and control laws
+#: over it; rigid-body dynamics (a scene: the body, its effects, its sensors and controllers)
+#: over those; the propagators at the top.
 CORE_ROOMS = {
     'attitude': (),
-    'estimation': ('attitude',),
+    'environment': ('attitude',),
+    'estimation': ('attitude', 'environment'),
     'control': ('attitude',),
-    'sensors': ('attitude', 'estimation'),
-    'dynamics': ('attitude', 'estimation', 'control', 'sensors'),
+    'sensors': ('attitude', 'environment', 'estimation'),
+    'dynamics': ('attitude', 'environment', 'estimation', 'control', 'sensors'),
 }
 CORE_SHARED = ('errors', 'registry', 'paths', 'yaml_files')
 THIRD_PARTY_IN_CORE = ('numpy', 'scipy', 'yaml')

@@ -354,8 +354,8 @@ def _sample_problem(rate: Sequence[float], accel: Sequence[float],
 
 def _accel_problem(accel: Sequence[float]) -> str:
     """``'non_finite'``, ``'accel_out_of_range'`` (a magnitude above
-    :data:`~rigid_body_attitude.core.estimation.rest.SPECIFIC_FORCE_LIMIT`) or ``''`` for a specific
-    force [m/s²]."""
+    :data:`~rigid_body_attitude.core.estimation.rest.SPECIFIC_FORCE_LIMIT`) or ``''`` for a
+    specific force [m/s²]."""
     try:
         ax, ay, az = (float(value) for value in accel)
     except (TypeError, ValueError):

@@ -2,16 +2,16 @@
 
 Per sample, in this order (:class:`~rigid_body_attitude.session.gyro.GyroSession` calls it):
 
-1. **calibration** (:mod:`rigid_body_attitude.core.estimation.calibration`), in the sensor frame (the
-   Imu's ``frame_id``): ``a_i = N (a − b_a)``, ``ω_i = K (ω − b_g − G a_i)``;
+1. **calibration** (:mod:`rigid_body_attitude.core.estimation.calibration`), in the sensor
+   frame (the Imu's ``frame_id``): ``a_i = N (a − b_a)``, ``ω_i = K (ω − b_g − G a_i)``;
 2. **mount**: ``v_body = R v_sensor`` with ``R`` the rotation of the sensor frame in the
    body frame (:func:`rpy_quaternion` of ``mount_rpy``, as ``static_transform_publisher``
    takes roll, pitch and yaw; or the transform ``body_frame`` → sensor frame from TF);
 3. **levelling** at start (:class:`Levelling`, around
-   :class:`~rigid_body_attitude.core.estimation.alignment.GravityAligner`): nothing is integrated until
-   the body rested ``align_seconds`` (or ``align_timeout`` passed); the roll and pitch come
-   from gravity, the yaw from ``initial_yaw`` or a ``set_pose`` received meanwhile, and the
-   window's mean rate is the gyro bias estimate ``b`` (body frame);
+   :class:`~rigid_body_attitude.core.estimation.alignment.GravityAligner`): nothing is
+   integrated until the body rested ``align_seconds`` (or ``align_timeout`` passed); the
+   roll and pitch come from gravity, the yaw from ``initial_yaw`` or a ``set_pose``
+   received meanwhile, and the window's mean rate is the gyro bias estimate ``b`` (body frame);
 4. **bias**: ``ω_body − b``, optionally refined whenever the body is at rest
    (:class:`~rigid_body_attitude.core.estimation.rest.RestBiasEstimator`).
 

@@ -2,19 +2,20 @@
 
 Two measurements, each fed sample by sample exactly as a session feeds the core:
 
-* **Levelling** (:func:`levelling_error`): a :class:`~rigid_body_attitude.core.estimation.alignment.\
-GravityAligner` from the trial's first sample; the tilt of its attitude is compared with the
-  ground truth's at the first sample with optical data from the moment it is aligned on,
-  inside the initial rest phase (the body does not move there, and the cameras see it only
-  after a few seconds in some trials).
+* **Levelling** (:func:`levelling_error`): a
+  :class:`~rigid_body_attitude.core.estimation.alignment.GravityAligner` from the trial's
+  first sample; the tilt of its attitude is compared with the ground truth's at the first
+  sample with optical data from the moment it is aligned on, inside the initial rest phase
+  (the body does not move there, and the cameras see it only after a few seconds in some
+  trials).
 * **Bias at rest** (:func:`strapdown_error`): the aligned attitude, with the heading of the
   ground truth (gravity gives none), is propagated through the whole trial with a strapdown
   method of :mod:`rigid_body_attitude.core.attitude.integrators.strapdown`, the gyro bias either
   fixed
   at the alignment window's mean or refined while the
   :class:`~rigid_body_attitude.core.estimation.rest.RestDetector` reports rest
-  (:class:`~rigid_body_attitude.core.estimation.rest.RestBiasEstimator`). The attitude error against the
-  ground truth is summarised over the motion phase.
+  (:class:`~rigid_body_attitude.core.estimation.rest.RestBiasEstimator`). The attitude error
+  against the ground truth is summarised over the motion phase.
 
 Command line: ``python -m rigid_body_attitude.tools.rest_study [DATA_DIR] [--method-table]``
 prints both tables (and, with ``--method-table``, every strapdown method with the fixed bias).
@@ -32,7 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rigid_body_attitude.core.estimation.alignment import GravityAligner, levelled_attitude, tilt_angle
+from rigid_body_attitude.core.estimation.alignment import (
+    GravityAligner, levelled_attitude, tilt_angle)
 from rigid_body_attitude.core.attitude.integrators.strapdown import (
     STRAPDOWN_METHODS, strapdown_method)
 from rigid_body_attitude.core.attitude.quaternion import attitude_error, to_matrix

@@ -12,7 +12,8 @@ from __future__ import annotations
 import pytest
 
 from rigid_body_attitude.core.estimation.alignment import ALIGNED
-from rigid_body_attitude.core.estimation.rest import DEFAULT_BIAS_TIME_CONSTANT, REFINE_BIAS_AT_REST
+from rigid_body_attitude.core.estimation.rest import (
+    DEFAULT_BIAS_TIME_CONSTANT, REFINE_BIAS_AT_REST)
 from rigid_body_attitude.core.dynamics.scene import load_scene
 from rigid_body_attitude.tools import rest_study
 from rigid_body_attitude.tools.broad import load_trial

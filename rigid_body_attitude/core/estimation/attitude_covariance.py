@@ -9,9 +9,10 @@ so ``cov(δθ)`` is the covariance about the world's x, y, z axes (east, north, 
 and pitch errors about world horizontal axes are its x and y entries, yaw its z entry.
 
 Error state ``x = (δθ, δb, e)`` (15 entries,
-:data:`~rigid_body_attitude.core.estimation.gyro_error_model.ERROR_STATE_SIZE`): ``δb = b − b_est`` the
-gyro bias error (body, rad/s), ``e`` the 9 entries of the intrinsic-error matrix ``E``
-(row-major; see :mod:`~rigid_body_attitude.core.estimation.gyro_error_model`).
+:data:`~rigid_body_attitude.core.estimation.gyro_error_model.ERROR_STATE_SIZE`):
+``δb = b − b_est`` the gyro bias error (body, rad/s), ``e`` the 9 entries of the
+intrinsic-error matrix ``E`` (row-major; see
+:mod:`~rigid_body_attitude.core.estimation.gyro_error_model`).
 With the estimated rate ``ω = ω_m − b_est`` and ``R = R(q_est)``, to first order::
 
     dδθ/dt = −R (δb + E ω + n),      dδb/dt = w,      de/dt = 0.

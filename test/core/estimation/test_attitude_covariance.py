@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.estimation.attitude_covariance import AttitudeCovariance, transition_blocks
+from rigid_body_attitude.core.estimation.attitude_covariance import (
+    AttitudeCovariance, transition_blocks)
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.gyro_error_model import (
     GRAVITY,
