@@ -28,8 +28,8 @@ same session, so a replayed bag gives the same numbers.
   lines go through a queue with a thread of its own (:mod:`~.log_queue`), never written while the
   state lock is held.
 * Gyro scenes read the sensor's mount from ``/tf_static`` when the samples' frame is not
-  ``body_frame`` and ``mount_rpy`` is not set (:mod:`~.tf_lookup`); with ``publish_tf`` the
-  attitude also goes to ``/tf``.
+  ``body_frame`` and ``mount_rpy`` is not set (:mod:`rigid_body_attitude.session.mount_gate`);
+  with ``publish_tf`` the attitude also goes to ``/tf``.
 
 Parameters are declared from :data:`rigid_body_attitude.session.parameters.PARAMETERS`; the
 parameters, topics and callbacks are :class:`~.propagator_base.PropagatorMixin`'s, shared with

@@ -37,10 +37,10 @@ from rigid_body_attitude.ros.gyro_loop import DedicatedGroup
 from rigid_body_attitude.ros.outputs import RosOutputs
 from rigid_body_attitude.ros.qos import (
     CLOCK_QOS, COMMAND_QOS, GYRO_QOS, TF_STATIC_LISTENER_QOS)
-from rigid_body_attitude.ros.tf_lookup import MountGate
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.mount_gate import MountGate
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
 from rigid_body_attitude.session.settings import (
     DIAGNOSTICS_PERIOD, input_topics, load_node_scene, open_session, AnySession,
@@ -230,15 +230,13 @@ class PropagatorMixin(Node):
     def _gyro_handler(self, topic: str) -> Callable[[bytes], None]:
         """The session's handler of a gyro ``topic`` (:func:`input_handler`) under the state
         lock, behind the mount gate until it opens."""
-        handle, lock, gate = input_handler(self.session, topic), self.state_lock, self.mount_gate
+        gate, lock = self.mount_gate, self.state_lock
         assert gate is not None
+        handle = gate.gated(input_handler(self.session, topic))
 
         def locked(data: bytes) -> None:
             with lock:
-                if gate.open:
-                    handle(data)
-                else:
-                    gate.sample(data, handle)
+                handle(data)
         return locked
 
     def _command_callback(self, topic: str) -> Callable[[bytes], None]:
@@ -272,7 +270,8 @@ class PropagatorMixin(Node):
         return coalesce
 
     def tf_static_callback(self, data: bytes) -> None:
-        """Static transforms for the mount (:meth:`~.tf_lookup.MountGate.tf_static`)."""
+        """Static transforms for the mount
+        (:meth:`~rigid_body_attitude.session.mount_gate.MountGate.tf_static`)."""
         gate = self.mount_gate
         if gate is not None and not gate.open:
             gate.tf_static(data, self.state_lock)

@@ -1,6 +1,6 @@
 """The sensor's mount in a replay: from ``mount_rpy``, or from the bag's ``/tf_static``.
 
-As the node does (:mod:`rigid_body_attitude.ros.tf_lookup`): the IMU's frame (the sensor
+As the node does (:mod:`rigid_body_attitude.session.mount_gate`): the IMU's frame (the sensor
 frame, REP-145) is the first decodable gyro record's frame with a known mount: any frame when
 ``mount_rpy`` is given, else ``body_frame`` itself, an empty frame, or a frame the static
 transforms connect to ``body_frame`` (a chain composed if need be:
