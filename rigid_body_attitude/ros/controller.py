@@ -26,7 +26,6 @@ from typing import Any
 import rclpy
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
@@ -41,12 +40,13 @@ from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
 from rigid_body_attitude.ros.node import ros_value
 from rigid_body_attitude.ros.propagator_base import declare_table_parameter, parameter_values
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
+from rigid_body_attitude.ros.interface import create_publisher, create_subscription
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
 from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
-from rigid_body_attitude.ros.qos import COMMAND_QOS, CONTROLLER_OUTPUT_QOS, OUTPUT_QOS
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
     CONTROLLER_PARAMETERS, check_controller_values)
+from rigid_body_attitude.session.interface import CONTROLLER_INTERFACE
 from rigid_body_attitude.session.reports import LEVEL_WARN
 from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD
 
@@ -79,17 +79,17 @@ class AttitudeControllerNode(Node):
         #: the executor's thread, so the session is changed under this lock.
         self.loop_group = DedicatedGroup()
         self.session_lock = threading.Lock()
-        self.torque_publisher = self.create_publisher(
-            WrenchStamped, 'torque', CONTROLLER_OUTPUT_QOS)
-        self.diagnostics_publisher = self.create_publisher(
-            DiagnosticArray, '/diagnostics', OUTPUT_QOS)
+        self.torque_publisher = create_publisher(
+            self, CONTROLLER_INTERFACE.endpoint('torque', 'out'))
+        self.diagnostics_publisher = create_publisher(
+            self, CONTROLLER_INTERFACE.endpoint('/diagnostics', 'out'))
+        callbacks = {'attitude': self.orientation_callback, 'twist': self.twist_callback,
+                     'target': self.target_callback}
+        #: (subscription, callback) of each input of :data:`CONTROLLER_INTERFACE`.
         self.inputs = [
-            self.create_subscription(QuaternionStamped, 'orientation', self.orientation_callback,
-                                     COMMAND_QOS, callback_group=self.loop_group, raw=True),
-            self.create_subscription(TwistStamped, 'twist', self.twist_callback, COMMAND_QOS,
-                                     callback_group=self.loop_group, raw=True),
-            self.create_subscription(QuaternionStamped, 'target', self.target_callback,
-                                     COMMAND_QOS, callback_group=self.loop_group, raw=True)]
+            (create_subscription(self, endpoint, callbacks[endpoint.quantity], self.loop_group),
+             callbacks[endpoint.quantity])
+            for endpoint in CONTROLLER_INTERFACE if endpoint.direction == 'in']
         self.diagnostics_timer = self.create_timer(
             DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group,
             clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -123,9 +123,7 @@ class AttitudeControllerNode(Node):
         """The package's raw-take loop serving the inputs and the diagnostics timer (one
         reused wait set, every queued message taken per wake-up); creating it takes them
         away from every executor."""
-        return GyroLoop(self.context, list(zip(self.inputs, (
-            self.orientation_callback, self.twist_callback, self.target_callback))),
-            [self.diagnostics_timer])
+        return GyroLoop(self.context, self.inputs, [self.diagnostics_timer])
 
     def diagnostics_callback(self) -> None:
         """Publish this period's diagnostics."""

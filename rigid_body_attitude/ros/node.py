@@ -38,6 +38,7 @@ the managed node (:mod:`~.managed_node`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
@@ -45,6 +46,7 @@ from rigid_body_attitude.ros.propagator_base import (
     LOG_EVERY_PERIODS, parameter_descriptor, parameter_values, PropagatorMixin, ros_value)
 from rigid_body_attitude.ros.step_loop import step_loop
 from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.interface import NODE_INTERFACE
 from rigid_body_attitude.session.settings import NODE_NAME
 
 __all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor',
@@ -74,16 +76,17 @@ class AttitudePropagatorNode(PropagatorMixin):
         :attr:`loop_group`); creating it takes them away from every executor. On the scene's
         own sim clock a :class:`StepLoop`, which also serves the commands."""
         if self.sim_clock is not None and isinstance(self.session, DynamicsSession):
-            return step_loop(self.context, self.session, self.sim_clock, [
-                (subscription, self.handlers[topic])
-                for topic, subscription in self.subscriptions_by_topic.items()
-                if topic in ('torque', 'rotor_torque')], [self.diagnostics_timer],
-                self.clock_publisher, self.state_lock, self.outputs)
-        return GyroLoop(self.context, [
-            (self.subscriptions_by_topic[topic], self.handlers[topic])
-            for topic in ('imu', 'angular_velocity') if topic in self.subscriptions_by_topic],
-            [timer for timer in (self.output_timer, self.diagnostics_timer)
-             if timer is not None])
+            return step_loop(self.context, self.session, self.sim_clock,
+                             self._served(('command',)), [self.diagnostics_timer],
+                             self.clock_publisher, self.state_lock, self.outputs)
+        return GyroLoop(self.context, self._served(('sensor',)),
+                        [timer for timer in (self.output_timer, self.diagnostics_timer)
+                         if timer is not None])
+
+    def _served(self, roles: tuple[str, ...]) -> list[tuple[Any, Callable[[bytes], None]]]:
+        """(subscription, handler) of the inputs of ``roles``."""
+        return [(self.subscriptions_by_topic[endpoint.name], self.handlers[endpoint.name])
+                for endpoint in NODE_INTERFACE.inputs(self.situation, roles)]
 
     def destroy_node(self) -> None:
         """Write the queued log lines (at most 1 s), then destroy the node."""

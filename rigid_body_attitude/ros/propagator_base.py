@@ -16,35 +16,29 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from geometry_msgs.msg import (
-    PoseStamped, PoseWithCovarianceStamped, Vector3Stamped, WrenchStamped)
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import (
     InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
-from rclpy.qos_overriding_options import QoSOverridingOptions
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
-from rosgraph_msgs.msg import Clock as ClockMessage
-from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
-from tf2_msgs.msg import TFMessage
 
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.base import LEVEL_INFO
-from rigid_body_attitude.session.decoding import DECODERS, input_handler, MALFORMED
+from rigid_body_attitude.session.decoding import decoder, input_handler, MALFORMED
 from rigid_body_attitude.ros.gyro_loop import DedicatedGroup
+from rigid_body_attitude.ros.interface import (
+    create_publisher, create_service, create_subscription)
 from rigid_body_attitude.ros.outputs import RosOutputs
-from rigid_body_attitude.ros.qos import (
-    CLOCK_QOS, COMMAND_QOS, GYRO_QOS, TF_STATIC_LISTENER_QOS)
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.interface import Endpoint, NODE_INTERFACE, Situation
 from rigid_body_attitude.session.mount_gate import MountGate
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
 from rigid_body_attitude.session.settings import (
-    DIAGNOSTICS_PERIOD, input_topics, load_node_scene, open_session, AnySession,
-    timer_period_ns)
+    DIAGNOSTICS_PERIOD, load_node_scene, open_session, AnySession, timer_period_ns)
 from rigid_body_attitude.session.sim_clock import SimClock, sim_clock_for, sim_clock_problem
 
 __all__ = ['LOG_EVERY_PERIODS', 'PropagatorMixin', 'declare_table_parameter',
@@ -53,11 +47,6 @@ __all__ = ['LOG_EVERY_PERIODS', 'PropagatorMixin', 'declare_table_parameter',
 
 #: Diagnostics periods between INFO log lines.
 LOG_EVERY_PERIODS = 5
-
-_GYRO_TOPICS = ('imu', 'angular_velocity')
-_MESSAGE_TYPES = {'imu': Imu, 'angular_velocity': Vector3Stamped, 'torque': WrenchStamped,
-                  'rotor_torque': Vector3Stamped, 'set_pose': PoseStamped,
-                  'set_pose_with_covariance': PoseWithCovarianceStamped}
 
 
 def parameter_descriptor(parameter: Parameter) -> ParameterDescriptor:
@@ -141,8 +130,7 @@ class PropagatorMixin(Node):
         self.scene = load_node_scene(values['scene'], values['integrator'], values['step'],
                                      values['torque_timeout'])
         self.publish_rate: float = values['publish_rate']
-        self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro',
-                                  values['covariance'])
+        self.outputs = RosOutputs(self, Situation(self.scene, values))
         self.outputs.hardware_id = self.scene.name
         self.sim_clock: SimClock | None = sim_clock_for(
             values, timer_period_ns(self.publish_rate), time.monotonic)
@@ -154,19 +142,22 @@ class PropagatorMixin(Node):
             raise InputError(problem)
         if isinstance(self.session, DynamicsSession):
             self.session.sim_clock = self.sim_clock
-        self.clock_publisher = (self.create_publisher(ClockMessage, '/clock', CLOCK_QOS)
-                                if values['publish_clock'] else None)
+        #: What decides the node's endpoints (:data:`NODE_INTERFACE`).
+        self.situation = Situation(self.scene, values, self.session.propagator.input_names)
+        self.clock_publisher = next(
+            (create_publisher(self, endpoint)
+             for endpoint in NODE_INTERFACE.outputs(self.situation, ('clock',))), None)
         self.outputs.set_frames(values['world_frame'], values['body_frame'])
         self.outputs.log_queue.start()
         if values['publish_tf']:
             self.outputs.enable_tf(values['tf_rate'])
         imu = self.scene.imu
         if imu is not None:
-            self.outputs.enable_simulated_imu(imu.topic, values['body_frame'], imu.frame_id,
-                                              imu.mount())
+            self.outputs.enable_simulated_imu(values['body_frame'], imu.frame_id, imu.mount())
         self._create_inputs()
         self._create_timers()
-        self.reset_service = self.create_service(Trigger, '~/reset', self.reset_callback)
+        self.reset_service = create_service(
+            self, NODE_INTERFACE.endpoint('~/reset', 'service'), self.reset_callback)
         self.configured = True
         self.get_logger().info(
             f'scene {self.scene.name!r} ({self.scene.rate_source}, {self.scene.integrator}'
@@ -192,34 +183,33 @@ class PropagatorMixin(Node):
         return declare_table_parameter(self, parameter, ignore_override)
 
     def _create_inputs(self) -> None:
-        """Raw subscriptions for the inputs the scene uses (and set_pose); ``/tf_static``
-        for gyro scenes (the mount).
+        """Raw subscriptions for the inputs of :data:`NODE_INTERFACE` present for the scene
+        (``/tf_static`` for gyro scenes: the mount).
 
-        The gyro subscriptions share a :class:`DedicatedGroup`, so :func:`~.serve.main`'s
-        :class:`~.gyro_loop.GyroLoop` can take them over
+        The sensor subscriptions (and, on the scene's own sim clock, the commands) share a
+        :class:`DedicatedGroup`, so :func:`~.serve.main`'s raw-take loop can take them over
         (:meth:`~.node.AttitudePropagatorNode.gyro_loop`).
         """
-        self.loop_group = DedicatedGroup()  # gyro subscriptions and the timers
+        self.loop_group = DedicatedGroup()  # sensor subscriptions and the timers
         self.subscriptions_by_topic = {}
         self.takers: dict[str, Callable[[], bytes | None]] = {}
         self.handlers: dict[str, Callable[[bytes], None]] = {}
         self.mount_gate: MountGate | None = None
         session = self.session
-        if isinstance(session, GyroSession):
-            self.mount_gate = MountGate(session, self.get_parameter('tf_timeout').value,
-                                        time.monotonic)
-            self.tf_static_subscription = self.create_subscription(
-                TFMessage, '/tf_static', self.tf_static_callback, TF_STATIC_LISTENER_QOS,
-                raw=True)
-        for topic in input_topics(self.scene, session.propagator.input_names):
-            gyro = topic in _GYRO_TOPICS
+        for endpoint in NODE_INTERFACE.inputs(self.situation, ('transforms',)):
+            if isinstance(session, GyroSession):
+                self.mount_gate = MountGate(session, self.get_parameter('tf_timeout').value,
+                                            time.monotonic)
+                self.tf_static_subscription = create_subscription(
+                    self, endpoint, self.tf_static_callback)
+        for endpoint in NODE_INTERFACE.inputs(self.situation):
+            topic, sensor = endpoint.name, endpoint.role == 'sensor'
             handler = self.gated(
-                self._gyro_handler(topic) if gyro else self._command_callback(topic))
+                self._gyro_handler(topic) if sensor else self._command_callback(endpoint))
             self.handlers[topic] = handler
-            self.subscriptions_by_topic[topic] = self.create_subscription(
-                _MESSAGE_TYPES[topic], topic, handler, GYRO_QOS if gyro else COMMAND_QOS,
-                callback_group=self.loop_group if gyro or self.sim_clock else None,
-                qos_overriding_options=QoSOverridingOptions.with_default_policies(), raw=True)
+            self.subscriptions_by_topic[topic] = create_subscription(
+                self, endpoint, handler,
+                self.loop_group if sensor or self.sim_clock else None)
             self.takers[topic] = raw_taker(self.subscriptions_by_topic[topic])
 
     def gated(self, handler: Callable[[bytes], None]) -> Callable[[bytes], None]:
@@ -239,12 +229,13 @@ class PropagatorMixin(Node):
                 handle(data)
         return locked
 
-    def _command_callback(self, topic: str) -> Callable[[bytes], None]:
-        """The callback of a command ``topic``: it also takes every message queued behind the
+    def _command_callback(self, endpoint: Endpoint) -> Callable[[bytes], None]:
+        """The callback of a command topic: it also takes every message queued behind the
         one it was given and hands only the newest decodable one to the session (the others
         are counted ``superseded``; malformed ones ``malformed``). On rclpy's stock path
         nothing more is taken: each message comes to the callback."""
-        decode, handle = DECODERS[topic], input_handler(self.session, topic)
+        topic = endpoint.name
+        decode, handle = decoder(topic), input_handler(self.session, topic)
         session, lock = self.session, self.state_lock
 
         def coalesce(data: bytes) -> None:

@@ -54,7 +54,7 @@ from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.core.yaml_files import Fields, quote
 
-__all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'NODE_TOPICS', 'imu_spec', 'sensors_spec']
+__all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'imu_spec', 'sensors_spec']
 
 FloatArray = NDArray[np.float64]
 Vector = tuple[float, float, float]
@@ -88,12 +88,6 @@ _BOUNDS: dict[str, tuple[float, float, float]] = {
 _OTHER_KEYS = {'frame_id', 'topic', 'mount_rpy', 'seed', 'gravity'}
 _FIELDS = Fields(SceneError)
 
-#: The node's own topics in a dynamics scene (relative names; ``diagnostics``, ``clock`` and
-#: ``tf_static`` are what ``/diagnostics``, ``/clock`` and ``/tf_static`` are in the root
-#: namespace): the IMU may not publish on any of them.
-NODE_TOPICS = ('orientation', 'pose', 'twist', 'energy', 'angular_momentum', 'diagnostics',
-               'clock', 'tf_static', 'torque', 'rotor_torque', 'set_pose',
-               'set_pose_with_covariance')
 #: Largest |mount angle| [rad] and |gravity component| [m/s²].
 _ANGLE_LIMIT, _GRAVITY_LIMIT = 10.0, 1000.0
 
@@ -185,9 +179,6 @@ def imu_spec(data: Any) -> ImuSpec:
         spec = replace(spec, frame_id=_matching('frame_id', data['frame_id'], _FRAME))
     if 'topic' in data:
         spec = replace(spec, topic=_matching('topic', data['topic'], _NAME))
-        if spec.topic in NODE_TOPICS:
-            raise SceneError(f'Expected sensors.imu.topic to be none of the node\'s own topics '
-                             f'({", ".join(NODE_TOPICS)}), got {quote(spec.topic)}')
     if 'mount_rpy' in data:
         spec = replace(spec, mount_rpy=_triple('mount_rpy', data['mount_rpy'], _ANGLE_LIMIT))
     if 'gravity' in data:
