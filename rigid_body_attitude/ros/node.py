@@ -43,7 +43,8 @@ from typing import Any
 
 from rigid_body_attitude.ros.gyro_loop import GyroLoop
 from rigid_body_attitude.ros.propagator_base import (
-    LOG_EVERY_PERIODS, parameter_descriptor, parameter_values, PropagatorMixin, ros_value)
+    LOG_EVERY_PERIODS, NodeParts, parameter_descriptor, parameter_values, PropagatorMixin,
+    ros_value)
 from rigid_body_attitude.ros.step_loop import step_loop
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.interface import NODE_INTERFACE
@@ -73,22 +74,26 @@ class AttitudePropagatorNode(PropagatorMixin):
 
     def gyro_loop(self) -> GyroLoop:
         """A :class:`GyroLoop` serving the gyro subscriptions (gyro scenes) and the timers (in
-        :attr:`loop_group`); creating it takes them away from every executor. On the scene's
-        own sim clock a :class:`StepLoop`, which also serves the commands."""
-        if self.sim_clock is not None and isinstance(self.session, DynamicsSession):
-            return step_loop(self.context, self.session, self.sim_clock,
-                             self._served(('command',)), [self.diagnostics_timer],
-                             self.clock_publisher, self.state_lock, self.outputs)
-        return GyroLoop(self.context, self._served(('sensor',)),
-                        [timer for timer in (self.output_timer, self.diagnostics_timer)
-                         if timer is not None])
-
-    def _served(self, roles: tuple[str, ...]) -> list[tuple[Any, Callable[[bytes], None]]]:
-        """(subscription, handler) of the inputs of ``roles``."""
-        return [(self.subscriptions_by_topic[endpoint.name], self.handlers[endpoint.name])
-                for endpoint in NODE_INTERFACE.inputs(self.situation, roles)]
+        the loop group); creating it takes them away from every executor. On the scene's own
+        sim clock a :class:`StepLoop`, which also serves the commands."""
+        parts = self.built
+        timers = [timer for timer in (parts.output_timer, parts.diagnostics_timer)
+                  if timer is not None]
+        if parts.sim_clock is not None and isinstance(parts.session, DynamicsSession):
+            return step_loop(self.context, parts.session, parts.sim_clock,
+                             _served(parts, ('command',)), timers, parts.clock_publisher,
+                             parts.state_lock, parts.outputs)
+        return GyroLoop(self.context, _served(parts, ('sensor',)), timers)
 
     def destroy_node(self) -> None:
         """Write the queued log lines (at most 1 s), then destroy the node."""
-        self.outputs.log_queue.stop()
+        if self.parts is not None:
+            self.parts.outputs.log_queue.stop()
         super().destroy_node()  # type: ignore[no-untyped-call]
+
+
+def _served(parts: NodeParts, roles: tuple[str, ...]
+            ) -> list[tuple[Any, Callable[[bytes], None]]]:
+    """(subscription, handler) of the inputs of ``roles``."""
+    return [(parts.subscriptions_by_topic[endpoint.name], parts.handlers[endpoint.name])
+            for endpoint in NODE_INTERFACE.inputs(parts.situation, roles)]

@@ -118,7 +118,7 @@ def spin(node: AttitudePropagatorNode) -> None:
     gc.freeze()
     problem = fast_path_problem()
     if problem is not None:
-        if node.sim_clock is not None:
+        if node.built.sim_clock is not None:
             raise InputError(f'publish_clock and lockstep need the node\'s own step loop, '
                              f'which rclpy\'s stock executor cannot serve ({problem}); run '
                              f'without them on this path')
