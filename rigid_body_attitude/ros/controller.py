@@ -6,7 +6,7 @@ angular part in body_frame) and ``target`` (geometry_msgs/QuaternionStamped, wor
 publishes ``torque`` (geometry_msgs/WrenchStamped, body_frame, zero force) and
 ``/diagnostics``. Remap ``orientation`` and ``twist`` to read an estimator instead of the
 plant's truth. The inputs are served by the package's raw-take loop
-(:class:`~rigid_body_attitude.ros.gyro_loop.GyroLoop`, every queued message per wake-up) and
+(:class:`~rigid_body_attitude.ros.raw_take_loop.RawTakeLoop`, every queued message per wake-up) and
 the parameter services by an executor in a second thread; on rclpy's stock executor path
 (:mod:`~rigid_body_attitude.ros.rclpy_internals`) one executor serves all. Everything else
 (pairing by stamp, sample and hold, checks, counts) is
@@ -37,9 +37,9 @@ from rigid_body_attitude.msgs.cdr import encode_wrench_stamped
 from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_twist_stamped
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
-from rigid_body_attitude.ros.node import ros_value
-from rigid_body_attitude.ros.propagator_base import declare_table_parameter, parameter_values
-from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
+from rigid_body_attitude.ros.parameters import (
+    declare_table_parameter, parameter_values, ros_value)
+from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, RawTakeLoop
 from rigid_body_attitude.ros.interface import create_publisher, create_subscription
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
 from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
@@ -119,11 +119,11 @@ class AttitudeControllerNode(Node):
         with self.session_lock:
             self.session.apply(values)
 
-    def loop(self) -> GyroLoop:
+    def loop(self) -> RawTakeLoop:
         """The package's raw-take loop serving the inputs and the diagnostics timer (one
         reused wait set, every queued message taken per wake-up); creating it takes them
         away from every executor."""
-        return GyroLoop(self.context, self.inputs, [self.diagnostics_timer])
+        return RawTakeLoop(self.context, self.inputs, [self.diagnostics_timer])
 
     def diagnostics_callback(self) -> None:
         """Publish this period's diagnostics."""

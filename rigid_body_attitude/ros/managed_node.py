@@ -42,7 +42,8 @@ from rclpy.parameter import Parameter as RosParameter
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import AttitudeError, InputError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text
-from rigid_body_attitude.ros.propagator_base import parameter_values, PropagatorMixin
+from rigid_body_attitude.ros.parameters import parameter_values
+from rigid_body_attitude.ros.propagator_base import PropagatorMixin
 from rigid_body_attitude.ros.rclpy_internals import RCLError
 from rigid_body_attitude.ros.serve import error_text, run_executable, SERVING_LINE
 from rigid_body_attitude.session.parameters import PARAMETERS

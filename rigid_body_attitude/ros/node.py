@@ -13,9 +13,9 @@ same session, so a replayed bag gives the same numbers.
   ``pose_with_covariance`` (parameter ``covariance``) and (for Imu input) ``imu/data`` per
   message. Spun in-process by any executor the node works as usual,
   one message per callback; :func:`~.serve.main` serves the gyro subscriptions and timers with
-  a :class:`~.gyro_loop.GyroLoop` (every queued message per wake-up).
+  a :class:`~.raw_take_loop.RawTakeLoop` (every queued message per wake-up).
 * Dynamics scenes advance on a timer of the node clock (``use_sim_time`` works) at
-  ``publish_rate``, served by the same gyro loop (timers only); commands arrive on
+  ``publish_rate``, served by the same raw-take loop (timers only); commands arrive on
   ``torque`` (WrenchStamped) and ``rotor_torque`` (Vector3Stamped) when the scene takes them.
   ``~/reset`` restores the scene's initial state. A scene with ``sensors`` also publishes its
   simulated IMU (``sensor_msgs/msg/Imu``, :mod:`rigid_body_attitude.session.sensors`) and the
@@ -41,17 +41,15 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from rigid_body_attitude.ros.gyro_loop import GyroLoop
+from rigid_body_attitude.ros.raw_take_loop import RawTakeLoop
 from rigid_body_attitude.ros.propagator_base import (
-    LOG_EVERY_PERIODS, NodeParts, parameter_descriptor, parameter_values, PropagatorMixin,
-    ros_value)
+    LOG_EVERY_PERIODS, NodeParts, PropagatorMixin)
 from rigid_body_attitude.ros.step_loop import step_loop
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.interface import NODE_INTERFACE
 from rigid_body_attitude.session.settings import NODE_NAME
 
-__all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS', 'parameter_descriptor',
-           'parameter_values', 'ros_value']
+__all__ = ['AttitudePropagatorNode', 'LOG_EVERY_PERIODS']
 
 
 class AttitudePropagatorNode(PropagatorMixin):
@@ -61,7 +59,7 @@ class AttitudePropagatorNode(PropagatorMixin):
     ``parameter_overrides``, ``cli_args``, ...), so tests and tools can build the node
     in-process. Bad parameters or a bad scene raise :class:`InputError` or
     :class:`~rigid_body_attitude.core.errors.SceneError` from here. Every callback that touches
-    the session holds :attr:`state_lock`, so the gyro loop of :func:`~.serve.main` and the
+    the session holds :attr:`state_lock`, so the raw-take loop of :func:`~.serve.main` and the
     executor thread serving the rest never interleave.
     """
 
@@ -72,8 +70,8 @@ class AttitudePropagatorNode(PropagatorMixin):
         self.add_on_set_parameters_callback(self.parameters_callback)
         self.add_post_set_parameters_callback(self.parameters_set_callback)
 
-    def gyro_loop(self) -> GyroLoop:
-        """A :class:`GyroLoop` serving the gyro subscriptions (gyro scenes) and the timers (in
+    def serving_loop(self) -> RawTakeLoop:
+        """A :class:`RawTakeLoop` serving the gyro subscriptions (gyro scenes) and the timers (in
         the loop group); creating it takes them away from every executor. On the scene's own
         sim clock a :class:`StepLoop`, which also serves the commands."""
         parts = self.built
@@ -83,7 +81,7 @@ class AttitudePropagatorNode(PropagatorMixin):
             return step_loop(self.context, parts.session, parts.sim_clock,
                              _served(parts, ('command',)), timers, parts.clock_publisher,
                              parts.state_lock, parts.outputs)
-        return GyroLoop(self.context, _served(parts, ('sensor',)), timers)
+        return RawTakeLoop(self.context, _served(parts, ('sensor',)), timers)
 
     def destroy_node(self) -> None:
         """Write the queued log lines (at most 1 s), then destroy the node."""

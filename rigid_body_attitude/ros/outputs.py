@@ -59,7 +59,7 @@ class RawOutput:
     On the fast path both go straight to rclpy's publisher handle, without
     :class:`rclpy.publisher.Publisher`'s per-call wrapper (it enters the handle as a context
     manager, against destruction by another thread, and checks the message type). That is
-    safe here because the node's publishers are destroyed only after its gyro loop has
+    safe here because the node's publishers are destroyed only after its raw-take loop has
     returned. Outputs are VOLATILE
     (``qos_overrides`` cannot change durability), so a sample published with no matched
     subscription reaches nobody, ever; Fast DDS would still store it, about 10 µs per message

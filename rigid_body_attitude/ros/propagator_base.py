@@ -12,33 +12,32 @@ and timers with the same callbacks (:mod:`~.node` describes them).
 
 from __future__ import annotations
 
-import array
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import (
-    InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
 from rclpy.publisher import Publisher
 from rclpy.service import Service
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import SetParametersResult
 from std_srvs.srv import Trigger
 
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import decoder, input_handler, MALFORMED
-from rigid_body_attitude.ros.gyro_loop import DedicatedGroup
+from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup
 from rigid_body_attitude.ros.interface import (
     create_publisher, create_service, create_subscription)
 from rigid_body_attitude.ros.outputs import RosOutputs
+from rigid_body_attitude.ros.parameters import (
+    declare_table_parameter, parameter_values, ros_value)
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
@@ -49,66 +48,10 @@ from rigid_body_attitude.session.settings import (
     DIAGNOSTICS_PERIOD, load_node_scene, open_session, AnySession, timer_period_ns)
 from rigid_body_attitude.session.sim_clock import SimClock, sim_clock_for, sim_clock_problem
 
-__all__ = ['LOG_EVERY_PERIODS', 'NodeParts', 'PropagatorMixin', 'declare_table_parameter',
-           'parameter_descriptor', 'parameter_values',
-           'ros_value']
+__all__ = ['LOG_EVERY_PERIODS', 'NodeParts', 'PropagatorMixin']
 
 #: Diagnostics periods between INFO log lines.
 LOG_EVERY_PERIODS = 5
-
-
-def parameter_descriptor(parameter: Parameter) -> ParameterDescriptor:
-    """The ROS descriptor of a parameter of the table."""
-    limits = []
-    if parameter.type is float:
-        low = parameter.low if parameter.low is not None else -float('inf')
-        high = parameter.high if parameter.high is not None else float('inf')
-        limits = [FloatingPointRange(from_value=low, to_value=high)]
-    return ParameterDescriptor(
-        name=parameter.name, description=parameter.description,
-        read_only=parameter.read_only, floating_point_range=limits)
-
-
-def ros_value(parameter: Parameter, value: Any) -> Any:
-    """A parameter's value as the table takes it: a double array (rclpy gives a list or an
-    ``array.array``, ``None`` when not set) as a tuple; other values as they are."""
-    if parameter.type is not tuple:
-        return value
-    if value is None:
-        return parameter.default
-    return tuple(value) if isinstance(value, (list, tuple, array.array)) else value
-
-
-def parameter_values(node: Node, table: Sequence[Parameter] = PARAMETERS) -> dict[str, Any]:
-    """Current values of ``node``'s parameters of ``table`` by name (``None``: a double
-    array not set)."""
-    values = {}
-    for parameter in table:
-        try:
-            value = node.get_parameter(parameter.name).value
-        except ParameterUninitializedException:  # a double array not set
-            value = None
-        values[parameter.name] = ros_value(parameter, value)
-    return values
-
-
-def declare_table_parameter(node: Node, parameter: Parameter, ignore_override: bool = False
-                            ) -> Any:
-    """Declare ``parameter`` of a table on ``node`` (with the value given at start unless
-    ``ignore_override``); its value, or :class:`InputError` naming it."""
-    # A double array without a value ([]: not set) is declared by its type (an empty list
-    # would make it a byte array); unset, it reads as the table's default.
-    default = (RosParameter.Type.DOUBLE_ARRAY if parameter.type is tuple
-               else parameter.default)
-    try:
-        return ros_value(parameter, node.declare_parameter(
-            parameter.name, default, parameter_descriptor(parameter),
-            ignore_override=ignore_override).value)
-    except InvalidParameterTypeException as err:
-        raise InputError(f'Expected parameter `{parameter.name}` to be a '
-                         f'{parameter.type_text}: {str(err)[:200]}') from err
-    except ParameterException as err:
-        raise InputError(f'Bad parameter `{parameter.name}`: {str(err)[:200]}') from err
 
 
 @dataclass
@@ -250,7 +193,7 @@ class PropagatorMixin(Node):
 
         The sensor subscriptions (and, on the scene's own sim clock, the commands) share the
         parts' :class:`DedicatedGroup`, so :func:`~.serve.main`'s raw-take loop can take them
-        over (:meth:`~.node.AttitudePropagatorNode.gyro_loop`).
+        over (:meth:`~.node.AttitudePropagatorNode.serving_loop`).
         """
         session = parts.session
         for endpoint in NODE_INTERFACE.inputs(parts.situation, ('transforms',)):
@@ -329,7 +272,7 @@ class PropagatorMixin(Node):
 
     def _create_timers(self, parts: NodeParts) -> None:
         """The output timer (node clock; dynamics scenes only) and the diagnostics timer
-        (steady clock), in the loop group, so :func:`~.serve.main`'s gyro loop serves them (an
+        (steady clock), in the loop group, so :func:`~.serve.main`'s raw-take loop serves them (an
         executor rebuilds its wait set of every entity per tick: about 2.8 % of a core at
         50 Hz)."""
         parts.output_timer = (

@@ -13,7 +13,7 @@ KEEP_LAST :data:`INPUT_DEPTH` (5 000).
   subscribe: a best-effort subscription matches best-effort and reliable publishers alike, so
   the node hears every driver out of the box. A reliable subscription would hear no
   best-effort driver at all.
-* *A deep queue*, because the gyro loop drains the queue at every wake-up and the depth only
+* *A deep queue*, because the raw-take loop drains the queue at every wake-up and the depth only
   has to cover the samples that arrive while the node cannot run (a scheduler delay on a
   loaded machine). 5 000 holds 5 s at 1 kHz. Measured (``test/ros/test_input_qos.py``): a
   sensor-data publisher paced at 1 kHz for 10 s beside two CPU-bound processes loses nothing.

@@ -258,8 +258,8 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
     assert node.built.session.stream.accepted == count and not node.built.session.stream.rejected
 
 
-def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request):
-    """main()'s structure in-process: the node's GyroLoop in a thread of its own takes every
+def test_the_raw_take_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request):
+    """main()'s structure in-process: the node's RawTakeLoop in a thread of its own takes every
     queued gyro message and runs the timers; the harness executor serves the rest (set_pose,
     the reset service) and never the claimed gyro subscriptions."""
     namespace = unique_namespace(request)
@@ -275,7 +275,7 @@ def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request
     imu_outputs = harness.record(Imu, 'imu/data')
     diagnostics = harness.record(DiagnosticArray, '/diagnostics')
     harness.wait_for_connections()
-    loop = node.gyro_loop()
+    loop = node.serving_loop()
     thread = threading.Thread(target=loop.run, daemon=True)
     thread.start()
     try:
