@@ -38,14 +38,15 @@ from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
 from rigid_body_attitude.ros.parameters import (
-    declare_table_parameter, parameter_values, ros_value)
+    declare_retired_parameters, declare_table_parameter, parameter_values, ros_value)
 from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, RawTakeLoop
 from rigid_body_attitude.ros.interface import create_publisher, create_subscription
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
 from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
-    CONTROLLER_PARAMETERS, check_controller_values)
+    CONTROLLER_PARAMETERS, check_controller_values, RENAMED_CONTROLLER_PARAMETERS,
+    renamed_problem)
 from rigid_body_attitude.session.interface import CONTROLLER_INTERFACE
 from rigid_body_attitude.session.reports import LEVEL_WARN
 from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD
@@ -97,8 +98,10 @@ class AttitudeControllerNode(Node):
         self.add_post_set_parameters_callback(self.parameters_set_callback)
 
     def _declare_parameters(self) -> dict[str, Any]:
-        return {parameter.name: declare_table_parameter(self, parameter)
-                for parameter in CONTROLLER_PARAMETERS}
+        values = {parameter.name: declare_table_parameter(self, parameter)
+                  for parameter in CONTROLLER_PARAMETERS}
+        declare_retired_parameters(self, RENAMED_CONTROLLER_PARAMETERS, renamed_problem)
+        return values
 
     def parameter_values(self) -> dict[str, Any]:
         """Current values of the controller's parameters by name."""
@@ -106,6 +109,10 @@ class AttitudeControllerNode(Node):
 
     def parameters_callback(self, parameters: list[RosParameter]) -> SetParametersResult:
         """Refuse run-time values the parameter table finds unusable."""
+        retired = [p.name for p in parameters if p.name in RENAMED_CONTROLLER_PARAMETERS
+                   and p.value is not None]
+        if retired:
+            return SetParametersResult(successful=False, reason=renamed_problem(retired[0]))
         values = self.parameter_values()
         by_name = {p.name: p for p in CONTROLLER_PARAMETERS}
         values.update({p.name: ros_value(by_name[p.name], p.value) for p in parameters

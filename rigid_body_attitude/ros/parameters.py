@@ -9,7 +9,7 @@ Used by both nodes and the controller: the propagator's table
 from __future__ import annotations
 
 import array
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from rclpy.exceptions import (
@@ -21,7 +21,8 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS
 
-__all__ = ['declare_table_parameter', 'parameter_descriptor', 'parameter_values', 'ros_value']
+__all__ = ['declare_retired_parameters', 'declare_table_parameter', 'parameter_descriptor',
+           'parameter_values', 'ros_value']
 
 
 def parameter_descriptor(parameter: Parameter) -> ParameterDescriptor:
@@ -76,3 +77,16 @@ def declare_table_parameter(node: Node, parameter: Parameter, ignore_override: b
                          f'{parameter.type_text}: {str(err)[:200]}') from err
     except ParameterException as err:
         raise InputError(f'Bad parameter `{parameter.name}`: {str(err)[:200]}') from err
+
+
+def declare_retired_parameters(node: Node, retired: Mapping[str, str],
+                               problem: Callable[[str], str]) -> None:
+    """Declare the ``retired`` names of renamed parameters (any type, no value), so a value
+    given for one at start is not silently ignored: :class:`InputError` with ``problem(name)``.
+    (Set at run time, the node's parameters callback refuses them.)"""
+    for name, present in retired.items():
+        value = node.declare_parameter(name, None, ParameterDescriptor(
+            name=name, dynamic_typing=True,
+            description=f'retired name of `{present}`: set that one')).value
+        if value is not None:
+            raise InputError(problem(name))

@@ -44,10 +44,16 @@ from test_input_qos import start_node as start_node_process
 from test_node_subprocess import stop_with_sigint
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
+
+
+def rpy(*angles):
+    """``from_rpy`` of roll, pitch, yaw as a (w, x, y, z) tuple."""
+    return tuple(from_rpy(angles).tolist())
+
 
 BASE_NS = 1_700_000_000 * 10**9 + 123_456_789
 MS = 1_000_000
@@ -303,7 +309,7 @@ def foreign_frames() -> list[Imu]:
 
 
 #: The tilt of the body at rest (levelling surfaces), roll and pitch [rad].
-TILT = rpy_quaternion(0.3, -0.2, 0.0)
+TILT = rpy(0.3, -0.2, 0.0)
 #: Samples of the body at rest: 0.6 s at 1 kHz, past ``align_seconds`` 0.3 s of rest.
 GOOD_AT_REST = 600
 

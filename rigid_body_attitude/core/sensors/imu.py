@@ -133,11 +133,7 @@ class ImuSpec:
     def mount(self) -> Quat:
         """Rotation (w, x, y, z) of the sensor frame in the body frame: ``Rz(yaw) Ry(pitch)
         Rx(roll)`` (tf2's ``setRPY``, static_transform_publisher's angles)."""
-        roll, pitch, yaw = self.mount_rpy
-        q = quaternion.multiply(quaternion.exp([0.0, 0.0, yaw]),
-                                quaternion.multiply(quaternion.exp([0.0, pitch, 0.0]),
-                                                    quaternion.exp([roll, 0.0, 0.0])))
-        w, x, y, z = q.tolist()
+        w, x, y, z = quaternion.from_rpy(self.mount_rpy).tolist()
         return w, x, y, z
 
     def error_model(self) -> GyroErrorModel:
