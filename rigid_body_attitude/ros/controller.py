@@ -25,7 +25,6 @@ from typing import Any
 
 import rclpy
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
@@ -40,6 +39,7 @@ from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
 from rigid_body_attitude.ros.parameters import (
     declare_retired_parameters, declare_table_parameter, parameter_values, ros_value)
 from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, RawTakeLoop
+from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
 from rigid_body_attitude.ros.interface import create_publisher, create_subscription
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
 from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
@@ -48,14 +48,13 @@ from rigid_body_attitude.session.controller_parameters import (
     CONTROLLER_PARAMETERS, check_controller_values, RENAMED_CONTROLLER_PARAMETERS,
     renamed_problem)
 from rigid_body_attitude.session.interface import CONTROLLER_INTERFACE
-from rigid_body_attitude.session.reports import LEVEL_WARN
+from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD
 
 __all__ = ['AttitudeControllerNode', 'CONTROLLER_NODE_NAME', 'controller_usage', 'main']
 
 CONTROLLER_NODE_NAME = 'attitude_controller'
 _ZERO_FORCE = (0.0, 0.0, 0.0)
-_LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN}
 
 
 class AttitudeControllerNode(Node):
@@ -82,8 +81,8 @@ class AttitudeControllerNode(Node):
         self.session_lock = threading.Lock()
         self.torque_publisher = create_publisher(
             self, CONTROLLER_INTERFACE.endpoint('torque', 'out'))
-        self.diagnostics_publisher = create_publisher(
-            self, CONTROLLER_INTERFACE.endpoint('/diagnostics', 'out'))
+        self.diagnostics_publisher = DiagnosticsPublisher(self, CONTROLLER_INTERFACE,
+                                                          CONTROLLER_NODE_NAME)
         callbacks = {'attitude': self.orientation_callback, 'twist': self.twist_callback,
                      'target': self.target_callback}
         #: (subscription, callback) of each input of :data:`CONTROLLER_INTERFACE`.
@@ -179,15 +178,9 @@ class AttitudeControllerNode(Node):
         self.torque_publisher.publish(encode_wrench_stamped(
             sec * 1_000_000_000 + nanosec, self.session.body_frame, _ZERO_FORCE, torque_body))
 
-    def diagnostics(self, report: Any) -> None:
+    def diagnostics(self, report: DiagnosticReport) -> None:
         """Publish one ``/diagnostics`` status, stamped with the node clock."""
-        status = DiagnosticStatus(
-            level=_LEVEL_BYTES[report.level], name=self.get_fully_qualified_name(),
-            message=report.message, hardware_id=CONTROLLER_NODE_NAME,
-            values=[KeyValue(key=key, value=value) for key, value in report.values])
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
-        self.diagnostics_publisher.publish(array)
+        self.diagnostics_publisher.publish(report)
 
     def log(self, level: int, text: str) -> None:
         """A log line of the session."""

@@ -27,19 +27,19 @@ from __future__ import annotations
 
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
 
 from rigid_body_attitude.msgs.cdr import (
     encode_float64, imu_with_orientation, pose_stamped_encoder,
     pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
     transform_encoder)
+from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
 from rigid_body_attitude.ros.interface import create_publisher
 from rigid_body_attitude.ros.log_queue import LogQueue
 from rigid_body_attitude.ros.rclpy_internals import raw_output
 from rigid_body_attitude.session.interface import NODE_INTERFACE, Situation
 from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
-from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
+from rigid_body_attitude.session.reports import DiagnosticReport
 from rigid_body_attitude.session.uncertainty import pose_covariance
 
 __all__ = ['RawOutput', 'RosOutputs']
@@ -47,8 +47,6 @@ __all__ = ['RawOutput', 'RosOutputs']
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
 
-_LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN,
-                LEVEL_ERROR: DiagnosticStatus.ERROR}
 _ZERO_POSITION = (0.0, 0.0, 0.0)
 _UNKNOWN = (0.0,) * 9
 
@@ -102,8 +100,8 @@ class RosOutputs:
         raw: dict[str, RawOutput] = {}
         for endpoint in NODE_INTERFACE.outputs(situation, ('output',)):
             raw[endpoint.name] = RawOutput(create_publisher(node, endpoint))
-        self.diagnostics_publisher = create_publisher(
-            node, NODE_INTERFACE.endpoint('/diagnostics', 'out'))
+        #: ``/diagnostics`` (its ``hardware_id``: the scene's name, set by the node).
+        self.diagnostics_publisher = DiagnosticsPublisher(node, NODE_INTERFACE)
         absent = RawOutput.absent()
         #: The session's outputs, bound once for the hot path (:meth:`RawOutput.absent` for
         #: those the scene does not have; ``pose_with_covariance``: ``None``).
@@ -127,7 +125,6 @@ class RosOutputs:
         self.world_frame = ''
         #: Frame of ``twist`` (:meth:`set_frames`).
         self.body_frame = ''
-        self.hardware_id = ''
         #: ``/tf`` (:meth:`enable_tf`), or None.
         self.tf_raw: RawOutput | None = None
         self.tf_limiter = StampRateLimiter(0.0)
@@ -239,13 +236,7 @@ class RosOutputs:
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the node clock."""
-        status = DiagnosticStatus(
-            level=_LEVEL_BYTES[report.level], name=self.node.get_fully_qualified_name(),
-            message=report.message, hardware_id=self.hardware_id,
-            values=[KeyValue(key=key, value=value) for key, value in report.values])
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.node.get_clock().now().to_msg()
-        self.diagnostics_publisher.publish(array)
+        self.diagnostics_publisher.publish(report)
 
     def log(self, level: int, text: str) -> None:
         """A line for the node's logger, queued (:class:`~.log_queue.LogQueue`): never

@@ -143,7 +143,7 @@ class PropagatorMixin(Node):
                                 values['torque_timeout'])
         publish_rate: float = values['publish_rate']
         outputs = RosOutputs(self, Situation(scene, values))
-        outputs.hardware_id = scene.name
+        outputs.diagnostics_publisher.hardware_id = scene.name
         sim_clock = sim_clock_for(values, timer_period_ns(publish_rate), time.monotonic)
         session: AnySession = open_session(scene, values, outputs, (
             clock_ns if sim_clock is None else sim_clock.now), time.monotonic)
