@@ -31,7 +31,8 @@ from std_srvs.srv import Trigger
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.base import LEVEL_INFO
-from rigid_body_attitude.session.decoding import decoder, input_handler, MALFORMED
+from rigid_body_attitude.session.decoding import (
+    ANGULAR_RATE, decoder, input_handler, MALFORMED)
 from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup
 from rigid_body_attitude.ros.interface import (
     create_publisher, create_service, create_subscription)
@@ -204,7 +205,7 @@ class PropagatorMixin(Node):
                     self, endpoint, self.tf_static_callback)
         for endpoint in NODE_INTERFACE.inputs(parts.situation):
             topic, sensor = endpoint.name, endpoint.role == 'sensor'
-            handler = self.gated(self._gyro_handler(parts, topic) if sensor
+            handler = self.gated(self._sensor_handler(parts, endpoint) if sensor
                                  else self._command_callback(parts, endpoint))
             parts.handlers[topic] = handler
             subscription = create_subscription(
@@ -218,12 +219,13 @@ class PropagatorMixin(Node):
         itself (the managed node lets it through only while active)."""
         return handler
 
-    def _gyro_handler(self, parts: NodeParts, topic: str) -> Callable[[bytes], None]:
-        """The session's handler of a gyro ``topic`` (:func:`input_handler`) under the state
-        lock, behind the mount gate until it opens."""
+    def _sensor_handler(self, parts: NodeParts, endpoint: Endpoint) -> Callable[[bytes], None]:
+        """The session's handler of a sensor topic (:func:`input_handler`) under the state
+        lock; a gyro topic's behind the mount gate until it opens."""
         gate, lock = parts.mount_gate, parts.state_lock
-        assert gate is not None
-        handle = gate.gated(input_handler(parts.session, topic))
+        handle = input_handler(parts.session, endpoint.name)
+        if endpoint.quantity == ANGULAR_RATE and gate is not None:
+            handle = gate.gated(handle)
 
         def locked(data: bytes) -> None:
             with lock:

@@ -37,7 +37,8 @@ from rigid_body_attitude.session.imu_start import frame_refused
 from rigid_body_attitude.session.interface import Endpoint, NODE_INTERFACE
 from rigid_body_attitude.session.settings import AnySession
 
-__all__ = ['Decoded', 'Handler', 'MALFORMED', 'VALUE_DECODERS', 'decoder', 'input_handler']
+__all__ = ['ANGULAR_RATE', 'Decoded', 'Handler', 'MALFORMED', 'VALUE_DECODERS', 'decoder',
+           'input_handler']
 
 #: What a value decoder returns: stamp sec, stamp nanosec, frame id, two values.
 Decoded = tuple[int, int, str, Any, Any]
