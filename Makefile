@@ -108,7 +108,7 @@ test: install $(TEST_REQUIREMENTS_STAMP)
 
 # The same paths as test/test_flake8.py.
 lint: install $(TEST_REQUIREMENTS_STAMP)
-	$(VENV_PYTHON) -m flake8 $(PACKAGE) test $(wildcard bench) setup.py scripts/ros2run
+	$(VENV_PYTHON) -m flake8 $(PACKAGE) test $(wildcard bench) launch setup.py scripts/ros2run
 
 install: $(TF2_MSGS_STAMP) $(PACKAGE_STAMP)
 

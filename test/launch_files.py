@@ -516,7 +516,8 @@ class _PythonActions:
 
     def _transition(self, event: Any, after: tuple[str | None, str | None] | None,
                     condition: Any) -> None:
-        if not (isinstance(event, Call) and event.name == 'launch_ros.events.lifecycle.ChangeState'):
+        if not (isinstance(event, Call)
+                and event.name == 'launch_ros.events.lifecycle.ChangeState'):
             raise LaunchFileError(f'unsupported event {event!r}')
         matcher = event.kwargs['lifecycle_node_matcher']
         transition = event.kwargs['transition_id']

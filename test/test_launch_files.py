@@ -193,8 +193,8 @@ def mutated(tmp_path: Path, name: str, old: str, new: str) -> Path:
     return tmp_path
 
 
-IMU, DYNAMICS, LOOP, MANAGED = ('imu.launch.xml', 'dynamics.launch.xml',
-                                 'closed_loop.launch.xml', 'managed.launch.py')
+IMU, DYNAMICS = 'imu.launch.xml', 'dynamics.launch.xml'
+LOOP, MANAGED = 'closed_loop.launch.xml', 'managed.launch.py'
 
 #: (file, text, replacement, a problem expected): edits each check must refuse.
 BROKEN_FILES = [
