@@ -80,4 +80,3 @@ def _check_shared_names(suite: SensorSuite) -> None:
                                  f'{quote(spec.frame_id)} with different mounts; give each '
                                  f'sensor its own frame_id or the same mount')
         mounts[spec.frame_id] = key, mount
-

@@ -20,8 +20,8 @@ def test_a_scene_carries_all_three_sensors_and_a_sun():
         'sensors': {'imu': {'rate': 200.0}, 'magnetometer': MAGNETOMETER,
                     'star_tracker': {'rate': 5.0, 'sun_exclusion_angle': 0.5}}})
     assert [key for key, _ in scene.sensors.items()] == ['imu', 'magnetometer', 'star_tracker']
-    assert (scene.imu.rate, scene.magnetometer.rate, scene.star_tracker.rate) == (200.0, 100.0,
-                                                                                   5.0)
+    rates = scene.imu.rate, scene.magnetometer.rate, scene.star_tracker.rate
+    assert rates == (200.0, 100.0, 5.0)
     assert scene.with_overrides(step=0.0005).star_tracker.rate == 5.0
 
 
