@@ -67,7 +67,7 @@ from rigid_body_attitude.core.sensors.section import (
     unit_vector)
 
 __all__ = ['ARCSECOND', 'MAX_STAR_TRACKER_RATE', 'STREAM', 'StarTrackerModel',
-           'StarTrackerSpec', 'star_tracker_spec']
+           'StarTrackerSpec', 'star_tracker_spec', 'world_covariance']
 
 #: One second of arc [rad].
 ARCSECOND = math.pi / (180.0 * 3600.0)
@@ -137,12 +137,19 @@ class StarTrackerSpec:
     def orientation_covariance(self, attitude: Quat) -> tuple[float, ...]:
         """The 9 entries (row major, rad², about world x, y, z) of the covariance of a
         measurement ``attitude`` (w, x, y, z): ``σ⊥² I + (σ∥² − σ⊥²) b_w b_wᵀ``."""
-        bx, by, bz = quaternion.rotate_floats(attitude, self.boresight_body())
-        across = self.cross_boresight_noise ** 2
-        extra = self.about_boresight_noise ** 2 - across
-        xy, xz, yz = extra * bx * by, extra * bx * bz, extra * by * bz
-        return (across + extra * bx * bx, xy, xz, xy, across + extra * by * by, yz,
-                xz, yz, across + extra * bz * bz)
+        across, _, about = self.sensor_variances()
+        return world_covariance(attitude, self.boresight_body(), across, about)
+
+
+def world_covariance(attitude: Quat, boresight_body: Vector, across: float,
+                     about: float) -> tuple[float, ...]:
+    """``σ⊥² I + (σ∥² − σ⊥²) b_w b_wᵀ`` (9 entries, row major), ``b_w`` the unit
+    ``boresight_body`` turned by ``attitude``; ``across`` = σ⊥², ``about`` = σ∥² [rad²]."""
+    bx, by, bz = quaternion.rotate_floats(attitude, boresight_body)
+    extra = about - across
+    xy, xz, yz = extra * bx * by, extra * bx * bz, extra * by * bz
+    return (across + extra * bx * bx, xy, xz, xy, across + extra * by * by, yz,
+            xz, yz, across + extra * bz * bz)
 
 
 def _shortest_rotation_from_z(direction: Vector) -> Quat:
@@ -196,6 +203,8 @@ class StarTrackerModel:
         #: ``M``: sensor components → body components.
         self.sensor_to_body = quaternion.to_matrix(self._mount).tolist()
         self._cos_exclusion = math.cos(spec.sun_exclusion_angle)
+        self._boresight = spec.boresight_body()
+        self._variances = spec.sensor_variances()
         self._noise_block = noise_block
         self.reset()
 
@@ -229,7 +238,8 @@ class StarTrackerModel:
         measured = self.measure(attitude)
         if self.excluded(t, attitude):
             return None
-        return measured, self.spec.orientation_covariance(measured)
+        across, _, about = self._variances
+        return measured, world_covariance(measured, self._boresight, across, about)
 
     def measure(self, attitude: Quat) -> Quat:
         """One measured body attitude of a body at ``attitude`` (no exclusion)."""
