@@ -24,8 +24,8 @@ measured attitude, which no published covariance holds. The error rotation is ap
 right, in the sensor's axes mapped into the body's: the multiplicative attitude error of F. L.
 Markley, J. L. Crassidis, "Fundamentals of Spacecraft Attitude Determination and Control",
 Springer, 2014, written for Hamilton quaternions; the noise in the sensor frame, as NASA 42's
-star tracker (E. Stoneking, 42 spacecraft simulation, ``StarTrackerModel``) and Basilisk's
-(AVS Lab, ``starTracker``) add it.
+star tracker adds it (E. Stoneking, 42 spacecraft simulation, ``StarTrackerModel``; Basilisk's
+``starTracker``, AVS Lab, adds a Gauss-Markov error in the body frame instead).
 
 **Covariance** (the orientation block of ``geometry_msgs/PoseWithCovarianceStamped``, rad²,
 about fixed world axes as the node's ``pose_with_covariance``: ``q_true = exp(δθ_w) ⊗

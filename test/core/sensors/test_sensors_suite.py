@@ -1,8 +1,12 @@
 """The scene's ``sensors:`` section as a whole (core/sensors/suite.py) and what the sensor
 sections share (core/sensors/section.py)."""
 
+from pathlib import Path
+import re
+
 import numpy as np
 import pytest
+import yaml
 
 from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
 from rigid_body_attitude.core.errors import SceneError
@@ -56,3 +60,20 @@ def test_normal_rows_are_the_generators_normals_in_order_whatever_the_block(bloc
     drawn = [rows.next() for _ in range(700)]
     expected = np.random.default_rng(8).standard_normal((700, 4))
     assert np.array_equal(np.array(drawn), expected)
+
+
+def documented_sections():
+    """The YAML examples of docs/scenes.md that hold a ``sensors`` section."""
+    text = (Path(__file__).resolve().parents[3] / 'docs' / 'scenes.md').read_text()
+    blocks = [yaml.safe_load(block) for block in re.findall(r'```yaml\n(.*?)```', text, re.S)]
+    return [block for block in blocks if isinstance(block, dict) and 'sensors' in block]
+
+
+def test_the_documented_sections_load_as_written():
+    sections = documented_sections()
+    assert {key for block in sections for key in block['sensors']} == {
+        'imu', 'magnetometer', 'star_tracker'}
+    for block in sections:
+        scene = scene_from_mapping({'rate_source': 'dynamics', 'step': 0.001,
+                                    'body': {'inertia': {'moments': [1.0, 2.0, 3.0]}}, **block})
+        assert list(scene.sensors.items())
