@@ -20,6 +20,8 @@ __all__ = [
     'FLOAT64',
     'IMU',
     'MESSAGE_TYPES',
+    'ODOMETRY',
+    'ODOMETRY_BODY',
     'POSE_STAMPED',
     'POSE_WITH_COVARIANCE_STAMPED',
     'QUATERNION_STAMPED',
@@ -39,6 +41,8 @@ POSE_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/PoseWithCovarianceStamped'
 TWIST_STAMPED = 'geometry_msgs/msg/TwistStamped'
 FLOAT64 = 'std_msgs/msg/Float64'
 DIAGNOSTIC_ARRAY = 'diagnostic_msgs/msg/DiagnosticArray'
+#: A header, ``child_frame_id`` (a second string), then float64 only (:data:`ODOMETRY_BODY`).
+ODOMETRY = 'nav_msgs/msg/Odometry'
 #: Types the node uses through rclpy only (no codec here).
 CLOCK = 'rosgraph_msgs/msg/Clock'
 TRIGGER = 'std_srvs/srv/Trigger'
@@ -89,5 +93,14 @@ FIXED_LAYOUTS: dict[str, Layout] = {
     FLOAT64: Layout(False, ('data',)),
 }
 
-#: Every message type the package reads or writes (DiagnosticArray: variable layout).
-MESSAGE_TYPES: tuple[str, ...] = (*FIXED_LAYOUTS, DIAGNOSTIC_ARRAY)
+#: The float64 fields of ``nav_msgs/msg/Odometry`` after its header and ``child_frame_id``
+#: (``stamped`` false: the header comes before the string; :mod:`~.odometry` reads both).
+ODOMETRY_BODY = Layout(
+    False, _vector('pose.pose.position') + _quaternion('pose.pose.orientation')
+    + tuple(f'pose.covariance[{index}]' for index in range(36))
+    + _vector('twist.twist.linear') + _vector('twist.twist.angular')
+    + tuple(f'twist.covariance[{index}]' for index in range(36)))
+
+#: Every message type the package reads or writes (DiagnosticArray: variable layout;
+#: Odometry: two strings, then :data:`ODOMETRY_BODY`).
+MESSAGE_TYPES: tuple[str, ...] = (*FIXED_LAYOUTS, ODOMETRY, DIAGNOSTIC_ARRAY)

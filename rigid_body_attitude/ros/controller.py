@@ -1,11 +1,12 @@
 """The ``attitude_controller`` node: quaternion-feedback PD over ROS, an rclpy adapter.
 
-Subscribes (raw CDR, decoded by the package's checked decoders) to ``orientation``
-(geometry_msgs/QuaternionStamped, world_frame), ``twist`` (geometry_msgs/TwistStamped, the
-angular part in body_frame) and ``target`` (geometry_msgs/QuaternionStamped, world_frame), and
-publishes ``torque`` (geometry_msgs/WrenchStamped, body_frame, zero force) and
-``/diagnostics``. Remap ``orientation`` and ``twist`` to read an estimator instead of the
-plant's truth. The inputs are served by the package's raw-take loop
+Subscribes (raw CDR, decoded by the package's checked decoders) to ``odom``
+(nav_msgs/Odometry: the pose in world_frame, the twist in body_frame) or, with
+``state_input`` ``orientation_twist``, to ``orientation`` (geometry_msgs/QuaternionStamped,
+world_frame) and ``twist`` (geometry_msgs/TwistStamped, the angular part in body_frame); and to
+``target`` (geometry_msgs/QuaternionStamped, world_frame). Publishes ``torque``
+(geometry_msgs/WrenchStamped, body_frame, zero force) and ``/diagnostics``. Remap ``odom`` to
+read an estimator (robot_localization's ``odometry/filtered``) instead of the plant's truth. The inputs are served by the package's raw-take loop
 (:class:`~rigid_body_attitude.ros.raw_take_loop.RawTakeLoop`, every queued message per wake-up) and
 the parameter services by an executor in a second thread; on rclpy's stock executor path
 (:mod:`~rigid_body_attitude.ros.rclpy_internals`) one executor serves all. Everything else
@@ -35,6 +36,7 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.msgs.cdr import encode_wrench_stamped
 from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_twist_stamped
 from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.odometry import decode_odometry
 from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
 from rigid_body_attitude.ros.parameters import (
     declare_retired_parameters, declare_table_parameter, parameter_values, ros_value)
@@ -46,7 +48,7 @@ from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor,
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
     CONTROLLER_PARAMETERS, check_controller_values, RENAMED_CONTROLLER_PARAMETERS,
-    renamed_problem)
+    renamed_problem, STATE_INPUTS)
 from rigid_body_attitude.session.interface import CONTROLLER_INTERFACE
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD
@@ -58,7 +60,8 @@ _ZERO_FORCE = (0.0, 0.0, 0.0)
 
 
 class AttitudeControllerNode(Node):
-    """Answers each tick's ``orientation`` and ``twist`` with a ``torque`` of the same stamp.
+    """Answers each tick's state (``odom``, or ``orientation`` and ``twist``) with a ``torque``
+    of the same stamp.
 
     Keyword arguments go to :class:`rclpy.node.Node` (``context``, ``namespace``,
     ``parameter_overrides``, ``cli_args``, ...), e.g.
@@ -83,13 +86,16 @@ class AttitudeControllerNode(Node):
             self, CONTROLLER_INTERFACE.endpoint('torque', 'out'))
         self.diagnostics_publisher = DiagnosticsPublisher(self, CONTROLLER_INTERFACE,
                                                           CONTROLLER_NODE_NAME)
-        callbacks = {'attitude': self.orientation_callback, 'twist': self.twist_callback,
-                     'target': self.target_callback}
-        #: (subscription, callback) of each input of :data:`CONTROLLER_INTERFACE`.
+        callbacks = {'odometry': self.odometry_callback, 'attitude': self.orientation_callback,
+                     'twist': self.twist_callback, 'target': self.target_callback}
+        wanted = (*STATE_INPUTS[values['state_input']], 'target')
+        #: (subscription, callback) of each input of :data:`CONTROLLER_INTERFACE` that
+        #: ``state_input`` asks for.
         self.inputs = [
             (create_subscription(self, endpoint, callbacks[endpoint.quantity], self.loop_group),
              callbacks[endpoint.quantity])
-            for endpoint in CONTROLLER_INTERFACE if endpoint.direction == 'in']
+            for endpoint in CONTROLLER_INTERFACE
+            if endpoint.direction == 'in' and endpoint.quantity in wanted]
         self.diagnostics_timer = self.create_timer(
             DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group,
             clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -137,6 +143,19 @@ class AttitudeControllerNode(Node):
             self.session.publish_diagnostics()
 
     # -- inputs (raw CDR) -------------------------------------------------------------------
+
+    def odometry_callback(self, data: bytes) -> None:
+        """``odom``: the plant's attitude and body rate in one message."""
+        try:
+            odometry = decode_odometry(data)
+        except MalformedMessage as err:
+            with self.session_lock:
+                self.session.malformed('odom', err.reason)
+            return
+        with self.session_lock:
+            self.session.odometry(odometry.sec, odometry.nanosec, odometry.frame_id,
+                                  odometry.child_frame_id, odometry.orientation,
+                                  odometry.angular)
 
     def orientation_callback(self, data: bytes) -> None:
         """``orientation``: the plant's attitude."""
@@ -196,8 +215,8 @@ def controller_usage() -> str:
     return '\n'.join([
         'usage: attitude_controller [-h] [--ros-args -p NAME:=VALUE ... [-r FROM:=TO] ...]',
         '',
-        'Quaternion-feedback PD attitude control: reads orientation and twist, publishes',
-        'torque stamped like the tick it answers. See docs/closed-loop.md.',
+        'Quaternion-feedback PD attitude control: reads odom (or orientation and twist),',
+        'publishes torque stamped like the tick it answers. See docs/closed-loop.md.',
         '',
         'options:',
         '  -h, --help  print this text and exit (ROS is not started)',

@@ -2,7 +2,7 @@
 rclpy publishers.
 
 Every per-sample and per-tick output (``orientation``, ``pose``, ``imu/data``; dynamics scenes:
-``twist``, ``energy``, ``angular_momentum``) is written as CDR bytes with the header packed once
+``twist``, ``odom``, ``energy``, ``angular_momentum``) is written as CDR bytes with the header packed once
 (:mod:`rigid_body_attitude.msgs.cdr`, the replay tool's codecs) and only when a subscription is
 matched (:class:`RawOutput`); ``/diagnostics`` (once a second) is an ordinary message.
 ``imu/data`` is the input Imu (its frame, rates and accelerations: the sensor's, REP-145) with
@@ -33,6 +33,7 @@ from rigid_body_attitude.msgs.cdr import (
     encode_float64, imu_with_orientation, pose_stamped_encoder,
     pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
     transform_encoder)
+from rigid_body_attitude.msgs.odometry import odometry_encoder
 from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
 from rigid_body_attitude.ros.interface import create_publisher
 from rigid_body_attitude.ros.log_queue import LogQueue
@@ -110,6 +111,7 @@ class RosOutputs:
         self.imu_raw = raw.get('imu/data', absent)
         self.pose_covariance_raw = raw.get('pose_with_covariance')
         self.twist_raw = raw.get('twist', absent)
+        self.odom_raw = raw.get('odom', absent)
         self.energy_raw = raw.get('energy', absent)
         self.momentum_raw = raw.get('angular_momentum', absent)
         #: Row-major 3×3 ``imu/data`` orientation covariance and 6×6 ``pose_with_covariance``
@@ -123,7 +125,7 @@ class RosOutputs:
         self.use_header_stamps = True
         #: Frame of ``orientation``, ``pose`` and ``angular_momentum`` (:meth:`set_frames`).
         self.world_frame = ''
-        #: Frame of ``twist`` (:meth:`set_frames`).
+        #: Frame of ``twist`` and ``odom``'s child frame (:meth:`set_frames`).
         self.body_frame = ''
         #: ``/tf`` (:meth:`enable_tf`), or None.
         self.tf_raw: RawOutput | None = None
@@ -171,6 +173,7 @@ class RosOutputs:
         self.encode_pose_covariance = pose_with_covariance_stamped_encoder(world_frame)
         self.encode_momentum = stamped_floats_encoder(world_frame, 3)
         self.encode_twist = stamped_floats_encoder(body_frame, 6)
+        self.encode_odom = odometry_encoder(world_frame, body_frame)
         self.encode_tf = transform_encoder(world_frame, body_frame)
 
     # -- OutputSink -------------------------------------------------------------------------
@@ -208,8 +211,12 @@ class RosOutputs:
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:
-        """``orientation``, ``pose`` and ``twist`` of one dynamics tick."""
+        """``orientation``, ``pose``, ``twist`` and ``odom`` of one dynamics tick."""
         orientation, pose, twist = self.orientation_raw, self.pose_raw, self.twist_raw
+        odom = self.odom_raw
+        if odom.subscription_count():
+            odom.publish(self.encode_odom(sec, nanosec, sample.position, sample.attitude,
+                                          velocity_body, sample.omega_body))
         if orientation.subscription_count():
             orientation.publish(self.encode_orientation(sec, nanosec, sample.attitude))
         if pose.subscription_count():

@@ -26,7 +26,7 @@ from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.yaml_files import quote
 from rigid_body_attitude.msgs.tf_message import TF_MESSAGE
 from rigid_body_attitude.msgs.types import (
-    CLOCK, DIAGNOSTIC_ARRAY, FLOAT64, IMU, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED,
+    CLOCK, DIAGNOSTIC_ARRAY, FLOAT64, IMU, ODOMETRY, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED,
     QUATERNION_STAMPED, TRIGGER, TWIST_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED)
 
 __all__ = ['CONTROLLER_INTERFACE', 'Endpoint', 'INPUT_DEPTH', 'Interface', 'NODE_INTERFACE',
@@ -268,6 +268,9 @@ NODE_INTERFACE = Interface((
     Endpoint('twist', TWIST_STAMPED, _OUT, 'output', 'output', 'dynamics scenes, every tick',
              'the body rate (and velocity), `body_frame`', kinds=(DYNAMICS,),
              qos_overrides=True, replayed=True),
+    Endpoint('odom', ODOMETRY, _OUT, 'output', 'output', 'dynamics scenes, every tick',
+             'the pose (`world_frame`) and the twist (`body_frame`) in one message, '
+             'covariances zero (exact)', kinds=(DYNAMICS,), qos_overrides=True, replayed=True),
     Endpoint('energy', FLOAT64, _OUT, 'output', 'output', 'dynamics scenes, every tick',
              "the body's kinetic energy [J] (a gyro scene simulates no body)",
              kinds=(DYNAMICS,), qos_overrides=True, replayed=True),
@@ -298,9 +301,14 @@ NODE_INTERFACE = Interface((
 
 #: The endpoints of ``attitude_controller``.
 CONTROLLER_INTERFACE = Interface((
-    Endpoint('orientation', QUATERNION_STAMPED, _IN, 'command', 'sensor', 'always',
-             "the plant's attitude, `world_frame`", quantity='attitude'),
-    Endpoint('twist', TWIST_STAMPED, _IN, 'command', 'sensor', 'always',
+    Endpoint('odom', ODOMETRY, _IN, 'command', 'sensor', '`state_input` `odom` (default)',
+             "the plant's attitude (pose, `world_frame`) and body rate (twist, angular part, "
+             '`body_frame`)', quantity='odometry'),
+    Endpoint('orientation', QUATERNION_STAMPED, _IN, 'command', 'sensor',
+             '`state_input` `orientation_twist`', "the plant's attitude, `world_frame`",
+             quantity='attitude'),
+    Endpoint('twist', TWIST_STAMPED, _IN, 'command', 'sensor',
+             '`state_input` `orientation_twist`',
              "the plant's body rate (the angular part), `body_frame`", quantity='twist'),
     Endpoint('target', QUATERNION_STAMPED, _IN, 'command', 'sensor', 'always',
              'a new target attitude, `world_frame`', quantity='target'),

@@ -25,6 +25,7 @@ from rigid_body_attitude.msgs import (
     encode_quaternion_stamped, encode_twist_stamped, encode_vector3_stamped,
     imu_with_orientation, pose_stamped_encoder, pose_with_covariance_stamped_encoder,
     quaternion_stamped_encoder)
+from rigid_body_attitude.msgs.odometry import odometry_encoder
 from rigid_body_attitude.msgs.types import IMU
 from rigid_body_attitude.session.base import Session
 from rigid_body_attitude.session.outputs import OutputSample
@@ -128,6 +129,7 @@ class BagSink:
         self.encode_orientation = quaternion_stamped_encoder(world_frame)
         self.encode_pose = pose_stamped_encoder(world_frame)
         self.encode_pose_covariance = pose_with_covariance_stamped_encoder(world_frame)
+        self.encode_odom = odometry_encoder(world_frame, body_frame)
 
     def start_from(self, start: GroundTruthStart, session: Session) -> None:
         """Set ``session``'s attitude from the ground truth at the first output due."""
@@ -203,7 +205,7 @@ class BagSink:
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:
-        """``orientation``, ``pose`` and ``twist`` of one dynamics tick."""
+        """``orientation``, ``pose``, ``twist`` and ``odom`` of one dynamics tick."""
         stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
         session = self.session
         if self._aligning and session is not None and self.start is not None and (
@@ -217,6 +219,9 @@ class BagSink:
                                                 sample.attitude))
         self._write('twist', encode_twist_stamped(stamp_ns, self.body_frame, velocity_body,
                                                   sample.omega_body))
+        if 'odom' in self.ids:
+            self._write('odom', self.encode_odom(sec, nanosec, sample.position, sample.attitude,
+                                                 velocity_body, sample.omega_body))
         self.last_attitude, self.last_stamp_ns = sample.attitude, stamp_ns
         if self.series is not None:
             self.series.attitude_stamps_ns.append(stamp_ns)
