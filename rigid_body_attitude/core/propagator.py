@@ -48,6 +48,16 @@ MAX_STEPS_PER_CALL = 10_000_000
 MAX_SUBSTEPS = 1_000_000
 
 
+def _float_vector(value: object) -> Vec | None:
+    """``value`` when it is a tuple of 3 finite floats, else ``None`` (checked with NumPy)."""
+    if type(value) is tuple and len(value) == 3:
+        x, y, z = value
+        if (type(x) is float and type(y) is float and type(z) is float
+                and math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+            return x, y, z
+    return None
+
+
 @dataclass
 class PropagatorState:
     """The propagated state.
@@ -201,14 +211,22 @@ class _Propagator:
 
         Raises :class:`InputError` for an input no effect takes or a non-finite value.
         """
-        if input_name not in self.input_routes:
+        routes = self.input_routes.get(input_name)
+        if routes is None:
             raise InputError(f'Scene {self.scene.name!r} takes no input {input_name!r}; '
                              f'inputs: {", ".join(sorted(self.input_routes)) or "(none)"}')
-        vector = quaternion.as_vector(value, input_name)
-        if vector.shape != (3,) or not math.isfinite(t):
+        vector = _float_vector(value)  # the node's commands: a tuple, checked without NumPy
+        if vector is None:
+            array = quaternion.as_vector(value, input_name)
+            if array.shape != (3,):
+                raise InputError(f'Expected `{input_name}` as 3 finite numbers at a finite '
+                                 f'time, got {array.tolist()!r} at t={t!r}')
+            x, y, z = array.tolist()
+            vector = (x, y, z)
+        if not math.isfinite(t):
             raise InputError(f'Expected `{input_name}` as 3 finite numbers at a finite time, '
-                             f'got {vector.tolist()!r} at t={t!r}')
-        for effect in self.input_routes[input_name]:
+                             f'got {list(vector)!r} at t={t!r}')
+        for effect in routes:
             effect.accept_input(input_name, t, vector)
 
     def counters(self) -> dict[str, int]:

@@ -33,7 +33,7 @@ from rcl_interfaces.msg import SetParametersResult
 
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.msgs.cdr import encode_wrench_stamped
+from rigid_body_attitude.msgs.cdr import stamped_floats_encoder
 from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_twist_stamped
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.odometry import decode_odometry
@@ -43,7 +43,7 @@ from rigid_body_attitude.ros.parameters import (
 from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, RawTakeLoop
 from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
 from rigid_body_attitude.ros.interface import create_publisher, create_subscription
-from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
+from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, raw_output
 from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
@@ -84,6 +84,8 @@ class AttitudeControllerNode(Node):
         self.session_lock = threading.Lock()
         self.torque_publisher = create_publisher(
             self, CONTROLLER_INTERFACE.endpoint('torque', 'out'))
+        _, self._publish_torque = raw_output(self.torque_publisher)
+        self._encoders: dict[str, Any] = {}
         self.diagnostics_publisher = DiagnosticsPublisher(self, CONTROLLER_INTERFACE,
                                                           CONTROLLER_NODE_NAME)
         callbacks = {'odometry': self.odometry_callback, 'attitude': self.orientation_callback,
@@ -194,8 +196,13 @@ class AttitudeControllerNode(Node):
 
     def torque(self, sec: int, nanosec: int, torque_body: tuple[float, float, float]) -> None:
         """Publish ``torque`` stamped ``(sec, nanosec)`` in body_frame."""
-        self.torque_publisher.publish(encode_wrench_stamped(
-            sec * 1_000_000_000 + nanosec, self.session.body_frame, _ZERO_FORCE, torque_body))
+        frame = self.session.body_frame
+        encode = self._encoders.get(frame)
+        if encode is None:  # the header packed once per body_frame
+            encode = self._encoders[frame] = stamped_floats_encoder(frame, 6)
+            if len(self._encoders) > 16:
+                self._encoders = {frame: encode}
+        self._publish_torque(encode(sec, nanosec, _ZERO_FORCE + torque_body))
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """Publish one ``/diagnostics`` status, stamped with the node clock."""

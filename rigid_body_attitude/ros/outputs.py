@@ -25,6 +25,8 @@ slow console.
 
 from __future__ import annotations
 
+import math
+import time
 from typing import Any
 
 from rclpy.node import Node
@@ -43,7 +45,11 @@ from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
 from rigid_body_attitude.session.reports import DiagnosticReport
 from rigid_body_attitude.session.uncertainty import pose_covariance
 
-__all__ = ['RawOutput', 'RosOutputs']
+__all__ = ['MATCH_CHECK_PERIOD', 'RawOutput', 'RosOutputs']
+
+#: Wall seconds between two looks at an output's matched subscriptions (:meth:`RawOutput.matched`).
+MATCH_CHECK_PERIOD = 0.01
+_monotonic = time.monotonic
 
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
@@ -61,11 +67,14 @@ class RawOutput:
     safe here because the node's publishers are destroyed only after its raw-take loop has
     returned. Outputs are VOLATILE
     (``qos_overrides`` cannot change durability), so a sample published with no matched
-    subscription reaches nobody, ever; Fast DDS would still store it, about 10 µs per message
-    here against about 2 µs for the count (docs/performance.md).
+    subscription reaches nobody, ever; Fast DDS would still store it. :meth:`matched` asks
+    the middleware at most once every :data:`MATCH_CHECK_PERIOD` seconds (a call into rmw
+    per output and message cost more than the rest of a lockstep tick's Python): a
+    subscription that matched gets its first message at most that much later, and for that
+    long after the last one left a message may still be handed to the middleware.
     """
 
-    __slots__ = ('subscription_count', 'publish')
+    __slots__ = ('subscription_count', 'publish', '_matched', '_check_at')
 
     def __init__(self, publisher: Any) -> None:
         """Bind ``publisher``'s handle on the fast path, else its public methods
@@ -73,12 +82,23 @@ class RawOutput:
         #: Matched subscriptions at the moment of the call (``int``; call it), and publish
         #: serialized (CDR) ``bytes``.
         self.subscription_count, self.publish = raw_output(publisher)
+        self._matched, self._check_at = False, -math.inf
+
+    def matched(self) -> bool:
+        """Whether a subscription was matched at the last look (at most
+        :data:`MATCH_CHECK_PERIOD` s ago)."""
+        now = _monotonic()
+        if now >= self._check_at:
+            self._matched = self.subscription_count() > 0
+            self._check_at = now + MATCH_CHECK_PERIOD
+        return self._matched
 
     @classmethod
     def absent(cls) -> RawOutput:
         """An output the scene does not have: no subscription ever, nothing published."""
         output = cls.__new__(cls)
         output.subscription_count, output.publish = _no_subscription, _refuse
+        output._matched, output._check_at = False, math.inf
         return output
 
 
@@ -161,7 +181,7 @@ class RosOutputs:
     def _publish_tf(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
         """The transform at ``(sec, nanosec)`` if one is due (:class:`StampRateLimiter`)."""
         tf = self.tf_raw
-        if (tf is not None and tf.subscription_count()
+        if (tf is not None and tf.matched()
                 and self.tf_limiter.due(sec * 1_000_000_000 + nanosec)):
             tf.publish(self.encode_tf(sec, nanosec, attitude))
 
@@ -182,17 +202,17 @@ class RosOutputs:
                  imu: bytes | None) -> None:
         """``orientation``, ``pose`` and (Imu input) ``imu/data`` of one gyro sample."""
         orientation, pose = self.orientation_raw, self.pose_raw
-        if orientation.subscription_count():
+        if orientation.matched():
             orientation.publish(self.encode_orientation(sec, nanosec, attitude))
-        if pose.subscription_count():
+        if pose.matched():
             pose.publish(self.encode_pose(sec, nanosec, _ZERO_POSITION, attitude))
-        if imu is not None and self.imu_raw.subscription_count():
+        if imu is not None and self.imu_raw.matched():
             stamp = None if self.use_header_stamps else (sec, nanosec)  # receive time used
             self.imu_raw.publish(imu_with_orientation(imu, attitude, stamp,
                                                       self.orientation_covariance,
                                                       self.imu_mount))
         with_covariance = self.pose_covariance_raw
-        if with_covariance is not None and with_covariance.subscription_count():
+        if with_covariance is not None and with_covariance.matched():
             with_covariance.publish(self.encode_pose_covariance(
                 sec, nanosec, _ZERO_POSITION, attitude, self.pose_covariance))
         if self.tf_raw is not None:
@@ -214,14 +234,14 @@ class RosOutputs:
         """``orientation``, ``pose``, ``twist`` and ``odom`` of one dynamics tick."""
         orientation, pose, twist = self.orientation_raw, self.pose_raw, self.twist_raw
         odom = self.odom_raw
-        if odom.subscription_count():
+        if odom.matched():
             odom.publish(self.encode_odom(sec, nanosec, sample.position, sample.attitude,
                                           velocity_body, sample.omega_body))
-        if orientation.subscription_count():
+        if orientation.matched():
             orientation.publish(self.encode_orientation(sec, nanosec, sample.attitude))
-        if pose.subscription_count():
+        if pose.matched():
             pose.publish(self.encode_pose(sec, nanosec, sample.position, sample.attitude))
-        if twist.subscription_count():
+        if twist.matched():
             twist.publish(self.encode_twist(sec, nanosec, velocity_body + sample.omega_body))
         if self.tf_raw is not None:
             self._publish_tf(sec, nanosec, sample.attitude)
@@ -230,15 +250,15 @@ class RosOutputs:
                    world_momentum: Vector) -> None:
         """``energy`` and ``angular_momentum`` of a dynamics tick (stamped like the
         attitude)."""
-        if self.energy_raw.subscription_count():
+        if self.energy_raw.matched():
             self.energy_raw.publish(encode_float64(energy))
-        if self.momentum_raw.subscription_count():
+        if self.momentum_raw.matched():
             self.momentum_raw.publish(self.encode_momentum(sec, nanosec, world_momentum))
 
     def simulated_imu(self, topic: str, data: bytes) -> None:
         """A simulated IMU's sample (serialized Imu) on ``topic``."""
         output = self.simulated_imus.get(topic)
-        if output is not None and output.subscription_count():
+        if output is not None and output.matched():
             output.publish(data)
 
     def diagnostics(self, report: DiagnosticReport) -> None:

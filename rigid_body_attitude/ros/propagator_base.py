@@ -33,7 +33,7 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import (
     ANGULAR_RATE, decoder, input_handler, MALFORMED)
-from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup
+from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, DRAINED
 from rigid_body_attitude.ros.interface import (
     create_publisher, create_service, create_subscription)
 from rigid_body_attitude.ros.outputs import RosOutputs
@@ -92,7 +92,7 @@ class NodeParts:
     clock_publisher: Publisher | None = None
     subscriptions_by_topic: dict[str, Subscription] = field(default_factory=dict)
     takers: dict[str, Callable[[], bytes | None]] = field(default_factory=dict)
-    handlers: dict[str, Callable[[bytes], None]] = field(default_factory=dict)
+    handlers: dict[str, Callable[[bytes], object]] = field(default_factory=dict)
     mount_gate: MountGate | None = None
     tf_static_subscription: Subscription | None = None
     output_timer: Timer | None = None
@@ -214,7 +214,7 @@ class PropagatorMixin(Node):
             parts.subscriptions_by_topic[topic] = subscription
             parts.takers[topic] = raw_taker(subscription)
 
-    def gated(self, handler: Callable[[bytes], None]) -> Callable[[bytes], None]:
+    def gated(self, handler: Callable[[bytes], object]) -> Callable[[bytes], object]:
         """The callback of an input topic around the session's ``handler``: ``handler``
         itself (the managed node lets it through only while active)."""
         return handler
@@ -233,11 +233,12 @@ class PropagatorMixin(Node):
         return locked
 
     def _command_callback(self, parts: NodeParts, endpoint: Endpoint
-                          ) -> Callable[[bytes], None]:
+                          ) -> Callable[[bytes], object]:
         """The callback of a command topic: it also takes every message queued behind the
         one it was given and hands only the newest decodable one to the session (the others
-        are counted ``superseded``; malformed ones ``malformed``). On rclpy's stock path
-        nothing more is taken: each message comes to the callback."""
+        are counted ``superseded``; malformed ones ``malformed``), and returns
+        :data:`~.raw_take_loop.DRAINED`. On rclpy's stock path nothing more is taken: each
+        message comes to the callback."""
         topic = endpoint.name
         decode, handle = decoder(topic), input_handler(parts.session, topic)
         session, lock, takers = parts.session, parts.state_lock, parts.takers
@@ -262,6 +263,7 @@ class PropagatorMixin(Node):
                     session.rejections['superseded'] += superseded
                 if newest is not None:
                     handle(newest)
+            return DRAINED
         return coalesce
 
     def tf_static_callback(self, data: bytes) -> None:

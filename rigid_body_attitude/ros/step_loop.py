@@ -108,7 +108,7 @@ class StepLoop(RawTakeLoop):
         message to its handler and run the due timers. False once the loop is to end."""
         self._fill(wait_set, self.guard_handles(), False)
         wait_set.wait(int(timeout_s * 1e9))
-        self.handle_ready()
+        self.handle_ready(wait_set)
         return self.context.ok() and not self._stopping.is_set()
 
 
@@ -123,7 +123,7 @@ def step_loop(context: Context, session: DynamicsSession, clock: SimClock,
     tick = session.lockstep_tick if clock.lockstep else session.tick
 
     def publish_clock(now_ns: int) -> None:
-        if raw is not None and raw.subscription_count():
+        if raw is not None and raw.matched():
             raw.publish(encode_clock(now_ns))
 
     def sim_tick() -> None:
