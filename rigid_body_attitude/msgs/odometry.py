@@ -23,7 +23,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable, Sequence
 from struct import Struct
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.msgs.decoders import ENCAPSULATIONS, Floats
@@ -181,10 +181,11 @@ def _decoder() -> Callable[[bytes], Odometry]:
         nonlocal primed, missed
         unpack, frame, child, names, size = primed
         try:
-            (encapsulation, sec, nanosec, frame_bytes, child_bytes,
-             px, py, pz, x, y, z, w, vx, vy, vz, wx, wy, wz) = unpack(data, 0)
-            if (encapsulation == b'\x00\x01' and frame_bytes == frame and child_bytes == child
+            fields = unpack(data, 0)
+            if (fields[0] == b'\x00\x01' and fields[3] == frame and fields[4] == child
                     and len(data) >= size):
+                sec, nanosec = cast('tuple[int, int]', fields[1:3])
+                px, py, pz, x, y, z, w, vx, vy, vz, wx, wy, wz = cast(Floats, fields[5:])
                 return Odometry(sec, nanosec, names[0], names[1], (px, py, pz),
                                 (w, x, y, z), (vx, vy, vz), (wx, wy, wz))
         except fast_errors:

@@ -55,26 +55,29 @@ class CdrReader:
         start = 4 + -(-(self.offset - 4) // alignment) * alignment
         if start + size > len(self.raw):
             raise MalformedMessage(self.msgtype, f'truncated: {len(self.raw)} bytes, '
-                                               f'{start + size} needed')
+                                                 f'{start + size} needed')
         self.offset = start + size
         return start
 
     def uint32s(self, fmt: str) -> tuple[int, ...]:
+        """The 4-byte integers of ``fmt`` (``'iI'``) at the next multiple of 4."""
         size = struct.calcsize(fmt)
         values: tuple[int, ...] = struct.unpack_from(self.order + fmt, self.raw,
                                                      self._take(size, 4))
         return values
 
     def float64s(self, count: int) -> Floats:
+        """``count`` float64 at the next multiple of the float64 alignment."""
         at = self._take(8 * count, self.alignment)
         values: Floats = struct.unpack_from(f'{self.order}{count}d', self.raw, at)
         return values
 
     def string(self, name: str) -> str:
+        """The CDR string ``name`` (a length, the bytes with one terminating NUL, UTF-8)."""
         (length,) = self.uint32s('I')
         if length == 0 or length > len(self.raw):
             raise MalformedMessage(self.msgtype, f'{name} length {length} in a message of '
-                                               f'{len(self.raw)} bytes')
+                                                 f'{len(self.raw)} bytes')
         text = self.raw[self._take(length, 1):self.offset]
         if text.find(0) != length - 1:
             raise MalformedMessage(self.msgtype, f'{name} is not NUL-terminated once')

@@ -6,7 +6,8 @@ Subscribes (raw CDR, decoded by the package's checked decoders) to ``odom``
 world_frame) and ``twist`` (geometry_msgs/TwistStamped, the angular part in body_frame); and to
 ``target`` (geometry_msgs/QuaternionStamped, world_frame). Publishes ``torque``
 (geometry_msgs/WrenchStamped, body_frame, zero force) and ``/diagnostics``. Remap ``odom`` to
-read an estimator (robot_localization's ``odometry/filtered``) instead of the plant's truth. The inputs are served by the package's raw-take loop
+read an estimator (robot_localization's ``odometry/filtered``) instead of the plant's truth.
+The inputs are served by the package's raw-take loop
 (:class:`~rigid_body_attitude.ros.raw_take_loop.RawTakeLoop`, every queued message per wake-up) and
 the parameter services by an executor in a second thread; on rclpy's stock executor path
 (:mod:`~rigid_body_attitude.ros.rclpy_internals`) one executor serves all. Everything else

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 import importlib
-from typing import Any
+from typing import Any, cast
 
 from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
@@ -39,11 +39,13 @@ def _overriding(endpoint: Endpoint) -> dict[str, Any]:
     return {'qos_overriding_options': QoSOverridingOptions.with_default_policies()}
 
 
-def create_subscription(node: Node, endpoint: Endpoint, callback: Callable[[bytes], None],
+def create_subscription(node: Node, endpoint: Endpoint, callback: Callable[[bytes], object],
                         callback_group: CallbackGroup | None = None) -> Subscription:
     """A raw subscription of the input ``endpoint`` on ``node``."""
+    # (rclpy ignores what a callback returns; the raw-take loop reads it: DRAINED)
     return node.create_subscription(
-        interface_class(endpoint.type), endpoint.name, callback, qos_profile(endpoint.qos),
+        interface_class(endpoint.type), endpoint.name, cast('Callable[[bytes], None]', callback),
+        qos_profile(endpoint.qos),
         callback_group=callback_group, raw=True, **_overriding(endpoint))
 
 

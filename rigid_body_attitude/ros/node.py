@@ -91,7 +91,7 @@ class AttitudePropagatorNode(PropagatorMixin):
 
 
 def _served(parts: NodeParts, roles: tuple[str, ...]
-            ) -> list[tuple[Any, Callable[[bytes], None]]]:
+            ) -> list[tuple[Any, Callable[[bytes], object]]]:
     """(subscription, handler) of the inputs of ``roles``."""
     return [(parts.subscriptions_by_topic[endpoint.name], parts.handlers[endpoint.name])
             for endpoint in NODE_INTERFACE.inputs(parts.situation, roles)]

@@ -2,11 +2,11 @@
 rclpy publishers.
 
 Every per-sample and per-tick output (``orientation``, ``pose``, ``imu/data``; dynamics scenes:
-``twist``, ``odom``, ``energy``, ``angular_momentum``) is written as CDR bytes with the header packed once
-(:mod:`rigid_body_attitude.msgs.cdr`, the replay tool's codecs) and only when a subscription is
-matched (:class:`RawOutput`); ``/diagnostics`` (once a second) is an ordinary message.
-``imu/data`` is the input Imu (its frame, rates and accelerations: the sensor's, REP-145) with
-the stamp the session used and the orientation of the sensor frame in ``world_frame``, the
+``twist``, ``odom``, ``energy``, ``angular_momentum``) is written as CDR bytes with the header
+packed once (:mod:`rigid_body_attitude.msgs.cdr`, :mod:`~rigid_body_attitude.msgs.odometry`, the
+replay tool's codecs) and only while a subscription is matched (:class:`RawOutput`);
+``/diagnostics`` (once a second) is an ordinary message. ``imu/data`` is the input Imu (its
+frame, rates and accelerations: the sensor's, REP-145) with the stamp the session used and the orientation of the sensor frame in ``world_frame``, the
 body's attitude composed with the mount (:meth:`RosOutputs.sensor_mount`, only when a
 subscription is matched); its ``orientation_covariance`` is the session's attitude covariance
 about fixed world axes (REP-145; the same for the sensor frame: a constant mount turns no world

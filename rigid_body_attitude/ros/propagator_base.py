@@ -243,7 +243,7 @@ class PropagatorMixin(Node):
         decode, handle = decoder(topic), input_handler(parts.session, topic)
         session, lock, takers = parts.session, parts.state_lock, parts.takers
 
-        def coalesce(data: bytes) -> None:
+        def coalesce(data: bytes) -> object:
             take = takers[topic]
             newest: bytes | None = None
             superseded = 0

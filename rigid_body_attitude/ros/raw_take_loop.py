@@ -50,7 +50,6 @@ Handler = Callable[[bytes], Any]
 DRAINED = 'drained'
 
 
-
 class DedicatedGroup(MutuallyExclusiveCallbackGroup):
     """A mutually exclusive callback group whose entities a :class:`RawTakeLoop` can claim.
 
