@@ -10,7 +10,8 @@ frame, rates and accelerations: the sensor's, REP-145) with the stamp the sessio
 the orientation of the sensor frame in ``world_frame``, the body's attitude composed with the
 mount (:meth:`RosOutputs.sensor_mount`, only when a subscription is matched); its
 ``orientation_covariance`` is the session's attitude covariance about fixed world axes
-(REP-145; the same for the sensor frame: a constant mount turns no world axis), or all zeros (REP-145: unknown) with the parameter ``covariance`` off.
+(REP-145; the same for the sensor frame: a constant mount turns no world axis), or all zeros
+(REP-145: unknown) with the parameter ``covariance`` off.
 ``pose_with_covariance`` carries the same attitude block in its 6×6 covariance, the position block
 marked unknown (:data:`~rigid_body_attitude.session.uncertainty.UNKNOWN_POSITION_VARIANCE`). With
 ``publish_tf`` (:meth:`RosOutputs.enable_tf`) the attitude also goes to ``/tf`` as the transform
