@@ -8,7 +8,9 @@ For each controller (``--controllers``) and control rate (``--rates``, default 1
 * ``attitude_controller``: the package's (``odom`` in, ``torque`` out);
 * ``plain``: ``bench/plain_controller.py``, the plain rclpy controller of
   docs/closed-loop.md (a typed ``odom`` subscription on rclpy's stock executor, ``rclpy.spin``),
-  started with the environment as it is (no Fast DDS profile of the package).
+  started with the environment as it is (no Fast DDS profile of the package);
+* ``plain+profile``: the same with the package's Fast DDS profile
+  (``FASTRTPS_DEFAULT_PROFILES_FILE``, as docs/tuning.md advises for the node's peers).
 
 After a warm-up it reads the node's ``/diagnostics`` for ``--duration`` seconds: the achieved
 real-time factor of each one-second period (sim seconds per wall second) and the lockstep
@@ -63,8 +65,9 @@ def command(name: str) -> list:
 
 
 def controller_command(controller: str) -> list:
-    """The command line of ``controller`` (``attitude_controller`` or ``plain``)."""
-    if controller == 'plain':
+    """The command line of ``controller`` (``attitude_controller``, ``plain``,
+    ``plain+profile``)."""
+    if controller.startswith('plain'):
         return [sys.executable, str(PLAIN_CONTROLLER), '--ros-args', *GAINS]
     return command('attitude_controller') + ['--ros-args', *GAINS]
 
@@ -138,8 +141,12 @@ def measure(controller: str, rate_hz: float, duration: float, warmup: float, dom
         '-p', 'lockstep:=true', '-p', 'publish_clock:=true', '-p', 'real_time_factor:=0.0',
         '-p', f'publish_rate:={rate_hz}'], env=env,
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    loop_env = dict(env)
+    if controller == 'plain+profile':
+        from rigid_body_attitude.ros.middleware import packaged_fastdds_profile
+        loop_env['FASTRTPS_DEFAULT_PROFILES_FILE'] = str(packaged_fastdds_profile())
     loop = subprocess.Popen(controller_command(controller) + ['-r', f'__ns:={namespace}'],
-                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                            env=loop_env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     context, executor, periods = diagnostics_reader(domain_id, (node.pid, loop.pid))
     load = [os.getloadavg()[0]]
     try:
@@ -213,7 +220,7 @@ def markdown(rows: list) -> str:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--controllers', default='attitude_controller,plain',
-                        help='attitude_controller and/or plain')
+                        help='attitude_controller, plain and/or plain+profile')
     parser.add_argument('--rates', default='100,1000', help='control rates [Hz]')
     parser.add_argument('--duration', type=float, default=8.0, help='measured seconds')
     parser.add_argument('--warmup', type=float, default=4.0, help='seconds before measuring')

@@ -14,6 +14,7 @@ import importlib
 from typing import Any, cast
 
 from rclpy.callback_groups import CallbackGroup
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos_overriding_options import QoSOverridingOptions
@@ -49,11 +50,17 @@ def create_subscription(node: Node, endpoint: Endpoint, callback: Callable[[byte
         callback_group=callback_group, raw=True, **_overriding(endpoint))
 
 
-def create_publisher(node: Node, endpoint: Endpoint, name: str = '') -> Publisher:
+def create_publisher(node: Node, endpoint: Endpoint, name: str = '',
+                     on_matched: Callable[[], None] | None = None) -> Publisher:
     """The publisher of the output ``endpoint`` on ``node`` (``name``: the name a scene gives
-    it, else the endpoint's)."""
+    it, else the endpoint's); ``on_matched`` is called (by the executor serving the node's
+    default callback group) when a subscription matches it or leaves it."""
+    options: dict[str, Any] = _overriding(endpoint)
+    if on_matched is not None:
+        options['event_callbacks'] = PublisherEventCallbacks(
+            matched=lambda status: on_matched())
     return node.create_publisher(interface_class(endpoint.type), name or endpoint.name,
-                                 qos_profile(endpoint.qos), **_overriding(endpoint))
+                                 qos_profile(endpoint.qos), **options)
 
 
 def create_service(node: Node, endpoint: Endpoint, callback: Callable[[Any, Any], Any]

@@ -79,7 +79,7 @@ class AttitudePropagatorNode(PropagatorMixin):
                   if timer is not None]
         if parts.sim_clock is not None and isinstance(parts.session, DynamicsSession):
             return step_loop(self.context, parts.session, parts.sim_clock,
-                             _served(parts, ('command',)), timers, parts.clock_publisher,
+                             _served(parts, ('command',)), timers, parts.clock_output,
                              parts.state_lock, parts.outputs)
         return RawTakeLoop(self.context, _served(parts, ('sensor',)), timers)
 

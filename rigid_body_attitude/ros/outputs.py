@@ -41,7 +41,7 @@ from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
 from rigid_body_attitude.ros.interface import create_publisher
 from rigid_body_attitude.ros.log_queue import LogQueue
 from rigid_body_attitude.ros.rclpy_internals import raw_output
-from rigid_body_attitude.session.interface import NODE_INTERFACE, Situation
+from rigid_body_attitude.session.interface import Endpoint, NODE_INTERFACE, Situation
 from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
 from rigid_body_attitude.session.reports import DiagnosticReport
 from rigid_body_attitude.session.uncertainty import pose_covariance
@@ -70,9 +70,10 @@ class RawOutput:
     (``qos_overrides`` cannot change durability), so a sample published with no matched
     subscription reaches nobody, ever; Fast DDS would still store it. :meth:`matched` asks
     the middleware at most once every :data:`MATCH_CHECK_PERIOD` seconds (a call into rmw
-    per output and message cost more than the rest of a lockstep tick's Python): a
-    subscription that matched gets its first message at most that much later, and for that
-    long after the last one left a message may still be handed to the middleware.
+    per output and message costs more than the rest of a lockstep tick's Python), and at once
+    after the publisher's matched event (:meth:`of`): a subscription that matched gets every
+    message from the next after the event; for at most that period after the last one left a
+    message may still be handed to the middleware.
     """
 
     __slots__ = ('subscription_count', 'publish', '_matched', '_check_at')
@@ -84,6 +85,23 @@ class RawOutput:
         #: serialized (CDR) ``bytes``.
         self.subscription_count, self.publish = raw_output(publisher)
         self._matched, self._check_at = False, -math.inf
+
+    @classmethod
+    def of(cls, node: Node, endpoint: Endpoint, name: str = '') -> RawOutput:
+        """The output ``endpoint`` of ``node`` (``name``: the scene's), its publisher created
+        with a matched event that makes :meth:`matched` ask again at once."""
+        made: list[RawOutput] = []
+
+        def recheck() -> None:
+            if made:
+                made[0].recheck()
+        output = cls(create_publisher(node, endpoint, name, on_matched=recheck))
+        made.append(output)
+        return output
+
+    def recheck(self) -> None:
+        """The next :meth:`matched` asks the middleware (any thread)."""
+        self._check_at = -math.inf
 
     def matched(self) -> bool:
         """Whether a subscription was matched at the last look (at most
@@ -121,7 +139,7 @@ class RosOutputs:
         self.situation = situation
         raw: dict[str, RawOutput] = {}
         for endpoint in NODE_INTERFACE.outputs(situation, ('output',)):
-            raw[endpoint.name] = RawOutput(create_publisher(node, endpoint))
+            raw[endpoint.name] = RawOutput.of(node, endpoint)
         #: ``/diagnostics`` (its ``hardware_id``: the scene's name, set by the node).
         self.diagnostics_publisher = DiagnosticsPublisher(node, NODE_INTERFACE)
         absent = RawOutput.absent()
@@ -164,7 +182,7 @@ class RosOutputs:
         scene = self.situation.scene
         for endpoint in NODE_INTERFACE.outputs(self.situation, ('simulated_sensor',)):
             topic = endpoint.topic(scene)
-            self.simulated_imus[topic] = RawOutput(create_publisher(self.node, endpoint, topic))
+            self.simulated_imus[topic] = RawOutput.of(self.node, endpoint, topic)
         for endpoint in NODE_INTERFACE.outputs(self.situation, ('tf_static',)):
             self.tf_static = create_publisher(self.node, endpoint)
             sec, nanosec = self.node.get_clock().now().seconds_nanoseconds()
@@ -175,8 +193,7 @@ class RosOutputs:
         """Publish ``world_frame`` -> ``body_frame`` on ``/tf`` when the interface has it, at
         most ``tf_rate`` per second of stamps (0: with every output)."""
         for endpoint in NODE_INTERFACE.outputs(self.situation, ('tf',)):
-            self.tf = create_publisher(self.node, endpoint)
-            self.tf_raw = RawOutput(self.tf)
+            self.tf_raw = RawOutput.of(self.node, endpoint)
         self.tf_limiter = StampRateLimiter(tf_rate)
 
     def _publish_tf(self, sec: int, nanosec: int, attitude: Quaternion) -> None:

@@ -21,7 +21,6 @@ from typing import Any
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
-from rclpy.publisher import Publisher
 from rclpy.service import Service
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
@@ -34,9 +33,8 @@ from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import (
     ANGULAR_RATE, decoder, input_handler, MALFORMED)
 from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, DRAINED
-from rigid_body_attitude.ros.interface import (
-    create_publisher, create_service, create_subscription)
-from rigid_body_attitude.ros.outputs import RosOutputs
+from rigid_body_attitude.ros.interface import create_service, create_subscription
+from rigid_body_attitude.ros.outputs import RawOutput, RosOutputs
 from rigid_body_attitude.ros.parameters import (
     declare_table_parameter, parameter_values, ros_value)
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
@@ -71,7 +69,7 @@ class NodeParts:
         situation: what decides the node's endpoints (:data:`NODE_INTERFACE`).
         loop_group: the callback group of the sensor inputs and timers, which the raw-take
             loop claims.
-        clock_publisher: ``/clock`` (``publish_clock``), or ``None``.
+        clock_output: ``/clock`` (``publish_clock``), or ``None``.
         subscriptions_by_topic, takers, handlers: per input topic, its raw subscription, its
             take function and its callback.
         mount_gate: the gyro samples' mount gate (gyro scenes), or ``None``.
@@ -89,7 +87,7 @@ class NodeParts:
     session: AnySession
     situation: Situation
     loop_group: DedicatedGroup = field(default_factory=DedicatedGroup)
-    clock_publisher: Publisher | None = None
+    clock_output: RawOutput | None = None
     subscriptions_by_topic: dict[str, Subscription] = field(default_factory=dict)
     takers: dict[str, Callable[[], bytes | None]] = field(default_factory=dict)
     handlers: dict[str, Callable[[bytes], object]] = field(default_factory=dict)
@@ -157,8 +155,8 @@ class PropagatorMixin(Node):
         parts = self.parts = NodeParts(
             threading.Lock(), clock_ns, scene, publish_rate, outputs, sim_clock, session,
             Situation(scene, values, session.propagator.input_names))
-        parts.clock_publisher = next(
-            (create_publisher(self, endpoint)
+        parts.clock_output = next(
+            (RawOutput.of(self, endpoint)
              for endpoint in NODE_INTERFACE.outputs(parts.situation, ('clock',))), None)
         outputs.set_frames(values['world_frame'], values['body_frame'])
         outputs.log_queue.start()

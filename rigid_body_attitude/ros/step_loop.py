@@ -19,7 +19,6 @@ import time
 from typing import Any
 
 from rclpy.context import Context
-from rclpy.publisher import Publisher
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 
@@ -114,12 +113,12 @@ class StepLoop(RawTakeLoop):
 
 def step_loop(context: Context, session: DynamicsSession, clock: SimClock,
               served: Sequence[tuple[Subscription, Handler]], timers: Sequence[Timer],
-              clock_publisher: Publisher | None, lock: threading.Lock,
+              clock_output: RawOutput | None, lock: threading.Lock,
               outputs: RosOutputs) -> StepLoop:
     """The :class:`StepLoop` of a node: its ticks publish ``/clock`` (raw bytes, when
-    ``clock_publisher`` has subscribers) and tick ``session`` under ``lock``; a lockstep timeout
+    ``clock_output`` has subscribers) and tick ``session`` under ``lock``; a lockstep timeout
     is counted and logged through ``outputs``."""
-    raw = RawOutput(clock_publisher) if clock_publisher is not None else None
+    raw = clock_output
     tick = session.lockstep_tick if clock.lockstep else session.tick
 
     def publish_clock(now_ns: int) -> None:

@@ -44,7 +44,7 @@ def scene(effect: dict) -> dict:
 def quoted_example() -> str:
     """The Python block of docs/closed-loop.md that follows the line naming the file."""
     text = (REPO_ROOT / 'docs' / 'closed-loop.md').read_text()
-    match = re.search(r'`bench/plain_controller\.py`[^\n]*:\n\n```python\n(.*?)```', text,
+    match = re.search(r'`bench/plain_controller\.py`.*?:\n\n```python\n(.*?)```', text,
                       re.DOTALL)
     assert match, 'docs/closed-loop.md quotes no bench/plain_controller.py'
     return match.group(1)
