@@ -82,7 +82,11 @@ def test_closed_loop_runs_in_lockstep_on_the_sim_clock(ros, request, processes, 
     harness = Harness(ros, namespace)
     clock = harness.record(Clock, '/clock', QoSProfile(
         depth=10, reliability=ReliabilityPolicy.RELIABLE))
-    torques = harness.record(WrenchStamped, 'torque')
+    # transient local, as the controller's torque writer: every torque from the first, however
+    # late this reader matches it on a loaded machine
+    torques = harness.record(WrenchStamped, 'torque', QoSProfile(
+        depth=5000, reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL))
     plant, controller = launch.nodes
     node_process = start(plant, tmp_path, processes)
     controller_process = start(controller, tmp_path, processes)
@@ -91,6 +95,9 @@ def test_closed_loop_runs_in_lockstep_on_the_sim_clock(ros, request, processes, 
         assert harness.spin_until(
             lambda: bool(clock) and seconds(clock[-1].clock) >= 2.0, timeout=60.0), (
             f'sim time {seconds(clock[-1].clock) if clock else None}')
+        assert harness.spin_until(lambda: len({round(seconds(t.header.stamp) * 100)
+                                               for t in torques}) >= 200, timeout=30.0), (
+            f'{len(torques)} torques recorded')
     finally:
         node_stderr = stopped(node_process)
         stopped(controller_process)
