@@ -253,6 +253,10 @@ class _Propagator:
         return rotation
 
     def world_momentum(self) -> FloatArray:
+        """World-frame angular momentum ``R(q)(J ω + h)`` [N m s] as an array."""
+        return np.array(self.world_momentum_tuple())
+
+    def world_momentum_tuple(self) -> Vec:
         """World-frame angular momentum ``R(q)(J ω + h)`` [N m s] (plain float math)."""
         p, q, r = self.state.omega_tuple()
         j00, j01, j02, j10, j11, j12, j20, j21, j22 = self._inertia_entries
@@ -264,9 +268,9 @@ class _Propagator:
             mx, my, mz = mx + hx, my + hy, mz + hz
         w, x, y, z = self.state.attitude_tuple()
         tx, ty, tz = 2.0 * (y * mz - z * my), 2.0 * (z * mx - x * mz), 2.0 * (x * my - y * mx)
-        return np.array([mx + w * tx + (y * tz - z * ty),
-                         my + w * ty + (z * tx - x * tz),
-                         mz + w * tz + (x * ty - y * tx)])
+        return (mx + w * tx + (y * tz - z * ty),
+                my + w * ty + (z * tx - x * tz),
+                mz + w * tz + (x * ty - y * tx))
 
     def diagnostics(self) -> Diagnostics:
         """Energy, momentum and their drift, energy-balance residual, norm error."""

@@ -237,6 +237,7 @@ class DynamicsSession(Session):
 
 
 def _finite(sample: OutputSample) -> bool:
-    return all(math.isfinite(value) for value in (
-        *sample.attitude, *sample.position, *sample.omega_body, sample.energy,
-        *sample.world_momentum))
+    values = (*sample.attitude, *sample.position, *sample.omega_body, sample.energy,
+              *sample.world_momentum)
+    # a NaN or an infinity makes the sum non-finite; a finite sum settles it in one call
+    return math.isfinite(sum(values)) or all(math.isfinite(value) for value in values)
