@@ -24,7 +24,7 @@ a CPU (the machine's load average is printed beside each row).
 
 Example::
 
-    python bench/lockstep_loop.py                 # both controllers, 100 and 1000 Hz
+    python bench/lockstep_loop.py                 # the three controllers, 100 and 1000 Hz
     python bench/lockstep_loop.py --controllers plain --rates 100 --duration 10
 """
 
@@ -219,7 +219,7 @@ def markdown(rows: list) -> str:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--controllers', default='attitude_controller,plain',
+    parser.add_argument('--controllers', default='attitude_controller,plain,plain+profile',
                         help='attitude_controller, plain and/or plain+profile')
     parser.add_argument('--rates', default='100,1000', help='control rates [Hz]')
     parser.add_argument('--duration', type=float, default=8.0, help='measured seconds')
