@@ -55,7 +55,8 @@ from numpy.typing import NDArray
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.effects import (
     EFFECTS, BodyProperties, Effect, SampledTorque)
-from rigid_body_attitude.core.errors import AttitudeError, SceneError
+from rigid_body_attitude.core.errors import AttitudeError, InertiaError, SceneError
+from rigid_body_attitude.core.dynamics.euler import inertia_without_rotors
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.paths import config_folders
 from rigid_body_attitude.core.sensors.imu import ImuSpec, sensors_spec
@@ -118,9 +119,13 @@ class Scene:
     imu: ImuSpec | None = None
 
     def build_effects(self) -> list[Effect]:
-        """Construct the scene's effects, in order; nothing else is built."""
+        """Construct the scene's effects, in order, and link them (:meth:`Effect.bind`);
+        nothing else is built."""
         body = BodyProperties(self.inertia, self.mass)
-        return [EFFECTS[name](params, body) for name, params in self.effects]
+        effects = [EFFECTS[name](params, body) for name, params in self.effects]
+        for effect in effects:
+            effect.bind(effects)
+        return effects
 
     def with_overrides(self, integrator: str = '', step: float = 0.0,
                        effect_parameters: Mapping[str, Mapping[str, Any]] | None = None
@@ -375,7 +380,14 @@ def _check_effects(scene: Scene) -> None:
         raise SceneError(_bounded(str(err))) from err
     except (AttitudeError, TypeError, OverflowError) as err:
         raise SceneError(_bounded(f'effects: {err}')) from err
+    try:
+        inertia_without_rotors(scene.inertia, built)
+    except InertiaError as err:
+        raise SceneError(_bounded(f'body.inertia minus the wheels\' spin inertia (the inertia '
+                                  f'the body keeps around spinning wheels) is not an inertia: '
+                                  f'{err}')) from err
     for effect in built:
+        effect.check_step(scene.step)
         if isinstance(effect, SampledTorque):
             steps = effect.period / scene.step
             if not (round(steps) >= 1 and abs(steps - round(steps)) <= 1e-9 * steps):

@@ -12,6 +12,11 @@ dynamic effectors and effectors with state of their own):
 * :class:`RateCorrection` — ``corrected_rate(t, attitude, ω_measured)`` [rad/s, body] for
   measured gyro rates (strapdown scenes);
 * :class:`StatefulEffect` — an integrated state of its own (centre-of-mass motion);
+* :class:`HeldOverStep` — an output held over each integration step, evaluated from the state
+  at the step's start (a drive's or a coil's zero-order hold at the scene's step);
+* :class:`RotorState` — rotors whose speeds are an integrated state of their own (reaction
+  wheels): a :class:`RotorEffect` held over each step, its spin inertia taken out of the
+  body's;
 * :class:`CommandedEffect` — driven by a held commanded input whose switch times end steps;
 * :class:`~.sampled.SampledTorque` — a digital controller's torque: computed from the state
   at sample instants a whole number of steps apart, held in between (zero-order hold).
@@ -49,12 +54,15 @@ __all__ = [
     'Effect',
     'EFFECTS',
     'ForceEffect',
+    'Environment',
     'HeldInput',
+    'HeldOverStep',
     'Parameter',
     'Quat',
     'REQUIRED',
     'RateCorrection',
     'RotorEffect',
+    'RotorState',
     'StatefulEffect',
     'TorqueEffect',
     'Vec',
@@ -79,12 +87,30 @@ REQUIRED: Any = object()
 EFFECTS: Registry[type[Effect]] = Registry('effect', SceneError)
 
 
+class Environment:
+    """What a scene says about the world the body moves in, for the effects that act through
+    it: the orbit (:class:`~rigid_body_attitude.core.environment.orbit.CircularOrbit`) and the
+    magnetic field model
+    (:class:`~rigid_body_attitude.core.environment.magnetic_field.MagneticFieldModel`), each
+    None when the scene has no such section."""
+
+    def __init__(self, orbit: Any = None, magnetic_field: Any = None) -> None:
+        """Keep the scene's orbit and field model (either may be None)."""
+        self.orbit = orbit
+        self.magnetic_field = magnetic_field
+
+
+_NO_ENVIRONMENT = Environment()
+
+
 @dataclass(frozen=True)
 class BodyProperties:
-    """What an effect may know about the body: inertia [kg m²] and mass [kg]."""
+    """What an effect may know about the body, inertia [kg m²] (the whole body, rotors
+    locked) and mass [kg], and about the scene's :class:`Environment`."""
 
     inertia: Inertia
     mass: float
+    environment: Environment = _NO_ENVIRONMENT
 
 
 @dataclass(frozen=True)
@@ -191,6 +217,18 @@ class Effect:
         """Take a commanded input (only called for names in :attr:`inputs`)."""
         raise SceneError(f'Effect {self.name!r} takes no input {input_name!r}')
 
+    def input_size(self, input_name: str) -> int:
+        """How many numbers a command of ``input_name`` holds (3: a body vector)."""
+        return 3
+
+    def bind(self, effects: Sequence[Effect]) -> None:
+        """Link to the other effects of the scene (all built), e.g. a controller to the
+        actuator it drives; :class:`SceneError` when a link the parameters ask for is missing.
+        """
+
+    def check_step(self, step: float) -> None:
+        """Refuse (:class:`SceneError`) a scene step [s] this effect cannot be held over."""
+
 
 class TorqueEffect(Effect, ABC):
     """An effect exerting a torque ``M(t, q, ω)`` [N m] in body axes.
@@ -201,6 +239,8 @@ class TorqueEffect(Effect, ABC):
     """
 
     torque_depends_on_rate: ClassVar[bool] = False
+    #: False for a controller whose output drives an actuator effect instead of the body.
+    applies_torque: bool = True
 
     @abstractmethod
     def torque(self, t: float, q: Quat, omega: Vec) -> Vec:
@@ -275,6 +315,77 @@ class RateCorrection(Effect, ABC):
     def corrected_rate(self, t: float, attitude: FloatArray,
                        omega_measured: FloatArray) -> FloatArray:
         """The corrected body rate [rad/s] for a measurement at ``t``."""
+
+
+class HeldOverStep(Effect, ABC):
+    """An effect whose output is held constant over each integration step.
+
+    The propagators call :meth:`hold` at the start of every step (and substep) with the state
+    there, before the integrator evaluates anything; the effect then answers every evaluation
+    inside the step with what it held (a wheel drive's torque, a coil's dipole: a zero-order
+    hold at the scene's step). :meth:`batch_hold` is the same for a chunk of bodies, whose
+    per-body rows are ``chunk.state`` (:attr:`batch_state_rows` of them).
+    """
+
+    @abstractmethod
+    def hold(self, t: float, h: float, q: Quat, omega: Vec) -> None:
+        """Hold the output for the step ``[t, t + h]`` from the state ``(q, ω)`` at ``t``."""
+
+    def batch_state_rows(self) -> int:
+        """Rows of per-body state this effect keeps in a batch."""
+        return 0
+
+    def batch_start(self, omega: FloatArray, chunk: BatchChunk) -> None:
+        """Initialise the per-body rows of ``chunk.state`` from the rates ``omega`` (3, n)."""
+
+    @abstractmethod
+    def batch_hold(self, t: float, h: float, q: FloatArray, omega: FloatArray,
+                   chunk: BatchChunk) -> None:
+        """:meth:`hold` for every body of ``chunk`` (``q`` (4, n), ``omega`` (3, n))."""
+
+
+class RotorState(HeldOverStep, RotorEffect, ABC):
+    """Rotors whose speeds are an integrated state of their own (reaction wheels).
+
+    Each rotor ``i`` spins about a body axis ``âᵢ`` with spin inertia ``Jₛᵢ``; its state is
+    the absolute axial momentum ``Hᵢ = Jₛᵢ (Ωᵢ + âᵢ·ω)`` (``Ωᵢ`` its speed relative to the
+    body), driven by the net axial torque ``uᵢ`` (motor minus friction) that :meth:`hold`
+    holds over the step: ``Hᵢ(t) = Hᵢ(tₖ) + uᵢ (t − tₖ)`` is exact inside the step, so
+    :meth:`rotor` gives ``h = Σ Hᵢ âᵢ`` and ``ḣ = Σ uᵢ âᵢ`` at any stage. The body then obeys
+    ``J' ω̇ + ω × (J' ω + h) = M − ḣ`` with ``J' = J − Σ Jₛᵢ âᵢ âᵢᵀ``
+    (:meth:`spin_inertia_body`; ``J`` the whole body with the rotors locked). The total
+    kinetic energy is ``½ ωᵀ J' ω + Σ Hᵢ²/(2 Jₛᵢ)`` (:meth:`kinetic_energy`); :meth:`commit`
+    advances the state at the step's end and returns the change of that own energy, which
+    with the integrator's work ``∫ ω·(M − ḣ) dt`` is the work of the external torques, the
+    motors and the friction.
+    """
+
+    @abstractmethod
+    def spin_inertia_body(self) -> FloatArray:
+        """``Σ Jₛᵢ âᵢ âᵢᵀ`` [kg m²] (3, 3), body axes."""
+
+    @abstractmethod
+    def start(self, omega_body: Vec) -> None:
+        """Set the state from the initial rotor speeds and the body rate ``omega_body``."""
+
+    @abstractmethod
+    def commit(self, t: float, h: float, omega_start: Vec, omega_end: Vec) -> float:
+        """Advance the state to ``t + h`` with the held torques; return the change [J] of
+        :meth:`kinetic_energy` over the step."""
+
+    @abstractmethod
+    def kinetic_energy(self) -> float:
+        """``Σ Hᵢ²/(2 Jₛᵢ)`` [J]: the rotors' axial kinetic energy."""
+
+    @abstractmethod
+    def batch_spin_inertia(self, parameters: Mapping[str, Any], count: int) -> FloatArray:
+        """:meth:`spin_inertia_body` of ``count`` bodies from their batch parameters, shape
+        (3, 3, count) or (3, 3, 1) when shared."""
+
+    @abstractmethod
+    def batch_commit(self, t: float, h: float, omega_start: FloatArray,
+                     omega_end: FloatArray, chunk: BatchChunk) -> None:
+        """:meth:`commit` for every body of ``chunk`` (its state rows)."""
 
 
 #: Sum of the scene's forces at ``(t, q)`` [N, world], plain floats.
@@ -358,24 +469,27 @@ class HeldInput:
     #: Commands kept; older ones can no longer be in force once this many newer ones exist.
     KEPT = 8
 
-    def __init__(self, owner: Effect, timeout: float) -> None:
-        """Hold commands for ``timeout`` [s]; count expiries on ``owner``."""
+    def __init__(self, owner: Effect, timeout: float, size: int = 3) -> None:
+        """Hold commands of ``size`` numbers (3: a body vector) for ``timeout`` [s]; count
+        expiries on ``owner``. The integrals (:meth:`integral_at`) are of 3-vectors only."""
         self.owner = owner
         self.timeout = timeout
+        self.size = size
+        self.zero: Any = (0.0,) * size
         self.reset()
 
     def reset(self) -> None:
         """Forget every command."""
-        self.segments: list[tuple[float, float, Vec]] = []
+        self.segments: list[tuple[float, float, Any]] = []
         self.folded: Vec = _ZERO
         self.window: float | None = None
-        self.pinned: tuple[float, Vec, Vec] = (0.0, _ZERO, _ZERO)
+        self.pinned: tuple[float, Vec, Any] = (0.0, _ZERO, self.zero)
         self.expiry_counted = True
 
     @property
     def value(self) -> FloatArray:
         """The latest command (zero before any)."""
-        return np.array(self.segments[-1][2] if self.segments else _ZERO)
+        return np.array(self.segments[-1][2] if self.segments else self.zero)
 
     @property
     def stamp(self) -> float:
@@ -390,11 +504,14 @@ class HeldInput:
         if self.segments and self.segments[-1][1] > t:
             start, _, previous = self.segments[-1]
             self.segments[-1] = (start, t, previous)
-        self.segments.append((t, t + self.timeout, as_vec(value)))
-        for start, end, old in self.segments[:-self.KEPT]:
-            span = end - start
-            self.folded = (self.folded[0] + old[0] * span, self.folded[1] + old[1] * span,
-                           self.folded[2] + old[2] * span)
+        held = as_vec(value) if self.size == 3 else tuple(
+            np.asarray(value, dtype=np.float64).tolist())
+        self.segments.append((t, t + self.timeout, held))
+        if self.size == 3:
+            for start, end, old in self.segments[:-self.KEPT]:
+                span = end - start
+                self.folded = (self.folded[0] + old[0] * span, self.folded[1] + old[1] * span,
+                               self.folded[2] + old[2] * span)
         del self.segments[:-self.KEPT]
         self.expiry_counted = False
 
@@ -412,7 +529,9 @@ class HeldInput:
         self.window = None
         middle = 0.5 * (t_start + t_end)
         segment = self.segment_at(middle)
-        if segment is None:
+        if self.size != 3:
+            self.pinned = (middle, _ZERO, self.zero if segment is None else segment[2])
+        elif segment is None:
             self.pinned = (middle, self.integral_at(middle), _ZERO)
         else:
             self.pinned = (segment[0], self.integral_at(segment[0]), segment[2])
@@ -422,7 +541,7 @@ class HeldInput:
         """Evaluate at the times asked again."""
         self.window = None
 
-    def segment_at(self, t: float) -> tuple[float, float, Vec] | None:
+    def segment_at(self, t: float) -> tuple[float, float, Any] | None:
         """The command in force at ``t`` (the step's midpoint during a step), or None."""
         probe = t if self.window is None else self.window
         for segment in reversed(self.segments):
@@ -435,12 +554,12 @@ class HeldInput:
             self.owner.count('stale')
         return None
 
-    def vector_at(self, t: float) -> Vec:
-        """The command in force at ``t``, or zero (plain floats)."""
+    def vector_at(self, t: float) -> Any:
+        """The command in force at ``t``, or zero (a tuple of plain floats)."""
         if self.window is not None:
             return self.pinned[2]
         segment = self.segment_at(t)
-        return _ZERO if segment is None else segment[2]
+        return self.zero if segment is None else segment[2]
 
     def integral_at(self, t: float) -> Vec:
         """``∫ command dt`` from the first command to ``t`` (exact for the piecewise constant)."""
