@@ -214,12 +214,8 @@ class _Propagator:
             raise InputError(f'Scene {self.scene.name!r} takes no input {input_name!r}; '
                              f'inputs: {", ".join(sorted(self.input_routes)) or "(none)"}')
         size = self.input_routes[input_name][0].input_size(input_name)
-        try:
-            vector = np.asarray(value, dtype=np.float64)
-        except (TypeError, ValueError) as err:
-            raise InputError(f'Expected `{input_name}` as {size} finite numbers, got '
-                             f'{value!r}') from err
-        if vector.shape != (size,) or not math.isfinite(t) or not np.all(np.isfinite(vector)):
+        vector = _command_vector(input_name, value, size)
+        if vector.shape != (size,) or not math.isfinite(t):
             raise InputError(f'Expected `{input_name}` as {size} finite numbers at a finite '
                              f'time, got {vector.tolist()!r} at t={t!r}')
         for effect in self.input_routes[input_name]:
@@ -559,6 +555,20 @@ class GyroPropagator(_Propagator):
         attitude = self.method.propagate(state.attitude_tuple(), state.omega_tuple(), omega,
                                          t - state.time)
         state.set_sample(t, attitude, omega)
+
+
+def _command_vector(input_name: str, value: ArrayLike, size: int) -> FloatArray:
+    """A command's numbers as a finite float array (3: a body vector), or InputError."""
+    if size == 3:
+        return quaternion.as_vector(value, input_name)
+    try:
+        vector = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise InputError(f'Expected `{input_name}` as {size} finite numbers, got '
+                         f'{value!r}') from err
+    if not np.all(np.isfinite(vector)):
+        raise InputError(f'Expected `{input_name}` to be finite, got {vector.tolist()!r}')
+    return vector
 
 
 def _positive_finite(value: object) -> bool:

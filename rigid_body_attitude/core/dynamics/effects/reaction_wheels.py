@@ -7,7 +7,7 @@ inertia, wheels locked (``body.inertia``), and ``J' = J − Σ Jₛᵢ âᵢ â�
 
     J' ω̇ + ω × (J' ω + Σ Hᵢ âᵢ) = M − Σ uᵢ âᵢ,        Ḣᵢ = uᵢ = τₘᵢ − τ_fᵢ
 
-(F. L. Markley and J. L. Crassidis, *Fundamentals of Spacecraft Attitude Determination and
+(Source: F. L. Markley and J. L. Crassidis, *Fundamentals of Spacecraft Attitude Determination and
 Control*, 2014, sec. 3.3.5 (the reaction-wheel dynamics); P. C. Hughes, *Spacecraft Attitude
 Dynamics*, 1986, sec. 3.4; the balanced wheels of Basilisk's reactionWheelStateEffector, whose
 hub inertia likewise holds the wheels).
