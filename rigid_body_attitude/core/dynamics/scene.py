@@ -20,6 +20,8 @@ the effects; only the effects it names are constructed. Format::
       - viscous_damping: {coefficient: 0.01}
     sensors:                       # dynamics scenes: simulated sensors (core/sensors)
       imu: {rate: 200.0, frame_id: imu_link, seed: 1}
+    orbit: {altitude: 500000.0, inclination_deg: 97.4}   # spacecraft scenes (world: inertial)
+    magnetic_field: {model: tilted_dipole}               # or igrf, local (core/environment)
 
 Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`scene_path`).
 
@@ -54,7 +56,11 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.effects import (
-    EFFECTS, BodyProperties, Effect, SampledTorque)
+    EFFECTS, BodyProperties, Effect, Environment, SampledTorque)
+from rigid_body_attitude.core.environment.magnetic_field import MagneticFieldModel
+from rigid_body_attitude.core.environment.orbit import CircularOrbit
+from rigid_body_attitude.core.environment.sections import (
+    magnetic_field_section, orbit_section)
 from rigid_body_attitude.core.errors import AttitudeError, InertiaError, SceneError
 from rigid_body_attitude.core.dynamics.euler import inertia_without_rotors
 from rigid_body_attitude.core.dynamics.inertia import Inertia
@@ -70,7 +76,7 @@ FloatArray = NDArray[np.float64]
 
 RATE_SOURCES = ('dynamics', 'gyro')
 _TOP_KEYS = {'name', 'description', 'rate_source', 'integrator', 'step', 'body',
-             'initial_state', 'effects', 'sensors'}
+             'initial_state', 'effects', 'sensors', 'orbit', 'magnetic_field'}
 _REQUIRED_TOP_KEYS = ('rate_source', 'body')
 _BODY_KEYS = {'mass', 'inertia'}
 _STATE_KEYS = {'attitude', 'omega_body'}
@@ -103,6 +109,8 @@ class Scene:
         effects: ``(name, parameters)`` pairs in scene order.
         source: the file it came from, if any.
         imu: the simulated IMU of the ``sensors`` section, or None.
+        orbit: the ``orbit`` section (world: Earth-centred inertial), or None.
+        magnetic_field: the ``magnetic_field`` section's model, or None.
     """
 
     name: str
@@ -117,11 +125,14 @@ class Scene:
     effects: tuple[tuple[str, Mapping[str, Any]], ...] = field(default_factory=tuple)
     source: str = ''
     imu: ImuSpec | None = None
+    orbit: CircularOrbit | None = None
+    magnetic_field: MagneticFieldModel | None = None
 
     def build_effects(self) -> list[Effect]:
         """Construct the scene's effects, in order, and link them (:meth:`Effect.bind`);
         nothing else is built."""
-        body = BodyProperties(self.inertia, self.mass)
+        body = BodyProperties(self.inertia, self.mass,
+                              Environment(self.orbit, self.magnetic_field))
         effects = [EFFECTS[name](params, body) for name, params in self.effects]
         for effect in effects:
             effect.bind(effects)
@@ -203,6 +214,7 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
     with np.errstate(all='ignore'):  # overflow is refused below, not warned about
         inertia, mass = _body(data['body'])
         attitude, omega = _initial_state(data.get('initial_state', {}), inertia)
+    orbit = orbit_section(data.get('orbit'))
     scene = Scene(
         name=_label('name', data.get('name', default_name), MAX_NAME_CHARS),
         description=_label('description', data.get('description', ''), MAX_DESCRIPTION_CHARS),
@@ -216,6 +228,8 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
         effects=_effect_list(data.get('effects') or []),
         source=source,
         imu=sensors_spec(data.get('sensors')),
+        orbit=orbit,
+        magnetic_field=magnetic_field_section(data.get('magnetic_field'), orbit),
     )
     _check_effects(scene)
     _check_sensors(scene)

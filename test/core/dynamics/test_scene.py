@@ -221,8 +221,8 @@ BAD_SCENES = [
      r"Effect 'constant_torque': parameter 'frame' must be 'body' or 'world', got 'inertial'"),
     ('missing required parameter',
      f'rate_source: dynamics\nbody: {BODY}\neffects: [gravity_gradient]',
-     r"Effect 'gravity_gradient': missing parameter 'orbit_radius' \(orbit radius \[m\]\); "
-     r'valid parameters: initial_anomaly, mu, orbit_normal, orbit_radius'),
+     r"Effect 'gravity_gradient': missing parameter 'orbit_radius' \(orbit radius \[m\]\) "
+     r"or the scene's orbit: section"),
     ('gyro effect in a dynamics scene',
      f'rate_source: dynamics\nbody: {BODY}\neffects: [gyro_bias]',
      r"Effect 'gyro_bias' applies to gyro scenes, not to rate_source 'dynamics'"),

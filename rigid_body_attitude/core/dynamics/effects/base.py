@@ -43,6 +43,8 @@ from numpy.typing import NDArray
 from rigid_body_attitude.core.dynamics.batch_rows import BatchChunk
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
+from rigid_body_attitude.core.environment.magnetic_field import MagneticFieldModel
+from rigid_body_attitude.core.environment.orbit import CircularOrbit
 from rigid_body_attitude.core.registry import Registry
 from rigid_body_attitude.core.yaml_files import real
 
@@ -87,17 +89,14 @@ REQUIRED: Any = object()
 EFFECTS: Registry[type[Effect]] = Registry('effect', SceneError)
 
 
+@dataclass(frozen=True)
 class Environment:
     """What a scene says about the world the body moves in, for the effects that act through
-    it: the orbit (:class:`~rigid_body_attitude.core.environment.orbit.CircularOrbit`) and the
-    magnetic field model
-    (:class:`~rigid_body_attitude.core.environment.magnetic_field.MagneticFieldModel`), each
-    None when the scene has no such section."""
+    it: the orbit and the magnetic field model (``core/environment``), each None when the
+    scene has no such section."""
 
-    def __init__(self, orbit: Any = None, magnetic_field: Any = None) -> None:
-        """Keep the scene's orbit and field model (either may be None)."""
-        self.orbit = orbit
-        self.magnetic_field = magnetic_field
+    orbit: CircularOrbit | None = None
+    magnetic_field: MagneticFieldModel | None = None
 
 
 _NO_ENVIRONMENT = Environment()
@@ -376,6 +375,11 @@ class RotorState(HeldOverStep, RotorEffect, ABC):
     @abstractmethod
     def kinetic_energy(self) -> float:
         """``Σ Hᵢ²/(2 Jₛᵢ)`` [J]: the rotors' axial kinetic energy."""
+
+    @abstractmethod
+    def stored_momentum(self) -> Vec:
+        """``Σ Jₛᵢ Ωᵢ âᵢ`` [N m s, body]: the momentum the rotors hold relative to the body
+        (what momentum dumping takes out)."""
 
     @abstractmethod
     def batch_spin_inertia(self, parameters: Mapping[str, Any], count: int) -> FloatArray:

@@ -302,6 +302,13 @@ class ReactionWheels(CommandedEffect, RotorState):
         """``Σ Hᵢ²/(2 Jₛᵢ)`` [J]."""
         return sum(h * h / (2.0 * j) for h, j in zip(self.momentum, self.wheel['spin_inertia']))
 
+    def stored_momentum(self) -> Vec:
+        """``Σ Jₛᵢ Ωᵢ âᵢ`` [N m s] at the propagated time."""
+        x = y = z = 0.0
+        for (a, b, c), j, speed in zip(self.axes, self.wheel['spin_inertia'], self.speeds()):
+            x, y, z = x + j * speed * a, y + j * speed * b, z + j * speed * c
+        return x, y, z
+
     def batch_rotor(self, t: float, chunk: BatchChunk) -> tuple[FloatArray, Any]:
         """Each body's ``(h, ḣ)`` from its held rows."""
         return wheel_batch.rotor(self, t, chunk)
