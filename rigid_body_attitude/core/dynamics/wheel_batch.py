@@ -46,7 +46,7 @@ def _per_wheel(effect: Any, parameters: Mapping[str, Any], key: str) -> FloatArr
     """A per-wheel parameter as (N, n) or (N, 1) rows (shared or dispersed)."""
     nominal = effect.params[key]
     value = np.asarray(parameters[key], dtype=np.float64)
-    count = effect.count
+    count = effect.wheel_count
     if isinstance(nominal, np.ndarray):
         return value[:, None] if value.ndim == 1 else value
     if value.ndim == 0:
@@ -64,7 +64,7 @@ def spin_inertia(effect: Any, parameters: Mapping[str, Any], count: int) -> Floa
 
 def _blocks(effect: Any, state: FloatArray) -> list[FloatArray]:
     """The six per-wheel blocks (N, n) of ``state``."""
-    count = effect.count
+    count = effect.wheel_count
     return [state[k * count:(k + 1) * count] for k in range(6)]
 
 
@@ -83,7 +83,7 @@ def start(effect: Any, omega: FloatArray, chunk: BatchChunk) -> None:
     inertia = _per_wheel(effect, chunk.parameters, 'spin_inertia')
     initial = _per_wheel(effect, chunk.parameters, 'initial_speed')
     axes = _axes(effect, chunk.parameters)
-    state[:effect.count] = inertia * (initial + np.einsum('iwn,in->wn', axes, omega))
+    state[:effect.wheel_count] = inertia * (initial + np.einsum('iwn,in->wn', axes, omega))
     peak = len(TOTALS)
     state[-peak] = np.max(np.abs(_speeds(effect, chunk, omega)), axis=0)
     _sum_held(effect, chunk)
@@ -136,7 +136,7 @@ def hold(effect: Any, t: float, h: float, omega: FloatArray, chunk: BatchChunk) 
     net[:] = motor - friction
     start_speed[:] = speeds
     cut_row[:] = cut
-    chunk.state[6 * effect.count] = np.any(cut, axis=0)
+    chunk.state[6 * effect.wheel_count] = np.any(cut, axis=0)
     effect.batch_hold_time = t
     _sum_held(effect, chunk)
 
@@ -165,7 +165,7 @@ def commit(effect: Any, t: float, h: float, omega_end: FloatArray, chunk: BatchC
     speeds = _speeds(effect, chunk, omega_end)
     turned = 0.5 * h * (start_speed + speeds)
     state = chunk.state
-    base = 6 * effect.count
+    base = 6 * effect.wheel_count
     np.fmax(state[base + 1], np.max(np.abs(speeds), axis=0), out=state[base + 1])
     state[base + 2] += h * state[base]
     state[base + 3] += np.sum(motor * turned, axis=0)
@@ -176,20 +176,20 @@ def commit(effect: Any, t: float, h: float, omega_end: FloatArray, chunk: BatchC
 
 def totals(effect: Any, state: FloatArray) -> dict[str, FloatArray]:
     """Each body's totals (n,) by name (:data:`TOTALS`) from its state rows."""
-    base = 6 * effect.count + 1
+    base = 6 * effect.wheel_count + 1
     return {name: state[base + k].copy() for k, name in enumerate(TOTALS)}
 
 
 def momenta(effect: Any, parameters: Mapping[str, Any], state: FloatArray) -> FloatArray:
     """Each body's ``Σ Hᵢ âᵢ`` (3, n) from its state rows and parameters."""
     result: FloatArray = np.einsum('iwn,wn->in', _axes(effect, parameters),
-                                   state[:effect.count])
+                                   state[:effect.wheel_count])
     return result
 
 
 def energies(effect: Any, parameters: Mapping[str, Any], state: FloatArray) -> FloatArray:
     """Each body's ``Σ Hᵢ²/(2 Jₛᵢ)`` (n,)."""
-    momentum = state[:effect.count]
+    momentum = state[:effect.wheel_count]
     result: FloatArray = np.sum(momentum ** 2 / (2.0 * _per_wheel(
         effect, parameters, 'spin_inertia')), axis=0)
     return result
@@ -200,6 +200,6 @@ def relative_momenta(effect: Any, parameters: Mapping[str, Any], state: FloatArr
     """Each body's stored wheel momentum ``Σ Jₛᵢ Ωᵢ âᵢ`` (3, n) (what dumping removes)."""
     axes = _axes(effect, parameters)
     inertia = _per_wheel(effect, parameters, 'spin_inertia')
-    speeds = state[:effect.count] / inertia - np.einsum('iwn,in->wn', axes, omega)
+    speeds = state[:effect.wheel_count] / inertia - np.einsum('iwn,in->wn', axes, omega)
     result: FloatArray = np.einsum('iwn,wn->in', axes, inertia * speeds)
     return result

@@ -136,7 +136,7 @@ class ReactionWheels(CommandedEffect, RotorState):
         """Validate; broadcast the per-wheel parameters; no command, wheels at rest."""
         super().__init__(params, body)
         axes = self.params['axes']
-        self.count = count = axes.shape[0]
+        self.wheel_count = count = axes.shape[0]
         self.axes = [tuple(axis) for axis in axes.tolist()]
         wheel = {key: _broadcast(self.name, key, self.params[key], count) for key in (
             'spin_inertia', 'max_torque', 'max_speed', 'coulomb_friction', 'viscous_friction',
@@ -154,7 +154,7 @@ class ReactionWheels(CommandedEffect, RotorState):
 
     def input_size(self, input_name: str) -> int:
         """One number per wheel."""
-        return self.count
+        return self.wheel_count
 
     def accept_input(self, input_name: str, t: float, value: FloatArray) -> None:
         """Hold a torque or speed command from ``t``, clipped to the limits (counted)."""
@@ -188,7 +188,7 @@ class ReactionWheels(CommandedEffect, RotorState):
     def reset(self) -> None:
         """No command held; wheels at their initial speeds once :meth:`start` runs."""
         super().reset()
-        count = self.count
+        count = self.wheel_count
         self.momentum = [0.0] * count  # Hᵢ [N m s]
         self.net = [0.0] * count  # uᵢ held over the step [N m]
         self.motor = [0.0] * count
@@ -215,7 +215,7 @@ class ReactionWheels(CommandedEffect, RotorState):
         self.omega = omega_body
         self.momentum = [j * (speed + _dot(axis, omega_body)) for j, speed, axis in zip(
             self.wheel['spin_inertia'], self.wheel['initial_speed'], self.axes)]
-        self.net = [0.0] * self.count
+        self.net = [0.0] * self.wheel_count
         self._sum_held(0.0)
         self.peak_speed = max(abs(speed) for speed in self.speeds())
 
@@ -319,7 +319,7 @@ class ReactionWheels(CommandedEffect, RotorState):
 
     def batch_state_rows(self) -> int:
         """Momenta, held torques, start speeds, cut flags and the four totals."""
-        return wheel_batch.state_rows(self.count)
+        return wheel_batch.state_rows(self.wheel_count)
 
     def batch_start(self, omega: FloatArray, chunk: BatchChunk) -> None:
         """Every body's wheels at their initial speeds."""
