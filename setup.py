@@ -96,7 +96,7 @@ setup(
         *config_data_files(),
     ],
     install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags', 'apsw', 'matplotlib', 'tqdm',
-                      'allantools', 'dask[distributed]', 'pyarrow'],
+                      'allantools', 'dask[distributed]', 'pyarrow', 'ppigrf'],
     python_requires='>=3.11, <3.13',
     zip_safe=True,
     maintainer='rigid_body_attitude developers',
