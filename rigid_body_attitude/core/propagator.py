@@ -386,8 +386,8 @@ class DynamicsPropagator(_Propagator):
 
     def _held_step(self, q: Quat, omega: Vec, t: float, h: float) -> tuple[Quat, Vec, float]:
         """:meth:`_checked_step` with the effects held over the step."""
-        for effect in self.held:
-            effect.hold(t, h, q, omega)
+        for held in self.held:
+            held.hold(t, h, q, omega)
         new_q, new_omega, work = self.integrator.advance_with_work(q, omega, t, h, self.model)
         if not math.isfinite(new_omega[0] + new_omega[1] + new_omega[2] + work):
             raise IntegratorError(f'Integration produced a non-finite state: attitude '

@@ -94,7 +94,8 @@ def _allocation(effect: Any, chunk: BatchChunk) -> FloatArray:
     allocation = chunk.workspace.get('allocation')
     if allocation is None:
         axes = _axes(effect, chunk.parameters)  # (3, N, n)
-        allocation = chunk.workspace['allocation'] = np.linalg.pinv(axes.transpose(2, 0, 1))
+        allocation = np.asarray(np.linalg.pinv(axes.transpose(2, 0, 1)), dtype=np.float64)
+        chunk.workspace['allocation'] = allocation
     return allocation
 
 

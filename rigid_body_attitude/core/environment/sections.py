@@ -75,6 +75,7 @@ def orbit_section(data: Any) -> CircularOrbit | None:
 
 def _epoch(value: Any) -> datetime:
     """An ISO 8601 UTC date-time (YAML may have read it as one already)."""
+    parsed: datetime | None = None
     if isinstance(value, datetime):
         parsed = value
     elif isinstance(value, date):
@@ -83,9 +84,7 @@ def _epoch(value: Any) -> datetime:
         try:
             parsed = datetime.fromisoformat(value.replace('Z', '+00:00'))
         except ValueError:
-            parsed = None  # type: ignore[assignment]
-    else:
-        parsed = None  # type: ignore[assignment]
+            parsed = None
     if parsed is None or not 1900 <= parsed.year <= 2100:
         raise SceneError(f'Expected orbit.epoch to be a UTC date-time from 1900 to 2100 '
                          f'(2025-01-01T00:00:00Z), got {quote(value)}')

@@ -11,8 +11,8 @@ import pkgutil
 
 from rigid_body_attitude.core.dynamics.effects.base import (
     BatchChunk, BodyProperties, CommandedEffect, ConservativeTorque, Effect, EFFECTS, Environment,
-    ForceEffect, HeldOverStep, RateCorrection, RotorEffect, RotorState, StatefulEffect,
-    TorqueEffect)
+    ForceEffect, RateCorrection, RotorEffect, StatefulEffect, TorqueEffect)
+from rigid_body_attitude.core.dynamics.effects.held import HeldOverStep, RotorState
 from rigid_body_attitude.core.dynamics.effects.sampled import SampledTorque
 
 __all__ = ['BatchChunk', 'BodyProperties', 'CommandedEffect', 'ConservativeTorque', 'EFFECTS',
@@ -20,5 +20,5 @@ __all__ = ['BatchChunk', 'BodyProperties', 'CommandedEffect', 'ConservativeTorqu
            'RotorEffect', 'RotorState', 'SampledTorque', 'StatefulEffect', 'TorqueEffect']
 
 for _module in pkgutil.iter_modules(__path__):
-    if _module.name not in ('base', 'sampled'):
+    if _module.name not in ('base', 'held', 'sampled'):
         importlib.import_module(f'{__name__}.{_module.name}')

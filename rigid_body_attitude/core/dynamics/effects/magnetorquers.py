@@ -32,8 +32,9 @@ from rigid_body_attitude.core.control.magnetic import dumping_dipole, dumping_di
 from rigid_body_attitude.core.dynamics import wheel_batch
 from rigid_body_attitude.core.dynamics.batch_rows import cross_rows
 from rigid_body_attitude.core.dynamics.effects.base import (
-    BatchChunk, BodyProperties, CommandedEffect, Effect, FloatArray, HeldOverStep, nonnegative,
-    Parameter, positive, Quat, real, register, REQUIRED, RotorState, TorqueEffect, Vec)
+    BatchChunk, BodyProperties, CommandedEffect, Effect, FloatArray, nonnegative,
+    Parameter, positive, Quat, real, register, REQUIRED, TorqueEffect, Vec)
+from rigid_body_attitude.core.dynamics.effects.held import HeldOverStep, RotorState
 from rigid_body_attitude.core.dynamics.effects.sampled import SampledTorque
 from rigid_body_attitude.core.errors import SceneError
 

@@ -54,7 +54,8 @@ import numpy as np
 
 from rigid_body_attitude.core.dynamics.effects.base import (
     BatchChunk, BodyProperties, CommandedEffect, Effect, FloatArray, HeldInput, nonnegative,
-    Parameter, positive, Quat, real, register, REQUIRED, RotorState, Vec)
+    Parameter, positive, Quat, real, register, REQUIRED, Vec)
+from rigid_body_attitude.core.dynamics.effects.held import RotorState
 from rigid_body_attitude.core.dynamics.effects.sampled import SampledTorque
 from rigid_body_attitude.core.dynamics import wheel_batch
 from rigid_body_attitude.core.errors import SceneError
@@ -136,7 +137,7 @@ class ReactionWheels(CommandedEffect, RotorState):
         """Validate; broadcast the per-wheel parameters; no command, wheels at rest."""
         super().__init__(params, body)
         axes = self.params['axes']
-        self.wheel_count = count = axes.shape[0]
+        self.wheel_count = count = int(axes.shape[0])
         self.axes = [tuple(axis) for axis in axes.tolist()]
         wheel = {key: _broadcast(self.name, key, self.params[key], count) for key in (
             'spin_inertia', 'max_torque', 'max_speed', 'coulomb_friction', 'viscous_friction',
@@ -178,8 +179,9 @@ class ReactionWheels(CommandedEffect, RotorState):
             raise SceneError(f'Effect {self.name!r}: parameter \'speed_gain\' {gain!r} 1/s '
                              f'times the step {step!r} s must be at most 1 (the held servo '
                              f'overshoots); lower the gain or the step')
-        ratio = max(step * c / j for c, j in zip(self.wheel['viscous_friction'],
-                                                   self.wheel['spin_inertia']))
+        wheel = self.wheel
+        ratio = max(step * c / j for c, j in zip(wheel['viscous_friction'],
+                                                 wheel['spin_inertia']))
         if ratio > 1.0:
             raise SceneError(f'Effect {self.name!r}: parameter \'viscous_friction\' times the '
                              f'step over spin_inertia is {ratio:.3g}, above 1 (the held '
