@@ -31,8 +31,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.batch_rows import cross_rows, matrix_rows_product
+from rigid_body_attitude.core.dynamics import wheel_batch
 from rigid_body_attitude.core.dynamics.effects import (
-    BatchChunk, CommandedEffect, Effect, ForceEffect, RotorEffect, SampledTorque, TorqueEffect)
+    BatchChunk, CommandedEffect, Effect, ForceEffect, HeldOverStep, RotorEffect, RotorState,
+    SampledTorque, TorqueEffect)
 from rigid_body_attitude.core.dynamics.effects.sampled import segment_end
 from rigid_body_attitude.core.dynamics.effects.translation import Translation
 from rigid_body_attitude.core.errors import InputError
@@ -257,6 +259,9 @@ class SceneBatch:
         self.effects = scene.build_effects()
         self._parameters = [_effect_parameters(effect, (effect_parameters or {}).get(
             effect.name, {}), self.count) for effect in self.effects]
+        self._tensor, self._inverse = _without_wheels(self._tensor, self._inverse,
+                                                      self.effects, self._parameters,
+                                                      self.count)
         self._state = np.ascontiguousarray(np.concatenate([attitude.T, omega.T]))
         self.translation = next((e for e in self.effects if isinstance(e, Translation)), None)
         if self.translation is not None:
@@ -264,11 +269,23 @@ class SceneBatch:
             self.velocity = np.repeat(self.translation.velocity[:, None], self.count, axis=1)
         self.switching = [e for e in self.effects if isinstance(e, CommandedEffect)]
         self.sampled = [e for e in self.effects if isinstance(e, SampledTorque)]
-        #: Each effect's own per-body state rows (a controller's held torque), or None.
-        self.effect_states = [np.zeros((e.STATE_ROWS, self.count))
-                              if isinstance(e, SampledTorque) else None for e in self.effects]
+        #: Each effect's own per-body state rows (a controller's held torque, wheel momenta),
+        #: or None.
+        self.effect_states = [np.zeros((_state_rows(e), self.count)) if _state_rows(e) else None
+                              for e in self.effects]
         self.input_routes = {name: [e for e in self.effects if name in e.input_names]
                              for e in self.effects for name in e.input_names}
+        self._start_held(omega)
+
+    def _start_held(self, omega: FloatArray) -> None:
+        """The effects held over each step start from the initial rates (wheel momenta)."""
+        if not any(isinstance(e, HeldOverStep) for e in self.effects):
+            return
+        for start in range(0, self.count, self.chunk):
+            bodies = slice(start, min(start + self.chunk, self.count))
+            chunk = _Chunk(self, bodies)
+            for effect, view in chunk.held:
+                effect.batch_start(np.ascontiguousarray(omega[bodies].T), view)
 
     @property
     def attitude(self) -> FloatArray:
@@ -385,7 +402,11 @@ class SceneBatch:
             force_start = chunk.force(t_start, y[:4])
         taken = 0
         for t, h in _Steps(t_start, t_end, self.scene.step):
+            if chunk.held:
+                chunk.hold(t, h, y)
             chunk.rk4(t, y, h)
+            if chunk.wheels:
+                chunk.commit(t, h, y)
             taken += 1
             if translation:
                 force_end = chunk.force(t + h, y[:4])
@@ -400,11 +421,43 @@ class SceneBatch:
         return taken
 
     def kinetic_energy(self) -> FloatArray:
-        """(N,) rotational kinetic energies ``½ ωᵀ J ω`` [J]."""
+        """(N,) rotational kinetic energies ``½ ωᵀ J' ω`` [J] (``J' = J`` without wheels),
+        plus the wheels' ``Σ Hᵢ²/(2 Jₛᵢ)``."""
         omega = self._state[4:]
         tensor = np.broadcast_to(self._tensor, (3, 3, self.count))
         energy: FloatArray = 0.5 * np.einsum('in,ijn,jn->n', omega, tensor, omega)
+        for effect, state, parameters in self._wheel_states():
+            energy += wheel_batch.energies(effect, parameters, state)
         return energy
+
+    def momentum_body(self) -> FloatArray:
+        """(N, 3) body-frame angular momenta ``J' ω + Σ Hᵢ âᵢ`` [N m s] (wheels included)."""
+        omega = self._state[4:]
+        tensor = np.broadcast_to(self._tensor, (3, 3, self.count))
+        momentum: FloatArray = np.einsum('ijn,jn->in', tensor, omega)
+        for effect, state, parameters in self._wheel_states():
+            momentum += wheel_batch.momenta(effect, parameters, state)
+        return np.ascontiguousarray(momentum.T)
+
+    def _wheel_states(self) -> list[tuple[RotorState, FloatArray, dict[str, Any]]]:
+        """Each wheel array with its state rows and batch parameters."""
+        return [(effect, state, parameters) for effect, state, (parameters, _) in zip(
+            self.effects, self.effect_states, self._parameters)
+            if isinstance(effect, RotorState) and state is not None]
+
+    def effect_totals(self, name: str) -> dict[str, FloatArray]:
+        """Per-body totals (N,) of the effect ``name``: a wheel array's ``peak_speed``
+        [rad/s], ``time_saturated`` [s], ``motor_work`` and ``friction_loss`` [J]; the
+        magnetorquers' ``torque_impulse`` [N m s]."""
+        for effect, state in zip(self.effects, self.effect_states):
+            if effect.name != name or state is None:
+                continue
+            if isinstance(effect, RotorState):
+                return wheel_batch.totals(effect, state)
+            if effect.name == 'magnetorquers':
+                return {'torque_impulse': state[3].copy()}
+        raise InputError(f'Scene {self.scene.name!r} has no wheel array or magnetorquers '
+                         f'{name!r}')
 
 
 class _Steps:
@@ -447,6 +500,30 @@ def _tensors(scene: Scene, inertia: ArrayLike | None,
     inverse = np.linalg.inv(tensors)
     return (np.ascontiguousarray(tensors.transpose(1, 2, 0)),
             np.ascontiguousarray(inverse.transpose(1, 2, 0)))
+
+
+def _state_rows(effect: Effect) -> int:
+    """Rows of per-body state an effect keeps in a batch."""
+    if isinstance(effect, SampledTorque):
+        return effect.STATE_ROWS
+    if isinstance(effect, HeldOverStep):
+        return effect.batch_state_rows()
+    return 0
+
+
+def _without_wheels(tensor: FloatArray, inverse: FloatArray, effects: list[Effect],
+                    parameters: list[tuple[dict[str, Any], frozenset[str]]],
+                    count: int) -> tuple[FloatArray, FloatArray]:
+    """``J' = J − Σ Jₛ â âᵀ`` per body (3, 3, N or 1) and its inverse (``J`` and its
+    ``inverse`` as they are without wheels)."""
+    spins = [effect.batch_spin_inertia(params, count)
+             for effect, (params, _) in zip(effects, parameters)
+             if isinstance(effect, RotorState)]
+    if not spins:
+        return tensor, inverse
+    reduced = tensor - sum(spins)
+    reduced_inverse = np.linalg.inv(reduced.transpose(2, 0, 1)).transpose(1, 2, 0)
+    return np.ascontiguousarray(reduced), np.ascontiguousarray(reduced_inverse)
 
 
 def _effect_parameters(effect: Effect, dispersed: Mapping[str, ArrayLike],
@@ -500,13 +577,22 @@ class _Chunk:
         self.rotors: list[tuple[RotorEffect, BatchChunk]] = []
         self.forces: list[tuple[ForceEffect, BatchChunk]] = []
         self.sampled: list[tuple[SampledTorque, BatchChunk]] = []
+        self.held: list[tuple[HeldOverStep, BatchChunk]] = []
+        self.wheels: list[tuple[RotorState, BatchChunk]] = []
+        peers: dict[str, BatchChunk] = {}
         states = batch.effect_states
         for effect, (parameters, dispersed), state in zip(batch.effects, batch._parameters,
                                                           states):
             sliced = {name: value[..., bodies] if name in dispersed else value
                       for name, value in parameters.items()}
             view = BatchChunk(self.tensor, self.mass, sliced, self.diagonal,
-                              state=np.empty((0, 0)) if state is None else state[:, bodies])
+                              state=np.empty((0, 0)) if state is None else state[:, bodies],
+                              peers=peers)
+            peers[effect.name] = view
+            if isinstance(effect, HeldOverStep):
+                self.held.append((effect, view))
+            if isinstance(effect, RotorState):
+                self.wheels.append((effect, view))
             if isinstance(effect, SampledTorque):
                 self.sampled.append((effect, view))
             if isinstance(effect, TorqueEffect):
@@ -515,6 +601,18 @@ class _Chunk:
                 self.rotors.append((effect, view))
             if isinstance(effect, ForceEffect):
                 self.forces.append((effect, view))
+
+    def hold(self, t: float, h: float, y: FloatArray) -> None:
+        """The effects held over the step from ``t`` take the state ``y`` (q, J' ω)."""
+        omega = self.rate(y[4:], np.empty((3, y.shape[1])))
+        for effect, view in self.held:
+            effect.batch_hold(t, h, y[:4], omega, view)
+
+    def commit(self, t: float, h: float, y: FloatArray) -> None:
+        """The wheels advance to ``t + h`` with the state ``y`` there."""
+        omega = self.rate(y[4:], np.empty((3, y.shape[1])))
+        for effect, view in self.wheels:
+            effect.batch_commit(t, h, omega, omega, view)
 
     def momentum(self, omega: FloatArray, out: FloatArray) -> FloatArray:
         """``out = J ω`` (3, n)."""
