@@ -17,6 +17,7 @@ interpolation error against the direct evaluation over an orbit). The result is 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from datetime import datetime, timezone
 
 import numpy as np
@@ -57,29 +58,33 @@ def igrf_earth_fixed(positions: FloatArray, epoch: datetime) -> FloatArray:
     return result
 
 
+@dataclass(frozen=True)
 class IgrfField:
     """IGRF-14 [T] along ``orbit`` in world axes, sampled and interpolated (module docstring).
+    The samples are a cache, not a field: two fields of the same orbit are equal.
     """
 
-    def __init__(self, orbit: CircularOrbit) -> None:
+    orbit: CircularOrbit
+
+    def __post_init__(self) -> None:
         """Check the epoch; compute the first block of samples."""
-        year = orbit.epoch.year
+        year = self.orbit.epoch.year
         if not FIRST_YEAR <= year < LAST_YEAR:
             raise InputError(f'Expected the orbit epoch within {FIRST_YEAR} to {LAST_YEAR} for '
-                             f'IGRF-14, got {orbit.epoch.isoformat()}')
-        self.orbit = orbit
-        self.samples: list[Vec] = []
+                             f'IGRF-14, got {self.orbit.epoch.isoformat()}')
+        object.__setattr__(self, 'samples', [])
         self._extend(BLOCK_SAMPLES)
 
     def _extend(self, count: int) -> None:
         """``count`` more samples (world axes)."""
-        start = len(self.samples)
+        samples: list[Vec] = getattr(self, 'samples')
+        start = len(samples)
         times = [(start + k) * SAMPLE_PERIOD for k in range(count)]
         positions = np.array([self.orbit.position_earth_fixed(t) for t in times])
         fields = igrf_earth_fixed(positions, self.orbit.epoch)
         for t, value in zip(times, fields.tolist()):
             x, y, z = self.orbit.to_world(t, (value[0], value[1], value[2]))
-            self.samples.append((x, y, z))
+            samples.append((x, y, z))
 
     def field_direct(self, t: float) -> Vec:
         """The field [T] at ``t`` evaluated by ``ppigrf`` itself (no interpolation)."""
@@ -92,14 +97,15 @@ class IgrfField:
         samples."""
         position = max(t, 0.0) / SAMPLE_PERIOD
         index = max(int(math.floor(position)) - 1, 0)
-        while index + 4 > len(self.samples):
+        samples: list[Vec] = getattr(self, 'samples')
+        while index + 4 > len(samples):
             self._extend(BLOCK_SAMPLES)
         s = position - index  # in [1, 2) except at the start
         w0 = -(s - 1.0) * (s - 2.0) * (s - 3.0) / 6.0
         w1 = s * (s - 2.0) * (s - 3.0) / 2.0
         w2 = -s * (s - 1.0) * (s - 3.0) / 2.0
         w3 = s * (s - 1.0) * (s - 2.0) / 6.0
-        a, b, c, d = self.samples[index:index + 4]
+        a, b, c, d = samples[index:index + 4]
         return (w0 * a[0] + w1 * b[0] + w2 * c[0] + w3 * d[0],
                 w0 * a[1] + w1 * b[1] + w2 * c[1] + w3 * d[1],
                 w0 * a[2] + w1 * b[2] + w2 * c[2] + w3 * d[2])
