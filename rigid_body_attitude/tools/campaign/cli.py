@@ -82,11 +82,11 @@ def _summary(result: CampaignResult) -> str:
     last = result.times[-1]
     for name in METRICS:
         column = result.statistics[name][:, -1]
-        values = ', '.join(f'{value:.4g}' for value in column)
+        text = ', '.join(f'{value:.4g}' for value in column)
         if np.all(np.isnan(column)):
-            values = 'none: every run turns slower than statistics.nutation_min_rate' if (
+            text = 'none: every run turns slower than statistics.nutation_min_rate' if (
                 name == 'nutation_deg') else 'none'
-        lines.append(f'{name} at {last:g} s (percentiles) [{UNITS[name]}]: {values}')
+        lines.append(f'{name} at {last:g} s (percentiles) [{UNITS[name]}]: {text}')
     if result.closed_loop:
         loop = result.closed_loop
         lines.append(f'closed loop: {loop["settled"]} of {result.runs - result.failed} runs '

@@ -39,7 +39,8 @@ def run_one_second(scene):
         assert propagator.state.time == pytest.approx(1.0, abs=1e-12)
     else:
         for input_name in sorted(propagator.input_names):
-            propagator.command(input_name, 0.0, [0.01, -0.02, 0.03])
+            size = propagator.input_routes[input_name][0].input_size(input_name)
+            propagator.command(input_name, 0.0, np.resize([0.01, -0.02, 0.03], size))
         propagator.advance_to(1.0)
         assert propagator.state.time == pytest.approx(1.0, abs=1e-12)
     return propagator
