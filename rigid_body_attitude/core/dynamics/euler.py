@@ -191,11 +191,13 @@ class RigidBodyModel:
 def inertia_without_rotors(inertia: Inertia, effects: Sequence[Effect]) -> Inertia:
     """``J' = J − Σ Jₛ â âᵀ``: the inertia Euler's equations take when rotors with a state of
     their own (:class:`.RotorState`) carry their axial momentum (``inertia`` itself when the
-    scene has none). Raises :class:`InertiaError` when ``J'`` is not a valid inertia."""
+    scene has none). ``J'`` is no rigid body's inertia (the triangle inequalities need not
+    hold) but must stay symmetric positive definite and non-singular: :class:`InertiaError`
+    otherwise."""
     spinning = [e.spin_inertia_body() for e in effects if isinstance(e, RotorState)]
     if not spinning:
         return inertia
-    return Inertia(inertia.tensor - sum(spinning))
+    return Inertia(inertia.tensor - sum(spinning), triangle=False)
 
 
 def _all_finite(h: float, values: tuple[float, ...]) -> bool:
