@@ -2,9 +2,12 @@
 
 * **Per sample** [µs]: :meth:`ImuModel.sample` (mean rate from the attitude increment, the
   specific force, every error term, saturation and quantisation on) and the Imu encoding
-  (:func:`~rigid_body_attitude.msgs.cdr.simulated_imu_encoder`), ``timeit`` on CPU time, best
-  of ``--repeats``; beside them one plain-float strapdown step, the run's yardstick (a busy
-  machine slows every figure: compare the ratio).
+  (:func:`~rigid_body_attitude.msgs.cdr.simulated_imu_encoder`); :meth:`MagnetometerModel.sample`
+  (the local field, hard and soft iron, noise, bias walk, saturation and quantisation on) and
+  :meth:`StarTrackerModel.sample` (misalignment, noise, the covariance about world axes and
+  the Sun exclusion test on), ``timeit`` on CPU time, best of ``--repeats``; beside them one
+  plain-float strapdown step, the run's yardstick (a busy machine slows every figure: compare
+  the ratio).
 * **Per simulated second** [ms]: a dynamics session (rk4, 1 ms step, a tumbling box, ticks of
   20 ms) without sensors and with a 200 Hz and a 1 kHz IMU, the samples handed to a sink that
   drops them; the ratio to the session without sensors. The three sessions run in turn
@@ -27,7 +30,9 @@ sys.path.insert(0, str(REPO))
 
 from rigid_body_attitude.core.attitude import quaternion  # noqa: E402
 from rigid_body_attitude.core.dynamics.scene import scene_from_mapping  # noqa: E402
-from rigid_body_attitude.core.sensors import ImuModel, ImuSpec  # noqa: E402
+from rigid_body_attitude.core.environment.sun import ConstantSunDirection  # noqa: E402
+from rigid_body_attitude.core.sensors import (  # noqa: E402
+    ImuModel, ImuSpec, MagnetometerModel, MagnetometerSpec, StarTrackerModel, StarTrackerSpec)
 from rigid_body_attitude.msgs.cdr import simulated_imu_encoder  # noqa: E402
 from rigid_body_attitude.session.dynamics import DynamicsSession  # noqa: E402
 from rigid_body_attitude.session.parameters import defaults  # noqa: E402
@@ -68,6 +73,27 @@ def per_sample(repeats: int) -> tuple[float, float, float]:
     return sample, encoded, step
 
 
+def attitude_sensor_samples(repeats: int) -> tuple[float, float]:
+    """µs per :meth:`MagnetometerModel.sample` and per :meth:`StarTrackerModel.sample`, every
+    term on (a sample the Sun does not exclude)."""
+    magnetometer = MagnetometerModel(MagnetometerSpec(
+        rate=100.0, noise_density=1e-8, intensity=5e-5, inclination=1.2, declination=0.07,
+        mount_rpy=(0.1, 0.2, 0.3), seed=1, random_walk=1e-10, hard_iron=(2e-5, -1e-5, 7e-6),
+        soft_iron=((1.08, 0.05, -0.02), (0.05, 0.93, 0.04), (-0.02, 0.04, 1.01)),
+        range=8e-4, resolution=1.5e-7))
+    star_tracker = StarTrackerModel(StarTrackerSpec(
+        rate=10.0, mount_rpy=(0.1, 0.2, 0.3), seed=1, misalignment_stddev=1e-4,
+        sun_exclusion_angle=0.5), ConstantSunDirection((0.0, -1.0, 0.0)))
+    q = tuple(quaternion.exp([0.4, -0.2, 0.3]).tolist())
+    count = 20_000
+    costs = []
+    for model in (magnetometer, star_tracker):
+        assert model.sample(1.0, q) is not None
+        costs.append(min(timeit.repeat(lambda: model.sample(1.0, q), number=count,
+                                       repeat=repeats, timer=time.process_time)) / count * 1e6)
+    return costs[0], costs[1]
+
+
 def session_cost(rate: float | None, seconds: float) -> float:
     """CPU milliseconds per simulated second of a dynamics session (with an IMU at ``rate``)."""
     data: dict[str, Any] = {
@@ -94,6 +120,10 @@ def main() -> None:
     sample, encoded, step = per_sample(args.repeats)
     print(f'ImuModel.sample: {sample:.2f} us per sample; Imu encoding: {encoded:.2f} us; '
           f'one strapdown step (scalar_exp_step): {step:.2f} us, the sample {sample / step:.1f}x')
+    magnetometer, star_tracker = attitude_sensor_samples(args.repeats)
+    print(f'MagnetometerModel.sample: {magnetometer:.2f} us per sample, '
+          f'{magnetometer / step:.1f}x the strapdown step; StarTrackerModel.sample: '
+          f'{star_tracker:.2f} us, {star_tracker / step:.1f}x')
     rates = (None, 200.0, 1000.0)
     costs = [min(run) for run in zip(*([session_cost(rate, args.seconds) for rate in rates]
                                        for _ in range(args.repeats)))]

@@ -75,7 +75,7 @@ class PropagatorState:
         return p, q, r
 
 
-class GyroState(PropagatorState):
+class FloatTupleState(PropagatorState):
     """A :class:`PropagatorState` that keeps attitude and rate as float tuples.
 
     The gyro hot path (:meth:`GyroPropagator.advance`, once per sample) and the dynamics steps
@@ -277,8 +277,8 @@ class _Propagator:
 class DynamicsPropagator(_Propagator):
     """Integrates Euler's equations and the attitude with the scene's integrator and step."""
 
-    _state_type = GyroState
-    state: GyroState
+    _state_type = FloatTupleState
+    state: FloatTupleState
 
     def __init__(self, scene: Scene) -> None:
         """Build the scene's effects, the body model and the integrator."""
@@ -490,8 +490,8 @@ class DynamicsPropagator(_Propagator):
 class GyroPropagator(_Propagator):
     """Strapdown integration of measured body rates with the scene's strapdown method."""
 
-    _state_type = GyroState
-    state: GyroState
+    _state_type = FloatTupleState
+    state: FloatTupleState
 
     def __init__(self, scene: Scene) -> None:
         """Build the rate corrections and the strapdown method named by the scene."""

@@ -24,7 +24,6 @@ return header stamps as float seconds (resolution 2.4·10⁻⁷ s at epoch times
 
 from rigid_body_attitude.msgs.cdr import (
     ATTITUDE_DECODERS,
-    RATE_DECODERS,
     TORQUE_DECODERS,
     Decoder,
     encode_float64,
@@ -57,8 +56,9 @@ from rigid_body_attitude.msgs.cdr import (
 )
 from rigid_body_attitude.msgs.decoders import (
     ENCAPSULATIONS,
-    GYRO_DECODERS,
-    GyroDecoder,
+    RATE_DECODERS,
+    RateDecoder,
+    RateSample,
     decode_float64,
     decode_header,
     decode_imu,
@@ -96,7 +96,6 @@ __all__ = [
     'ENCAPSULATIONS',
     'FIXED_LAYOUTS',
     'FLOAT64',
-    'GYRO_DECODERS',
     'IMU',
     'MESSAGE_TYPES',
     'POSE_STAMPED',
@@ -110,7 +109,8 @@ __all__ = [
     'WRENCH_STAMPED',
     'Decoder',
     'DiagnosticStatus',
-    'GyroDecoder',
+    'RateDecoder',
+    'RateSample',
     'Layout',
     'MalformedMessage',
     'Transform',

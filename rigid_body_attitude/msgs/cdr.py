@@ -58,7 +58,6 @@ from rigid_body_attitude.msgs.types import (
     IMU,
     POSE_STAMPED,
     QUATERNION_STAMPED,
-    TWIST_STAMPED,
     VECTOR3_STAMPED,
     WRENCH_STAMPED,
 )
@@ -67,7 +66,6 @@ from rigid_body_attitude.core.attitude.quaternion import multiply_floats
 
 __all__ = [
     'ATTITUDE_DECODERS',
-    'RATE_DECODERS',
     'TORQUE_DECODERS',
     'Decoder',
     'encode_clock',
@@ -194,14 +192,6 @@ def pose_position(data: bytes) -> tuple[float, Floats]:
 def float64_value(data: bytes) -> float:
     """The value of a ``std_msgs/msg/Float64`` (no header, so no stamp)."""
     return decode_float64(data)
-
-
-#: Decoders of a body-frame angular rate, by message type.
-RATE_DECODERS: dict[str, Decoder] = {
-    IMU: imu_rates,
-    VECTOR3_STAMPED: vector3_stamped,
-    TWIST_STAMPED: twist_angular,
-}
 
 
 #: Decoders of a body-frame torque, by message type.

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = [
+    'CLOCK',
     'DIAGNOSTIC_ARRAY',
     'FIXED_LAYOUTS',
     'FLOAT64',
@@ -22,6 +23,7 @@ __all__ = [
     'POSE_STAMPED',
     'POSE_WITH_COVARIANCE_STAMPED',
     'QUATERNION_STAMPED',
+    'TRIGGER',
     'TWIST_STAMPED',
     'VECTOR3_STAMPED',
     'WRENCH_STAMPED',
@@ -37,6 +39,9 @@ POSE_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/PoseWithCovarianceStamped'
 TWIST_STAMPED = 'geometry_msgs/msg/TwistStamped'
 FLOAT64 = 'std_msgs/msg/Float64'
 DIAGNOSTIC_ARRAY = 'diagnostic_msgs/msg/DiagnosticArray'
+#: Types the node uses through rclpy only (no codec here).
+CLOCK = 'rosgraph_msgs/msg/Clock'
+TRIGGER = 'std_srvs/srv/Trigger'
 
 
 @dataclass(frozen=True)

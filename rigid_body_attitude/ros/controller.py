@@ -6,7 +6,7 @@ angular part in body_frame) and ``target`` (geometry_msgs/QuaternionStamped, wor
 publishes ``torque`` (geometry_msgs/WrenchStamped, body_frame, zero force) and
 ``/diagnostics``. Remap ``orientation`` and ``twist`` to read an estimator instead of the
 plant's truth. The inputs are served by the package's raw-take loop
-(:class:`~rigid_body_attitude.ros.gyro_loop.GyroLoop`, every queued message per wake-up) and
+(:class:`~rigid_body_attitude.ros.raw_take_loop.RawTakeLoop`, every queued message per wake-up) and
 the parameter services by an executor in a second thread; on rclpy's stock executor path
 (:mod:`~rigid_body_attitude.ros.rclpy_internals`) one executor serves all. Everything else
 (pairing by stamp, sample and hold, checks, counts) is
@@ -25,8 +25,6 @@ from typing import Any
 
 import rclpy
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
@@ -38,23 +36,25 @@ from rigid_body_attitude.msgs.cdr import encode_wrench_stamped
 from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_twist_stamped
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
-from rigid_body_attitude.ros.node import ros_value
-from rigid_body_attitude.ros.propagator_base import declare_table_parameter, parameter_values
-from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
+from rigid_body_attitude.ros.parameters import (
+    declare_retired_parameters, declare_table_parameter, parameter_values, ros_value)
+from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, RawTakeLoop
+from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
+from rigid_body_attitude.ros.interface import create_publisher, create_subscription
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
 from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
-from rigid_body_attitude.ros.qos import COMMAND_QOS, CONTROLLER_OUTPUT_QOS, OUTPUT_QOS
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
-    CONTROLLER_PARAMETERS, check_controller_values)
-from rigid_body_attitude.session.reports import LEVEL_WARN
+    CONTROLLER_PARAMETERS, check_controller_values, RENAMED_CONTROLLER_PARAMETERS,
+    renamed_problem)
+from rigid_body_attitude.session.interface import CONTROLLER_INTERFACE
+from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD
 
 __all__ = ['AttitudeControllerNode', 'CONTROLLER_NODE_NAME', 'controller_usage', 'main']
 
 CONTROLLER_NODE_NAME = 'attitude_controller'
 _ZERO_FORCE = (0.0, 0.0, 0.0)
-_LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN}
 
 
 class AttitudeControllerNode(Node):
@@ -79,17 +79,17 @@ class AttitudeControllerNode(Node):
         #: the executor's thread, so the session is changed under this lock.
         self.loop_group = DedicatedGroup()
         self.session_lock = threading.Lock()
-        self.torque_publisher = self.create_publisher(
-            WrenchStamped, 'torque', CONTROLLER_OUTPUT_QOS)
-        self.diagnostics_publisher = self.create_publisher(
-            DiagnosticArray, '/diagnostics', OUTPUT_QOS)
+        self.torque_publisher = create_publisher(
+            self, CONTROLLER_INTERFACE.endpoint('torque', 'out'))
+        self.diagnostics_publisher = DiagnosticsPublisher(self, CONTROLLER_INTERFACE,
+                                                          CONTROLLER_NODE_NAME)
+        callbacks = {'attitude': self.orientation_callback, 'twist': self.twist_callback,
+                     'target': self.target_callback}
+        #: (subscription, callback) of each input of :data:`CONTROLLER_INTERFACE`.
         self.inputs = [
-            self.create_subscription(QuaternionStamped, 'orientation', self.orientation_callback,
-                                     COMMAND_QOS, callback_group=self.loop_group, raw=True),
-            self.create_subscription(TwistStamped, 'twist', self.twist_callback, COMMAND_QOS,
-                                     callback_group=self.loop_group, raw=True),
-            self.create_subscription(QuaternionStamped, 'target', self.target_callback,
-                                     COMMAND_QOS, callback_group=self.loop_group, raw=True)]
+            (create_subscription(self, endpoint, callbacks[endpoint.quantity], self.loop_group),
+             callbacks[endpoint.quantity])
+            for endpoint in CONTROLLER_INTERFACE if endpoint.direction == 'in']
         self.diagnostics_timer = self.create_timer(
             DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group,
             clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -97,8 +97,10 @@ class AttitudeControllerNode(Node):
         self.add_post_set_parameters_callback(self.parameters_set_callback)
 
     def _declare_parameters(self) -> dict[str, Any]:
-        return {parameter.name: declare_table_parameter(self, parameter)
-                for parameter in CONTROLLER_PARAMETERS}
+        values = {parameter.name: declare_table_parameter(self, parameter)
+                  for parameter in CONTROLLER_PARAMETERS}
+        declare_retired_parameters(self, RENAMED_CONTROLLER_PARAMETERS, renamed_problem)
+        return values
 
     def parameter_values(self) -> dict[str, Any]:
         """Current values of the controller's parameters by name."""
@@ -106,6 +108,10 @@ class AttitudeControllerNode(Node):
 
     def parameters_callback(self, parameters: list[RosParameter]) -> SetParametersResult:
         """Refuse run-time values the parameter table finds unusable."""
+        retired = [p.name for p in parameters if p.name in RENAMED_CONTROLLER_PARAMETERS
+                   and p.value is not None]
+        if retired:
+            return SetParametersResult(successful=False, reason=renamed_problem(retired[0]))
         values = self.parameter_values()
         by_name = {p.name: p for p in CONTROLLER_PARAMETERS}
         values.update({p.name: ros_value(by_name[p.name], p.value) for p in parameters
@@ -119,13 +125,11 @@ class AttitudeControllerNode(Node):
         with self.session_lock:
             self.session.apply(values)
 
-    def loop(self) -> GyroLoop:
+    def loop(self) -> RawTakeLoop:
         """The package's raw-take loop serving the inputs and the diagnostics timer (one
         reused wait set, every queued message taken per wake-up); creating it takes them
         away from every executor."""
-        return GyroLoop(self.context, list(zip(self.inputs, (
-            self.orientation_callback, self.twist_callback, self.target_callback))),
-            [self.diagnostics_timer])
+        return RawTakeLoop(self.context, self.inputs, [self.diagnostics_timer])
 
     def diagnostics_callback(self) -> None:
         """Publish this period's diagnostics."""
@@ -174,15 +178,9 @@ class AttitudeControllerNode(Node):
         self.torque_publisher.publish(encode_wrench_stamped(
             sec * 1_000_000_000 + nanosec, self.session.body_frame, _ZERO_FORCE, torque_body))
 
-    def diagnostics(self, report: Any) -> None:
+    def diagnostics(self, report: DiagnosticReport) -> None:
         """Publish one ``/diagnostics`` status, stamped with the node clock."""
-        status = DiagnosticStatus(
-            level=_LEVEL_BYTES[report.level], name=self.get_fully_qualified_name(),
-            message=report.message, hardware_id=CONTROLLER_NODE_NAME,
-            values=[KeyValue(key=key, value=value) for key, value in report.values])
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
-        self.diagnostics_publisher.publish(array)
+        self.diagnostics_publisher.publish(report)
 
     def log(self, level: int, text: str) -> None:
         """A log line of the session."""

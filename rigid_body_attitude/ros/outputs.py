@@ -27,24 +27,19 @@ from __future__ import annotations
 
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import (
-    PoseStamped, PoseWithCovarianceStamped, QuaternionStamped, TwistStamped, Vector3Stamped)
 from rclpy.node import Node
-from rclpy.qos_overriding_options import QoSOverridingOptions
-from sensor_msgs.msg import Imu
-from std_msgs.msg import Float64
-from tf2_msgs.msg import TFMessage
 
 from rigid_body_attitude.msgs.cdr import (
     encode_float64, imu_with_orientation, pose_stamped_encoder,
     pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
     transform_encoder)
+from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
+from rigid_body_attitude.ros.interface import create_publisher
 from rigid_body_attitude.ros.log_queue import LogQueue
-from rigid_body_attitude.ros.qos import OUTPUT_QOS, TF_QOS, TF_STATIC_QOS
 from rigid_body_attitude.ros.rclpy_internals import raw_output
+from rigid_body_attitude.session.interface import NODE_INTERFACE, Situation
 from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
-from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_ERROR, LEVEL_WARN
+from rigid_body_attitude.session.reports import DiagnosticReport
 from rigid_body_attitude.session.uncertainty import pose_covariance
 
 __all__ = ['RawOutput', 'RosOutputs']
@@ -52,8 +47,6 @@ __all__ = ['RawOutput', 'RosOutputs']
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
 
-_LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN,
-                LEVEL_ERROR: DiagnosticStatus.ERROR}
 _ZERO_POSITION = (0.0, 0.0, 0.0)
 _UNKNOWN = (0.0,) * 9
 
@@ -64,7 +57,7 @@ class RawOutput:
     On the fast path both go straight to rclpy's publisher handle, without
     :class:`rclpy.publisher.Publisher`'s per-call wrapper (it enters the handle as a context
     manager, against destruction by another thread, and checks the message type). That is
-    safe here because the node's publishers are destroyed only after its gyro loop has
+    safe here because the node's publishers are destroyed only after its raw-take loop has
     returned. Outputs are VOLATILE
     (``qos_overrides`` cannot change durability), so a sample published with no matched
     subscription reaches nobody, ever; Fast DDS would still store it, about 10 µs per message
@@ -80,36 +73,45 @@ class RawOutput:
         #: serialized (CDR) ``bytes``.
         self.subscription_count, self.publish = raw_output(publisher)
 
+    @classmethod
+    def absent(cls) -> RawOutput:
+        """An output the scene does not have: no subscription ever, nothing published."""
+        output = cls.__new__(cls)
+        output.subscription_count, output.publish = _no_subscription, _refuse
+        return output
+
+
+def _no_subscription() -> int:
+    return 0
+
+
+def _refuse(data: bytes) -> None:
+    raise RuntimeError('Expected no message on an output the scene does not have')
+
 
 class RosOutputs:
     """Publishers of one node and the messages they reuse; the session's sink."""
 
-    def __init__(self, node: Node, gyro_scene: bool, covariance: bool = False) -> None:
-        """Create the publishers of a gyro or a dynamics scene on ``node``
-        (``pose_with_covariance`` for a gyro scene with ``covariance``)."""
+    def __init__(self, node: Node, situation: Situation) -> None:
+        """Create on ``node`` the publishers of the session's outputs present in ``situation``
+        (:data:`~rigid_body_attitude.session.interface.NODE_INTERFACE`)."""
         self.node = node
-        self.orientation = self._publisher(QuaternionStamped, 'orientation')
-        self.pose = self._publisher(PoseStamped, 'pose')
-        self.diagnostics_publisher = node.create_publisher(
-            DiagnosticArray, '/diagnostics', OUTPUT_QOS)
-        self.orientation_raw = RawOutput(self.orientation)
-        self.pose_raw = RawOutput(self.pose)
-        if gyro_scene:
-            self.imu = self._publisher(Imu, 'imu/data')
-            self.imu_raw = RawOutput(self.imu)
-            self.pose_covariance_raw: RawOutput | None = None
-            if covariance:
-                self.pose_with_covariance = self._publisher(PoseWithCovarianceStamped,
-                                                            'pose_with_covariance')
-                self.pose_covariance_raw = RawOutput(self.pose_with_covariance)
-        else:
-            self.twist = self._publisher(TwistStamped, 'twist')
-            self.twist_raw = RawOutput(self.twist)
-            # A simulated body's invariants (a gyro scene simulates none).
-            self.energy = self._publisher(Float64, 'energy')
-            self.momentum = self._publisher(Vector3Stamped, 'angular_momentum')
-            self.energy_raw = RawOutput(self.energy)
-            self.momentum_raw = RawOutput(self.momentum)
+        self.situation = situation
+        raw: dict[str, RawOutput] = {}
+        for endpoint in NODE_INTERFACE.outputs(situation, ('output',)):
+            raw[endpoint.name] = RawOutput(create_publisher(node, endpoint))
+        #: ``/diagnostics`` (its ``hardware_id``: the scene's name, set by the node).
+        self.diagnostics_publisher = DiagnosticsPublisher(node, NODE_INTERFACE)
+        absent = RawOutput.absent()
+        #: The session's outputs, bound once for the hot path (:meth:`RawOutput.absent` for
+        #: those the scene does not have; ``pose_with_covariance``: ``None``).
+        self.orientation_raw = raw.get('orientation', absent)
+        self.pose_raw = raw.get('pose', absent)
+        self.imu_raw = raw.get('imu/data', absent)
+        self.pose_covariance_raw = raw.get('pose_with_covariance')
+        self.twist_raw = raw.get('twist', absent)
+        self.energy_raw = raw.get('energy', absent)
+        self.momentum_raw = raw.get('angular_momentum', absent)
         #: Row-major 3×3 ``imu/data`` orientation covariance and 6×6 ``pose_with_covariance``
         #: covariance (:meth:`attitude_covariance`).
         self.orientation_covariance: tuple[float, ...] = _UNKNOWN
@@ -123,7 +125,6 @@ class RosOutputs:
         self.world_frame = ''
         #: Frame of ``twist`` (:meth:`set_frames`).
         self.body_frame = ''
-        self.hardware_id = ''
         #: ``/tf`` (:meth:`enable_tf`), or None.
         self.tf_raw: RawOutput | None = None
         self.tf_limiter = StampRateLimiter(0.0)
@@ -132,24 +133,27 @@ class RosOutputs:
         #: Simulated IMU publishers by topic (:meth:`enable_simulated_imu`).
         self.simulated_imus: dict[str, RawOutput] = {}
 
-    def enable_simulated_imu(self, topic: str, body_frame: str, sensor_frame: str,
+    def enable_simulated_imu(self, body_frame: str, sensor_frame: str,
                              mount: Quaternion) -> None:
-        """Publish a simulated IMU's samples on ``topic`` and its mount (w, x, y, z) as the
-        static transform ``body_frame`` -> ``sensor_frame`` on ``/tf_static`` (once, stamped
-        with the node clock; none when the frames are the same)."""
-        self.simulated_imus[topic] = RawOutput(self._publisher(Imu, topic))
-        if sensor_frame == body_frame:
-            return
-        self.tf_static = self.node.create_publisher(TFMessage, '/tf_static', TF_STATIC_QOS)
-        sec, nanosec = self.node.get_clock().now().seconds_nanoseconds()
-        RawOutput(self.tf_static).publish(
-            transform_encoder(body_frame, sensor_frame)(sec, nanosec, mount))
+        """Publish the scene's simulated IMU samples on the topic the scene names and its
+        mount (w, x, y, z) as the static transform ``body_frame`` -> ``sensor_frame`` on
+        ``/tf_static`` when the interface has it (once, stamped with the node clock)."""
+        scene = self.situation.scene
+        for endpoint in NODE_INTERFACE.outputs(self.situation, ('simulated_sensor',)):
+            topic = endpoint.topic(scene)
+            self.simulated_imus[topic] = RawOutput(create_publisher(self.node, endpoint, topic))
+        for endpoint in NODE_INTERFACE.outputs(self.situation, ('tf_static',)):
+            self.tf_static = create_publisher(self.node, endpoint)
+            sec, nanosec = self.node.get_clock().now().seconds_nanoseconds()
+            RawOutput(self.tf_static).publish(
+                transform_encoder(body_frame, sensor_frame)(sec, nanosec, mount))
 
     def enable_tf(self, tf_rate: float) -> None:
-        """Publish ``world_frame`` -> ``body_frame`` on ``/tf``, at most ``tf_rate`` per
-        second of stamps (0: with every output)."""
-        self.tf = self.node.create_publisher(TFMessage, '/tf', TF_QOS)
-        self.tf_raw = RawOutput(self.tf)
+        """Publish ``world_frame`` -> ``body_frame`` on ``/tf`` when the interface has it, at
+        most ``tf_rate`` per second of stamps (0: with every output)."""
+        for endpoint in NODE_INTERFACE.outputs(self.situation, ('tf',)):
+            self.tf = create_publisher(self.node, endpoint)
+            self.tf_raw = RawOutput(self.tf)
         self.tf_limiter = StampRateLimiter(tf_rate)
 
     def _publish_tf(self, sec: int, nanosec: int, attitude: Quaternion) -> None:
@@ -158,11 +162,6 @@ class RosOutputs:
         if (tf is not None and tf.subscription_count()
                 and self.tf_limiter.due(sec * 1_000_000_000 + nanosec)):
             tf.publish(self.encode_tf(sec, nanosec, attitude))
-
-    def _publisher(self, message_type: Any, topic: str) -> Any:
-        return self.node.create_publisher(
-            message_type, topic, OUTPUT_QOS,
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
 
     def set_frames(self, world_frame: str, body_frame: str) -> None:
         """Frames of the world-frame outputs and of ``twist``."""
@@ -237,13 +236,7 @@ class RosOutputs:
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the node clock."""
-        status = DiagnosticStatus(
-            level=_LEVEL_BYTES[report.level], name=self.node.get_fully_qualified_name(),
-            message=report.message, hardware_id=self.hardware_id,
-            values=[KeyValue(key=key, value=value) for key, value in report.values])
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.node.get_clock().now().to_msg()
-        self.diagnostics_publisher.publish(array)
+        self.diagnostics_publisher.publish(report)
 
     def log(self, level: int, text: str) -> None:
         """A line for the node's logger, queued (:class:`~.log_queue.LogQueue`): never

@@ -8,7 +8,7 @@ wait on one reused wait set (the command subscriptions, the diagnostics timer, a
 and SIGINT's guard; GIL released, no busy spinning) until they arrived or ``lockstep_timeout``
 of wall time passed. Between ticks it waits the same way for the wall-time schedule of
 ``real_time_factor``, serving commands and diagnostics meanwhile. The command subscriptions
-and timers belong to :class:`~.gyro_loop.DedicatedGroup` s, so no executor takes them.
+and timers belong to :class:`~.raw_take_loop.DedicatedGroup` s, so no executor takes them.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 
 from rigid_body_attitude.msgs.cdr import encode_clock
-from rigid_body_attitude.ros.gyro_loop import GyroLoop, Handler
+from rigid_body_attitude.ros.raw_take_loop import RawTakeLoop, Handler
 from rigid_body_attitude.ros.outputs import RawOutput, RosOutputs
 from rigid_body_attitude.ros.rclpy_internals import new_wait_set
 from rigid_body_attitude.session.base import LEVEL_INFO
@@ -39,7 +39,7 @@ __all__ = ['READY_POLL_S', 'StepLoop', 'step_loop']
 READY_POLL_S = 0.1
 
 
-class StepLoop(GyroLoop):
+class StepLoop(RawTakeLoop):
     """Makes the sim clock's ticks and serves commands and timers between them."""
 
     def __init__(self, context: Context, served: Sequence[tuple[Subscription, Handler]],

@@ -34,7 +34,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.control import as_axis_gains, pd_torque_floats
 from rigid_body_attitude.session.base import LEVEL_INFO, WARNING_INTERVAL
 from rigid_body_attitude.session.controller_parameters import UNIT_TOLERANCE
-from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_OK, LEVEL_WARN
 from rigid_body_attitude.session.times import seconds_to_ns, stamp_problem, to_ns
 
@@ -63,14 +63,15 @@ class TorqueSink(Protocol):
 
 
 def target_from_values(values: Mapping[str, Any]) -> Quaternion:
-    """The target (w, x, y, z) of checked parameter values: ``target_quaternion``
+    """The target (w, x, y, z) of checked parameter values: ``target_quaternion_xyzw``
     (normalised), else ``target_rpy``, else the identity."""
-    if values['target_quaternion']:
-        x, y, z, w = values['target_quaternion']
+    if values['target_quaternion_xyzw']:
+        x, y, z, w = values['target_quaternion_xyzw']
         norm = math.sqrt(w * w + x * x + y * y + z * z)
         return w / norm, x / norm, y / norm, z / norm
     if values['target_rpy']:
-        return rpy_quaternion(*values['target_rpy'])
+        w, x, y, z = from_rpy(values['target_rpy']).tolist()
+        return w, x, y, z
     return _IDENTITY
 
 

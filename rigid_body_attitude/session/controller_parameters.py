@@ -14,8 +14,8 @@ from typing import Any
 
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, values_problem
 
-__all__ = ['CONTROLLER_PARAMETERS', 'UNIT_TOLERANCE', 'check_controller_values',
-           'controller_defaults']
+__all__ = ['CONTROLLER_PARAMETERS', 'RENAMED_CONTROLLER_PARAMETERS', 'UNIT_TOLERANCE',
+           'check_controller_values', 'controller_defaults', 'renamed_problem']
 
 #: Largest ``| |q| − 1 |`` of a quaternion taken as an attitude (parameter or message).
 UNIT_TOLERANCE = 1e-3
@@ -28,9 +28,10 @@ CONTROLLER_PARAMETERS: tuple[Parameter, ...] = (
     _NODE['body_frame'],
     Parameter('target_rpy', tuple, (),
               'rad: [roll, pitch, yaw] of the target attitude of body_frame in world_frame, as '
-              'static_transform_publisher takes them ([] = target_quaternion, or the identity)',
+              'static_transform_publisher takes them ([] = target_quaternion_xyzw, or the '
+              'identity)',
               -10.0, 10.0, may_be_empty=True, read_only=False),
-    Parameter('target_quaternion', tuple, (),
+    Parameter('target_quaternion_xyzw', tuple, (),
               '[x, y, z, w] of the target attitude, of unit norm ([] = target_rpy, or the '
               'identity: body axes on world axes)', -2.0, 2.0, may_be_empty=True,
               read_only=False, length=4),
@@ -47,6 +48,16 @@ CONTROLLER_PARAMETERS: tuple[Parameter, ...] = (
 
 _BY_NAME = {parameter.name: parameter for parameter in CONTROLLER_PARAMETERS}
 
+#: Retired parameter names → the names in use: a value given for a retired name is refused
+#: with a message naming its successor.
+RENAMED_CONTROLLER_PARAMETERS = {'target_quaternion': 'target_quaternion_xyzw'}
+
+
+def renamed_problem(name: str) -> str:
+    """Why the retired parameter ``name`` cannot be set."""
+    return (f'Parameter `{name}` is named `{RENAMED_CONTROLLER_PARAMETERS[name]}` '
+            f'(its components in the order of the name): set that one instead')
+
 
 def controller_defaults() -> dict[str, Any]:
     """Parameter name → default."""
@@ -57,18 +68,18 @@ def check_controller_values(values: Mapping[str, Any]) -> str:
     """Why these parameter values are unusable, or ``''`` when they are fine.
 
     Each value against its declaration, then: distinct frames, at most one of ``target_rpy``
-    and ``target_quaternion``, and a target quaternion of unit norm within
+    and ``target_quaternion_xyzw``, and a target quaternion of unit norm within
     :data:`UNIT_TOLERANCE`.
     """
     problem = values_problem(values, _BY_NAME)
     if problem:
         return problem
-    if values.get('target_rpy') and values.get('target_quaternion'):
-        return ('Expected at most one of `target_rpy` and `target_quaternion`, got both: '
-                f'{list(values["target_rpy"])} and {list(values["target_quaternion"])}')
-    xyzw = values.get('target_quaternion') or (0.0, 0.0, 0.0, 1.0)
+    if values.get('target_rpy') and values.get('target_quaternion_xyzw'):
+        return ('Expected at most one of `target_rpy` and `target_quaternion_xyzw`, got both: '
+                f'{list(values["target_rpy"])} and {list(values["target_quaternion_xyzw"])}')
+    xyzw = values.get('target_quaternion_xyzw') or (0.0, 0.0, 0.0, 1.0)
     norm = math.sqrt(sum(value * value for value in xyzw))
     if abs(norm - 1.0) > UNIT_TOLERANCE:
-        return (f'Expected parameter `target_quaternion` to have norm 1 (within '
+        return (f'Expected parameter `target_quaternion_xyzw` to have norm 1 (within '
                 f'{UNIT_TOLERANCE:g}), got norm {norm:.6g} for {list(xyzw)}')
     return ''

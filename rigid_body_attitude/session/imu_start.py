@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
 from rigid_body_attitude.core.estimation.calibration import (
     calibration_noise, calibration_summary, calibration_values, load_calibration)
 from rigid_body_attitude.core.propagator import GyroPropagator
@@ -24,7 +25,7 @@ from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
 from rigid_body_attitude.session.levelling import (
-    FROM_SCENE, AlignmentResult, Levelling, SampleMap, heading, rpy_quaternion)
+    FROM_SCENE, AlignmentResult, Levelling, SampleMap, heading)
 from rigid_body_attitude.session.reports import (
     LEVEL_WARN, NOT_ALIGNED, StrapdownState, gyro_bias_text)
 from rigid_body_attitude.session.stream import GyroStream
@@ -85,7 +86,7 @@ class ImuStart(Session):
         mount_rpy = values['mount_rpy']
         self._mount_given = bool(mount_rpy)
         self.topic_frames = {}
-        self.sample_map = SampleMap(calibration, rpy_quaternion(*mount_rpy) if mount_rpy
+        self.sample_map = SampleMap(calibration, from_rpy(mount_rpy).tolist() if mount_rpy
                                     else None)
         gyro_noise = calibration.noise.gyro_sigma() if calibration is not None else None
         self.levelling = (Levelling(values['align_seconds'], values['align_timeout'],

@@ -26,13 +26,16 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
 import numpy as np
 import pytest
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from ros_helpers import Harness, unique_namespace
 import yaml
 
 from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.control import pd_torque_floats
+from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.msgs.cdr import encode_quaternion_stamped
+from rigid_body_attitude.ros.controller import AttitudeControllerNode
 
 PACKAGE = 'rigid_body_attitude'
 #: A reader of the controller's transient-local torque writer that gets its whole history.
@@ -170,10 +173,12 @@ def test_controller_answers_a_pair_and_counts_hostile_inputs(ros, request, proce
 @pytest.mark.parametrize('arguments, expected', [
     (('-p', 'kd:=-1.0'), 'error: Bad parameter `kd`'),
     (('-p', 'kp:=1'), 'error: Expected parameter `kp` to be a double'),
-    (('-p', 'target_quaternion:=[0.0, 0.0, 0.0, 2.0]'),
-     'error: Expected parameter `target_quaternion` to have norm 1'),
-    (('-p', 'target_rpy:=[0.1, 0.0, 0.0]', '-p', 'target_quaternion:=[0.0, 0.0, 0.0, 1.0]'),
-     'error: Expected at most one of `target_rpy` and `target_quaternion`'),
+    (('-p', 'target_quaternion_xyzw:=[0.0, 0.0, 0.0, 2.0]'),
+     'error: Expected parameter `target_quaternion_xyzw` to have norm 1'),
+    (('-p', 'target_rpy:=[0.1, 0.0, 0.0]', '-p', 'target_quaternion_xyzw:=[0.0, 0.0, 0.0, 1.0]'),
+     'error: Expected at most one of `target_rpy` and `target_quaternion_xyzw`'),
+    (('-p', 'target_quaternion:=[0.0, 0.0, 0.0, 1.0]'),
+     'error: Parameter `target_quaternion` is named `target_quaternion_xyzw`'),
 ])
 def test_bad_parameters_exit_2_with_one_error_line(arguments, expected, processes):
     process = start('attitude_controller', '--ros-args', *arguments)
@@ -182,3 +187,22 @@ def test_bad_parameters_exit_2_with_one_error_line(arguments, expected, processe
     assert process.returncode == 2
     assert stderr.startswith(expected) and stderr.count('\n') == 1, stderr
     assert 'Traceback' not in stderr
+
+
+def test_a_former_parameter_name_is_refused_naming_the_present_one(ros, request):
+    """``target_quaternion`` (renamed ``target_quaternion_xyzw``): refused at start and at run
+    time with a message naming the present name."""
+    namespace = unique_namespace(request)
+    with pytest.raises(InputError, match='`target_quaternion` is named `target_quaternion_xyzw`'):
+        AttitudeControllerNode(context=ros.context, namespace=namespace, parameter_overrides=[
+            Parameter('target_quaternion', value=[0.0, 0.0, 0.0, 1.0])])
+    node = AttitudeControllerNode(context=ros.context, namespace=namespace)
+    try:
+        result = node.set_parameters([Parameter('target_quaternion',
+                                                value=[0.0, 0.0, 0.0, 1.0])])[0]
+        assert not result.successful and 'target_quaternion_xyzw' in result.reason
+        good = node.set_parameters([Parameter('target_quaternion_xyzw',
+                                              value=[0.0, 0.0, 1.0, 0.0])])[0]
+        assert good.successful and node.session.target == (0.0, 0.0, 0.0, 1.0)
+    finally:
+        node.destroy_node()

@@ -44,10 +44,16 @@ from test_input_qos import start_node as start_node_process
 from test_node_subprocess import stop_with_sigint
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
+
+
+def rpy(*angles):
+    """``from_rpy`` of roll, pitch, yaw as a (w, x, y, z) tuple."""
+    return tuple(from_rpy(angles).tolist())
+
 
 BASE_NS = 1_700_000_000 * 10**9 + 123_456_789
 MS = 1_000_000
@@ -80,9 +86,9 @@ def start_node(harness: Harness, **parameters: Any) -> AttitudePropagatorNode:
 
 def send(harness: Harness, node: AttitudePropagatorNode, topic: str, payload: Any) -> None:
     """Publish one message (a message or raw bytes); spin until the node has taken it."""
-    expected = node.session.received_count() + 1
+    expected = node.built.session.received_count() + 1
     harness.publishers[topic].publish(payload)
-    assert harness.spin_until(lambda: node.session.received_count() >= expected, 5.0), topic
+    assert harness.spin_until(lambda: node.built.session.received_count() >= expected, 5.0), topic
 
 
 def gyro_message(topic: str, at_ns: int, frame: str = 'base_link') -> Any:
@@ -127,7 +133,7 @@ def test_malformed_gyro_bytes_change_nothing(ros, request, topic, message_type):
     expected = _exp((good_count - 1) * 1e-3 * np.array(OMEGA))
     last = orientations[-1].quaternion
     assert np.max(np.abs(np.array([last.w, last.x, last.y, last.z]) - expected)) <= 1e-14
-    session = node.session
+    session = node.built.session
     assert session.malformed_by_topic == {topic: len(bad), 'set_pose': len(bad)}
     assert session.accepted_count() == good_count
     assert harness.spin_until(
@@ -162,7 +168,7 @@ def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, mess
             good.header.stamp = stamp(BASE_NS)
             for payload in malformed_variants(serialize_message(good)):
                 send(harness, node, topic, payload)
-            assert node.session.malformed_by_topic == {topic: 10}
+            assert node.built.session.malformed_by_topic == {topic: 10}
         for k in range(1, 6):
             clock = Clock()
             clock.clock = stamp(1000 * 10**9 + k * 20 * MS)
@@ -303,7 +309,7 @@ def foreign_frames() -> list[Imu]:
 
 
 #: The tilt of the body at rest (levelling surfaces), roll and pitch [rad].
-TILT = rpy_quaternion(0.3, -0.2, 0.0)
+TILT = rpy(0.3, -0.2, 0.0)
 #: Samples of the body at rest: 0.6 s at 1 kHz, past ``align_seconds`` 0.3 s of rest.
 GOOD_AT_REST = 600
 
@@ -361,12 +367,12 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
     harness = Harness(ros, unique_namespace(request))
     node = start_node(harness, scene='strapdown', **surface.parameters)
     lines: list[str] = []
-    log = node.outputs.log
+    log = node.built.outputs.log
 
     def logged(level: int, text: str) -> None:  # every line the node logs, also kept here
         lines.append(text)
         log(level, text)
-    node.outputs.log = logged  # type: ignore[method-assign]
+    node.built.outputs.log = logged  # type: ignore[method-assign]
     harness.publisher(Imu, 'imu')
     harness.publisher(surface.message_type, surface.topic,
                       LATCHED_QOS if surface.latched else DEEP_QOS)
@@ -383,10 +389,10 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
         if k < len(cases):
             harness.publishers[surface.topic].publish(cases[k])
         harness.spin_for(0.01 if k < len(cases) + 1 or k % 50 == 0 else 0.0)
-    counts = node.session.rejection_counts
+    counts = node.built.session.rejection_counts
     expected = len(cases) if surface.counted is None else surface.counted
     # Levelling: the samples of the rest window are accepted, not integrated (no output).
-    session = node.session
+    session = node.built.session
     assert harness.spin_until(
         lambda: sum(counts()[reason] for reason in surface.reasons) >= expected
         and session.accepted_count() >= good
@@ -401,7 +407,7 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
     last = orientations[-1].quaternion
     q = np.array([last.w, last.x, last.y, last.z])
     if surface.at_rest:  # levelled from the clean samples: the true tilt, up to round-off
-        assert node.session.alignment.at_rest
+        assert node.built.session.alignment.at_rest
         assert math.degrees(tilt_angle(tuple(q.tolist()), TILT)) < 0.05
     else:
         assert np.max(np.abs(q - _exp((good - 1) * 1e-3 * np.array(OMEGA)))) <= 1e-14

@@ -133,7 +133,7 @@ def test_saturation_and_target_parameters():
     assert sink.torques[0][1] == pytest.approx(expected, abs=1e-17)
     assert max(abs(value) for value in sink.torques[0][1]) == 0.001
     x, y, z, w = 0.0, 0.0, math.sin(0.5), math.cos(0.5)
-    by_quaternion, sink_q = session(target_quaternion=(x, y, z, w), torque_limit=0.001)
+    by_quaternion, sink_q = session(target_quaternion_xyzw=(x, y, z, w), torque_limit=0.001)
     tick(by_quaternion, SECOND)
     assert sink_q.torques[0][1] == pytest.approx(sink.torques[0][1], abs=1e-17)
 
@@ -204,10 +204,10 @@ def test_diagnostics_warn_while_no_tick_is_answered():
     ({'control_period': math.nan}, 'Expected parameter `control_period` to be a finite number'),
     ({'torque_limit': math.inf}, 'Expected parameter `torque_limit` to be a finite number'),
     ({'target_rpy': (0.0, 1.0)}, 'Expected parameter `target_rpy` to be a double array of 3'),
-    ({'target_rpy': (0.0, 0.0, 1.0), 'target_quaternion': (0.0, 0.0, 0.0, 1.0)},
-     'Expected at most one of `target_rpy` and `target_quaternion`, got both'),
-    ({'target_quaternion': (0.0, 0.0, 0.0, 0.5)},
-     'Expected parameter `target_quaternion` to have norm 1 (within 0.001), got norm 0.5'),
+    ({'target_rpy': (0.0, 0.0, 1.0), 'target_quaternion_xyzw': (0.0, 0.0, 0.0, 1.0)},
+     'Expected at most one of `target_rpy` and `target_quaternion_xyzw`, got both'),
+    ({'target_quaternion_xyzw': (0.0, 0.0, 0.0, 0.5)},
+     'Expected parameter `target_quaternion_xyzw` to have norm 1 (within 0.001), got norm 0.5'),
     ({'body_frame': 'world'}, 'Expected `world_frame` and `body_frame` to differ'),
     ({'gain': 1.0}, 'Unknown parameter `gain`'),
 ])

@@ -416,6 +416,9 @@ def _effects(value: Any, scene: Scene, commands: bool) -> dict[str, dict[str, Sp
         result[name] = {}
         for parameter, spread in parameters.items():
             key = f'dispersions.effects.{name}.{parameter}'
+            if parameter in effects[name].renamed_parameters:
+                raise SpecError(f'{key}: the parameter is named '
+                                f'{effects[name].renamed_parameters[parameter]!r}: rename it')
             if parameter in effects[name].shared_parameters:
                 raise SpecError(f'{key}: every run shares {parameter} (it cannot be '
                                 f'dispersed)')

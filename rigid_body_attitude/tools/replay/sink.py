@@ -30,7 +30,8 @@ from rigid_body_attitude.session.base import Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, body_frame_velocity)
-from rigid_body_attitude.session.settings import DIAGNOSTICS_TOPIC, NODE_NAME, OUTPUT_TOPICS
+from rigid_body_attitude.session.interface import NODE_INTERFACE
+from rigid_body_attitude.session.settings import NODE_NAME
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND
 from rigid_body_attitude.session.uncertainty import pose_covariance
 from rigid_body_attitude.tools.replay.truth import GroundTruthStart
@@ -44,6 +45,7 @@ FloatArray = NDArray[np.float64]
 LogHandler = Callable[[int, int, str], None]
 
 _ZERO = (0.0, 0.0, 0.0)
+_DIAGNOSTICS_TOPIC = NODE_INTERFACE.endpoint('/diagnostics', 'out').name
 _LEVEL_NAMES = {LEVEL_WARN: 'warning', LEVEL_ERROR: 'error'}
 
 
@@ -91,7 +93,8 @@ class BagSink:
         """Topics ``outputs`` on ``writer``; ``keep_series``: keep the values in memory;
         ``hardware_id``: the diagnostics' (the scene's name); ``log``: gets each log line."""
         self.writer = writer
-        self.ids = {name: writer.add_topic(name, OUTPUT_TOPICS[name]).id for name in outputs}
+        self.ids = {name: writer.add_topic(name, NODE_INTERFACE.endpoint(name, 'out').type).id
+                    for name in outputs}
         self.records: list[Record] = []
         #: Bag time of the input or tick being handled [ns]: the records' time.
         self.now_ns = 0
@@ -245,7 +248,7 @@ class BagSink:
         status = DiagnosticStatus(level=report.level, name='/' + NODE_NAME,
                                   message=report.message, hardware_id=self.hardware_id,
                                   values=dict(report.values))
-        self._write(DIAGNOSTICS_TOPIC, encode_diagnostic_array(self.now_ns, '', [status]))
+        self._write(_DIAGNOSTICS_TOPIC, encode_diagnostic_array(self.now_ns, '', [status]))
 
     def log(self, level: int, text: str) -> None:
         """Count the line by level; hand it to the log handler, if any."""

@@ -191,11 +191,15 @@ class Effect:
     requires: ClassVar[tuple[str, ...]] = ()
     #: Parameters every body of a batch shares (not dispersed per body).
     shared_parameters: ClassVar[frozenset[str]] = frozenset()
+    #: Retired parameter names → the names in use (a retired name is an error naming its
+    #: successor).
+    renamed_parameters: ClassVar[Mapping[str, str]] = {}
 
     def __init__(self, params: Mapping[str, Any], body: BodyProperties) -> None:
         """Validate ``params`` against :attr:`parameters`; keep ``body``."""
         self.body = body
-        self.params = validate_parameters(self.name, self.parameters, params)
+        self.params = validate_parameters(self.name, self.parameters, params,
+                                          self.renamed_parameters)
         self.counters: dict[str, int] = {}
 
     def reset(self) -> None:
@@ -348,8 +352,10 @@ class StatefulEffect(Effect, ABC):
 
 
 def validate_parameters(effect_name: str, spec: Mapping[str, Parameter],
-                        params: Mapping[str, Any]) -> dict[str, Any]:
-    """Check ``params`` against ``spec``: unknown names, missing keys and bad values.
+                        params: Mapping[str, Any],
+                        renamed: Mapping[str, str] | None = None) -> dict[str, Any]:
+    """Check ``params`` against ``spec``: unknown names (a retired name of ``renamed`` names
+    its successor), missing keys and bad values.
 
     Raises :class:`SceneError` naming the effect, the parameter, the value and the valid
     choices.
@@ -359,6 +365,10 @@ def validate_parameters(effect_name: str, spec: Mapping[str, Parameter],
                          f'got {params!r}')
     valid = ', '.join(sorted(spec)) or '(none)'
     unknown = sorted(set(params) - set(spec))
+    retired = [name for name in unknown if renamed and name in renamed]
+    if retired and renamed:
+        raise SceneError(f'Effect {effect_name!r}: parameter {retired[0]!r} is named '
+                         f'{renamed[retired[0]]!r}: rename it')
     if unknown:
         raise SceneError(f'Effect {effect_name!r}: unknown parameter {unknown[0]!r}; '
                          f'valid parameters: {valid}')
