@@ -27,7 +27,10 @@ class Kept:
     def __init__(self):
         self.samples = []
 
-    def simulated_imu(self, topic, data):
+    def sensor_wanted(self, topic):
+        return True
+
+    def simulated_sensor(self, topic, data):
         self.samples.append((topic, data))
 
     def __getattr__(self, name):
