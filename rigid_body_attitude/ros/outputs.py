@@ -31,9 +31,10 @@ from typing import Any
 from rclpy.node import Node
 
 from rigid_body_attitude.msgs.cdr import (
-    encode_float64, encode_tf_message, imu_with_orientation, pose_stamped_encoder,
+    encode_float64, imu_with_orientation, pose_stamped_encoder,
     pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
     transform_encoder)
+from rigid_body_attitude.msgs.sensor_encoders import encode_tf_message
 from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
 from rigid_body_attitude.ros.interface import create_publisher
 from rigid_body_attitude.ros.log_queue import LogQueue

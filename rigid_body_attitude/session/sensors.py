@@ -47,7 +47,7 @@ from rigid_body_attitude.core.propagator import DynamicsPropagator
 from rigid_body_attitude.core.sensors.imu import ImuModel, ImuSpec
 from rigid_body_attitude.core.sensors.magnetometer import MagnetometerModel, MagnetometerSpec
 from rigid_body_attitude.core.sensors.star_tracker import StarTrackerModel, StarTrackerSpec
-from rigid_body_attitude.msgs.cdr import (
+from rigid_body_attitude.msgs.sensor_encoders import (
     attitude_with_covariance_encoder, magnetic_field_encoder, simulated_imu_encoder)
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.times import TimeBase, split_ns

@@ -17,9 +17,10 @@ from tf2_msgs.msg import TFMessage
 from rigid_body_attitude import bag
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.msgs import MAGNETIC_FIELD, POSE_WITH_COVARIANCE_STAMPED, TF_MESSAGE
-from rigid_body_attitude.msgs.cdr import (
-    attitude_with_covariance_encoder, encode_pose_with_covariance_stamped, encode_tf_message,
-    magnetic_field_encoder, simulated_imu_encoder)
+from rigid_body_attitude.msgs.cdr import encode_pose_with_covariance_stamped
+from rigid_body_attitude.msgs.sensor_encoders import (
+    attitude_with_covariance_encoder, encode_tf_message, magnetic_field_encoder,
+    simulated_imu_encoder)
 from rigid_body_attitude.msgs.types import IMU
 
 FRAME_IDS = ['', 'a', 'imu_lin', 'base_link', 'abcdefghijkl', 'ünïcode']

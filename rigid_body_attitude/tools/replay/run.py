@@ -23,7 +23,7 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.session.gyro import GyroSession
-from rigid_body_attitude.msgs.cdr import encode_tf_message
+from rigid_body_attitude.msgs.sensor_encoders import encode_tf_message
 from rigid_body_attitude.session.reports import state_summary
 from rigid_body_attitude.session.sensors import mount_transforms
 from rigid_body_attitude.session.settings import (
