@@ -213,7 +213,8 @@ class DynamicsSession(Session):
         self.clock.resume()
 
     def _pose_set(self, orientation_covariance: tuple[float, ...] | None) -> None:
-        """A pose was set: the simulated IMU's next sample instant is a new baseline."""
+        """A pose was set: the simulated IMU's next sample instant is a new baseline (the
+        point samples go on from the next instant not yet sampled)."""
         if self.sensors is not None:
             self.sensors.restart()
 
