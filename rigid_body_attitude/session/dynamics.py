@@ -72,7 +72,7 @@ class DynamicsSession(Session):
         self.commands_accepted = 0
         #: The simulated sensors of the scene's ``sensors`` section, or None.
         self.sensors: SensorSampler | None = None
-        sensors = simulated_sensors(scene, self.propagator, sink)
+        sensors = simulated_sensors(scene, self.propagator, sink, scene.magnetic_field)
         if sensors:
             self.sensors = SensorSampler(sensors, self.propagator, self.time_base)
             self.clock.advance = self.sensors.advance_to

@@ -15,8 +15,9 @@ sample time:
   period later.
 * :class:`MagnetometerOutput`: a ``sensor_msgs/msg/MagneticField`` of
   :class:`~rigid_body_attitude.core.sensors.MagnetometerModel` [T] in the sensor frame, the
-  field of the scene's field model at the instant (else the section's local field), with the
-  white noise variance per sample on the diagonal of ``magnetic_field_covariance``.
+  field of the scene's field model (its ``magnetic_field`` section) at the instant's scene
+  time, else the section's local field, with the white noise variance per sample on the
+  diagonal of ``magnetic_field_covariance``.
 * :class:`StarTrackerOutput`: a ``geometry_msgs/msg/PoseWithCovarianceStamped`` of
   :class:`~rigid_body_attitude.core.sensors.StarTrackerModel`: the measured attitude of the
   body in ``world_frame`` (the header's frame is ``world_frame``, as the node's

@@ -15,12 +15,14 @@ import yaml
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
 from rigid_body_attitude.core.environment.magnetic_field import field_world_vector
+from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.msgs.decoders import parse_stamped
 from rigid_body_attitude.msgs.types import (
     FIXED_LAYOUTS, IMU, MAGNETIC_FIELD, POSE_WITH_COVARIANCE_STAMPED)
 from rigid_body_attitude.session.parameters import defaults
 from rigid_body_attitude.session.sensors import (
     SensorSampler, mount_transforms, simulated_sensors)
+from rigid_body_attitude.session.settings import load_node_scene
 from rigid_body_attitude.session.uncertainty import UNKNOWN_POSITION_VARIANCE
 
 from conftest import MS
@@ -294,3 +296,43 @@ def test_the_mounts_are_one_transform_per_frame_off_the_body():
     assert transforms[0][2] == pytest.approx((math.cos(0.5), 0.0, 0.0, math.sin(0.5)))
     assert [child for _, child, _ in mount_transforms(scene, 'body')] == [
         'imu_link', 'base_link']
+
+
+def orbiting_scene(tmp_path, magnetometer):
+    path = tmp_path / 'orbiting.yaml'
+    path.write_text(yaml.safe_dump({
+        'name': 'orbiting', 'rate_source': 'dynamics', 'step': 0.01,
+        'body': {'inertia': {'moments': [1.0, 2.0, 3.0]}},
+        'orbit': {'altitude': 500000.0, 'inclination_deg': 97.4},
+        'magnetic_field': {'model': 'tilted_dipole'},
+        'sensors': {'magnetometer': magnetometer}}))
+    return str(path)
+
+
+def test_the_magnetometer_reads_the_scenes_field_model_along_the_orbit(open_scene, tmp_path):
+    """A body at rest in inertial axes on a 500 km orbit with the tilted dipole: each sample is
+    the scene's field at its instant's scene time (within 6 σ of the noise), and the field
+    changes along the orbit by far more than the noise."""
+    session, sink = open_scene(orbiting_scene(tmp_path, {'rate': 10.0,
+                                                         'noise_density': 1e-9}))
+    run(session, [START_NS + k * 500 * MS for k in range(121)])
+    samples = by_topic(sink)['imu/mag']
+    assert len(samples) == 601
+    field = session.scene.magnetic_field
+    sigma = 1e-9 * math.sqrt(10.0)
+    for stamp, _, body in samples:
+        expected = field.field_world((stamp - START_NS) * 1e-9)
+        assert np.max(np.abs(np.array(body[:3]) - expected)) < 6 * sigma
+    first, last = np.array(samples[0][2][:3]), np.array(samples[-1][2][:3])
+    assert np.linalg.norm(last - first) > 1e3 * sigma
+
+
+def test_the_magnetometer_takes_its_field_from_the_scene_or_its_section_not_both(tmp_path):
+    with pytest.raises(SceneError, match='sensors.magnetometer.intensity gives a local field '
+                                         'in a scene whose magnetic_field section'):
+        load_node_scene(orbiting_scene(tmp_path, MAGNETOMETER))
+    no_field = {key: value for key, value in MAGNETOMETER.items() if key not in FIELD}
+    loaded = load_node_scene(orbiting_scene(tmp_path, no_field))
+    assert loaded.magnetometer.intensity is None and loaded.magnetic_field is not None
+    with pytest.raises(SceneError, match='sensors.magnetometer needs the local field'):
+        load_node_scene(scene_file(tmp_path, {'magnetometer': no_field}))
