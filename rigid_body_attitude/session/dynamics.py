@@ -6,9 +6,9 @@ works) the state is integrated up to the clock's time under the clock rules
 stamped with the propagated time. Commands (``wrench``: torque and force; ``rotor_torque``)
 are held from their stamp on (:class:`~rigid_body_attitude.session.stream.CommandStream`).
 The session times its own work (the monotonic clock) to report a scene that cannot keep up:
-its real-time factor and its lag behind the clock. A scene with a simulated IMU (its
-``sensors`` section) is integrated through an
-:class:`~rigid_body_attitude.session.sensors.ImuSampler`, which samples it on the way. On the
+its real-time factor and its lag behind the clock. A scene with simulated sensors (its
+``sensors`` section) is integrated through a
+:class:`~rigid_body_attitude.session.sensors.SensorSampler`, which samples them on the way. On the
 node's own sim clock (:mod:`~rigid_body_attitude.session.sim_clock`: ``publish_clock``,
 ``lockstep``) the ticks are its sim times and, in lockstep, a command counts only when stamped
 with the current tick.
@@ -28,7 +28,7 @@ from rigid_body_attitude.session.base import OutputSink, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.reports import LEVEL_WARN, PeriodCounts, body_frame_velocity
-from rigid_body_attitude.session.sensors import ImuSampler
+from rigid_body_attitude.session.sensors import SensorSampler, simulated_sensors
 from rigid_body_attitude.session.sim_clock import SimClock
 from rigid_body_attitude.session.stream import ClockDriver, CommandStream, Outcome
 from rigid_body_attitude.session.times import TimeBase, split_ns, stamp_problem, to_ns
@@ -70,18 +70,20 @@ class DynamicsSession(Session):
         self._work = self._simulated = self._lag = 0.0
         #: Command messages used (a WrenchStamped is one, whatever fields the scene takes).
         self.commands_accepted = 0
-        #: The simulated IMU of the scene's ``sensors`` section, or None.
-        self.imu: ImuSampler | None = None
-        if scene.imu is not None:
-            self.imu = ImuSampler(scene.imu, self.propagator, self.time_base,
-                                  sink.simulated_imu)
-            self.clock.advance = self.imu.advance_to
+        #: The simulated sensors of the scene's ``sensors`` section, or None.
+        self.sensors: SensorSampler | None = None
+        sensors = simulated_sensors(scene, self.propagator, sink, scene.magnetic_field)
+        if sensors:
+            self.sensors = SensorSampler(sensors, self.propagator, self.time_base)
+            self.clock.advance = self.sensors.advance_to
         super().__init__(scene, values, sink, clock_ns, monotonic)
 
     def apply(self, values: Mapping[str, Any]) -> None:
         """Take the run-time parameters."""
         super().apply(values)
         self.clock.time_jump_threshold = values['time_jump_threshold']
+        if self.sensors is not None:
+            self.sensors.set_world_frame(values['world_frame'])
 
     def check(self, values: Mapping[str, Any]) -> str:
         """The parameters' own checks, and a clock jump within the steps of one tick."""
@@ -179,8 +181,8 @@ class DynamicsSession(Session):
     def _clock_rejected(self, outcome: Outcome) -> None:
         if outcome.reset:
             self.commands.reset()
-            if self.imu is not None:
-                self.imu.reset()
+            if self.sensors is not None:
+                self.sensors.reset()
             self.sink.log(LEVEL_WARN, f'clock: time jumped back by more than '
                                       f'time_jump_threshold ({self.clock.time_jump_threshold:g}'
                                       f' s; looping bag?); reset to the initial state of scene '
@@ -203,17 +205,18 @@ class DynamicsSession(Session):
         self.clock.reset()
         self.propagator.reset(self.propagator.state.time)
         self.commands.reset()
-        if self.imu is not None:
-            self.imu.reset()
+        if self.sensors is not None:
+            self.sensors.reset()
 
     def resume(self) -> None:
         """The state kept; the next tick is a new baseline (the scene paused meanwhile)."""
         self.clock.resume()
 
     def _pose_set(self, orientation_covariance: tuple[float, ...] | None) -> None:
-        """A pose was set: the simulated IMU's next sample instant is a new baseline."""
-        if self.imu is not None:
-            self.imu.restart()
+        """A pose was set: the simulated IMU's next sample instant is a new baseline (the
+        point samples go on from the next instant not yet sampled)."""
+        if self.sensors is not None:
+            self.sensors.restart()
 
     # -- counts -----------------------------------------------------------------------------
 

@@ -26,8 +26,9 @@ from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.yaml_files import quote
 from rigid_body_attitude.msgs.tf_message import TF_MESSAGE
 from rigid_body_attitude.msgs.types import (
-    CLOCK, DIAGNOSTIC_ARRAY, FLOAT64, IMU, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED,
-    QUATERNION_STAMPED, TRIGGER, TWIST_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED)
+    CLOCK, DIAGNOSTIC_ARRAY, FLOAT64, IMU, MAGNETIC_FIELD, POSE_STAMPED,
+    POSE_WITH_COVARIANCE_STAMPED, QUATERNION_STAMPED, TRIGGER, TWIST_STAMPED, VECTOR3_STAMPED,
+    WRENCH_STAMPED)
 
 __all__ = ['CONTROLLER_INTERFACE', 'Endpoint', 'INPUT_DEPTH', 'Interface', 'NODE_INTERFACE',
            'OUTPUT_DEPTH', 'QOS_PROFILES', 'QosProfile', 'Situation', 'check_scene_topics',
@@ -101,6 +102,10 @@ def _always(situation: Situation) -> bool:
 #: The scene keys that name an endpoint (:attr:`Endpoint.named_by`) → the name they give.
 _SCENE_NAMES: dict[str, Callable[[Scene], str]] = {
     'sensors.imu.topic': lambda scene: scene.imu.topic if scene.imu is not None else '',
+    'sensors.magnetometer.topic': lambda scene: (
+        scene.magnetometer.topic if scene.magnetometer is not None else ''),
+    'sensors.star_tracker.topic': lambda scene: (
+        scene.star_tracker.topic if scene.star_tracker is not None else ''),
 }
 
 
@@ -214,10 +219,10 @@ def _parameter(name: str) -> Callable[[Situation], bool]:
     return lambda situation: situation.flag(name)
 
 
-def _mounted_simulated_imu(situation: Situation) -> bool:
-    """A simulated IMU in a frame other than ``body_frame``."""
-    imu = situation.scene.imu
-    return imu is not None and imu.frame_id != situation.values.get('body_frame')
+def _mounted_simulated_sensor(situation: Situation) -> bool:
+    """A simulated sensor in a frame other than ``body_frame``."""
+    return any(spec.frame_id != situation.values.get('body_frame')
+               for _, spec in situation.scene.sensors.items())
 
 
 _PER_OUTPUT = 'every gyro sample / every tick'
@@ -275,11 +280,23 @@ NODE_INTERFACE = Interface((
              'dynamics scenes, every tick', 'the angular momentum [N m s], `world_frame`',
              kinds=(DYNAMICS,), qos_overrides=True, replayed=True),
     Endpoint('imu', IMU, _OUT, 'output', 'simulated_sensor',
-             'dynamics scenes with a `sensors:` section, at its rate',
+             'dynamics scenes with `sensors.imu`, at its rate',
              'the simulated IMU, sensor frame, stamped with the sample time, REP-145 '
              'covariances', kinds=(DYNAMICS,),
              condition=lambda situation: situation.scene.imu is not None,
              qos_overrides=True, replayed=True, named_by='sensors.imu.topic'),
+    Endpoint('imu/mag', MAGNETIC_FIELD, _OUT, 'output', 'simulated_sensor',
+             'dynamics scenes with `sensors.magnetometer`, at its rate',
+             'the simulated magnetometer [T], sensor frame, stamped with the sample time, its '
+             'white-noise covariance', kinds=(DYNAMICS,),
+             condition=lambda situation: situation.scene.magnetometer is not None,
+             qos_overrides=True, replayed=True, named_by='sensors.magnetometer.topic'),
+    Endpoint('star_tracker', POSE_WITH_COVARIANCE_STAMPED, _OUT, 'output', 'simulated_sensor',
+             'dynamics scenes with `sensors.star_tracker`, at its rate',
+             "the measured attitude of the body, `world_frame`, stamped with the sample time, "
+             'its covariance about world axes (position marked unknown)', kinds=(DYNAMICS,),
+             condition=lambda situation: situation.scene.star_tracker is not None,
+             qos_overrides=True, replayed=True, named_by='sensors.star_tracker.topic'),
     Endpoint('/diagnostics', DIAGNOSTIC_ARRAY, _OUT, 'output', 'diagnostics',
              'once a second', 'rates, counts, rejections by reason, the status and why',
              replayed=True),
@@ -290,8 +307,9 @@ NODE_INTERFACE = Interface((
              '`world_frame` -> `body_frame`, at most `tf_rate` per second of stamps',
              condition=_parameter('publish_tf')),
     Endpoint('/tf_static', TF_MESSAGE, _OUT, 'tf_static', 'tf_static',
-             'dynamics scenes with a simulated IMU', 'its mount `body_frame` -> `frame_id`, once',
-             kinds=(DYNAMICS,), condition=_mounted_simulated_imu),
+             'dynamics scenes with a sensor frame other than `body_frame`',
+             'their mounts `body_frame` -> `frame_id`, one message, once',
+             kinds=(DYNAMICS,), condition=_mounted_simulated_sensor, replayed=True),
     Endpoint('~/reset', TRIGGER, 'service', 'service', 'service', 'always',
              "back to the scene's initial state"),
 ))
@@ -330,9 +348,9 @@ def qos_markdown_table() -> str:
 
 
 def check_scene_topics(scene: Scene) -> None:
-    """A topic named by ``scene`` (a simulated IMU's) may be none of the node's own topics in a
-    dynamics scene (relative, or the absolute ones without their slash); SceneError naming the
-    key otherwise."""
+    """A topic named by ``scene`` (a simulated sensor's) may be none of the node's own topics
+    in a dynamics scene (relative, or the absolute ones without their slash); SceneError naming
+    the key otherwise."""
     reserved = tuple(dict.fromkeys(
         endpoint.name.lstrip('/') for endpoint in NODE_INTERFACE
         if DYNAMICS in endpoint.kinds and not endpoint.named_by

@@ -361,7 +361,7 @@ class ClockDriver(_Counting):
         self.started = False
         self.resuming = False
         #: Integrates up to a time [s]: the propagator's ``advance_to``, or a simulated
-        #: sensor's (:class:`~rigid_body_attitude.session.sensors.ImuSampler`) that samples
+        #: sensors' (:class:`~rigid_body_attitude.session.sensors.SensorSampler`) that samples
         #: on the way.
         self.advance: Callable[[float], int] = propagator.advance_to
 

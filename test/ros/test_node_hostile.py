@@ -12,6 +12,9 @@ while the attitude ends where the good stream alone takes it. A new input gets t
 treatment by adding one entry. The issue-sized cases (a 200 Hz stream behind a foreign frame
 or thousands of junk transforms, 4 MB frame ids) run against the installed node in a process
 of its own, whose log and resident memory are measured.
+
+A scene's ``sensors`` sections are given at start: each hostile one in
+:data:`SENSOR_SECTIONS` must stop the node with one short error line that names the key.
 """
 
 from __future__ import annotations
@@ -41,12 +44,15 @@ from sensor_msgs.msg import Imu
 from tf2_msgs.msg import TFMessage
 from test_input_qos import connect, missing_stamps, receive_all, RECORD_QOS
 from test_input_qos import start_node as start_node_process
-from test_node_subprocess import stop_with_sigint
+from test_node_subprocess import start as start_installed, stop_with_sigint
+import yaml
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
+from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
+from rigid_body_attitude.ros.serve import error_text
 from rigid_body_attitude.core.attitude.quaternion import from_rpy
 
 
@@ -413,6 +419,104 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
         assert np.max(np.abs(q - _exp((good - 1) * 1e-3 * np.array(OMEGA)))) <= 1e-14
     assert lines and max(len(line) for line in lines) < 600
     assert not any('\x1b' in line or '\n' in line for line in lines)
+
+
+# -- the scene's sensors sections: refused at start ----------------------------------------------
+
+_MAGNETOMETER = {'rate': 100.0, 'noise_density': 1e-8, 'intensity': 5e-5}
+
+
+def _magnetometer(**keys: Any) -> dict[str, Any]:
+    return {'sensors': {'magnetometer': {**_MAGNETOMETER, **keys}}}
+
+
+def _star_tracker(**keys: Any) -> dict[str, Any]:
+    return {'sensors': {'star_tracker': {'rate': 10.0, **keys}}}
+
+
+#: Hostile ``sensors`` (and ``sun``) sections of a dynamics scene, one key each (the cases of
+#: studies/hostile_inputs.py's ``sensors sections``) → what the one error line must name.
+SENSOR_SECTIONS: dict[str, tuple[dict[str, Any], str]] = {
+    'magnetometer rate 1e308': (_magnetometer(rate=1e308), 'sensors.magnetometer.rate'),
+    'magnetometer noise density NaN': (_magnetometer(noise_density=math.nan),
+                                       'sensors.magnetometer.noise_density'),
+    'magnetometer without a field': ({'sensors': {'magnetometer': {
+        'rate': 100.0, 'noise_density': 1e-8}}}, 'sensors.magnetometer needs the local field'),
+    'magnetometer soft iron singular': (_magnetometer(soft_iron=[[1, 0, 0], [0, 1, 0],
+                                                                 [0, 0, 0]]),
+                                        'sensors.magnetometer.soft_iron'),
+    'magnetometer soft iron mirrored': (_magnetometer(soft_iron=[[-1, 0, 0], [0, 1, 0],
+                                                                 [0, 0, 1]]),
+                                        'sensors.magnetometer.soft_iron'),
+    'magnetometer hard iron 1e308': (_magnetometer(hard_iron=[1e308, 0, 0]),
+                                     'sensors.magnetometer.hard_iron'),
+    "magnetometer on the node's own topic": (_magnetometer(topic='pose'),
+                                             'sensors.magnetometer.topic'),
+    'magnetometer topic of 5000 characters': (_magnetometer(topic='x' * 5000),
+                                              'sensors.magnetometer.topic'),
+    'magnetometer frame with escape sequences': (_magnetometer(frame_id='\x1b[2J\x07'),
+                                                 'sensors.magnetometer.frame_id'),
+    'magnetometer unknown key': (_magnetometer(noise=1.0), "'noise' in sensors.magnetometer"),
+    'magnetometer seed 2^63': (_magnetometer(seed=2**63), 'sensors.magnetometer.seed'),
+    'star tracker rate 1e4': (_star_tracker(rate=1e4), 'sensors.star_tracker.rate'),
+    'star tracker period off the step': (_star_tracker(rate=300.0),
+                                         'sensors.star_tracker.rate'),
+    'star tracker zero boresight': (_star_tracker(boresight=[0, 0, 0]),
+                                    'sensors.star_tracker.boresight'),
+    'star tracker boresight and mount': (_star_tracker(boresight=[1, 0, 0], mount_rpy=[0, 0, 1]),
+                                         'sensors.star_tracker takes mount_rpy or boresight'),
+    'star tracker zero noise': (_star_tracker(cross_boresight_noise=0.0),
+                                'sensors.star_tracker.cross_boresight_noise'),
+    'star tracker Sun exclusion without a Sun': (_star_tracker(sun_exclusion_angle=0.5),
+                                                 'sensors.star_tracker.sun_exclusion_angle'),
+    'star tracker section a list': ({'sensors': {'star_tracker': [1, 2, 3]}},
+                                    'sensors.star_tracker to be a mapping'),
+    'two sensors on one topic': ({'sensors': {'magnetometer': {**_MAGNETOMETER, 'topic': 'att'},
+                                              'star_tracker': {'rate': 10.0, 'topic': 'att'}}},
+                                 'sensors.star_tracker.topic'),
+    'one frame, two mounts': ({'sensors': {
+        'magnetometer': {**_MAGNETOMETER, 'frame_id': 'f'},
+        'star_tracker': {'rate': 10.0, 'frame_id': 'f', 'boresight': [1, 0, 0]}}},
+        "name the same frame_id 'f'"),
+    'zero Sun direction': ({**_star_tracker(sun_exclusion_angle=0.5),
+                            'sun': {'direction': [0, 0, 0]}}, 'sun.direction'),
+    'sensors in a gyro scene': ({'rate_source': 'gyro', **_magnetometer()},
+                                'simulated sensors need a dynamics scene'),
+}
+
+
+def sensed_scene(path: Path, section: dict[str, Any]) -> str:
+    path.write_text(yaml.safe_dump({'rate_source': 'dynamics', 'step': 0.001,
+                                    'body': {'inertia': {'moments': [1, 2, 3]}}, **section}))
+    return str(path)
+
+
+@pytest.mark.parametrize('name', SENSOR_SECTIONS)
+def test_a_hostile_sensors_section_is_refused_in_one_line_naming_the_key(
+        ros, request, name, tmp_path):
+    """The node in this process refuses the scene: one SceneError, its first line all there
+    is, at most 600 characters, without control characters, naming the key."""
+    section, key = SENSOR_SECTIONS[name]
+    path = sensed_scene(tmp_path / 'sensed.yaml', section)
+    harness = Harness(ros, unique_namespace(request))
+    with pytest.raises(SceneError) as refused:
+        start_node(harness, scene=path)
+    text = str(refused.value)
+    assert error_text(refused.value) == text and len(text) <= 600, text
+    assert text.startswith(f'Scene file {path!r}: ') and key in text, text
+    assert not any(ord(character) < 32 for character in text), text
+
+
+def test_the_installed_node_gives_one_error_line_for_a_hostile_sensors_section(processes,
+                                                                               tmp_path):
+    section, key = SENSOR_SECTIONS['magnetometer frame with escape sequences']
+    process = start_installed('--ros-args', '-p',
+                              f'scene:={sensed_scene(tmp_path / "sensed.yaml", section)}')
+    processes.append(process)
+    _, stderr = process.communicate(timeout=30.0)
+    assert process.returncode == 2
+    assert stderr.startswith('error: Scene file ') and key in stderr
+    assert stderr.count('\n') == 1 and '\x1b' not in stderr and 'Traceback' not in stderr
 
 
 # -- the installed node in a process of its own -------------------------------------------------

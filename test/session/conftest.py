@@ -47,7 +47,10 @@ class RecordingSink:
     def invariants(self, sec, nanosec, energy, world_momentum):
         self.invariant_samples.append((sec, nanosec, energy, world_momentum))
 
-    def simulated_imu(self, topic, data):
+    def sensor_wanted(self, topic):
+        return True
+
+    def simulated_sensor(self, topic, data):
         self.simulated.append((topic, data))
 
     def diagnostics(self, report):
