@@ -79,10 +79,7 @@ class Magnetorquers(CommandedEffect, HeldOverStep, TorqueEffect):
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Check the scene's field; the rods' allocation."""
         super().__init__(params, body)
-        model = body.environment.magnetic_field
-        if model is None:
-            raise SceneError(f"Effect {self.name!r} needs the scene's magnetic_field: section")
-        self.model = model
+        self.model = body.environment.required_field(self.name)
         axes = self.params['axes']
         self.rod_axes = [tuple(axis) for axis in axes.tolist()]
         self.allocation = np.linalg.pinv(axes.T).tolist()  # (rods, 3)
