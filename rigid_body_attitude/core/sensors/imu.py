@@ -52,7 +52,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.core.sensors.section import (
-    ANGLE_LIMIT, MAX_RATE, NOISE_BLOCK, Quat, SampledSensorSpec, SensorSection, Vector,
+    MAX_RATE, NOISE_BLOCK, Quat, SampledSensorSpec, SensorSection, Vector,
     limited)
 
 __all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'imu_spec']
@@ -137,19 +137,10 @@ def imu_spec(data: Any) -> ImuSpec:
     """Validate a ``sensors.imu`` mapping; one :class:`SceneError` naming the key otherwise."""
     data = _SECTION.mapping(data, set(_BOUNDS) | _OTHER_KEYS, ('rate',))
     numbers: dict[str, Any] = _SECTION.numbers(data, _BOUNDS)
-    spec = replace(ImuSpec(rate=numbers.pop('rate')), **numbers)
-    if 'frame_id' in data:
-        spec = replace(spec, frame_id=_SECTION.frame_id(data['frame_id']))
-    if 'topic' in data:
-        spec = replace(spec, topic=_SECTION.topic(data['topic']))
-    if 'mount_rpy' in data:
-        spec = replace(spec, mount_rpy=_SECTION.triple('mount_rpy', data['mount_rpy'],
-                                                       ANGLE_LIMIT))
+    spec = replace(ImuSpec(rate=numbers.pop('rate')), **numbers, **_SECTION.placement(data))
     if 'gravity' in data:
         spec = replace(spec, gravity=_SECTION.triple('gravity', data['gravity'],
                                                      _GRAVITY_LIMIT))
-    if 'seed' in data:
-        spec = replace(spec, seed=_SECTION.seed(data['seed']))
     return spec
 
 

@@ -66,7 +66,7 @@ from rigid_body_attitude.core.environment.magnetic_field import (
     LocalMagneticField, MagneticFieldModel, WORLD_AXES)
 from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.core.sensors.section import (
-    ANGLE_LIMIT, MAX_RATE, Matrix, NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec,
+    MAX_RATE, Matrix, NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec,
     SensorSection, Vector, body_to_sensor_matrix, limited)
 
 __all__ = ['MagnetometerModel', 'MagnetometerSpec', 'SOFT_IRON_CONDITION_LIMIT',
@@ -168,15 +168,7 @@ def magnetometer_spec(data: Any) -> MagnetometerSpec:
     if 'world_axes' in data:
         spec = replace(spec, world_axes=_SECTION.choice('world_axes', data['world_axes'],
                                                         tuple(sorted(WORLD_AXES))))
-    if 'frame_id' in data:
-        spec = replace(spec, frame_id=_SECTION.frame_id(data['frame_id']))
-    if 'topic' in data:
-        spec = replace(spec, topic=_SECTION.topic(data['topic']))
-    if 'mount_rpy' in data:
-        spec = replace(spec, mount_rpy=_SECTION.triple('mount_rpy', data['mount_rpy'],
-                                                       ANGLE_LIMIT))
-    if 'seed' in data:
-        spec = replace(spec, seed=_SECTION.seed(data['seed']))
+    spec = replace(spec, **_SECTION.placement(data))
     if 'hard_iron' in data:
         spec = replace(spec, hard_iron=_SECTION.triple('hard_iron', data['hard_iron'],
                                                        _HARD_IRON_LIMIT))

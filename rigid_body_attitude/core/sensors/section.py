@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import re
 import struct
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -24,7 +24,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.yaml_files import Fields, quote
 
-__all__ = ['ANGLE_LIMIT', 'MAX_RATE', 'Matrix', 'NOISE_BLOCK', 'SampledSensorSpec', 'NormalRows',
+__all__ = ['ANGLE_LIMIT', 'MAX_RATE', 'Matrix', 'NOISE_BLOCK', 'NormalRows', 'SampledSensorSpec',
            'Quat', 'SensorSection', 'Vector', 'body_to_sensor_matrix', 'limited',
            'mount_quaternion', 'unit_vector']
 
@@ -85,6 +85,15 @@ class SensorSection:
         """A relative ROS topic name (the node or the replay refuses one of the node's own
         when it loads the scene: ``session.interface.check_scene_topics``)."""
         return self._matching('topic', value, _NAME)
+
+    def placement(self, data: dict[str, Any]) -> dict[str, Any]:
+        """The checked values of the keys every sensor has, those ``data`` gives:
+        ``frame_id``, ``topic``, ``mount_rpy`` (|angle| at most :data:`ANGLE_LIMIT`),
+        ``seed``."""
+        checks: dict[str, Callable[[Any], Any]] = {
+            'frame_id': self.frame_id, 'topic': self.topic, 'seed': self.seed,
+            'mount_rpy': lambda value: self.triple('mount_rpy', value, ANGLE_LIMIT)}
+        return {key: check(data[key]) for key, check in checks.items() if key in data}
 
     def seed(self, value: Any) -> int:
         """An integer in ``[0, 2^63)``."""

@@ -63,7 +63,7 @@ from rigid_body_attitude.core.attitude.float_quaternion import q_exp, q_multiply
 from rigid_body_attitude.core.environment.sun import SunDirectionModel
 from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.core.sensors.section import (
-    ANGLE_LIMIT, NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec, SensorSection, Vector,
+    NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec, SensorSection, Vector,
     mount_quaternion, unit_vector)
 
 __all__ = ['ARCSECOND', 'MAX_STAR_TRACKER_RATE', 'STREAM', 'StarTrackerModel',
@@ -160,18 +160,10 @@ def star_tracker_spec(data: Any) -> StarTrackerSpec:
     spec = replace(StarTrackerSpec(rate=numbers.pop('rate')), **numbers)
     if 'mount_rpy' in data and 'boresight' in data:
         raise SceneError('sensors.star_tracker takes mount_rpy or boresight, not both')
-    if 'mount_rpy' in data:
-        spec = replace(spec, mount_rpy=_SECTION.triple('mount_rpy', data['mount_rpy'],
-                                                       ANGLE_LIMIT))
+    spec = replace(spec, **_SECTION.placement(data))
     if 'boresight' in data:
         given = _SECTION.triple('boresight', data['boresight'], _BORESIGHT_LIMIT)
         spec = replace(spec, boresight=unit_vector('sensors.star_tracker.boresight', given))
-    if 'frame_id' in data:
-        spec = replace(spec, frame_id=_SECTION.frame_id(data['frame_id']))
-    if 'topic' in data:
-        spec = replace(spec, topic=_SECTION.topic(data['topic']))
-    if 'seed' in data:
-        spec = replace(spec, seed=_SECTION.seed(data['seed']))
     return spec
 
 
