@@ -80,6 +80,10 @@ class OutputSink(Protocol):
         """A simulated IMU's sample (dynamics scenes with ``sensors``): a serialized
         ``sensor_msgs/msg/Imu`` for the output ``topic``."""
 
+    def wheel_state(self, data: bytes) -> None:
+        """A dynamics tick's reaction wheels (scenes with ``reaction_wheels``): a serialized
+        ``sensor_msgs/msg/JointState`` for ``wheels/state``, stamped like the attitude."""
+
     def diagnostics(self, report: DiagnosticReport) -> None:
         """One diagnostics report."""
 

@@ -462,9 +462,15 @@ def _check_sensors(scene: Scene) -> None:
         raise SceneError(f'sensors.imu.gravity is for a body held in place without gravity '
                          f'effects; scene {quote(scene.name)} has {given_by[0]!r} (the '
                          f'accelerometer takes the gravity of its effects)')
-    if magnetometer is not None and magnetometer.intensity is None:
-        raise SceneError('sensors.magnetometer needs the local field: intensity [T], '
-                         'inclination and declination [rad]')
+    if magnetometer is not None and magnetometer.intensity is None and (
+            scene.magnetic_field is None):
+        raise SceneError('sensors.magnetometer needs a field: the scene\'s magnetic_field '
+                         'section, or the local field (intensity [T], inclination and '
+                         'declination [rad])')
+    if magnetometer is not None and magnetometer.intensity is not None and (
+            scene.magnetic_field is not None):
+        raise SceneError('sensors.magnetometer.intensity: the scene has a magnetic_field '
+                         'section, which the magnetometer reads; give one field, not both')
     if star_tracker is not None and star_tracker.sun_exclusion_angle > 0.0 and scene.sun is None:
         raise SceneError('sensors.star_tracker.sun_exclusion_angle needs the Sun\'s direction: '
                          'a sun section (sun: {direction: [x, y, z]})')

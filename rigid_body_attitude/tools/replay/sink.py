@@ -243,6 +243,10 @@ class BagSink:
             self.counts[topic] = 0
         self._write(topic, data)
 
+    def wheel_state(self, data: bytes) -> None:
+        """``wheels/state`` of a dynamics tick (a serialized JointState)."""
+        self._write('wheels/state', data)
+
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the bag time (the node's sim-time clock)."""
         status = DiagnosticStatus(level=report.level, name='/' + NODE_NAME,
