@@ -13,7 +13,8 @@ decoders of :mod:`rigid_body_attitude.msgs.decoders`; imports no rclpy and no ba
 Each value decoder returns ``(sec, nanosec, frame_id, first, second)``: the header stamp as
 sent (not normalised: the session judges it) and frame, and the message's values (force and
 torque; a vector; attitude (w, x, y, z) and position, or attitude and (position,
-covariance); a JointState's names and (position, velocity, effort)). A rate decoder returns ``(sec, nanosec, frame_id, rate, accel)``
+covariance); a JointState's names and (position, velocity, effort)). A rate decoder returns
+``(sec, nanosec, frame_id, rate, accel)``
 (:data:`~rigid_body_attitude.msgs.decoders.RateSample`); the handler adds an Imu's own bytes
 (for ``imu/data``). Bytes that are not a valid message of the topic's type raise one of
 :data:`MALFORMED`; the handler hands them to

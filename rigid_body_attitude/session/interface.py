@@ -326,8 +326,16 @@ CONTROLLER_INTERFACE = Interface((
              "the plant's body rate (the angular part), `body_frame`", quantity='twist'),
     Endpoint('target', QUATERNION_STAMPED, _IN, 'command', 'sensor', 'always',
              'a new target attitude, `world_frame`', quantity='target'),
-    Endpoint('torque', WRENCH_STAMPED, _OUT, 'latched_output', 'output', 'every tick answered',
+    Endpoint('torque', WRENCH_STAMPED, _OUT, 'latched_output', 'output',
+             '`actuator` `body` (default), every tick answered',
              'the torque, stamped like the tick it answers, `body_frame`, zero force'),
+    Endpoint('wheels/command', JOINT_STATE, _OUT, 'latched_output', 'output',
+             '`actuator` `reaction_wheels`, every tick answered',
+             "the scene's wheels (`name`) and their motor torques [N m] (`effort`), stamped "
+             'like the tick it answers'),
+    Endpoint('dipole', VECTOR3_STAMPED, _OUT, 'latched_output', 'output',
+             '`actuator` `reaction_wheels`, a scene with commanded `magnetorquers`',
+             'a zero dipole [A m²], `body_frame`, stamped like the tick it answers'),
     Endpoint('/diagnostics', DIAGNOSTIC_ARRAY, _OUT, 'output', 'diagnostics', 'once a second',
              'pointing error, counts, rejections by reason, the status and why'),
 ))

@@ -182,4 +182,3 @@ def test_a_reset_restores_the_wheels(open_scene):
     session.reset()
     session.tick(PERIOD_NS * 11)
     assert decode_joint_state(sink.wheel_states[-1]).velocity == first.velocity
-

@@ -31,10 +31,11 @@ Commands: one per array, stamped, held until ``timeout`` (then the motors coast,
 ``wheel_torque`` (one motor torque per wheel [N m], in ``names`` order) or ``wheel_speed``
 (one speed per wheel [rad/s]). A command above the limits is clipped and counted
 (``torque_limit``, ``speed_command_limit``). With ``commanded: false`` the array takes no
-command (only a controller of the scene drives it, and a lockstep loop waits for none). An ``attitude_pd`` controller with
-``actuator: reaction_wheels`` adds its body torque ``τ_c``, allocated over the wheels with the
-minimum-norm pseudo-inverse: ``τₘ = −A⁺ τ_c``, ``A = [â₁ … â_N]`` (the body feels
-``−A τₘ = τ_c`` when the wheels span the three axes).
+command (only a controller of the scene drives it, and a lockstep loop waits for none). An
+``attitude_pd`` controller with ``actuator: reaction_wheels`` adds its body torque ``τ_c``,
+allocated over the wheels with the minimum-norm pseudo-inverse: ``τₘ = −A⁺ τ_c``,
+``A = [â₁ … â_N]`` (the body feels ``−A τₘ = τ_c`` when the wheels span the three axes;
+:mod:`rigid_body_attitude.core.control.allocation`).
 
 Energy: the total kinetic energy ``½ ωᵀ J' ω + Σ Hᵢ²/(2 Jₛᵢ)`` changes by the work of the
 external torques plus the motors' work ``∫ τₘ Ω dt`` minus the friction loss ``∫ τ_f Ω dt``
@@ -53,6 +54,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from rigid_body_attitude.core.control.allocation import minimum_norm_allocation
 from rigid_body_attitude.core.dynamics.effects.base import (
     BatchChunk, BodyProperties, boolean, CommandedEffect, Effect, FloatArray, HeldInput,
     nonnegative, Parameter, positive, Quat, real, register, REQUIRED, Vec)
@@ -152,7 +154,7 @@ class ReactionWheels(CommandedEffect, RotorState):
             raise SceneError(f'Effect {self.name!r}: parameter \'names\' must be one name per '
                              f'wheel ({count}), got {len(names)}')
         self.names = tuple(names)
-        self.allocation = np.linalg.pinv(axes.T).tolist()  # (N, 3): τₘ = −A⁺ τ_c
+        self.allocation = minimum_norm_allocation(axes)  # (N, 3): τₘ = −A⁺ τ_c
         self.command = HeldInput(self, self.params['timeout'], size=count + 1)
         self.controllers: list[SampledTorque] = []
         self.reset()
@@ -211,9 +213,8 @@ class ReactionWheels(CommandedEffect, RotorState):
         self.held_rate: Vec = (0.0, 0.0, 0.0)
         self.omega: Vec = (0.0, 0.0, 0.0)
         self.peak_speed = self.time_saturated = self.motor_work = self.friction_loss = 0.0
-        #: Per wheel: the time its motor torque was cut at the speed limit [s], the episodes
-        #: of such cuts, the time its asked torque was beyond ``max_torque`` [s], and its
-        #: angle relative to the body [rad] in [−π, π] (the trapezoidal rule on its speed).
+        #: Per wheel: time cut at the speed limit [s], episodes of it, time asked beyond
+        #: ``max_torque`` [s], angle relative to the body [rad] in [−π, π] (trapezoidal).
         self.speed_limited_time = [0.0] * count
         self.speed_limit_episodes = [0] * count
         self.torque_limited_time = [0.0] * count
@@ -308,23 +309,14 @@ class ReactionWheels(CommandedEffect, RotorState):
             energy += (new * new - old * old) / (2.0 * j)
         self.omega = omega_end
         speeds = self.speeds()
-        angles = self.angles
         for i, (start, end, motor, friction) in enumerate(zip(
                 self.speeds_start, speeds, self.motor, self.friction)):
             turned = 0.5 * h * (start + end)  # ∫ Ω dt [rad]
             self.motor_work += motor * turned
             self.friction_loss += friction * turned
             self.peak_speed = max(self.peak_speed, abs(end))
-            angle = angles[i] + turned
-            angles[i] = angle if -math.pi <= angle <= math.pi else math.remainder(angle, math.tau)
-        if self.cut_this_step:
-            self.time_saturated += h
-            for i, cut in enumerate(self.cutting):
-                if cut:
-                    self.speed_limited_time[i] += h
-        for i, limited in enumerate(self.torque_limited):
-            if limited:
-                self.torque_limited_time[i] += h
+            _turn(self.angles, i, turned)
+        _tally_limits(self, h)
         self._sum_held(t + h)
         return energy
 
@@ -364,6 +356,25 @@ class ReactionWheels(CommandedEffect, RotorState):
                      omega_end: FloatArray, chunk: BatchChunk) -> None:
         """Every body's momenta advanced; its totals kept."""
         wheel_batch.commit(self, t, h, omega_end, chunk)
+
+
+def _turn(angles: list[float], i: int, turned: float) -> None:
+    """Wheel ``i``'s angle [rad] turned by ``turned``, kept in [−π, π]."""
+    angle = angles[i] + turned
+    angles[i] = angle if -math.pi <= angle <= math.pi else math.remainder(angle, math.tau)
+
+
+def _tally_limits(wheels: ReactionWheels, h: float) -> None:
+    """A step of ``h`` [s] held: the time at the speed limit (any wheel, and each) and at
+    the torque limit (each)."""
+    if wheels.cut_this_step:
+        wheels.time_saturated += h
+        for i, cut in enumerate(wheels.cutting):
+            if cut:
+                wheels.speed_limited_time[i] += h
+    for i, limited in enumerate(wheels.torque_limited):
+        if limited:
+            wheels.torque_limited_time[i] += h
 
 
 def _dot(axis: tuple[float, ...], vector: Vec) -> float:
