@@ -554,6 +554,7 @@ def scene_files(folder: Path) -> dict[str, Path]:
         'alias bomb (error text)': _alias_bomb(b'rate_source'),
         'YAML syntax error': b'body: {inertia: [1, 2\n',
         '20 MB file': b'# ' + b'x' * (20 * 2**20) + b'\n',
+        **spacecraft_scene_files(),
     }
     paths = {}
     for name, content in files.items():
@@ -622,6 +623,55 @@ def sensor_scene_files(folder: Path) -> dict[str, Path]:
         path.write_text(content)
         paths[name] = path
     return paths
+
+
+_SPACECRAFT = (b'rate_source: dynamics\nbody: {inertia: {moments: [8, 10, 6]}}\n'
+               b'orbit: {altitude: 500000.0, inclination_deg: 97.4}\n')
+
+
+def spacecraft_scene_files() -> dict[str, bytes]:
+    """Hostile reaction_wheels, magnetorquers, residual_dipole, bdot, orbit and
+    magnetic_field sections of a spacecraft scene."""
+    field = b'magnetic_field: {model: tilted_dipole}\n'
+    wheels = b'{axes: [[1, 0, 0]], spin_inertia: 0.01, max_torque: 0.02, max_speed: 600'
+    return {
+        'reaction_wheels 17 wheels': _SPACECRAFT + b'effects: [reaction_wheels: {axes: ['
+        + b', '.join([b'[1, 0, 0]'] * 17) + b'], spin_inertia: 1, max_torque: 1, '
+        b'max_speed: 1}]\n',
+        'reaction_wheels zero axis': _SPACECRAFT + b'effects: [reaction_wheels: {axes: '
+        b'[[0, 0, 0]], spin_inertia: 0.01, max_torque: 0.02, max_speed: 600}]\n',
+        'reaction_wheels spin inertia 1e308': _SPACECRAFT + b'effects: [reaction_wheels: '
+        b'{axes: [[1, 0, 0]], spin_inertia: 1e308, max_torque: 0.02, max_speed: 600}]\n',
+        'reaction_wheels names twice': _SPACECRAFT + b'effects: [reaction_wheels: {axes: '
+        b'[[1, 0, 0], [0, 1, 0]], spin_inertia: 0.01, max_torque: 0.02, max_speed: 600, '
+        b'names: [a, a]}]\n',
+        'reaction_wheels speed gain too high for the step': _SPACECRAFT + b'step: 0.1\n'
+        b'effects: [reaction_wheels: ' + wheels + b', speed_gain: 100}]\n',
+        'reaction_wheels commanded "yes"': _SPACECRAFT + b'effects: [reaction_wheels: '
+        + wheels + b', commanded: "yes"}]\n',
+        'magnetorquers without a field': _SPACECRAFT + b'effects: [magnetorquers: '
+        b'{max_dipole: 1}]\n',
+        'magnetorquers max_dipole -1': _SPACECRAFT + field + b'effects: [magnetorquers: '
+        b'{max_dipole: -1}]\n',
+        'magnetorquers dumping without wheels': _SPACECRAFT + field + b'effects: '
+        b'[magnetorquers: {max_dipole: 1, dumping_gain: 0.001}]\n',
+        'residual_dipole NaN': _SPACECRAFT + field + b'effects: [residual_dipole: '
+        b'{dipole: [.nan, 0, 0]}]\n',
+        'bdot without magnetorquers': _SPACECRAFT + field + b'effects: [bdot: '
+        b'{gain: 1, control_period: 1.0}]\n',
+        'bdot period not a whole number of steps': _SPACECRAFT + field + b'step: 0.1\n'
+        b'effects: [magnetorquers: {max_dipole: 1}, bdot: {gain: 1, control_period: 0.15}]\n',
+        'orbit altitude -1 km': b'rate_source: dynamics\nbody: {inertia: {moments: [1, 2, 3]}}'
+        b'\norbit: {altitude: -1000.0}\n',
+        'orbit epoch 1e308': b'rate_source: dynamics\nbody: {inertia: {moments: [1, 2, 3]}}'
+        b'\norbit: {altitude: 500000.0, epoch: 1e308}\n',
+        'magnetic_field igrf in 2200': b'rate_source: dynamics\nbody: {inertia: {moments: '
+        b'[1, 2, 3]}}\norbit: {altitude: 500000.0, epoch: 2200-01-01T00:00:00Z}\n'
+        b'magnetic_field: {model: igrf}\n',
+        'magnetic_field without an orbit': b'rate_source: dynamics\nbody: {inertia: '
+        b'{moments: [1, 2, 3]}}\nmagnetic_field: {model: tilted_dipole}\n',
+        'magnetic_field unknown model': _SPACECRAFT + b'magnetic_field: {model: wmm}\n',
+    }
 
 
 def _alias_bomb(key: bytes) -> bytes:

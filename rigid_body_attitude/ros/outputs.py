@@ -115,6 +115,7 @@ class RosOutputs:
         self.twist_raw = raw.get('twist', absent)
         self.energy_raw = raw.get('energy', absent)
         self.momentum_raw = raw.get('angular_momentum', absent)
+        self.wheel_state_raw = raw.get('wheels/state', absent)
         #: Row-major 3×3 ``imu/data`` orientation covariance and 6×6 ``pose_with_covariance``
         #: covariance (:meth:`attitude_covariance`).
         self.orientation_covariance: tuple[float, ...] = _UNKNOWN
@@ -241,6 +242,11 @@ class RosOutputs:
         output = self.simulated_sensors.get(topic)
         if output is not None:
             output.publish(data)
+
+    def wheel_state(self, data: bytes) -> None:
+        """``wheels/state`` of a dynamics tick (a serialized JointState)."""
+        if self.wheel_state_raw.subscription_count():
+            self.wheel_state_raw.publish(data)
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the node clock."""

@@ -85,6 +85,10 @@ class OutputSink(Protocol):
         output ``topic``: its ``sensor_msgs/msg/Imu``, ``sensor_msgs/msg/MagneticField`` or
         ``geometry_msgs/msg/PoseWithCovarianceStamped``."""
 
+    def wheel_state(self, data: bytes) -> None:
+        """A dynamics tick's reaction wheels (scenes with ``reaction_wheels``): a serialized
+        ``sensor_msgs/msg/JointState`` for ``wheels/state``, stamped like the attitude."""
+
     def diagnostics(self, report: DiagnosticReport) -> None:
         """One diagnostics report."""
 

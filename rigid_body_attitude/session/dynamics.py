@@ -24,6 +24,8 @@ from typing import Any
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.core.propagator import DynamicsPropagator, MAX_STEPS_PER_CALL
 from rigid_body_attitude.core.dynamics.scene import Scene
+from rigid_body_attitude.session.actuators import (
+    MagnetorquerReport, WHEEL_COMMAND_TOPIC, WHEEL_REASONS, WheelArray)
 from rigid_body_attitude.session.base import OutputSink, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.parameters import check_values
@@ -61,9 +63,14 @@ class DynamicsSession(Session):
         inputs = self.propagator.input_names
         #: The WrenchStamped fields the scene takes (``torque``, ``force``).
         self.wrench_inputs = tuple(name for name in ('torque', 'force') if name in inputs)
-        #: The commanded inputs a lockstep tick waits for.
-        self.command_inputs = self.wrench_inputs + (
-            ('rotor_torque',) if 'rotor_torque' in inputs else ())
+        #: The reaction-wheel array (``wheels/command``, ``wheels/state``), or None.
+        self.wheels = WheelArray.of(self.propagator)
+        self.rods = MagnetorquerReport.of(self.propagator)
+        #: The commands a lockstep tick waits for (the inputs; one topic for the wheels).
+        self.command_inputs = self.wrench_inputs + tuple(
+            key for key, name in (('rotor_torque', 'rotor_torque'), ('dipole', 'dipole'),
+                                  (WHEEL_COMMAND_TOPIC, 'wheel_torque'))
+            if name in inputs)
         #: The node's own sim clock (``publish_clock``, ``lockstep``), or ``None``.
         self.sim_clock: SimClock | None = None
         self.tick_period = 1.0 / values['publish_rate']
@@ -111,6 +118,28 @@ class DynamicsSession(Session):
         if stamp_ns is not None and self._command('rotor_torque', stamp_ns, torque):
             self.commands_accepted += 1
 
+    def dipole(self, sec: int, nanosec: int, dipole_body: Sequence[float]) -> None:
+        """The magnetorquers' commanded dipole [A m², body axes] stamped ``(sec, nanosec)``."""
+        stamp_ns = self._command_ns('dipole', sec, nanosec)
+        if stamp_ns is not None and self._command('dipole', stamp_ns, dipole_body):
+            self.commands_accepted += 1
+
+    def wheel_command(self, sec: int, nanosec: int, names: Sequence[str],
+                      position: Sequence[float], velocity: Sequence[float],
+                      effort: Sequence[float]) -> None:
+        """A JointState for the reaction wheels (:mod:`~.actuators`: motor torques in
+        ``effort`` or speeds in ``velocity``) stamped ``(sec, nanosec)``."""
+        wheels = self.wheels
+        stamp_ns = self._command_ns(WHEEL_COMMAND_TOPIC, sec, nanosec)
+        if stamp_ns is None or wheels is None:
+            return
+        input_name, reason, detail, values = wheels.command(names, position, velocity, effort)
+        if reason:
+            self.rejections[reason] += 1
+            self.warn(reason, f'{WHEEL_COMMAND_TOPIC}: {reason}: {detail}; message ignored')
+        elif self._command(input_name, stamp_ns, values, WHEEL_COMMAND_TOPIC):
+            self.commands_accepted += 1
+
     def _command_ns(self, topic: str, sec: int, nanosec: int) -> int | None:
         """The command's time: its stamp, or the receive time (no header stamps, zero
         stamp); None (counted) for an invalid stamp."""
@@ -125,8 +154,9 @@ class DynamicsSession(Session):
             return None
         return self.clock_ns()
 
-    def _command(self, name: str, stamp_ns: int, value: Sequence[float]) -> bool:
-        outcome = self.commands.add(name, stamp_ns, self.time_base.seconds(stamp_ns), value)
+    def _command(self, name: str, stamp_ns: int, value: Sequence[float], key: str = '') -> bool:
+        outcome = self.commands.add(name, stamp_ns, self.time_base.seconds(stamp_ns), value,
+                                    key)
         if outcome.reason:
             self.warn(outcome.reason, f'{name}: {_DETAIL[outcome.reason]}')
         return outcome.accepted
@@ -177,6 +207,12 @@ class DynamicsSession(Session):
         sec, nanosec = split_ns(self.time_base.nanoseconds(sample.stamp))
         self.sink.dynamics(sec, nanosec, sample, body_frame_velocity(self.propagator))
         self.sink.invariants(sec, nanosec, sample.energy, sample.world_momentum)
+        wheels = self.wheels
+        if wheels is not None:
+            self.sink.wheel_state(wheels.state(sec, nanosec))
+            news = wheels.speed_limit_news()
+            if news:
+                self.note('speed_limit', news, sum(wheels.effect.speed_limit_episodes))
 
     def _clock_rejected(self, outcome: Outcome) -> None:
         if outcome.reset:
@@ -236,6 +272,14 @@ class DynamicsSession(Session):
         counts.lag, counts.tick_period = self._lag, self.tick_period
         if self.sim_clock is not None:
             self.sim_clock.report(counts)
+        if self.wheels is not None:
+            values, problems = self.wheels.report()
+            counts.actuator_values += tuple(values) + tuple(
+                (f'rejected {reason}', str(self.rejections[reason]))
+                for reason in WHEEL_REASONS)
+            counts.actuator_problems += tuple(problems)
+        if self.rods is not None:
+            counts.actuator_values += tuple(self.rods.values())
         self._work = self._simulated = self._lag = 0.0
 
 

@@ -24,6 +24,7 @@ from typing import Any
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.yaml_files import quote
+from rigid_body_attitude.msgs.joint_state import JOINT_STATE
 from rigid_body_attitude.msgs.tf_message import TF_MESSAGE
 from rigid_body_attitude.msgs.types import (
     CLOCK, DIAGNOSTIC_ARRAY, FLOAT64, IMU, MAGNETIC_FIELD, POSE_STAMPED,
@@ -124,7 +125,8 @@ class Endpoint:
             ``reset`` (coalesced), ``transforms``; outputs: ``output``, ``diagnostics``,
             ``clock``, ``tf``, ``tf_static``, ``simulated_sensor``; ``service``.
         quantity: what an input carries for the session (``angular_rate``, ``wrench``,
-            ``rotor_torque``, ``pose``, ``pose_with_covariance``, ``transforms``;
+            ``rotor_torque``, ``wheel_command``, ``dipole``, ``pose``,
+            ``pose_with_covariance``, ``transforms``;
             the controller's ``attitude``, ``twist``, ``target``); ``''`` for outputs.
         when: when it exists, in words (the README's).
         meaning: what it carries, one line.
@@ -225,6 +227,11 @@ def _mounted_simulated_sensor(situation: Situation) -> bool:
                for _, spec in situation.scene.sensors.items())
 
 
+def _has_wheels(situation: Situation) -> bool:
+    """The scene has a reaction-wheel array."""
+    return any(name == 'reaction_wheels' for name, _ in situation.scene.effects)
+
+
 _PER_OUTPUT = 'every gyro sample / every tick'
 _IN, _OUT = 'in', 'out'
 
@@ -246,6 +253,17 @@ NODE_INTERFACE = Interface((
              'scenes with a commanded `rotor`', "the rotor's motor torque [N m]",
              quantity='rotor_torque', kinds=(DYNAMICS,), condition=_takes('rotor_torque'),
              qos_overrides=True, replayed=True),
+    Endpoint('wheels/command', JOINT_STATE, _IN, 'command', 'command',
+             'scenes with commanded `reaction_wheels`',
+             'one per array: `name` every wheel, `effort` motor torques [N m] or `velocity` '
+             'speeds [rad/s]', quantity='wheel_command', kinds=(DYNAMICS,),
+             condition=_takes('wheel_torque', 'wheel_speed'), qos_overrides=True,
+             replayed=True),
+    Endpoint('dipole', VECTOR3_STAMPED, _IN, 'command', 'command',
+             'scenes with commanded `magnetorquers`',
+             "the torque rods' dipole [A m²], body axes", quantity='dipole',
+             kinds=(DYNAMICS,), condition=_takes('dipole'), qos_overrides=True,
+             replayed=True),
     Endpoint('set_pose', POSE_STAMPED, _IN, 'command', 'reset', 'always',
              're-initialises the attitude (and position), `world_frame`', quantity='pose',
              qos_overrides=True, replayed=True),
@@ -279,6 +297,10 @@ NODE_INTERFACE = Interface((
     Endpoint('angular_momentum', VECTOR3_STAMPED, _OUT, 'output', 'output',
              'dynamics scenes, every tick', 'the angular momentum [N m s], `world_frame`',
              kinds=(DYNAMICS,), qos_overrides=True, replayed=True),
+    Endpoint('wheels/state', JOINT_STATE, _OUT, 'output', 'output',
+             'scenes with `reaction_wheels`, every tick',
+             'per wheel: angle [rad], speed [rad/s] relative to the body, motor torque [N m]',
+             kinds=(DYNAMICS,), condition=_has_wheels, qos_overrides=True, replayed=True),
     Endpoint('imu', IMU, _OUT, 'output', 'simulated_sensor',
              'dynamics scenes with `sensors.imu`, at its rate',
              'the simulated IMU, sensor frame, stamped with the sample time, REP-145 '
@@ -322,8 +344,16 @@ CONTROLLER_INTERFACE = Interface((
              "the plant's body rate (the angular part), `body_frame`", quantity='twist'),
     Endpoint('target', QUATERNION_STAMPED, _IN, 'command', 'sensor', 'always',
              'a new target attitude, `world_frame`', quantity='target'),
-    Endpoint('torque', WRENCH_STAMPED, _OUT, 'latched_output', 'output', 'every tick answered',
+    Endpoint('torque', WRENCH_STAMPED, _OUT, 'latched_output', 'output',
+             '`actuator` `body` (default), every tick answered',
              'the torque, stamped like the tick it answers, `body_frame`, zero force'),
+    Endpoint('wheels/command', JOINT_STATE, _OUT, 'latched_output', 'output',
+             '`actuator` `reaction_wheels`, every tick answered',
+             "the scene's wheels (`name`) and their motor torques [N m] (`effort`), stamped "
+             'like the tick it answers'),
+    Endpoint('dipole', VECTOR3_STAMPED, _OUT, 'latched_output', 'output',
+             '`actuator` `reaction_wheels`, a scene with commanded `magnetorquers`',
+             'a zero dipole [A m²], `body_frame`, stamped like the tick it answers'),
     Endpoint('/diagnostics', DIAGNOSTIC_ARRAY, _OUT, 'output', 'diagnostics', 'once a second',
              'pointing error, counts, rejections by reason, the status and why'),
 ))

@@ -31,7 +31,8 @@ NODE_NAME = 'attitude_propagator'
 #: Seconds between diagnostics messages.
 DIAGNOSTICS_PERIOD = 1.0
 #: Effects whose ``timeout`` the ``torque_timeout`` parameter overrides.
-COMMAND_EFFECTS = ('commanded_torque', 'commanded_force', 'rotor')
+COMMAND_EFFECTS = ('commanded_torque', 'commanded_force', 'rotor', 'reaction_wheels',
+                   'magnetorquers')
 
 #: A session of either rate source (what :func:`open_session` returns).
 AnySession = GyroSession | DynamicsSession

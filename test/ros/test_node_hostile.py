@@ -40,7 +40,7 @@ from rclpy.qos import (
 from rclpy.serialization import serialize_message
 from ros_helpers import Harness, stamp, unique_namespace
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, JointState
 from tf2_msgs.msg import TFMessage
 from test_input_qos import connect, missing_stamps, receive_all, RECORD_QOS
 from test_input_qos import start_node as start_node_process
@@ -51,6 +51,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
+from rigid_body_attitude.msgs.joint_state import joint_state_encoder
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.serve import error_text
 from rigid_body_attitude.core.attitude.quaternion import from_rpy
@@ -158,6 +159,8 @@ def _exp(rotation_vector: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize('scene, topic, message_type', [
     ('commanded_torque', 'torque', WrenchStamped),
     ('gyrostat', 'rotor_torque', Vector3Stamped),
+    ('wheel_slew_commanded', 'wheels/command', JointState),
+    ('wheel_slew_commanded', 'dipole', Vector3Stamped),
 ])
 def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, message_type):
     """On sim time: a node fed only malformed commands ticks exactly like one fed nothing."""
@@ -172,7 +175,11 @@ def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, mess
         if role == 'hostile':
             good = message_type()
             good.header.stamp = stamp(BASE_NS)
-            for payload in malformed_variants(serialize_message(good)):
+            good_bytes = serialize_message(good)
+            if message_type is JointState:  # exactly the message (rclpy pads after it)
+                good_bytes = joint_state_encoder('', ['wheel_a'])(
+                    good.header.stamp.sec, good.header.stamp.nanosec, (), (), (0.01,))
+            for payload in malformed_variants(good_bytes):
                 send(harness, node, topic, payload)
             assert node.built.session.malformed_by_topic == {topic: 10}
         for k in range(1, 6):
@@ -182,6 +189,93 @@ def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, mess
             assert harness.spin_until(lambda: len(poses) >= k, 5.0)
         outputs[role] = [(m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z)
                          for m in poses[:5]]
+        ros.executor.remove_node(node)
+        node.destroy_node()
+    assert outputs['hostile'] == outputs['quiet']
+
+
+WHEELS = ['wheel_a', 'wheel_b', 'wheel_c', 'wheel_d']
+
+
+SIM_NS = 1000 * 10**9  # the sim clock's ticks: 1000 s + k 50 ms
+
+
+def joint_state(names, position=(), velocity=(), effort=()) -> JointState:
+    message = JointState()
+    message.header.stamp = stamp(SIM_NS)
+    message.name = list(names)
+    message.position, message.velocity, message.effort = (
+        list(position), list(velocity), list(effort))
+    return message
+
+
+def dipole(vector) -> Vector3Stamped:
+    message = Vector3Stamped()
+    message.header.stamp = stamp(SIM_NS)
+    message.header.frame_id = 'base_link'
+    message.vector.x, message.vector.y, message.vector.z = vector
+    return message
+
+
+#: (topic, message, the reason it is counted under): decodable commands the node refuses.
+HOSTILE_ACTUATOR_COMMANDS = [
+    ('wheels/command', joint_state(WHEELS[:3] + ['wheel_x'], effort=[0.01] * 4),
+     'unknown_wheel'),
+    ('wheels/command', joint_state(WHEELS[:2] + WHEELS[:2], effort=[0.01] * 4),
+     'unknown_wheel'),
+    ('wheels/command', joint_state(['x' * 200] * 1000, effort=[0.01] * 1000), 'unknown_wheel'),
+    ('wheels/command', joint_state(WHEELS[:3], effort=[0.01] * 3), 'missing_wheel'),
+    ('wheels/command', joint_state([], effort=[]), 'missing_wheel'),
+    ('wheels/command', joint_state(WHEELS, velocity=[1.0] * 4, effort=[0.01] * 4),
+     'wheel_fields'),
+    ('wheels/command', joint_state(WHEELS), 'wheel_fields'),
+    ('wheels/command', joint_state(WHEELS, position=[0.0] * 4, effort=[0.01] * 4),
+     'wheel_fields'),
+    ('wheels/command', joint_state(WHEELS, effort=[0.01] * 3), 'wheel_lengths'),
+    ('wheels/command', joint_state(WHEELS, velocity=[1.0] * 1000), 'wheel_lengths'),
+    ('wheels/command', joint_state(WHEELS, effort=[math.nan, 0.0, 0.0, 0.0]), 'non_finite'),
+    ('wheels/command', joint_state(WHEELS, velocity=[math.inf, 0.0, 0.0, 0.0]), 'non_finite'),
+    ('wheels/command', joint_state(WHEELS, effort=[1e13, 0.0, 0.0, 0.0]), 'out_of_range'),
+    ('wheels/command', joint_state(WHEELS, velocity=[-1e300] * 4), 'out_of_range'),
+    ('dipole', dipole((math.nan, 0.0, 0.0)), 'non_finite'),
+    ('dipole', dipole((0.0, 1e13, 0.0)), 'out_of_range'),
+    ('dipole', dipole((-1e308, 1e308, 1e308)), 'out_of_range'),
+]
+
+
+def test_hostile_wheel_and_dipole_commands_are_counted_and_change_nothing(ros, request):
+    """On sim time: a node sent every refused command ticks exactly like one sent nothing,
+    its attitude and its wheels alike, and counts each by its reason."""
+    outputs = {}
+    for role in ('hostile', 'quiet'):
+        harness = Harness(ros, unique_namespace(request) + '_' + role)
+        node = start_node(harness, scene='wheel_slew_commanded', use_sim_time=True)
+        harness.publisher(Clock, '/clock')
+        harness.publisher(JointState, 'wheels/command')
+        harness.publisher(Vector3Stamped, 'dipole')
+        poses = harness.record(QuaternionStamped, 'orientation')
+        wheels = harness.record(JointState, 'wheels/state')
+        harness.wait_for_connections()
+        if role == 'hostile':
+            for topic, payload, _ in HOSTILE_ACTUATOR_COMMANDS:
+                send(harness, node, topic, payload)
+            counts = node.built.session.rejection_counts()
+            expected: dict[str, int] = {}
+            for _, _, reason in HOSTILE_ACTUATOR_COMMANDS:
+                expected[reason] = expected.get(reason, 0) + 1
+            assert {reason: counts[reason] for reason in expected} == expected
+            assert node.built.session.commands_accepted == 0
+        for k in range(1, 6):
+            clock = Clock()
+            clock.clock = stamp(SIM_NS + k * 50 * MS)
+            harness.publishers['/clock'].publish(clock)
+            assert harness.spin_until(lambda: len(poses) >= k and len(wheels) >= k, 5.0)
+        outputs[role] = ([(m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z)
+                          for m in poses[:5]],
+                         [(tuple(m.velocity), tuple(m.effort)) for m in wheels[:5]])
+        if role == 'hostile':
+            report = node.built.session.report()
+            assert 'unknown_wheel' in report.message and 'wheel_fields' in report.message
         ros.executor.remove_node(node)
         node.destroy_node()
     assert outputs['hostile'] == outputs['quiet']

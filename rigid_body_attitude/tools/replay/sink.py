@@ -250,6 +250,10 @@ class BagSink:
         ``/tf_static``, written when the outputs hold it (once, as the node publishes it)."""
         self._write(_TF_STATIC_TOPIC, data)
 
+    def wheel_state(self, data: bytes) -> None:
+        """``wheels/state`` of a dynamics tick (a serialized JointState)."""
+        self._write('wheels/state', data)
+
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the bag time (the node's sim-time clock)."""
         status = DiagnosticStatus(level=report.level, name='/' + NODE_NAME,
