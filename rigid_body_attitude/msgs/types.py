@@ -19,6 +19,7 @@ __all__ = [
     'FIXED_LAYOUTS',
     'FLOAT64',
     'IMU',
+    'MAGNETIC_FIELD',
     'MESSAGE_TYPES',
     'ODOMETRY',
     'ODOMETRY_BODY',
@@ -40,6 +41,7 @@ POSE_STAMPED = 'geometry_msgs/msg/PoseStamped'
 POSE_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/PoseWithCovarianceStamped'
 TWIST_STAMPED = 'geometry_msgs/msg/TwistStamped'
 FLOAT64 = 'std_msgs/msg/Float64'
+MAGNETIC_FIELD = 'sensor_msgs/msg/MagneticField'
 DIAGNOSTIC_ARRAY = 'diagnostic_msgs/msg/DiagnosticArray'
 #: A header, ``child_frame_id`` (a second string), then float64 only (:data:`ODOMETRY_BODY`).
 ODOMETRY = 'nav_msgs/msg/Odometry'
@@ -91,6 +93,7 @@ FIXED_LAYOUTS: dict[str, Layout] = {
         True, _vector('pose.pose.position') + _quaternion('pose.pose.orientation')
         + tuple(f'pose.covariance[{index}]' for index in range(36))),
     FLOAT64: Layout(False, ('data',)),
+    MAGNETIC_FIELD: Layout(True, _vector('magnetic_field') + _covariance('magnetic_field')),
 }
 
 #: The float64 fields of ``nav_msgs/msg/Odometry`` after its header and ``child_frame_id``
