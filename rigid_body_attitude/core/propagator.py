@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.attitude.float_quaternion import finite_vec3
 from rigid_body_attitude.core.dynamics.diagnostics import Diagnostics, DiagnosticsTracker
 from rigid_body_attitude.core.dynamics.euler import inertia_without_rotors, RigidBodyModel
 from rigid_body_attitude.core.dynamics.effects import (
@@ -46,16 +47,6 @@ MAX_STEPS_PER_CALL = 10_000_000
 
 #: A single step may not be split into more substeps than this.
 MAX_SUBSTEPS = 1_000_000
-
-
-def _float_vector(value: object) -> Vec | None:
-    """``value`` when it is a tuple of 3 finite floats, else ``None`` (checked with NumPy)."""
-    if type(value) is tuple and len(value) == 3:
-        x, y, z = value
-        if (type(x) is float and type(y) is float and type(z) is float
-                and math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
-            return x, y, z
-    return None
 
 
 @dataclass
@@ -214,28 +205,20 @@ class _Propagator:
         self.tracker = DiagnosticsTracker(self.energy(), self.world_momentum())
 
     def command(self, input_name: str, t: float, value: ArrayLike) -> None:
-        """Pass a commanded input (e.g. ``torque`` [N m, body]) stamped ``t`` to its effects.
-
-        Raises :class:`InputError` for an input no effect takes or a non-finite value; a
-        command holds 3 numbers, or as many as its effect says (one per wheel of
-        ``wheel_torque``).
-        """
+        """Pass a commanded input (e.g. ``torque`` [N m, body]) stamped ``t`` to its effects:
+        3 numbers, or as many as its effect says (one per wheel of ``wheel_torque``);
+        :class:`InputError` for an input no effect takes or a non-finite value."""
         routes = self.input_routes.get(input_name)
         if routes is None:
             raise InputError(f'Scene {self.scene.name!r} takes no input {input_name!r}; '
                              f'inputs: {", ".join(sorted(self.input_routes)) or "(none)"}')
         size = routes[0].input_size(input_name)
-        # the node's 3-vector commands arrive as tuples of floats: checked without NumPy
-        vector: Vec | FloatArray | None = _float_vector(value) if size == 3 else None
+        vector: Vec | FloatArray | None = finite_vec3(value) if size == 3 else None  # no NumPy
         if vector is None:
-            array = _command_vector(input_name, value, size)
-            if array.shape != (size,):
-                raise InputError(f'Expected `{input_name}` as {size} finite numbers at a '
-                                 f'finite time, got {array.tolist()!r} at t={t!r}')
-            vector = array
-        if not math.isfinite(t):
+            vector = _command_vector(input_name, value, size)
+        if (isinstance(vector, np.ndarray) and vector.shape != (size,)) or not math.isfinite(t):
             raise InputError(f'Expected `{input_name}` as {size} finite numbers at a finite '
-                             f'time, got {list(vector)!r} at t={t!r}')
+                             f'time, got {np.asarray(vector).tolist()!r} at t={t!r}')
         for effect in routes:
             effect.accept_input(input_name, t, vector)
 
@@ -266,8 +249,7 @@ class _Propagator:
         return rotation
 
     def world_momentum(self) -> FloatArray:
-        """World-frame angular momentum ``R(q)(J' ω + h)`` [N m s] as an array (``J'`` is
-        ``J`` without wheels)."""
+        """:meth:`world_momentum_tuple` as an array [N m s]."""
         return np.array(self.world_momentum_tuple())
 
     def world_momentum_tuple(self) -> Vec:
