@@ -111,7 +111,7 @@ def test_a_bad_section_is_one_error_naming_the_key(section, words):
 def test_the_scene_needs_the_field_a_dynamics_scene_and_a_whole_number_of_steps():
     section = {'rate': 100.0, 'noise_density': 1e-8, **FIELD}
     assert scene({'magnetometer': section}).magnetometer.intensity == 5e-5
-    with pytest.raises(SceneError, match='sensors.magnetometer needs a field'):
+    with pytest.raises(SceneError, match='sensors.magnetometer needs the local field'):
         scene({'magnetometer': {'rate': 100.0, 'noise_density': 1e-8}})
     with pytest.raises(SceneError, match='sensors.magnetometer.rate .* whole multiple'):
         scene({'magnetometer': {**section, 'rate': 300.0}})
@@ -126,8 +126,8 @@ def test_a_scene_field_model_is_the_magnetometers_field_and_excludes_a_local_one
              'magnetic_field': {'model': 'tilted_dipole'}}
     bare = {'rate': 100.0, 'noise_density': 1e-8}
     assert scene({'magnetometer': bare}, **orbit).magnetometer.intensity is None
-    with pytest.raises(SceneError, match='magnetometer.intensity: the scene has a '
-                                         'magnetic_field section'):
+    with pytest.raises(SceneError, match='magnetometer.intensity gives a local field in a '
+                                         'scene whose magnetic_field section'):
         scene({'magnetometer': {**bare, **FIELD}}, **orbit)
 
 
