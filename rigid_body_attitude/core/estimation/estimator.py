@@ -207,8 +207,9 @@ class AttitudeEstimator:
             self.counts[f'magnetometer_{outcome}'] += 1
             return q
         noise = self.settings.magnetometer_noise_density ** 2 * self.sample_rate / count
+        timing = (speed * self.settings.magnetometer_timing) ** 2
         measurement = heading_measurement(mean_field, self.east, self.north,
-                                          self.settings.declination, noise)
+                                          self.settings.declination, noise, timing)
         rows, projection = heading_only_gain(self.estimated,
                                              covariance.mean_rotation.T @ self.up)
         result = joseph_update(covariance.p, measurement.h, measurement.residual,

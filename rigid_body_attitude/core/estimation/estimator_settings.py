@@ -8,6 +8,8 @@ The gyro's figures (and the accelerometer's noise density and bias prior) are th
 * ``magnetometer_noise_density`` 1.5·10⁻⁷ T/√Hz: a consumer magnetometer (Bosch BMM150 data
   sheet, BST-BMM150-DS001: 0.3-0.6 µT rms noise at 10-30 Hz output rates). Measure yours at
   rest (the standard deviation of a still recording over √rate).
+* ``magnetometer_timing`` 0.01 s: how far a magnetometer sample's instant may lie from the
+  gyro sample it comes with (a magnetometer's own output period, 100 Hz for most parts).
 * ``magnetic_disturbance_stddev`` 2° and ``magnetic_disturbance_time`` 10 s: the heading
   disturbance ``d`` (:mod:`.filter_covariance`) a field that passes the norm and dip checks
   still carries indoors (steel in floors and furniture bends the horizontal field by degrees,
@@ -57,6 +59,7 @@ class EstimatorSettings:
 
     accelerometer_random_walk: float = 3.0e-3
     magnetometer_noise_density: float = 1.5e-7
+    magnetometer_timing: float = 0.01
     magnetic_disturbance_stddev: float = 2.0 * _DEGREE
     magnetic_disturbance_time: float = 10.0
     field_norm_tolerance: float = 0.1

@@ -19,7 +19,10 @@ the disturbance state of :mod:`.filter_covariance`), so the residual is::
 axis, terms on the horizontal ones: a tilt error turns the field's vertical part (the dip,
 68° in Berlin) into a heading error of ``tan(dip)`` times the tilt, and the covariance knows.
 ``v`` is the magnetometer's white noise averaged over the interval's ``k`` samples,
-variance ``σ_m²/(k |m̄_h|²)``.
+variance ``σ_m²/(k |m̄_h|²)``, plus the error of its timing: a magnetometer samples at its own
+output rate and its sample is up to ``δt`` (``magnetometer_timing``) older or newer than the
+gyro's, so the body's turn ``|ω| δt`` in between appears as a heading error (variance
+``(|ω| δt)²``, ``|ω|`` the interval's mean rate).
 
 **Heading only.** The update's gain is kept off the tilt: its rows of the world's horizontal
 axes are zero, and its gyro-bias rows are projected onto the body's vertical (``u uᵀ`` with
@@ -97,9 +100,11 @@ def heading_angle(vector: FloatArray, east: FloatArray, north: FloatArray) -> fl
 
 
 def heading_measurement(mean_field: FloatArray, east: FloatArray, north: FloatArray,
-                        declination: float, noise_variance: float) -> HeadingMeasurement:
+                        declination: float, noise_variance: float,
+                        timing_variance: float = 0.0) -> HeadingMeasurement:
     """The measurement of the module docstring from the interval's mean world-frame field
-    [T]; ``noise_variance`` the per-axis variance of that mean [T²]."""
+    [T]; ``noise_variance`` the per-axis variance of that mean [T²], ``timing_variance`` the
+    heading variance [rad²] of the samples' timing (``(|ω| δt)²``)."""
     e, n = float(east @ mean_field), float(north @ mean_field)
     horizontal2 = e * e + n * n
     gradient = (e * north - n * east) / horizontal2
@@ -111,7 +116,7 @@ def heading_measurement(mean_field: FloatArray, east: FloatArray, north: FloatAr
     reference = math.atan2(math.cos(declination), math.sin(declination))
     residual = math.remainder(reference - math.atan2(n, e), 2.0 * math.pi)
     return HeadingMeasurement(h, np.array([residual]),
-                              np.array([[noise_variance / horizontal2]]))
+                              np.array([[noise_variance / horizontal2 + timing_variance]]))
 
 
 def heading_only_gain(estimated: NDArray[np.bool_], up_body: FloatArray
