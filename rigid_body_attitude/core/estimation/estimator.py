@@ -203,13 +203,15 @@ class AttitudeEstimator:
         duration = count / self.sample_rate
         speed = math.sqrt(sum(value * value for value in rate)) if rate else 0.0
         outcome = field.check(mean_field, self.up, speed, duration)
+        timing = speed * self.settings.magnetometer_timing
+        if outcome == ACCEPTED and timing > self.settings.magnetic_disturbance_stddev:
+            outcome = 'turning'  # the timing error would exceed the disturbance tolerated
         if outcome != ACCEPTED:
             self.counts[f'magnetometer_{outcome}'] += 1
             return q
         noise = self.settings.magnetometer_noise_density ** 2 * self.sample_rate / count
-        timing = (speed * self.settings.magnetometer_timing) ** 2
         measurement = heading_measurement(mean_field, self.east, self.north,
-                                          self.settings.declination, noise, timing)
+                                          self.settings.declination, noise, timing * timing)
         rows, projection = heading_only_gain(self.estimated,
                                              covariance.mean_rotation.T @ self.up)
         result = joseph_update(covariance.p, measurement.h, measurement.residual,
