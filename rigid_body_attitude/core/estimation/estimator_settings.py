@@ -36,9 +36,9 @@ The gyro's figures (and the accelerometer's noise density and bias prior) are th
   ``gravity_tolerance`` 0.5 m/s²: the zero-rate update's rest test on whole update intervals
   (as :class:`~rigid_body_attitude.core.estimation.rest.RestDetector` on samples).
 * ``declination`` 0 rad: magnetic north east of true north (a WMM value for the place).
-* ``estimate_intrinsic`` and ``estimate_accelerometer_bias``: whether the updates estimate
-  the gyro's scale-factor and misalignment errors and the accelerometer bias, or only consider
-  them (:mod:`.filter_covariance`).
+* ``estimate_intrinsic`` (true) and ``estimate_accelerometer_bias`` (false): whether the
+  updates estimate the gyro's scale-factor and misalignment errors and the accelerometer bias,
+  or only consider them (:mod:`.filter_covariance`, :mod:`.estimator`).
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ class EstimatorSettings:
     max_rest_rate: float = 0.05
     gravity_tolerance: float = 0.5
     declination: float = 0.0
-    estimate_intrinsic: bool = False
+    estimate_intrinsic: bool = True
     estimate_accelerometer_bias: bool = False
 
     def __post_init__(self) -> None:
