@@ -14,7 +14,7 @@ the error-state Kalman filter", 2017, chapter 7), in order, once per update inte
 
 Each accepted update is injected at once (:mod:`.kalman_update`): ``q ← exp(δθ) ⊗ q``, the
 gyro bias (and, when estimated, the intrinsic errors and the accelerometer bias) corrected,
-the covariance reset; the sums of the next measurement are rotated by the same ``δθ``. An
+the covariance kept (no reset Jacobian, :mod:`.kalman_update`); the sums of the next measurement are rotated by the same ``δθ``. An
 external attitude (:meth:`AttitudeEstimator.attitude_measurement`) is one more update.
 
 Per sample (:meth:`AttitudeEstimator.sample`, :meth:`AttitudeEstimator.magnetic_field`) the
@@ -51,8 +51,7 @@ from rigid_body_attitude.core.estimation.filter_covariance import (
 from rigid_body_attitude.core.estimation.gravity_update import MotionPower, gravity_measurement
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.core.estimation.interval_sums import ImuInterval, MagneticInterval
-from rigid_body_attitude.core.estimation.kalman_update import (
-    injected_attitude, joseph_update, reset_jacobian_applied)
+from rigid_body_attitude.core.estimation.kalman_update import injected_attitude, joseph_update
 from rigid_body_attitude.core.estimation.magnetometer import (
     MagnetometerCalibration, heading_measurement, heading_only_gain)
 from rigid_body_attitude.core.estimation.zero_rate_update import (
@@ -247,7 +246,7 @@ class AttitudeEstimator:
         self.gyro_bias = (b[0] + float(dx[3]), b[1] + float(dx[4]), b[2] + float(dx[5]))
         self.intrinsic += dx[6:15]
         self.accel_bias += dx[15:18]
-        covariance.set(reset_jacobian_applied(updated, dtheta))
+        covariance.set(updated)
         angle = float(np.linalg.norm(dtheta))
         if angle > 0.0:
             axis = dtheta / angle

@@ -18,8 +18,11 @@ eq. 4.2.18). ``y`` is first tested against ``S``: its normalised squared size ``
 26(2), 2003, section III; J. Solà, "Quaternion kinematics for the error-state Kalman filter",
 2017, section 7.2): the attitude takes the world-frame correction ``q ← exp(δθ) ⊗ q``, the
 gyro bias ``b ← b + δb`` (the error was ``δb = b − b_est``), and the error state restarts at
-zero. The covariance is reset with ``G = I − ½ [δθ×]`` on the attitude block (Solà eq. 287:
-the error is now measured about the corrected attitude).
+zero. Solà's reset Jacobian ``G = I − ½ [δθ×]`` (eq. 287, :func:`reset_jacobian_applied`)
+is a second-order term that the filter does not apply: with an unknown heading (variance
+π²) it turns a tilt correction of a milliradian into a tilt-heading correlation the data never
+gave, and the next gravity update then pretends to know the heading (Markley's MEKF keeps
+the covariance as it is, section III).
 """
 
 from __future__ import annotations

@@ -192,8 +192,8 @@ def test_without_magnetometer_the_heading_stays_unknown():
 
 
 def test_magnetic_start_finds_north():
-    q_true = quaternion.exp(np.radians([3.0, -2.0, 70.0]))
     levelled = quaternion.exp(np.radians([3.0, -2.0, 0.0]))
+    q_true = quaternion.multiply(quaternion.exp(np.radians([0.0, 0.0, 70.0])), levelled)
     field_body = quaternion.rotate_inverse(q_true, FIELD_WORLD)
     estimator, q = started(levelled, field_body=field_body)
     assert math.degrees(quaternion.attitude_error(q, q_true)) < 1e-6
