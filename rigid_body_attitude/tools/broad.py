@@ -7,8 +7,9 @@ See ``docs/data.md``; converted bags carry the citation in their ``custom_data``
 
 A trial archive (``.npz``, converted from BROAD's HDF5 files, values unchanged) holds
 ``sampling_rate`` (Hz), ``imu_gyr`` (N, 3) rad/s and ``imu_acc`` (N, 3) m/s² in the IMU (body)
-frame, ``imu_mag`` (N, 3) µT in the trials that carry a magnetometer (:attr:`BroadTrial.field`
-holds it in tesla), ``opt_quat_wxyz`` (N, 4) the optical attitude of the IMU frame w.r.t. an ENU world frame
+frame, ``imu_mag`` (N, 3) µT in the trials that carry a magnetometer
+(:attr:`BroadTrial.field` holds it in tesla), ``opt_quat_wxyz`` (N, 4) the optical attitude
+of the IMU frame w.r.t. an ENU world frame
 (scalar first, body → world as in :mod:`rigid_body_attitude.core.attitude.quaternion`; NaN rows
 where the
 cameras lost the body), ``movement`` (N,) bool, and ``info``. Sample ``i`` is at

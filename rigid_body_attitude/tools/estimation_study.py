@@ -119,7 +119,7 @@ def run_filter(trial: BroadTrial, model: GyroErrorModel, settings: EstimatorSett
 
 def run_vqf(trial: BroadTrial, use_magnetometer: bool = True) -> Run:
     """VQF (offline, defaults) over the trial's samples: 9D with a magnetometer, else 6D."""
-    from vqf import offlineVQF  # the test requirements' VQF; imported where it is used
+    from vqf import offlineVQF  # type: ignore[import-untyped]  # test requirements' VQF
 
     gyro = np.ascontiguousarray(trial.gyro, dtype=np.float64)
     acc = np.ascontiguousarray(trial.acc, dtype=np.float64)

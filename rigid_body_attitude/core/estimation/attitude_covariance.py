@@ -282,7 +282,7 @@ def _all_good(q: FloatArray, rates: FloatArray, dt: FloatArray) -> bool:
 
 
 def propagated_covariance(p: FloatArray, coupling: FloatArray, duration: float,
-                model: GyroErrorModel) -> FloatArray:
+                          model: GyroErrorModel) -> FloatArray:
     """``Φ P Φᵀ + Q`` with ``Φ = [[I, coupling], [0, I]]``, symmetrised and floored."""
     pax = p[:3, 3:]
     cross = pax + coupling @ p[3:, 3:]

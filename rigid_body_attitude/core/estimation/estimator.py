@@ -14,8 +14,8 @@ the error-state Kalman filter", 2017, chapter 7), in order, once per update inte
 
 Each accepted update is injected at once (:mod:`.kalman_update`): ``q ← exp(δθ) ⊗ q``, the
 gyro bias (and, when estimated, the intrinsic errors and the accelerometer bias) corrected,
-the covariance kept (no reset Jacobian, :mod:`.kalman_update`); the sums of the next measurement are rotated by the same ``δθ``. An
-external attitude (:meth:`AttitudeEstimator.attitude_measurement`) is one more update.
+the covariance kept (no reset Jacobian: :mod:`.kalman_update`); the sums of the next
+measurement are rotated by the same ``δθ``. An external attitude (:meth:`AttitudeEstimator.attitude_measurement`) is one more update.
 
 Per sample (:meth:`AttitudeEstimator.sample`, :meth:`AttitudeEstimator.magnetic_field`) the
 work is a few plain-float operations (:mod:`.interval_sums`); the NumPy work happens at the
@@ -51,7 +51,8 @@ from rigid_body_attitude.core.estimation.filter_covariance import (
 from rigid_body_attitude.core.estimation.gravity_update import MotionPower, gravity_measurement
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.core.estimation.interval_sums import ImuInterval, MagneticInterval
-from rigid_body_attitude.core.estimation.kalman_update import injected_attitude, joseph_update
+from rigid_body_attitude.core.estimation.kalman_update import (
+    UpdateResult, injected_attitude, joseph_update)
 from rigid_body_attitude.core.estimation.magnetometer import (
     MagnetometerCalibration, heading_measurement, heading_only_gain)
 from rigid_body_attitude.core.estimation.zero_rate_update import (
@@ -230,12 +231,12 @@ class AttitudeEstimator:
         result = joseph_update(state.p, h, y, r, self.estimated, math.inf)
         return self._injected('attitude', result, q, np.eye(3))[0]
 
-    def _injected(self, name: str, result: object, q: Quat, rotation: FloatArray
+    def _injected(self, name: str, result: UpdateResult, q: Quat, rotation: FloatArray
                   ) -> tuple[Quat, FloatArray]:
         """Inject an update's correction (module docstring); count it."""
         covariance = self.covariance
         assert covariance is not None
-        accepted, dx, updated, _ = result  # type: ignore[misc]
+        accepted, dx, updated = result.accepted, result.dx, result.covariance
         if not accepted:
             self.counts[f'{name}_gated'] += 1
             return q, rotation

@@ -3,8 +3,9 @@
 Per IMU sample (:meth:`ImuInterval.add`): the specific force rotated into the world frame
 with the attitude at the sample (``q ⊗ f ⊗ q*``, 18 products), its sum, the sums of the
 body-frame specific force and rate and of their squared norms (for the rest test), the count
-and the duration. Per magnetometer sample (:meth:`MagneticInterval.add`, corrected for hard and soft iron
-by :class:`~rigid_body_attitude.core.estimation.magnetometer.MagnetometerCalibration`): the
+and the duration. Per magnetometer sample (:meth:`MagneticInterval.add`, corrected for hard
+and soft iron by
+:class:`~rigid_body_attitude.core.estimation.magnetometer.MagnetometerCalibration`): the
 rotation into the world frame, the sum.
 Averaging in the world frame is what lets the updates run at a low rate: the body may turn
 fast within an interval, the world-frame gravity and field do not (VQF low-passes the
@@ -14,6 +15,7 @@ Information Fusion 91, 2023, section 3.2).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 __all__ = ['ImuInterval', 'MagneticInterval']
@@ -73,12 +75,12 @@ class ImuInterval:
         s, n = self.sums, self.count
         gyro = s[10] / n - (s[7] ** 2 + s[8] ** 2 + s[9] ** 2) / (n * n)
         accel = s[6] / n - (s[3] ** 2 + s[4] ** 2 + s[5] ** 2) / (n * n)
-        return max(gyro, 0.0) ** 0.5, max(accel, 0.0) ** 0.5
+        return math.sqrt(max(gyro, 0.0)), math.sqrt(max(accel, 0.0))
 
     def mean_force_norm(self) -> float:
         """``|mean body specific force|`` [m/s²]."""
         s, n = self.sums, self.count
-        return (s[3] ** 2 + s[4] ** 2 + s[5] ** 2) ** 0.5 / n
+        return math.sqrt(s[3] ** 2 + s[4] ** 2 + s[5] ** 2) / n
 
 
 class MagneticInterval:
