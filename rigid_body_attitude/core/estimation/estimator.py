@@ -15,7 +15,8 @@ the error-state Kalman filter", 2017, chapter 7), in order, once per update inte
 Each accepted update is injected at once (:mod:`.kalman_update`): ``q ← exp(δθ) ⊗ q``, the
 gyro bias (and, when estimated, the intrinsic errors and the accelerometer bias) corrected,
 the covariance kept (no reset Jacobian: :mod:`.kalman_update`); the sums of the next
-measurement are rotated by the same ``δθ``. An external attitude (:meth:`AttitudeEstimator.attitude_measurement`) is one more update.
+measurement are rotated by the same ``δθ``. An external attitude
+(:meth:`AttitudeEstimator.attitude_measurement`) is one more update.
 
 Per sample (:meth:`AttitudeEstimator.sample`, :meth:`AttitudeEstimator.magnetic_field`) the
 work is a few plain-float operations (:mod:`.interval_sums`); the NumPy work happens at the
