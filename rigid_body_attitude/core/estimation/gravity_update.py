@@ -10,7 +10,7 @@ is ``f̄ = f_true + [f_true×] δθ + R̄ δb_a + n̄`` to first order (``q_true
     y = Eᵀ f̄ = g_v Eᵀ [up×] δθ + Eᵀ R̄ δb_a + Eᵀ ā + Eᵀ n̄,
 
 ``g_v = up · f̄`` the measured vertical specific force. It carries no heading (``up × up``
-is zero); the vertical part ``g_v − g`` is no tilt to first order and is only used to measure
+is zero); the vertical part ``g_v − g`` is no tilt to first order and serves only to measure
 the motion.
 
 **Noise model.** ``n̄`` is the accelerometer's white noise averaged over ``T``: variance

@@ -27,7 +27,7 @@ gyro's, so the body's turn ``|ω| δt`` in between appears as a heading error (v
 **Heading only.** The update's gain is kept off the tilt: its rows of the world's horizontal
 axes are zero, and its gyro-bias rows are projected onto the body's vertical (``u uᵀ`` with
 ``u = R̄ᵀ up``), so that no correction made from a field, disturbed or not, can tilt the
-attitude, now or later through the bias. The Joseph form
+attitude, at once or later through the bias. The Joseph form
 (:func:`~rigid_body_attitude.core.estimation.kalman_update.joseph_update`) keeps the
 covariance true under this gain (Laidig and Seel's VQF corrects heading only for the same
 reason: Information Fusion 91, 2023, section 3.4).
