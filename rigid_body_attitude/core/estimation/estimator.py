@@ -1,0 +1,264 @@
+"""The attitude filter: an error-state (multiplicative) Kalman filter over the gyro's attitude.
+
+The gyro propagates the attitude (the session's strapdown step) and
+:class:`~rigid_body_attitude.core.estimation.filter_covariance.FilterCovariance` its error
+covariance; this class adds the measurement updates (F. L. Markley, "Attitude error
+representations for Kalman filtering", JGCD 26(2), 2003; J. Solà, "Quaternion kinematics for
+the error-state Kalman filter", 2017, chapter 7), in order, once per update interval:
+
+1. **gravity** (:mod:`.gravity_update`): tilt from the world-frame mean specific force, with
+   the acceleration as measured, inflated noise and an innovation gate;
+2. **zero rate** (:mod:`.zero_rate_update`): the gyro bias while the body rests;
+3. **magnetometer** (:mod:`.magnetometer`): heading only, when the interval's field passes the
+   norm and dip checks of :mod:`.field_reference`.
+
+Each accepted update is injected at once (:mod:`.kalman_update`): ``q ← exp(δθ) ⊗ q``, the
+gyro bias (and, when estimated, the intrinsic errors and the accelerometer bias) corrected,
+the covariance kept (no reset Jacobian: :mod:`.kalman_update`); the sums of the next
+measurement are rotated by the same ``δθ``. An external attitude
+(:meth:`AttitudeEstimator.attitude_measurement`) is one more update.
+
+Per sample (:meth:`AttitudeEstimator.sample`, :meth:`AttitudeEstimator.magnetic_field`) the
+work is a few plain-float operations (:mod:`.interval_sums`); the NumPy work happens at the
+update rate. Gyro bias in motion: every update corrects it through the covariance (its
+correlation with the attitude error), at rest the zero-rate update does.
+
+Which states are estimated (:mod:`.filter_covariance`): the gyro's intrinsic errors are by
+default, because they matter exactly when the body turns fast and that is when the gravity
+and heading updates make them observable (a 1 % scale error at 10 rad/s is 6°/s of drift);
+the accelerometer bias is considered by default: over minutes of hand-held motion it is not
+separable from the acceleration the gravity update treats as noise, so estimating it lets
+that noise leak into it, while considering it keeps its effect in every gain and in the
+published covariance. The magnetometer's residual hard iron needs no state of its own: a field it
+distorts fails the norm and dip checks or stays within the heading disturbance ``d``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigid_body_attitude.core.environment.magnetic_field import WORLD_AXES
+from rigid_body_attitude.core.errors import InputError
+from rigid_body_attitude.core.estimation.attitude_update import attitude_measurement
+from rigid_body_attitude.core.estimation.estimator_settings import EstimatorSettings
+from rigid_body_attitude.core.estimation.field_reference import ACCEPTED, FieldReference
+from rigid_body_attitude.core.estimation.filter_covariance import (
+    FILTER_STATE_SIZE, FilterCovariance, estimated_mask)
+from rigid_body_attitude.core.estimation.gravity_update import MotionPower, gravity_measurement
+from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
+from rigid_body_attitude.core.estimation.interval_sums import ImuInterval, MagneticInterval
+from rigid_body_attitude.core.estimation.kalman_update import (
+    UpdateResult, injected_attitude, joseph_update)
+from rigid_body_attitude.core.estimation.magnetometer import (
+    MagnetometerCalibration, heading_measurement, heading_only_gain)
+from rigid_body_attitude.core.estimation.zero_rate_update import (
+    RestIntervals, zero_rate_measurement)
+
+__all__ = ['AttitudeEstimator', 'SPECIFIC_FORCE_LIMIT']
+
+FloatArray = NDArray[np.float64]
+Quat = tuple[float, float, float, float]
+Vec = tuple[float, float, float]
+#: Largest specific force [m/s²] and field [T] magnitudes a sample may have.
+SPECIFIC_FORCE_LIMIT = 1.0e4
+FIELD_LIMIT = 1.0e-2
+
+
+class AttitudeEstimator:
+    """The filter (module docstring). Start it with :meth:`start`, then per IMU sample call
+    :meth:`sample` and, when it returns true, :meth:`update`.
+
+    Args:
+        model: the gyro error budget (with the accelerometer's noise density and bias prior).
+        settings: the filter's settings.
+        world_axes: ``'enu'``, ``'ned'`` or ``'nwu'``.
+        magnetometer: the hard- and soft-iron correction (none: identity).
+        sample_rate: the IMU's rate [Hz] (per-sample noise of the rest test).
+    """
+
+    def __init__(self, model: GyroErrorModel, settings: EstimatorSettings,
+                 world_axes: str = 'enu', magnetometer: MagnetometerCalibration | None = None,
+                 sample_rate: float = 100.0) -> None:
+        if world_axes not in WORLD_AXES:
+            raise InputError(f'Expected world_axes to be one of {", ".join(sorted(WORLD_AXES))}'
+                             f', got {world_axes!r}')
+        if not (math.isfinite(sample_rate) and sample_rate > 0.0):
+            raise InputError(f'Expected `sample_rate` > 0 Hz, got {sample_rate!r}')
+        axes = WORLD_AXES[world_axes]
+        self.up, self.east, self.north = (np.array(v) for v in (axes.up, axes.east, axes.north))
+        self.horizontal = np.stack([self.east, self.north], axis=1)
+        self.model, self.settings = model, settings
+        self.magnetometer = magnetometer or MagnetometerCalibration()
+        self.sample_rate = float(sample_rate)
+        self.estimated = estimated_mask(settings.estimate_intrinsic,
+                                        settings.estimate_accelerometer_bias)
+        self.interval, self.field_interval = ImuInterval(), MagneticInterval()
+        self.motion = MotionPower(settings.motion_power_time, settings.acceleration_time)
+        self.rest = RestIntervals(settings.rest_seconds, settings.rest_noise_factor,
+                                  settings.max_rest_rate, settings.gravity_tolerance)
+        self.counts: Counter[str] = Counter()
+        self.covariance: FilterCovariance | None = None
+        self.field: FieldReference | None = None
+        self.gyro_bias: Vec = (0.0, 0.0, 0.0)
+        self.accel_bias = np.zeros(3)
+        self.intrinsic = np.zeros(9)
+        self.gravity = 9.80665
+
+    def start(self, covariance: FilterCovariance, gyro_bias: Sequence[float], gravity: float,
+              field: FieldReference | None) -> None:
+        """Begin from a levelled start (:mod:`.estimator_start`): its covariance, gyro bias
+        [rad/s], the specific force's norm at rest [m/s²], the field's reference (or None:
+        no magnetometer, the heading stays propagated)."""
+        self.covariance, self.field, self.gravity = covariance, field, float(gravity)
+        self.gyro_bias = (float(gyro_bias[0]), float(gyro_bias[1]), float(gyro_bias[2]))
+        self.interval.clear()
+        self.field_interval.clear()
+
+    def sample(self, q_before: Quat, rate: Vec, dt: float, q_after: Quat,
+               specific_force: Vec | None) -> bool:
+        """One integrated step: attitude at its start, the bias-corrected body rate held over
+        it [rad/s], its length [s], the attitude after it, the body specific force [m/s²] at
+        its end (None: none). Returns whether an update is due. InputError for a non-finite
+        or out-of-range value (naming it)."""
+        covariance = self.covariance
+        if covariance is None:
+            raise InputError('Expected start() before the first sample')
+        covariance.add_sample(q_before, rate, dt)
+        if specific_force is not None:
+            fx, fy, fz = specific_force
+            if not 0.0 < fx * fx + fy * fy + fz * fz <= SPECIFIC_FORCE_LIMIT ** 2:
+                raise InputError(f'Expected a finite, non-zero specific force of at most '
+                                 f'{SPECIFIC_FORCE_LIMIT:g} m/s^2, got {tuple(specific_force)!r}')
+            b = self.accel_bias
+            self.interval.add(q_after, rate, (fx - b[0], fy - b[1], fz - b[2]), dt)
+        else:
+            self.interval.duration += dt
+        return self.interval.duration >= self.settings.update_interval
+
+    def magnetic_field(self, q: Quat, field: Vec) -> None:
+        """One magnetometer sample [T], body frame, uncorrected, at the attitude ``q``;
+        InputError for a non-finite, zero or out-of-range field (naming it)."""
+        mx, my, mz = field
+        if not 0.0 < mx * mx + my * my + mz * mz <= FIELD_LIMIT ** 2:
+            raise InputError(f'Expected a finite, non-zero magnetic field of at most '
+                             f'{FIELD_LIMIT:g} T, got {tuple(field)!r}')
+        self.field_interval.add(q, self.magnetometer.corrected(field))
+
+    def update(self, q: Quat) -> Quat:
+        """The updates of the interval ending at attitude ``q``; returns the corrected
+        attitude (:attr:`gyro_bias` and the other estimates are corrected in place)."""
+        covariance = self.covariance
+        assert covariance is not None
+        covariance.fold()
+        interval, rotation = self.interval, np.eye(3)
+        if interval.count:
+            q, rotation = self._gravity(q, rotation)
+            if self.rest.at_rest(interval, self._gyro_noise(), self._accel_noise(),
+                                 self.gravity):
+                q, rotation = self._zero_rate(q, rotation)
+        if self.field is not None and self.field_interval.count:
+            q = self._heading(q, rotation, interval.mean_rate() if interval.count else None)
+        interval.clear()
+        self.field_interval.clear()
+        return q
+
+    def _gyro_noise(self) -> float:
+        return self.model.gyroscope_noise_density * math.sqrt(self.sample_rate)
+
+    def _accel_noise(self) -> float:
+        return self.model.accelerometer_noise_density * math.sqrt(self.sample_rate)
+
+    def _gravity(self, q: Quat, rotation: FloatArray) -> tuple[Quat, FloatArray]:
+        interval, covariance = self.interval, self.covariance
+        assert covariance is not None
+        duration = max(interval.count / self.sample_rate, 1e-9)
+        white = self.model.accelerometer_noise_density ** 2 / duration
+        mean_force = np.array(interval.mean_world_force())
+        measurement = gravity_measurement(mean_force, covariance.mean_rotation,
+                                          self.horizontal, self.up,
+                                          white + self.motion.variance(duration))
+        prior = covariance.p
+        result = joseph_update(prior, measurement.h, measurement.residual, measurement.r,
+                               self.estimated, self.settings.gravity_gate)
+        self.motion.observe(measurement, prior, interval.mean_force_norm() - self.gravity,
+                            white, duration)
+        return self._injected('gravity', result, q, rotation)
+
+    def _zero_rate(self, q: Quat, rotation: FloatArray) -> tuple[Quat, FloatArray]:
+        covariance = self.covariance
+        assert covariance is not None
+        duration = max(self.interval.count / self.sample_rate, 1e-9)
+        h, y, r = zero_rate_measurement(self.interval.mean_rate(),
+                                        self.model.gyroscope_noise_density, duration)
+        result = joseph_update(covariance.p, h, y, r, self.estimated, self.settings.rest_gate)
+        return self._injected('zero_rate', result, q, rotation)
+
+    def _heading(self, q: Quat, rotation: FloatArray, rate: Vec | None) -> Quat:
+        covariance, field = self.covariance, self.field
+        assert covariance is not None and field is not None
+        count = self.field_interval.count
+        mean_field = rotation @ np.array(self.field_interval.mean())
+        duration = count / self.sample_rate
+        speed = math.sqrt(sum(value * value for value in rate)) if rate else 0.0
+        outcome = field.check(mean_field, self.up, speed, duration)
+        timing = speed * self.settings.magnetometer_timing
+        if outcome == ACCEPTED and timing > self.settings.magnetic_disturbance_stddev:
+            outcome = 'turning'  # the timing error would exceed the disturbance tolerated
+        if outcome != ACCEPTED:
+            self.counts[f'magnetometer_{outcome}'] += 1
+            return q
+        noise = self.settings.magnetometer_noise_density ** 2 * self.sample_rate / count
+        measurement = heading_measurement(mean_field, self.east, self.north,
+                                          self.settings.declination, noise, timing * timing)
+        rows, projection = heading_only_gain(self.estimated,
+                                             covariance.mean_rotation.T @ self.up)
+        result = joseph_update(covariance.p, measurement.h, measurement.residual,
+                               measurement.r, rows, self.settings.magnetometer_gate, projection)
+        return self._injected('magnetometer', result, q, rotation)[0]
+
+    def attitude_measurement(self, q: Quat, q_measured: Sequence[float],
+                             covariance: FloatArray) -> Quat:
+        """An external attitude ``q_measured`` (w, x, y, z) with its 3×3 world-frame
+        covariance [rad²] (:mod:`.attitude_update`); returns the corrected attitude."""
+        state = self.covariance
+        assert state is not None
+        h, y, r = attitude_measurement(q, q_measured, covariance)
+        state.fold()
+        result = joseph_update(state.p, h, y, r, self.estimated, math.inf)
+        return self._injected('attitude', result, q, np.eye(3))[0]
+
+    def _injected(self, name: str, result: UpdateResult, q: Quat, rotation: FloatArray
+                  ) -> tuple[Quat, FloatArray]:
+        """Inject an update's correction (module docstring); count it."""
+        covariance = self.covariance
+        assert covariance is not None
+        accepted, dx, updated = result.accepted, result.dx, result.covariance
+        if not accepted:
+            self.counts[f'{name}_gated'] += 1
+            return q, rotation
+        self.counts[name] += 1
+        dtheta = dx[:3]
+        q = injected_attitude(q, dtheta)
+        b = self.gyro_bias
+        self.gyro_bias = (b[0] + float(dx[3]), b[1] + float(dx[4]), b[2] + float(dx[5]))
+        self.intrinsic += dx[6:15]
+        self.accel_bias += dx[15:18]
+        covariance.set(updated)
+        angle = float(np.linalg.norm(dtheta))
+        if angle > 0.0:
+            axis = dtheta / angle
+            cross = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
+                              [-axis[1], axis[0], 0.0]])
+            turn = np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * cross @ cross
+            rotation = turn @ rotation
+        return q, rotation
+
+    @property
+    def state_size(self) -> int:
+        """:data:`~rigid_body_attitude.core.estimation.filter_covariance.FILTER_STATE_SIZE`."""
+        return FILTER_STATE_SIZE

@@ -1,0 +1,132 @@
+"""The magnetometer: hard- and soft-iron correction, and a measurement of heading only.
+
+**Correction** (sensor frame): ``m = S (m_raw − h)`` with the hard-iron offset ``h`` [T] (a
+field carried with the sensor) and the soft-iron matrix ``S`` (the distortion of materials
+carried with it), from a calibration (:class:`MagnetometerCalibration`); identity and zero
+without one.
+
+**Heading measurement.** The field averaged over an interval in the world frame with the
+estimated attitude (:class:`.interval_sums.MagneticInterval`), ``m̄``, has the horizontal
+direction ``α(m̄) = atan2(north · m̄, east · m̄)`` (an angle about the world's up: east × north
+= up in any right-handed world frame). Magnetic north lies at ``α_ref = atan2(cos D, sin D)``
+for the declination ``D``. With ``q_true = exp(δθ) ⊗ q_est`` the estimated field is
+``m̄ = m_true + [m_true×] δθ`` to first order, and the true one lies at ``α_ref + d`` (``d``
+the disturbance state of :mod:`.filter_covariance`), so the residual is::
+
+    y = α_ref − α(m̄) = −∇α(m̄)ᵀ [m̄×] δθ − d + v,     ∇α(v) = ((e·v) n − (n·v) e) / |v_h|²
+
+(``e``, ``n`` east and north). The row ``−∇αᵀ [m̄×]`` has, besides ``1`` on the vertical
+axis, terms on the horizontal ones: a tilt error turns the field's vertical part (the dip,
+68° in Berlin) into a heading error of ``tan(dip)`` times the tilt, and the covariance knows.
+``v`` is the magnetometer's white noise averaged over the interval's ``k`` samples,
+variance ``σ_m²/(k |m̄_h|²)``, plus the error of its timing: a magnetometer samples at its own
+output rate and its sample is up to ``δt`` (``magnetometer_timing``) older or newer than the
+gyro's, so the body's turn ``|ω| δt`` in between appears as a heading error (variance
+``(|ω| δt)²``, ``|ω|`` the interval's mean rate).
+
+**Heading only.** The update's gain is kept off the tilt: its rows of the world's horizontal
+axes are zero, and its gyro-bias rows are projected onto the body's vertical (``u uᵀ`` with
+``u = R̄ᵀ up``), so that no correction made from a field, disturbed or not, can tilt the
+attitude, at once or later through the bias. The Joseph form
+(:func:`~rigid_body_attitude.core.estimation.kalman_update.joseph_update`) keeps the
+covariance true under this gain (Laidig and Seel's VQF corrects heading only for the same
+reason: Information Fusion 91, 2023, section 3.4).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rigid_body_attitude.core.errors import InputError
+from rigid_body_attitude.core.estimation.filter_covariance import (
+    ATTITUDE, DISTURBANCE, FILTER_STATE_SIZE, GYRO_BIAS)
+
+__all__ = ['HeadingMeasurement', 'MagnetometerCalibration', 'heading_angle',
+           'heading_measurement', 'heading_only_gain']
+
+FloatArray = NDArray[np.float64]
+#: Largest hard-iron offset accepted [T]: 1 mT, twenty times the Earth's field (a magnet
+#: on the sensor saturates a magnetometer well before).
+MAX_HARD_IRON = 1e-3
+
+
+@dataclass(frozen=True)
+class MagnetometerCalibration:
+    """Hard iron ``hard_iron`` [T] (3) and soft iron ``soft_iron`` (3×3, row-major 9 numbers)
+    of one magnetometer, sensor frame (module docstring); InputError naming a bad value."""
+
+    hard_iron: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    soft_iron: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+
+    def __post_init__(self) -> None:
+        """Finite values, the offset within :data:`MAX_HARD_IRON`, ``S`` invertible."""
+        if len(self.hard_iron) != 3 or not all(
+                math.isfinite(value) and abs(value) <= MAX_HARD_IRON for value in self.hard_iron):
+            raise InputError(f'Expected `hard_iron` as 3 finite values of at most '
+                             f'{MAX_HARD_IRON:g} T, got {self.hard_iron!r}')
+        matrix = np.array(self.soft_iron, dtype=np.float64)
+        if matrix.shape != (9,) or not np.all(np.isfinite(matrix)):
+            raise InputError(f'Expected `soft_iron` as 9 finite values (3x3 row-major), got '
+                             f'{self.soft_iron!r}')
+        if not np.linalg.cond(matrix.reshape(3, 3)) < 1e3:
+            raise InputError(f'Expected `soft_iron` to be well conditioned (condition number '
+                             f'below 1000), got {self.soft_iron!r}')
+
+    def corrected(self, raw: tuple[float, float, float]) -> tuple[float, float, float]:
+        """``S (m_raw − h)`` [T] (plain floats)."""
+        hx, hy, hz = self.hard_iron
+        s00, s01, s02, s10, s11, s12, s20, s21, s22 = self.soft_iron
+        mx, my, mz = raw[0] - hx, raw[1] - hy, raw[2] - hz
+        return (s00 * mx + s01 * my + s02 * mz, s10 * mx + s11 * my + s12 * mz,
+                s20 * mx + s21 * my + s22 * mz)
+
+
+class HeadingMeasurement(NamedTuple):
+    """``h`` (1, n), the residual (1,) [rad], the white-noise variance ``r`` (1, 1) [rad²]."""
+
+    h: FloatArray
+    residual: FloatArray
+    r: FloatArray
+
+
+def heading_angle(vector: FloatArray, east: FloatArray, north: FloatArray) -> float:
+    """``α(v) = atan2(north · v, east · v)`` [rad]: the horizontal direction of ``v``."""
+    return math.atan2(float(north @ vector), float(east @ vector))
+
+
+def heading_measurement(mean_field: FloatArray, east: FloatArray, north: FloatArray,
+                        declination: float, noise_variance: float,
+                        timing_variance: float = 0.0) -> HeadingMeasurement:
+    """The measurement of the module docstring from the interval's mean world-frame field
+    [T]; ``noise_variance`` the per-axis variance of that mean [T²], ``timing_variance`` the
+    heading variance [rad²] of the samples' timing (``(|ω| δt)²``)."""
+    e, n = float(east @ mean_field), float(north @ mean_field)
+    horizontal2 = e * e + n * n
+    gradient = (e * north - n * east) / horizontal2
+    mx, my, mz = (float(value) for value in mean_field)
+    field_cross = np.array([[0.0, -mz, my], [mz, 0.0, -mx], [-my, mx, 0.0]])
+    h = np.zeros((1, FILTER_STATE_SIZE))
+    h[0, ATTITUDE] = -gradient @ field_cross
+    h[0, DISTURBANCE] = -1.0
+    reference = math.atan2(math.cos(declination), math.sin(declination))
+    residual = math.remainder(reference - math.atan2(n, e), 2.0 * math.pi)
+    return HeadingMeasurement(h, np.array([residual]),
+                              np.array([[noise_variance / horizontal2 + timing_variance]]))
+
+
+def heading_only_gain(estimated: NDArray[np.bool_], up_body: FloatArray
+                      ) -> tuple[NDArray[np.bool_], FloatArray]:
+    """The magnetometer's gain restriction: the rows it may correct (the attitude about the
+    world's vertical axis z, vertical in every world frame of
+    :data:`~rigid_body_attitude.core.environment.magnetic_field.WORLD_AXES`, and the gyro
+    bias; never the intrinsic errors or the accelerometer bias, which would tilt later) and
+    the projection ``u uᵀ`` of its gyro-bias rows onto the body's vertical ``u``."""
+    rows = np.zeros_like(estimated)
+    rows[2] = True
+    rows[GYRO_BIAS] = estimated[GYRO_BIAS]
+    return rows, np.outer(up_body, up_body)
