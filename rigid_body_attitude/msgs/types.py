@@ -14,11 +14,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = [
+    'ACCEL_WITH_COVARIANCE_STAMPED',
     'CLOCK',
     'DIAGNOSTIC_ARRAY',
     'FIXED_LAYOUTS',
     'FLOAT64',
     'IMU',
+    'MAGNETIC_FIELD',
     'MESSAGE_TYPES',
     'POSE_STAMPED',
     'POSE_WITH_COVARIANCE_STAMPED',
@@ -38,6 +40,8 @@ POSE_STAMPED = 'geometry_msgs/msg/PoseStamped'
 POSE_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/PoseWithCovarianceStamped'
 TWIST_STAMPED = 'geometry_msgs/msg/TwistStamped'
 FLOAT64 = 'std_msgs/msg/Float64'
+MAGNETIC_FIELD = 'sensor_msgs/msg/MagneticField'
+ACCEL_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/AccelWithCovarianceStamped'
 DIAGNOSTIC_ARRAY = 'diagnostic_msgs/msg/DiagnosticArray'
 #: Types the node uses through rclpy only (no codec here).
 CLOCK = 'rosgraph_msgs/msg/Clock'
@@ -87,6 +91,10 @@ FIXED_LAYOUTS: dict[str, Layout] = {
         True, _vector('pose.pose.position') + _quaternion('pose.pose.orientation')
         + tuple(f'pose.covariance[{index}]' for index in range(36))),
     FLOAT64: Layout(False, ('data',)),
+    MAGNETIC_FIELD: Layout(True, _vector('magnetic_field') + _covariance('magnetic_field')),
+    ACCEL_WITH_COVARIANCE_STAMPED: Layout(
+        True, _vector('accel.accel.linear') + _vector('accel.accel.angular')
+        + tuple(f'accel.covariance[{index}]' for index in range(36))),
 }
 
 #: Every message type the package reads or writes (DiagnosticArray: variable layout).

@@ -30,7 +30,7 @@ from typing import Any
 from rclpy.node import Node
 
 from rigid_body_attitude.msgs.cdr import (
-    encode_float64, imu_with_orientation, pose_stamped_encoder,
+    accel_with_covariance_stamped_encoder, encode_float64, imu_with_orientation, pose_stamped_encoder,
     pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
     transform_encoder)
 from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
@@ -109,6 +109,7 @@ class RosOutputs:
         self.pose_raw = raw.get('pose', absent)
         self.imu_raw = raw.get('imu/data', absent)
         self.pose_covariance_raw = raw.get('pose_with_covariance')
+        self.acceleration_raw = raw.get('accel/filtered', absent)
         self.twist_raw = raw.get('twist', absent)
         self.energy_raw = raw.get('energy', absent)
         self.momentum_raw = raw.get('angular_momentum', absent)
@@ -172,6 +173,7 @@ class RosOutputs:
         self.encode_momentum = stamped_floats_encoder(world_frame, 3)
         self.encode_twist = stamped_floats_encoder(body_frame, 6)
         self.encode_tf = transform_encoder(world_frame, body_frame)
+        self.encode_acceleration = accel_with_covariance_stamped_encoder(body_frame)
 
     # -- OutputSink -------------------------------------------------------------------------
 
@@ -194,6 +196,13 @@ class RosOutputs:
                 sec, nanosec, _ZERO_POSITION, attitude, self.pose_covariance))
         if self.tf_raw is not None:
             self._publish_tf(sec, nanosec, attitude)
+
+    def acceleration(self, sec: int, nanosec: int, linear_body: Vector,
+                     covariance: tuple[float, ...]) -> None:
+        """``accel/filtered`` of one filtered gyro sample."""
+        output = self.acceleration_raw
+        if output.subscription_count():
+            output.publish(self.encode_acceleration(sec, nanosec, linear_body, covariance))
 
     def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
         """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``

@@ -76,6 +76,12 @@ class OutputSink(Protocol):
         """A dynamics tick's kinetic energy [J] and world angular momentum [N m s], stamped
         like its attitude."""
 
+    def acceleration(self, sec: int, nanosec: int, linear_body: Vector,
+                     covariance: tuple[float, ...]) -> None:
+        """A filtered gyro sample's gravity-free acceleration [m/s², body frame] and its
+        row-major 3×3 covariance [(m/s²)²] (scenes with an ``estimation`` section), stamped
+        like the attitude."""
+
     def simulated_imu(self, topic: str, data: bytes) -> None:
         """A simulated IMU's sample (dynamics scenes with ``sensors``): a serialized
         ``sensor_msgs/msg/Imu`` for the output ``topic``."""

@@ -101,6 +101,9 @@ class ImuStart(Session):
         self._told_no_accelerometer = False
         self._align_samples = 0
         self._refused_levelling = 0
+        #: The body-frame specific force [m/s²] of the last sample on the general path after
+        #: levelling (None: none), unchecked.
+        self.body_specific_force: tuple[float, float, float] | None = None
 
     def tell_calibration(self) -> None:
         """The INFO line naming the calibration file, its kind, the IMU key and the terms
@@ -191,6 +194,7 @@ class ImuStart(Session):
             body_rate, body_accel = self.sample_map.body_sample(rate, accel)
         except (TypeError, ValueError):
             return rate  # not 3 numbers: the stream refuses it
+        self.body_specific_force = body_accel
         levelling = self.levelling
         if levelling is not None and levelling.refine_bias_at_rest and body_accel is not None:
             stream = self.stream

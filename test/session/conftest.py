@@ -30,6 +30,11 @@ class RecordingSink:
     covariances: list[tuple[float, ...]] = field(default_factory=list)
     mounts: list[tuple[float, ...] | None] = field(default_factory=list)
     simulated: list[tuple[str, bytes]] = field(default_factory=list)
+    accelerations: list[tuple[int, int, tuple[float, ...], tuple[float, ...]]] = field(
+        default_factory=list)
+
+    def acceleration(self, sec, nanosec, linear_body, covariance):
+        self.accelerations.append((sec, nanosec, linear_body, covariance))
 
     def sensor_mount(self, q_body_sensor):
         self.mounts.append(q_body_sensor)

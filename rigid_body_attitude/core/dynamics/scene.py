@@ -23,6 +23,8 @@ the effects; only the effects it names are constructed. Format::
       magnetometer: {rate: 100.0, noise_density: 1.0e-8, intensity: 5.0e-5, inclination: 1.2}
       star_tracker: {rate: 5.0, boresight: [0, 0, 1], sun_exclusion_angle: 0.5}
     sun: {direction: [1, 0, 0]}    # world axes, towards the Sun (core/environment/sun.py)
+    estimation: {magnetometer: true}  # gyro scenes: the filter's updates
+                                   # (core/estimation/estimation_section.py)
 
 Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`scene_path`).
 
@@ -61,6 +63,8 @@ from rigid_body_attitude.core.dynamics.effects import (
 from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.environment.sun import ConstantSunDirection, sun_section
+from rigid_body_attitude.core.estimation.estimation_section import (
+    EstimationSpec, estimation_section)
 from rigid_body_attitude.core.paths import config_folders
 from rigid_body_attitude.core.sensors.imu import ImuSpec
 from rigid_body_attitude.core.sensors.magnetometer import MagnetometerSpec
@@ -76,7 +80,7 @@ FloatArray = NDArray[np.float64]
 
 RATE_SOURCES = ('dynamics', 'gyro')
 _TOP_KEYS = {'name', 'description', 'rate_source', 'integrator', 'step', 'body',
-             'initial_state', 'effects', 'sensors', 'sun'}
+             'initial_state', 'effects', 'sensors', 'sun', 'estimation'}
 _REQUIRED_TOP_KEYS = ('rate_source', 'body')
 _BODY_KEYS = {'mass', 'inertia'}
 _STATE_KEYS = {'attitude', 'omega_body'}
@@ -111,6 +115,8 @@ class Scene:
         sensors: the simulated sensors of the ``sensors`` section (:attr:`imu`,
             :attr:`magnetometer`, :attr:`star_tracker`: each None when not named).
         sun: the Sun's direction of the ``sun`` section, or None.
+        estimation: the measurement updates of the ``estimation`` section (gyro scenes), or
+            None (pure propagation).
     """
 
     name: str
@@ -126,6 +132,7 @@ class Scene:
     source: str = ''
     sensors: SensorSuite = field(default_factory=SensorSuite)
     sun: ConstantSunDirection | None = None
+    estimation: EstimationSpec | None = None
 
     @property
     def imu(self) -> ImuSpec | None:
@@ -237,7 +244,11 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
         source=source,
         sensors=sensors_section(data.get('sensors')),
         sun=sun_section(data.get('sun')),
+        estimation=estimation_section(data.get('estimation')),
     )
+    if scene.estimation is not None and rate_source != 'gyro':
+        raise SceneError('estimation: the measurement updates need a gyro scene (rate_source: '
+                         'gyro)')
     _check_effects(scene)
     _check_sensors(scene)
     return scene

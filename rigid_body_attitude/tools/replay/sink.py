@@ -25,6 +25,7 @@ from rigid_body_attitude.msgs import (
     encode_quaternion_stamped, encode_twist_stamped, encode_vector3_stamped,
     imu_with_orientation, pose_stamped_encoder, pose_with_covariance_stamped_encoder,
     quaternion_stamped_encoder)
+from rigid_body_attitude.msgs.cdr import accel_with_covariance_stamped_encoder
 from rigid_body_attitude.msgs.types import IMU
 from rigid_body_attitude.session.base import Session
 from rigid_body_attitude.session.outputs import OutputSample
@@ -115,6 +116,7 @@ class BagSink:
         self._pose = self.ids.get('pose')
         self._imu = self.ids.get('imu/data')
         self._pose_covariance = self.ids.get('pose_with_covariance')
+        self._acceleration = self.ids.get('accel/filtered')
         #: Rotation (w, x, y, z) of the IMU's frame in the body frame for ``imu/data``
         #: (:meth:`sensor_mount`; ``None``: identity).
         self.imu_mount: Quaternion | None = None
@@ -128,6 +130,7 @@ class BagSink:
         self.encode_orientation = quaternion_stamped_encoder(world_frame)
         self.encode_pose = pose_stamped_encoder(world_frame)
         self.encode_pose_covariance = pose_with_covariance_stamped_encoder(world_frame)
+        self.encode_acceleration = accel_with_covariance_stamped_encoder(body_frame)
 
     def start_from(self, start: GroundTruthStart, session: Session) -> None:
         """Set ``session``'s attitude from the ground truth at the first output due."""
@@ -180,6 +183,14 @@ class BagSink:
             series.attitude_stamps_ns.append(sec * NANOSECONDS_PER_SECOND + nanosec)
             series.attitudes.extend(attitude)
             series.positions.extend(_ZERO)
+
+    def acceleration(self, sec: int, nanosec: int, linear_body: Vector,
+                     covariance: tuple[float, ...]) -> None:
+        """``accel/filtered`` of one filtered gyro sample."""
+        if self._acceleration is not None:
+            self.records.append((self._acceleration, self.now_ns, self.encode_acceleration(
+                sec, nanosec, linear_body, covariance)))
+            self.counts['accel/filtered'] += 1
 
     def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
         """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``
