@@ -56,6 +56,7 @@ from rigid_body_attitude.core.estimation.kalman_update import (
     UpdateResult, injected_attitude, joseph_update)
 from rigid_body_attitude.core.estimation.magnetometer import (
     MagnetometerCalibration, heading_measurement, heading_only_gain)
+from rigid_body_attitude.core.estimation.velocity_update import BoundedVelocity
 from rigid_body_attitude.core.estimation.zero_rate_update import (
     RestIntervals, zero_rate_measurement)
 
@@ -99,6 +100,10 @@ class AttitudeEstimator:
                                         settings.estimate_accelerometer_bias)
         self.interval, self.field_interval = ImuInterval(), MagneticInterval()
         self.motion = MotionPower(settings.motion_power_time, settings.acceleration_time)
+        #: The velocity channel (:mod:`.velocity_update`).
+        self.velocity = BoundedVelocity(settings.velocity_time, settings.motion_power_time,
+                                        model.accelerometer_noise_density,
+                                        settings.zero_velocity_stddev)
         self.rest = RestIntervals(settings.rest_seconds, settings.rest_noise_factor,
                                   settings.max_rest_rate, settings.gravity_tolerance)
         self.counts: Counter[str] = Counter()
@@ -116,6 +121,7 @@ class AttitudeEstimator:
         no magnetometer, the heading stays propagated)."""
         self.covariance, self.field, self.gravity = covariance, field, float(gravity)
         self.gyro_bias = (float(gyro_bias[0]), float(gyro_bias[1]), float(gyro_bias[2]))
+        self.velocity.restart(covariance)
         self.interval.clear()
         self.field_interval.clear()
 
@@ -152,20 +158,50 @@ class AttitudeEstimator:
     def update(self, q: Quat) -> Quat:
         """The updates of the interval ending at attitude ``q``; returns the corrected
         attitude (:attr:`gyro_bias` and the other estimates are corrected in place)."""
-        covariance = self.covariance
-        assert covariance is not None
-        covariance.fold()
+        self._fold()
         interval, rotation = self.interval, np.eye(3)
+        velocity_model = self.settings.motion_model == 'velocity'
         if interval.count:
-            q, rotation = self._gravity(q, rotation)
+            if velocity_model:
+                q, rotation = self._velocity_change(q, rotation)
+            else:
+                q, rotation = self._gravity(q, rotation)
             if self.rest.at_rest(interval, self._gyro_noise(), self._accel_noise(),
                                  self.gravity):
                 q, rotation = self._zero_rate(q, rotation)
+                if velocity_model:
+                    q, rotation = self._zero_velocity(q, rotation)
+        elif interval.duration > 0.0:  # no specific force: the velocity is not seen
+            self.velocity.unseen(self._state(), interval.duration)
         if self.field is not None and self.field_interval.count:
             q = self._heading(q, rotation, interval.mean_rate() if interval.count else None)
+        self.velocity.clone(self._state())
         interval.clear()
         self.field_interval.clear()
         return q
+
+    def _fold(self) -> None:
+        """The covariance folded over the recorded steps."""
+        covariance = self.covariance
+        assert covariance is not None
+        covariance.fold()
+
+    def _state(self) -> FilterCovariance:
+        covariance = self.covariance
+        assert covariance is not None
+        return covariance
+
+    def _velocity_change(self, q: Quat, rotation: FloatArray) -> tuple[Quat, FloatArray]:
+        covariance, duration = self._state(), self.interval.count / self.sample_rate
+        force_sum = np.array(self.interval.mean_world_force()) * duration
+        h, y, r = self.velocity.change(covariance, force_sum, duration, self.gravity, self.up)
+        result = joseph_update(covariance.p, h, y, r, self.estimated)
+        return self._injected('velocity_change', result, q, rotation)
+
+    def _zero_velocity(self, q: Quat, rotation: FloatArray) -> tuple[Quat, FloatArray]:
+        h, y, r = self.velocity.at_rest()
+        result = joseph_update(self._state().p, h, y, r, self.estimated)
+        return self._injected('zero_velocity', result, q, rotation)
 
     def _gyro_noise(self) -> float:
         return self.model.gyroscope_noise_density * math.sqrt(self.sample_rate)
@@ -228,7 +264,7 @@ class AttitudeEstimator:
         state = self.covariance
         assert state is not None
         h, y, r = attitude_measurement(q, q_measured, covariance)
-        state.fold()
+        self._fold()
         result = joseph_update(state.p, h, y, r, self.estimated, math.inf)
         return self._injected('attitude', result, q, np.eye(3))[0]
 
@@ -248,6 +284,7 @@ class AttitudeEstimator:
         self.gyro_bias = (b[0] + float(dx[3]), b[1] + float(dx[4]), b[2] + float(dx[5]))
         self.intrinsic += dx[6:15]
         self.accel_bias += dx[15:18]
+        self.velocity.inject(dx)
         covariance.set(updated)
         angle = float(np.linalg.norm(dtheta))
         if angle > 0.0:

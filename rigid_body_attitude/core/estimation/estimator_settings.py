@@ -48,7 +48,11 @@ from dataclasses import dataclass, fields
 
 from rigid_body_attitude.core.errors import InputError
 
-__all__ = ['EstimatorSettings']
+__all__ = ['EstimatorSettings', 'MOTION_MODELS']
+
+#: The motion models of the gravity measurement: the velocity's (:mod:`.velocity_update`) or
+#: the acceleration's (:mod:`.gravity_update`).
+MOTION_MODELS = ('velocity', 'acceleration')
 
 _DEGREE = math.pi / 180.0
 
@@ -79,11 +83,19 @@ class EstimatorSettings:
     declination: float = 0.0
     estimate_intrinsic: bool = True
     estimate_accelerometer_bias: bool = False
+    motion_model: str = 'velocity'
+    velocity_time: float = 0.5
+    zero_velocity_stddev: float = 0.01
 
     def __post_init__(self) -> None:
         """Every number finite and >= 0 (times and gates > 0), the declination in [-π, π]."""
+        if self.motion_model not in MOTION_MODELS:
+            raise InputError(f'Expected `motion_model` to be one of {", ".join(MOTION_MODELS)}, '
+                             f'got {self.motion_model!r}')
         for field in fields(self):
             value = getattr(self, field.name)
+            if field.name == 'motion_model':
+                continue
             if field.name.startswith('estimate_'):
                 if not isinstance(value, bool):
                     raise InputError(f'Expected `{field.name}` to be true or false, got '
@@ -95,7 +107,8 @@ class EstimatorSettings:
                 if not (math.isfinite(value) and abs(value) <= math.pi):
                     raise InputError(f'Expected `declination` in [-pi, pi] rad, got {value!r}')
                 continue
-            positive = field.name.endswith(('_time', '_gate', '_interval', '_seconds'))
+            positive = field.name.endswith(('_time', '_gate', '_interval', '_seconds',
+                                            'velocity_stddev'))
             if not math.isfinite(value) or value < 0.0 or (positive and value == 0.0):
                 bound = '> 0' if positive else '>= 0'
                 raise InputError(f'Expected `{field.name}` to be finite and {bound}, got '

@@ -44,10 +44,12 @@ def start_covariance(estimator: AttitudeEstimator, window_seconds: float | None
                      ) -> FilterCovariance:
     """The covariance at start (module docstring), heading unknown."""
     model, settings = estimator.model, estimator.settings
+    at_rest = window_seconds is not None
     return FilterCovariance(model, initial_covariance(model, window_seconds),
                             model.accelerometer_bias_stddev, settings.accelerometer_random_walk,
                             settings.magnetic_disturbance_stddev,
-                            settings.magnetic_disturbance_time)
+                            settings.magnetic_disturbance_time,
+                            settings.zero_velocity_stddev if at_rest else 1.0)
 
 
 def magnetic_start(estimator: AttitudeEstimator, q: Quat, mean_field_body: Sequence[float],
