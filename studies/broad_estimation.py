@@ -1,14 +1,16 @@
-"""The attitude filter on the BROAD trials with magnetometer, beside VQF, in one table.
+"""The node's attitude filter on the BROAD trials with magnetometer, beside VQF, in one table.
 
-Runs :mod:`rigid_body_attitude.tools.estimation_study` on every trial of the given folders
-(default: ``shared/data/broad_mag`` beside or above the checkout), one set of settings for all:
-the documented defaults, with the IMU's white-noise densities measured once on the first
-trial's initial rest (``imu_noise``'s Allan fit for gyro and accelerometer; the
-magnetometer's standard deviation over √rate). Prints per trial the total, heading and
-inclination RMSE [deg] of the filter and of VQF (``offlineVQF``, defaults), the ratio of the
-totals, the share of motion samples whose NEES lies inside the chi-square 99 % bound (3 dof,
-tilt 2 dof, heading 1 dof) and the median 1σ over the RMSE (total, tilt over inclination,
-heading); then the means per group (undisturbed, disturbed) and over all trials.
+Each trial of the given folders (default: ``shared/data/broad_mag`` beside or above the
+checkout) is written as a bag (Imu, MagneticField, ground truth) and replayed through the
+replay tool with the shipped ``imu_filter`` scene and the node's default parameters, one set
+for all trials, plus one calibration file: the kalibr ``imu.yaml`` that ``imu_noise`` writes
+from the first trial's initial rest (:mod:`rigid_body_attitude.tools.estimation_study`). The
+same session fed in this process must give the same outputs (the largest difference is
+printed). Prints per trial the total, heading and inclination RMSE [deg] of the node and of
+VQF (``offlineVQF``, defaults) on the same samples, the ratio of the totals, the share of
+motion samples whose NEES lies inside the chi-square 99 % bound (3 dof, tilt 2 dof, heading
+1 dof) and the median 1σ over the RMSE (total, tilt over inclination, heading); then the
+means per group (undisturbed, disturbed) and over all trials.
 
 Usage: ``python studies/broad_estimation.py [DATA_DIR ...]``. Needs ``vqf``
 (requirements-test.txt).
@@ -20,13 +22,14 @@ from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from rigid_body_attitude.tools.broad import load_trial
 from rigid_body_attitude.tools.estimation_study import (
-    dataset_model, figures, run_filter, run_vqf, settings_for)
+    dataset_calibration, figures, run_replay, run_session, run_vqf, study_values)
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
@@ -35,6 +38,13 @@ def default_folders() -> list[Path]:
     """Any ``shared/data/broad_mag`` beside or above the checkout."""
     return [parent / 'shared' / 'data' / 'broad_mag' for parent in REPO_ROOT.parents
             if (parent / 'shared' / 'data' / 'broad_mag').is_dir()][:1]
+
+
+def _header() -> None:
+    print('| trial | node total / heading / incl. [deg] | VQF total / heading / incl. '
+          '[deg] | total ratio | NEES inside 99 %: 3-dof / tilt / heading | median 1σ / '
+          'RMSE: total / tilt / heading |')
+    print('| --- | --- | --- | --- | --- | --- |')
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -47,35 +57,45 @@ def main(argv: list[str] | None = None) -> int:
     if not paths:
         print('error: no BROAD trial (.npz) found', file=sys.stderr)
         return 1
-    model, magnetometer = dataset_model(load_trial(paths[0]))
-    settings = settings_for(0.0, magnetometer)
-    print(f'noise densities (first trial\'s rest): gyro {model.gyroscope_noise_density:.3g} '
-          f'rad/s/√Hz, accelerometer {model.accelerometer_noise_density:.3g} m/s²/√Hz, '
-          f'magnetometer {settings.magnetometer_noise_density:.3g} T/√Hz')
-    print('| trial | filter total / heading / incl. [deg] | VQF total / heading / incl. '
-          '[deg] | total ratio | NEES inside 99 %: 3-dof / tilt / heading | median 1σ / '
-          'RMSE: total / tilt / heading |')
-    print('| --- | --- | --- | --- | --- | --- |')
-    groups: dict[str, list[tuple[float, ...]]] = {}
-    for path in paths:
-        trial = load_trial(path)
-        ours, vqf = figures(trial, run_filter(trial, model, settings)), figures(
-            trial, run_vqf(trial))
-        t, h, i = ours.rmse
-        useful = (ours.median_sigma[0] / t, ours.median_sigma[1] / i, ours.median_sigma[2] / h)
-        print(f'| {trial.name} | {t:.2f} / {h:.2f} / {i:.2f} | {vqf.rmse[0]:.2f} / '
-              f'{vqf.rmse[1]:.2f} / {vqf.rmse[2]:.2f} | {t / vqf.rmse[0]:.2f} | '
-              + ' / '.join(f'{100 * share:.1f} %' for share in ours.inside) + ' | '
-              + ' / '.join(f'{ratio:.1f}' for ratio in useful) + ' |', flush=True)
-        group = 'disturbed' if 'disturbed' in trial.name.replace('undisturbed', '') else (
-            'undisturbed')
-        groups.setdefault(group, []).append((*ours.rmse, *vqf.rmse))
+    with tempfile.TemporaryDirectory() as temporary:
+        folder = Path(temporary)
+        calibration = dataset_calibration(load_trial(paths[0]), folder / 'imu.yaml')
+        print(f'calibration_file (imu_noise on {paths[0].stem}\'s rest):')
+        print(calibration.read_text(encoding='utf-8'))
+        values = study_values(calibration_file=str(calibration))
+        _header()
+        groups: dict[str, list[tuple[float, ...]]] = {}
+        largest = 0.0
+        for path in paths:
+            trial = load_trial(path)
+            replayed = run_replay(trial, values, folder)
+            largest = max(largest, float(np.nanmax(np.abs(
+                replayed.attitude - run_session(trial, values).attitude))))
+            ours, vqf = figures(trial, replayed), figures(trial, run_vqf(trial))
+            _row(trial.name, ours, vqf)
+            group = 'disturbed' if 'disturbed' in trial.name.replace('undisturbed', '') else (
+                'undisturbed')
+            groups.setdefault(group, []).append((*ours.rmse, *vqf.rmse))
     groups['all'] = [row for rows in list(groups.values()) for row in rows]
     for name, rows in groups.items():
         mean = np.mean(np.array(rows), axis=0)
         print(f'| mean, {name} ({len(rows)}) | {mean[0]:.2f} / {mean[1]:.2f} / {mean[2]:.2f} | '
               f'{mean[3]:.2f} / {mean[4]:.2f} / {mean[5]:.2f} | {mean[0] / mean[3]:.2f} | | |')
+    print(f'replay against the session fed in this process: largest quaternion component '
+          f'difference {largest:.3g}')
     return 0
+
+
+def _row(name: str, ours: object, vqf: object) -> None:
+    """One trial's row."""
+    from rigid_body_attitude.tools.estimation_study import TrialFigures
+    assert isinstance(ours, TrialFigures) and isinstance(vqf, TrialFigures)
+    t, h, i = ours.rmse
+    useful = (ours.median_sigma[0] / t, ours.median_sigma[1] / i, ours.median_sigma[2] / h)
+    print(f'| {name} | {t:.2f} / {h:.2f} / {i:.2f} | {vqf.rmse[0]:.2f} / '
+          f'{vqf.rmse[1]:.2f} / {vqf.rmse[2]:.2f} | {t / vqf.rmse[0]:.2f} | '
+          + ' / '.join(f'{100 * share:.1f} %' for share in ours.inside) + ' | '
+          + ' / '.join(f'{ratio:.1f}' for ratio in useful) + ' |', flush=True)
 
 
 if __name__ == '__main__':
