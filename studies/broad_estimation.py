@@ -27,9 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rigid_body_attitude.tools.broad import load_trial
+from typing import Any
+
+from rigid_body_attitude.tools.broad import BroadTrial, load_trial
 from rigid_body_attitude.tools.estimation_study import (
-    dataset_calibration, figures, run_replay, run_session, run_vqf, study_values)
+    Run, TrialFigures, dataset_calibration, figures, run_replay, run_session, study_values)
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
@@ -38,6 +40,20 @@ def default_folders() -> list[Path]:
     """Any ``shared/data/broad_mag`` beside or above the checkout."""
     return [parent / 'shared' / 'data' / 'broad_mag' for parent in REPO_ROOT.parents
             if (parent / 'shared' / 'data' / 'broad_mag').is_dir()][:1]
+
+
+def run_vqf(trial: BroadTrial, use_magnetometer: bool = True) -> Run:
+    """VQF (offline, defaults) over the trial's samples: 9D with a magnetometer, else 6D."""
+    from vqf import offlineVQF  # type: ignore[import-untyped]  # test requirements' VQF
+
+    gyro = np.ascontiguousarray(trial.gyro, dtype=np.float64)
+    acc = np.ascontiguousarray(trial.acc, dtype=np.float64)
+    if use_magnetometer and trial.field is not None:
+        field = np.ascontiguousarray(trial.field * 1e6, dtype=np.float64)
+        out: dict[str, Any] = offlineVQF(gyro, acc, field, 1.0 / trial.sampling_rate, None)
+        return Run(np.asarray(out['quat9D']), None)
+    out = offlineVQF(gyro, acc, None, 1.0 / trial.sampling_rate, None)
+    return Run(np.asarray(out['quat6D']), None)
 
 
 def _header() -> None:
@@ -86,10 +102,8 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def _row(name: str, ours: object, vqf: object) -> None:
+def _row(name: str, ours: TrialFigures, vqf: TrialFigures) -> None:
     """One trial's row."""
-    from rigid_body_attitude.tools.estimation_study import TrialFigures
-    assert isinstance(ours, TrialFigures) and isinstance(vqf, TrialFigures)
     t, h, i = ours.rmse
     useful = (ours.median_sigma[0] / t, ours.median_sigma[1] / i, ours.median_sigma[2] / h)
     print(f'| {name} | {t:.2f} / {h:.2f} / {i:.2f} | {vqf.rmse[0]:.2f} / '

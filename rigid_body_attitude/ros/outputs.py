@@ -30,7 +30,8 @@ from typing import Any
 from rclpy.node import Node
 
 from rigid_body_attitude.msgs.cdr import (
-    accel_with_covariance_stamped_encoder, encode_float64, imu_with_orientation, pose_stamped_encoder,
+    accel_with_covariance_stamped_encoder, encode_float64, imu_with_orientation,
+    pose_stamped_encoder,
     pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
     transform_encoder)
 from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher

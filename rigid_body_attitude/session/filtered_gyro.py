@@ -76,7 +76,8 @@ class FilteredGyroSession(GyroSession):
         iron = load_magnetometer_calibration(path) if path else MagnetometerCalibration()
         super().__init__(scene, values, sink, clock_ns, monotonic)
         noise = self.calibration_noise()
-        model = error_model_from(values, noise, CALIBRATION_KEYS + ('accelerometer_noise_density',))
+        model = error_model_from(values, noise,
+                                 CALIBRATION_KEYS + ('accelerometer_noise_density',))
         walk = noise.get('accelerometer_random_walk', values['accelerometer_random_walk'])
         self.estimation = build_estimation(
             spec, {**values, 'accelerometer_random_walk': walk}, model, iron)
@@ -148,7 +149,7 @@ class FilteredGyroSession(GyroSession):
             estimation.refresh_acceleration_covariance(q, self._force)
 
     def _corrected(self) -> None:
-        """After an update: the bias subtracted from now on, the covariance published."""
+        """After an update: the bias subtracted from the next samples, the covariance published."""
         bias = self.estimation.estimator.gyro_bias
         self.sample_map.set_gyro_bias(bias)
         self._update_paths()
@@ -214,7 +215,7 @@ class FilteredGyroSession(GyroSession):
         self.estimation_inputs += 1
 
     def _levelling_window(self) -> bool:
-        """Whether the levelling is averaging a rest window now."""
+        """Whether the levelling is averaging a rest window."""
         levelling = self.levelling
         return (self._aligning and levelling is not None
                 and levelling.aligner.state == ALIGNING)

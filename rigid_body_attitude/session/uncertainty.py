@@ -37,7 +37,8 @@ from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel,
 from rigid_body_attitude.session.levelling import AlignmentResult
 
 __all__ = ['BATCH_SIZE', 'FOLD_SECONDS', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE',
-           'Uncertainty', 'attitude_stddev_deg', 'error_model_from', 'orientation_block', 'pose_covariance']
+           'Uncertainty', 'attitude_stddev_deg', 'error_model_from', 'orientation_block',
+           'pose_covariance']
 
 #: Variance [m²] on the diagonal of the position block of ``pose_with_covariance``: the
 #: position is not estimated. Large and finite, so the 6×6 stays symmetric positive definite

@@ -8,8 +8,8 @@ parameters for all trials and nothing taken from the trial's truth:
   ``imu/mag``), either through the replay tool (:func:`run_replay`: the trial as a bag, the
   bag through ``replay``, the output bag read back) or the same session fed in this process
   (:func:`run_session`: what the replay does, without the bag; the two agree exactly);
-* **VQF** (``vqf.offlineVQF`` with its defaults, D. Laidig, T. Seel, Information Fusion 91,
-  2023) on the same samples: its 9D quaternion with a magnetometer, else its 6D one.
+* the reference estimator of the study script (``studies/broad_estimation.py``: VQF) as a
+  :class:`Run` without covariance, scored by :func:`figures` alike.
 
 The benchmark's metric (BROAD: D. Laidig, M. Caruso, A. Cereatti, T. Seel, "BROAD — A
 Benchmark for Robust Inertial Orientation Estimation", Data 6(7):72, 2021, section 4): with
@@ -52,7 +52,7 @@ from rigid_body_attitude.tools.replay.options import ReplayOptions
 from rigid_body_attitude.tools.replay.run import replay_bag
 
 __all__ = ['CHI2_99', 'Run', 'SCENE', 'TrialFigures', 'broad_errors', 'dataset_calibration',
-           'figures', 'run_replay', 'run_session', 'run_vqf', 'study_values']
+           'figures', 'run_replay', 'run_session', 'study_values']
 
 FloatArray = NDArray[np.float64]
 
@@ -200,20 +200,6 @@ def run_replay(trial: BroadTrial, values: Mapping[str, Any], folder: Path) -> Ru
                 covariances.append(block[3:, 3:].reshape(9))
     return _run(trial, np.array(stamps, dtype=np.float64), np.array(attitudes),
                 np.array(covariances))
-
-
-def run_vqf(trial: BroadTrial, use_magnetometer: bool = True) -> Run:
-    """VQF (offline, defaults) over the trial's samples: 9D with a magnetometer, else 6D."""
-    from vqf import offlineVQF  # type: ignore[import-untyped]  # test requirements' VQF
-
-    gyro = np.ascontiguousarray(trial.gyro, dtype=np.float64)
-    acc = np.ascontiguousarray(trial.acc, dtype=np.float64)
-    if use_magnetometer and trial.field is not None:
-        field = np.ascontiguousarray(trial.field * 1e6, dtype=np.float64)
-        out: dict[str, Any] = offlineVQF(gyro, acc, field, 1.0 / trial.sampling_rate, None)
-        return Run(np.asarray(out['quat9D']), None)
-    out = offlineVQF(gyro, acc, None, 1.0 / trial.sampling_rate, None)
-    return Run(np.asarray(out['quat6D']), None)
 
 
 def _evaluated(trial: BroadTrial, run: Run) -> NDArray[np.bool_]:

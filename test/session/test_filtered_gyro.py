@@ -41,7 +41,8 @@ def body_rate(t):
     """The true body rate [rad/s] at ``t`` seconds after the rest (0 during it)."""
     if t < 0.0:
         return np.zeros(3)
-    return np.array([0.6 * math.sin(0.7 * t), 0.5 * math.cos(0.45 * t), 0.4 + 0.3 * math.sin(0.2 * t)])
+    return np.array([0.6 * math.sin(0.7 * t), 0.5 * math.cos(0.45 * t),
+                     0.4 + 0.3 * math.sin(0.2 * t)])
 
 
 def simulate(seconds, rest=2.0, yaw=1.0, bias=(0.01, -0.02, 0.015), seed=1, magnet=None):
