@@ -72,7 +72,7 @@ class Estimation:
         self.counts: Counter[str] = Counter()
         self._fields: deque[tuple[int, Vec]] = deque()
         self._rest_field = [0.0, 0.0, 0.0, 0.0]  # sum (body) and count while levelling
-        self._late = [0.0, 0.0, 0.0, 0.0, 0.0]  # sum (world), count, seconds after start
+        self._late = [0.0, 0.0, 0.0, 0.0, 0.0]  # sum (world), count, first stamp [ns]
         self._last_field_ns: int | None = None
         #: Row-major 3×3 attitude covariance [rad²] about fixed world axes, as published.
         self.published: tuple[float, ...] = (0.0,) * 9
@@ -128,7 +128,7 @@ class Estimation:
         fields = self._fields
         turned = None
         while fields and fields[0][0] <= stamp_ns:
-            turned = self._field_at(q_after, fields.popleft()[1], dt) or turned
+            turned = self._field_at(q_after, *fields.popleft()) or turned
         if not due:
             return turned
         interval = estimator.interval
@@ -138,26 +138,28 @@ class Estimation:
         self._publish()
         return q
 
-    def _field_at(self, q: Quat, field_body: Vec, dt: float) -> Quat | None:
+    def _field_at(self, q: Quat, stamp_ns: int, field_body: Vec) -> Quat | None:
         """A field sample paired with the attitude ``q`` of its step; returns the turned
         attitude when it completed a late heading start."""
         if self.estimator.field is None:
-            return self._late_field(q, field_body, dt)
+            return self._late_field(q, stamp_ns, field_body)
         self.estimator.magnetic_field(q, field_body)
         return None
 
-    def _late_field(self, q: Quat, field_body: Vec, dt: float) -> Quat | None:
-        """No field at start: average ``late_field_seconds`` of it in the world frame, then
-        turn the heading once (:func:`magnetic_start` on the attitude of the last sample)."""
+    def _late_field(self, q: Quat, stamp_ns: int, field_body: Vec) -> Quat | None:
+        """No field at start: average ``late_field_seconds`` of stamps of it in the world
+        frame, then turn the heading once (:func:`magnetic_start` on the attitude of the last
+        sample)."""
         late = self._late
+        if not late[3]:
+            late[4] = float(stamp_ns)
         rotation = _matrix(q)
         world = rotation @ np.array(field_body)
         late[0] += float(world[0])
         late[1] += float(world[1])
         late[2] += float(world[2])
         late[3] += 1.0
-        late[4] += dt
-        if late[4] < self.late_field_seconds:
+        if (stamp_ns - late[4]) * 1e-9 < self.late_field_seconds:
             return None
         mean_body = rotation.T @ (np.array(late[:3]) / late[3])
         covariance = self.estimator.covariance
