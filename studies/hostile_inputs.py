@@ -502,7 +502,9 @@ def magnetometer_classes(seed: int) -> Iterator[AttackClass]:
     frames without a mount, zero and invalid stamps."""
     from rclpy.serialization import serialize_message
     earth = (2e-5, 0.0, -4e-5)
-    good = serialize_message(field_message(BASE_NS, earth))
+    # In a frame without a mount: a variant that still decodes (the transport pads a cut
+    # payload with zeros) is refused as such, never taken.
+    good = serialize_message(field_message(BASE_NS, earth, 'elsewhere'))
     for name, payloads in malformed_cases(good, seed + 3).items():
         yield AttackClass(name, payloads, 'malformed|magnetometer_no_mount|'
                           'magnetometer_invalid_stamp|magnetometer_stale_stamp|'
@@ -538,7 +540,7 @@ def measurement_classes(seed: int) -> Iterator[AttackClass]:
     hostile covariance blocks, stamps far from the gyro's."""
     from rclpy.serialization import serialize_message
     unit = (1.0, 0.0, 0.0, 0.0)
-    good = serialize_message(measurement_message(BASE_NS, unit))
+    good = serialize_message(measurement_message(BASE_NS, unit, 'map'))  # decodable: refused
     reasons = 'attitude_measurement_wrong_frame|attitude_measurement_stale_measurement'
     for name, payloads in malformed_cases(good, seed + 4).items():
         yield AttackClass(name, payloads, f'malformed|{reasons}|'

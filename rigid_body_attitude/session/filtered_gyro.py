@@ -44,7 +44,7 @@ from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns
 from rigid_body_attitude.session.uncertainty import (
     CALIBRATION_KEYS, attitude_stddev_deg, error_model_from, orientation_block)
 
-__all__ = ['FilteredGyroSession']
+__all__ = ['FILTER_REJECTION_KEYS', 'FilteredGyroSession']
 
 Quat = tuple[float, float, float, float]
 Vec = tuple[float, float, float]
@@ -62,6 +62,15 @@ _DETAIL = {
     'not_started': 'the filter has not started (levelling)',
     'stale_measurement': 'a stamp further than max_dt from the latest gyro sample',
 }
+
+
+#: The filter's own input rejections, as ``/diagnostics`` lists them (``rejected <key>``).
+FILTER_REJECTION_KEYS = (
+    'magnetometer_non_finite', 'magnetometer_out_of_range', 'magnetometer_no_mount',
+    'magnetometer_invalid_stamp', 'magnetometer_stale_stamp',
+    *(f'attitude_measurement_{reason}' for reason in (
+        'wrong_frame', 'non_finite', 'invalid_pose', 'invalid_covariance', 'not_started',
+        'stale_measurement')))
 
 
 class FilteredGyroSession(GyroSession):
@@ -110,7 +119,8 @@ class FilteredGyroSession(GyroSession):
              imu: bytes | None = None, accel: Sequence[float] | None = None) -> bool:
         """:meth:`GyroSession.gyro`, then the sample's gravity-free acceleration."""
         self._force = None
-        self._sample_ns = sec * NANOSECONDS_PER_SECOND + nanosec
+        self._sample_ns = (sec * NANOSECONDS_PER_SECOND + nanosec if self.use_header_stamps
+                           else self.clock_ns())
         published = super().gyro(sec, nanosec, rate, imu, accel)
         force = self._force
         if published and force is not None and self.estimation.started:
@@ -273,7 +283,10 @@ class FilteredGyroSession(GyroSession):
         """The gyro session's report with the filter's values; WARN past
         ``tilt_stddev_warn`` (only once the filter runs)."""
         report = super().report()
-        values = list(report.values) + self.estimation.values()
+        rejections = self.rejections
+        values = list(report.values) + [(f'rejected {key}', str(rejections[key]))
+                                        for key in FILTER_REJECTION_KEYS]
+        values += self.estimation.values()
         level, message = report.level, report.message
         if self.estimation.started:
             tilt, yaw = attitude_stddev_deg(self.estimation.published)

@@ -221,9 +221,14 @@ def _parameter(name: str) -> Callable[[Situation], bool]:
 
 
 def _estimating(update: str) -> Callable[[Situation], bool]:
-    """The scene's ``estimation`` section switches ``update`` on."""
-    return lambda situation: situation.scene.estimation is not None and bool(
-        getattr(situation.scene.estimation, update))
+    """The scene's ``estimation`` section switches ``update`` (``magnetometer`` or
+    ``attitude``) on."""
+    def present(situation: Situation) -> bool:
+        spec = situation.scene.estimation
+        if spec is None:
+            return False
+        return {'magnetometer': spec.magnetometer, 'attitude': spec.attitude}[update]
+    return present
 
 
 def _mounted_simulated_imu(situation: Situation) -> bool:
