@@ -99,7 +99,7 @@ setup(
         *shared_data_files('launch'),
     ],
     install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags', 'apsw', 'matplotlib', 'tqdm',
-                      'allantools', 'dask[distributed]', 'pyarrow'],
+                      'allantools', 'dask[distributed]', 'pyarrow', 'ppigrf'],
     python_requires='>=3.11, <3.13',
     zip_safe=True,
     maintainer='rigid_body_attitude developers',

@@ -59,7 +59,7 @@ ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'pyth
 #: in requirements.txt, named in a comment of package.xml and in docs/setup.md's pip line.
 WITHOUT_ROSDEP_KEY = {'apsw': 'apsw', 'dask': 'dask',
                       'distributed': 'distributed', 'pyarrow': 'pyarrow',
-                      'allantools': 'allantools'}
+                      'allantools': 'allantools', 'ppigrf': 'ppigrf'}
 REQUIRED_TEST_DEPENDS = {'python3-pytest'}
 
 # Run in a fresh interpreter: refuses rclpy through a meta path finder (so an import anywhere,

@@ -160,7 +160,7 @@ CORE_ROOMS = {
     'dynamics': ('attitude', 'environment', 'estimation', 'control', 'sensors'),
 }
 CORE_SHARED = ('errors', 'registry', 'paths', 'yaml_files')
-THIRD_PARTY_IN_CORE = ('numpy', 'scipy', 'yaml')
+THIRD_PARTY_IN_CORE = ('numpy', 'scipy', 'yaml', 'ppigrf')
 
 
 def test_core_rooms_import_only_the_rooms_below_them():
@@ -180,7 +180,7 @@ def test_core_rooms_import_only_the_rooms_below_them():
 
 
 def test_the_core_imports_no_node_layer():
-    allowed = ('numpy', 'scipy', 'yaml', 'rigid_body_attitude.core')
+    allowed = ('numpy', 'scipy', 'yaml', 'ppigrf', 'rigid_body_attitude.core')
     assert imports_outside(['core'], allowed) == []
 
 

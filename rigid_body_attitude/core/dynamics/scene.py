@@ -23,6 +23,8 @@ the effects; only the effects it names are constructed. Format::
       magnetometer: {rate: 100.0, noise_density: 1.0e-8, intensity: 5.0e-5, inclination: 1.2}
       star_tracker: {rate: 5.0, boresight: [0, 0, 1], sun_exclusion_angle: 0.5}
     sun: {direction: [1, 0, 0]}    # world axes, towards the Sun (core/environment/sun.py)
+    orbit: {altitude: 500000.0, inclination_deg: 97.4}   # spacecraft scenes (world: inertial)
+    magnetic_field: {model: tilted_dipole}               # or igrf, local (core/environment)
     estimation: {magnetometer: true}  # gyro scenes: the filter's updates
                                    # (core/estimation/estimation_section.py)
 
@@ -59,8 +61,13 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.effects import (
-    EFFECTS, BodyProperties, Effect, SampledTorque)
-from rigid_body_attitude.core.errors import AttitudeError, SceneError
+    EFFECTS, BodyProperties, Effect, Environment, SampledTorque)
+from rigid_body_attitude.core.environment.magnetic_field import MagneticFieldModel
+from rigid_body_attitude.core.environment.orbit import CircularOrbit
+from rigid_body_attitude.core.environment.sections import (
+    magnetic_field_section, orbit_section)
+from rigid_body_attitude.core.errors import AttitudeError, InertiaError, SceneError
+from rigid_body_attitude.core.dynamics.euler import inertia_without_rotors
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.environment.sun import ConstantSunDirection, sun_section
 from rigid_body_attitude.core.estimation.estimation_section import (
@@ -80,7 +87,8 @@ FloatArray = NDArray[np.float64]
 
 RATE_SOURCES = ('dynamics', 'gyro')
 _TOP_KEYS = {'name', 'description', 'rate_source', 'integrator', 'step', 'body',
-             'initial_state', 'effects', 'sensors', 'sun', 'estimation'}
+             'initial_state', 'effects', 'sensors', 'sun', 'orbit', 'magnetic_field',
+             'estimation'}
 _REQUIRED_TOP_KEYS = ('rate_source', 'body')
 _BODY_KEYS = {'mass', 'inertia'}
 _STATE_KEYS = {'attitude', 'omega_body'}
@@ -115,6 +123,8 @@ class Scene:
         sensors: the simulated sensors of the ``sensors`` section (:attr:`imu`,
             :attr:`magnetometer`, :attr:`star_tracker`: each None when not named).
         sun: the Sun's direction of the ``sun`` section, or None.
+        orbit: the ``orbit`` section (world: Earth-centred inertial), or None.
+        magnetic_field: the ``magnetic_field`` section's model, or None.
         estimation: the measurement updates of the ``estimation`` section (gyro scenes), or
             None (pure propagation).
     """
@@ -132,6 +142,8 @@ class Scene:
     source: str = ''
     sensors: SensorSuite = field(default_factory=SensorSuite)
     sun: ConstantSunDirection | None = None
+    orbit: CircularOrbit | None = None
+    magnetic_field: MagneticFieldModel | None = None
     estimation: EstimationSpec | None = None
 
     @property
@@ -150,9 +162,14 @@ class Scene:
         return self.sensors.star_tracker
 
     def build_effects(self) -> list[Effect]:
-        """Construct the scene's effects, in order; nothing else is built."""
-        body = BodyProperties(self.inertia, self.mass)
-        return [EFFECTS[name](params, body) for name, params in self.effects]
+        """Construct the scene's effects, in order, and link them (:meth:`Effect.bind`);
+        nothing else is built."""
+        body = BodyProperties(self.inertia, self.mass,
+                              Environment(self.orbit, self.magnetic_field))
+        effects = [EFFECTS[name](params, body) for name, params in self.effects]
+        for effect in effects:
+            effect.bind(effects)
+        return effects
 
     def with_overrides(self, integrator: str = '', step: float = 0.0,
                        effect_parameters: Mapping[str, Mapping[str, Any]] | None = None
@@ -230,6 +247,7 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
     with np.errstate(all='ignore'):  # overflow is refused below, not warned about
         inertia, mass = _body(data['body'])
         attitude, omega = _initial_state(data.get('initial_state', {}), inertia)
+    orbit = orbit_section(data.get('orbit'))
     scene = Scene(
         name=_label('name', data.get('name', default_name), MAX_NAME_CHARS),
         description=_label('description', data.get('description', ''), MAX_DESCRIPTION_CHARS),
@@ -244,6 +262,8 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
         source=source,
         sensors=sensors_section(data.get('sensors')),
         sun=sun_section(data.get('sun')),
+        orbit=orbit,
+        magnetic_field=magnetic_field_section(data.get('magnetic_field'), orbit),
         estimation=estimation_section(data.get('estimation')),
     )
     if scene.estimation is not None and rate_source != 'gyro':
@@ -412,7 +432,14 @@ def _check_effects(scene: Scene) -> None:
         raise SceneError(_bounded(str(err))) from err
     except (AttitudeError, TypeError, OverflowError) as err:
         raise SceneError(_bounded(f'effects: {err}')) from err
+    try:
+        inertia_without_rotors(scene.inertia, built)
+    except InertiaError as err:
+        raise SceneError(_bounded(f'body.inertia minus the wheels\' spin inertia (the inertia '
+                                  f'the body keeps around spinning wheels) is not an inertia: '
+                                  f'{err}')) from err
     for effect in built:
+        effect.check_step(scene.step)
         if isinstance(effect, SampledTorque):
             steps = effect.period / scene.step
             if not (round(steps) >= 1 and abs(steps - round(steps)) <= 1e-9 * steps):

@@ -15,7 +15,9 @@ Parameters: ``kp`` [N m] and ``kd`` [N m s] (one number or one per body axis, â‰
 ``torque_limit`` [N m] (one or three, â‰¥ 0; 0: none), ``control_period`` [s],
 ``target_rpy`` [rad] (roll, pitch, yaw of the target attitude: ``Rz(yaw) Ry(pitch)
 Rx(roll)``, as tf2's ``setRPY``; default the identity, body axes on world axes) or
-``target_attitude_wxyz`` (w, x, y, z; normalised; replaces ``target_rpy``).
+``target_attitude_wxyz`` (w, x, y, z; normalised; replaces ``target_rpy``), ``actuator``:
+``body`` (default: the torque acts on the body as given) or ``reaction_wheels`` (the torque is
+allocated over the scene's ``reaction_wheels``, which apply it within their limits).
 """
 
 from __future__ import annotations
@@ -56,6 +58,13 @@ def _attitude(value: Any) -> FloatArray | None:
     return result
 
 
+def _actuator(value: Any) -> str:
+    """``body`` or ``reaction_wheels``."""
+    if value not in ('body', 'reaction_wheels'):
+        raise ValueError('body or reaction_wheels')
+    return str(value)
+
+
 def _per_body(value: Any) -> float | FloatArray:
     """A batch parameter as the law takes it: a float, or (bodies or 1, 3)."""
     array = np.asarray(value, dtype=np.float64)
@@ -84,9 +93,12 @@ class AttitudePD(SampledTorque):
                                 'target roll, pitch, yaw [rad] (Rz Ry Rx)'),
         'target_attitude_wxyz': Parameter(_attitude, [],
                                           'target (w, x, y, z); replaces target_rpy'),
+        'actuator': Parameter(_actuator, 'body',
+                              'body (the torque itself) or reaction_wheels (allocated)'),
     }
     shared_parameters: ClassVar[frozenset[str]] = frozenset({'control_period',
-                                                             'target_attitude_wxyz'})
+                                                             'target_attitude_wxyz',
+                                                             'actuator'})
     renamed_parameters: ClassVar[dict[str, str]] = {'target_attitude': 'target_attitude_wxyz'}
 
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
@@ -98,6 +110,8 @@ class AttitudePD(SampledTorque):
         given = self.params['target_attitude_wxyz']
         self.target: Quat = as_quat(given if given is not None else
                                     quaternion.from_rpy(self.params['target_rpy']))
+        self.actuator = self.params['actuator']
+        self.applies_torque = self.actuator == 'body'
 
     @property
     def period(self) -> float:
