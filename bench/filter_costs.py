@@ -76,7 +76,7 @@ def main() -> int:
     parser.add_argument('--mag-every', type=int, default=10)
     args = parser.parse_args()
     update = Timed(AttitudeEstimator, 'update')
-    covariance = Timed(estimation.Estimation, 'refresh_acceleration_covariance')
+    covariance = Timed(estimation.Estimation, '_covariance_at')
     strapdown = min(run('strapdown', args.samples, args.mag_every) for _ in range(args.repeats))
     update.seconds = covariance.seconds = 0.0
     update.calls = 0

@@ -39,6 +39,7 @@ from rigid_body_attitude.ros.interface import create_publisher
 from rigid_body_attitude.ros.log_queue import LogQueue
 from rigid_body_attitude.ros.rclpy_internals import raw_output
 from rigid_body_attitude.session.interface import NODE_INTERFACE, Situation
+from rigid_body_attitude.session.base import AccelerationEstimate
 from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
 from rigid_body_attitude.session.reports import DiagnosticReport
 from rigid_body_attitude.session.uncertainty import pose_covariance
@@ -198,12 +199,11 @@ class RosOutputs:
         if self.tf_raw is not None:
             self._publish_tf(sec, nanosec, attitude)
 
-    def acceleration(self, sec: int, nanosec: int, linear_body: Vector,
-                     covariance: tuple[float, ...]) -> None:
-        """``accel/filtered`` of one filtered gyro sample."""
+    def acceleration(self, sec: int, nanosec: int, estimate: AccelerationEstimate) -> None:
+        """``accel/filtered`` of one filtered gyro sample (computed when subscribed)."""
         output = self.acceleration_raw
         if output.subscription_count():
-            output.publish(self.encode_acceleration(sec, nanosec, linear_body, covariance))
+            output.publish(self.encode_acceleration(sec, nanosec, *estimate()))
 
     def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
         """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``

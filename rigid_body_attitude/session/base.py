@@ -29,7 +29,7 @@ from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, StrapdownState, diagnostic_report,
     stale_command_count, state_summary)
 
-__all__ = ['LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session', 'WARNING_INTERVAL']
+__all__ = ['AccelerationEstimate', 'LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session', 'WARNING_INTERVAL']
 
 #: Seconds between repeated warnings about the same reason.
 WARNING_INTERVAL = 5.0
@@ -44,6 +44,8 @@ POSITION_LIMIT = 1e15
 
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
+#: A sample's gravity-free acceleration and its covariance, computed when called.
+AccelerationEstimate = Callable[[], tuple[Vector, tuple[float, ...]]]
 
 
 class OutputSink(Protocol):
@@ -76,11 +78,11 @@ class OutputSink(Protocol):
         """A dynamics tick's kinetic energy [J] and world angular momentum [N m s], stamped
         like its attitude."""
 
-    def acceleration(self, sec: int, nanosec: int, linear_body: Vector,
-                     covariance: tuple[float, ...]) -> None:
-        """A filtered gyro sample's gravity-free acceleration [m/s², body frame] and its
-        row-major 3×3 covariance [(m/s²)²] (scenes with an ``estimation`` section), stamped
-        like the attitude."""
+    def acceleration(self, sec: int, nanosec: int, estimate: AccelerationEstimate) -> None:
+        """A filtered gyro sample's gravity-free acceleration (scenes with an ``estimation``
+        section), stamped like the attitude: ``estimate()`` gives it [m/s², body frame] with
+        its row-major 3×3 covariance [(m/s²)²], computed when called (an output that
+        publishes nothing need not)."""
 
     def simulated_imu(self, topic: str, data: bytes) -> None:
         """A simulated IMU's sample (dynamics scenes with ``sensors``): a serialized

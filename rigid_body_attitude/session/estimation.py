@@ -76,7 +76,8 @@ class Estimation:
         self._last_field_ns: int | None = None
         #: Row-major 3×3 attitude covariance [rad²] about fixed world axes, as published.
         self.published: tuple[float, ...] = (0.0,) * 9
-        self.acceleration_covariance: tuple[float, ...] = (0.0,) * 9
+        self._acceleration_covariance: tuple[float, ...] = (0.0,) * 9
+        self._acceleration_at: tuple[Quat, Vec] | None = None  # the last update's, not used
 
     # -- start -------------------------------------------------------------------------------
 
@@ -228,10 +229,21 @@ class Estimation:
         self.published = tuple(state.attitude.reshape(9).tolist())
         self._p = state.p
 
+    def acceleration_estimate(self, q: Quat, specific_force: Vec
+                              ) -> tuple[Vec, tuple[float, ...]]:
+        """The body's gravity-free acceleration [m/s², body frame] of a sample at ``q`` and
+        its row-major 3×3 covariance [(m/s²)²]: the covariance at the last update's attitude
+        and specific force (:meth:`mark_acceleration_covariance`), computed once per update
+        when first asked for."""
+        at = self._acceleration_at
+        if at is not None:
+            self._acceleration_at = None
+            self._acceleration_covariance = self._covariance_at(*at)
+        return self.gravity_free(q, specific_force), self._acceleration_covariance
+
     def gravity_free(self, q: Quat, specific_force: Vec) -> Vec:
         """The body's acceleration [m/s², body frame] of one sample (gravity and the
-        accelerometer bias removed); :attr:`acceleration_covariance` its covariance,
-        refreshed at each update."""
+        accelerometer bias removed)."""
         estimator = self.estimator
         bias, gravity, up = estimator.accel_bias, estimator.gravity, estimator.up
         w, x, y, z = q
@@ -244,17 +256,21 @@ class Estimation:
                 specific_force[1] - float(bias[1]) - gravity * by,
                 specific_force[2] - float(bias[2]) - gravity * bz)
 
-    def refresh_acceleration_covariance(self, q: Quat, specific_force: Vec) -> None:
-        """:attr:`acceleration_covariance` at ``q`` (module :mod:`.gravity_free`)."""
+    def mark_acceleration_covariance(self, q: Quat, specific_force: Vec) -> None:
+        """An update ran at ``q`` with ``specific_force``: the acceleration's covariance is
+        that of this attitude and force (computed when asked for)."""
+        self._acceleration_at = (q, specific_force)
+
+    def _covariance_at(self, q: Quat, specific_force: Vec) -> tuple[float, ...]:
+        """The gravity-free acceleration's covariance at ``q`` (:mod:`.gravity_free`)."""
         estimator = self.estimator
         state = estimator.covariance
-        if state is None:
-            return
+        assert state is not None
         variance = estimator.model.accelerometer_noise_density ** 2 * estimator.sample_rate
         _, covariance = gravity_free_acceleration(q, specific_force, estimator.accel_bias,
                                                   estimator.gravity, estimator.up, state.p,
                                                   variance)
-        self.acceleration_covariance = tuple(covariance.reshape(9).tolist())
+        return tuple(covariance.reshape(9).tolist())
 
     def values(self) -> list[tuple[str, str]]:
         """The filter in ``/diagnostics``: bias, updates and rejections, field, heading."""

@@ -24,10 +24,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
+from functools import partial
 from typing import Any
 
 import numpy as np
 
+from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.alignment import ALIGNING
@@ -76,6 +78,10 @@ FILTER_REJECTION_KEYS = (
 class FilteredGyroSession(GyroSession):
     """A gyro session with the attitude filter (module docstring)."""
 
+    #: The mount the specific force's map was made for, and the map (12 floats).
+    _accel_mount: Quat | None = None
+    _accel_affine: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+
     def __init__(self, scene: Scene, values: Mapping[str, Any], sink: OutputSink,
                  clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> None:
         """The gyro session of ``scene`` and its filter (the scene's ``estimation``)."""
@@ -109,9 +115,17 @@ class FilteredGyroSession(GyroSession):
         self.tilt_stddev_warn: float = values['tilt_stddev_warn']
 
     def _update_paths(self) -> None:
-        """Every sample on the general path: the filter takes the body specific force."""
+        """The hot path's maps: the rate's, and the specific force's ``R N`` and
+        ``−R N b_a`` (mount and calibration: recomputed when the mount changes)."""
         super()._update_paths()
-        self._special = True
+        sample_map = self.sample_map
+        if self._accel_mount != sample_map.mount:
+            self._accel_mount = sample_map.mount
+            rotation = quaternion.to_matrix(np.array(sample_map.mount))
+            calibration = sample_map.calibration
+            matrix = rotation @ calibration.accelerometer_matrix
+            offset = -(matrix @ calibration.accelerometer_bias)
+            self._accel_affine = tuple(matrix.ravel().tolist() + offset.tolist())
 
     # -- the gyro samples --------------------------------------------------------------------
 
@@ -121,14 +135,33 @@ class FilteredGyroSession(GyroSession):
         self._force = None
         self._sample_ns = (sec * NANOSECONDS_PER_SECOND + nanosec if self.use_header_stamps
                            else self.clock_ns())
+        if not self._special and accel is not None:  # the inline path: the force mapped here
+            self._force = self._mapped_force(accel)
         published = super().gyro(sec, nanosec, rate, imu, accel)
         force = self._force
         if published and force is not None and self.estimation.started:
             sec, nanosec = self.output_stamp
-            self.sink.acceleration(sec, nanosec, self.estimation.gravity_free(
-                self.propagator.state.attitude_tuple(), force),
-                self.estimation.acceleration_covariance)
+            self.sink.acceleration(sec, nanosec, partial(
+                self.estimation.acceleration_estimate, self.propagator.state.attitude_tuple(),
+                force))
         return published
+
+    def _mapped_force(self, accel: Sequence[float]) -> Vec | None:
+        """The body specific force of a sensor-frame one (``None``: none, or not a real one:
+        all zeros, non-finite, beyond the accelerometer limit)."""
+        try:
+            ax, ay, az = accel
+        except (TypeError, ValueError):
+            return None
+        if ax == 0.0 and ay == 0.0 and az == 0.0:
+            return None  # an Imu without accelerometer data
+        a00, a01, a02, a10, a11, a12, a20, a21, a22, c0, c1, c2 = self._accel_affine
+        fx = a00 * ax + a01 * ay + a02 * az + c0
+        fy = a10 * ax + a11 * ay + a12 * az + c1
+        fz = a20 * ax + a21 * ay + a22 * az + c2
+        if 0.0 < fx * fx + fy * fy + fz * fz <= _FORCE_LIMIT_SQUARED:  # NaN fails too
+            return fx, fy, fz
+        return None
 
     def _special_sample(self, sec: int, nanosec: int, rate: Sequence[float],
                         accel: Sequence[float] | None) -> Sequence[float] | None:
@@ -156,7 +189,7 @@ class FilteredGyroSession(GyroSession):
         state.set_sample(state.time, q, state.omega_tuple())
         self._corrected()
         if self._force is not None:
-            estimation.refresh_acceleration_covariance(q, self._force)
+            estimation.mark_acceleration_covariance(q, self._force)
 
     def _corrected(self) -> None:
         """After an update: the bias subtracted from the next samples, the covariance published."""

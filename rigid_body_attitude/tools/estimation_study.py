@@ -128,7 +128,7 @@ class _SeriesSink:
     def sensor_mount(self, q_body_sensor: Any) -> None:
         """Nothing: ``imu/data`` is not kept."""
 
-    def acceleration(self, sec: int, nanosec: int, linear_body: Any, covariance: Any) -> None:
+    def acceleration(self, sec: int, nanosec: int, estimate: Any) -> None:
         """Nothing: ``accel/filtered`` is not kept."""
 
     def dynamics(self, *args: Any) -> None:

@@ -33,8 +33,8 @@ class RecordingSink:
     accelerations: list[tuple[int, int, tuple[float, ...], tuple[float, ...]]] = field(
         default_factory=list)
 
-    def acceleration(self, sec, nanosec, linear_body, covariance):
-        self.accelerations.append((sec, nanosec, linear_body, covariance))
+    def acceleration(self, sec, nanosec, estimate):
+        self.accelerations.append((sec, nanosec, *estimate()))
 
     def sensor_mount(self, q_body_sensor):
         self.mounts.append(q_body_sensor)

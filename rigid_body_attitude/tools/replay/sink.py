@@ -27,7 +27,7 @@ from rigid_body_attitude.msgs import (
     quaternion_stamped_encoder)
 from rigid_body_attitude.msgs.cdr import accel_with_covariance_stamped_encoder
 from rigid_body_attitude.msgs.types import IMU
-from rigid_body_attitude.session.base import Session
+from rigid_body_attitude.session.base import AccelerationEstimate, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, body_frame_velocity)
@@ -184,12 +184,11 @@ class BagSink:
             series.attitudes.extend(attitude)
             series.positions.extend(_ZERO)
 
-    def acceleration(self, sec: int, nanosec: int, linear_body: Vector,
-                     covariance: tuple[float, ...]) -> None:
-        """``accel/filtered`` of one filtered gyro sample."""
+    def acceleration(self, sec: int, nanosec: int, estimate: AccelerationEstimate) -> None:
+        """``accel/filtered`` of one filtered gyro sample (computed when written)."""
         if self._acceleration is not None:
             self.records.append((self._acceleration, self.now_ns, self.encode_acceleration(
-                sec, nanosec, linear_body, covariance)))
+                sec, nanosec, *estimate())))
             self.counts['accel/filtered'] += 1
 
     def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
