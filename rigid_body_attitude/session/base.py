@@ -29,7 +29,8 @@ from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, StrapdownState, diagnostic_report,
     stale_command_count, state_summary)
 
-__all__ = ['AccelerationEstimate', 'LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session', 'WARNING_INTERVAL']
+__all__ = ['AccelerationEstimate', 'LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session',
+           'WARNING_INTERVAL']
 
 #: Seconds between repeated warnings about the same reason.
 WARNING_INTERVAL = 5.0

@@ -25,7 +25,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from functools import partial
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -40,13 +40,14 @@ from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.estimation import STANDARD_GRAVITY, build_estimation
 from rigid_body_attitude.session.gyro import GyroSession
-from rigid_body_attitude.session.levelling import FROM_SCENE, AlignmentResult
+from rigid_body_attitude.session.levelling import FROM_SCENE, AlignmentResult, SampleMap
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns
 from rigid_body_attitude.session.uncertainty import (
     CALIBRATION_KEYS, attitude_stddev_deg, error_model_from, orientation_block)
 
-__all__ = ['FILTER_REJECTION_KEYS', 'FilteredGyroSession']
+__all__ = ['FILTER_REJECTION_KEYS', 'FilteredGyroSession', 'mapped_force',
+           'specific_force_map']
 
 Quat = tuple[float, float, float, float]
 Vec = tuple[float, float, float]
@@ -118,14 +119,9 @@ class FilteredGyroSession(GyroSession):
         """The hot path's maps: the rate's, and the specific force's ``R N`` and
         ``−R N b_a`` (mount and calibration: recomputed when the mount changes)."""
         super()._update_paths()
-        sample_map = self.sample_map
-        if self._accel_mount != sample_map.mount:
-            self._accel_mount = sample_map.mount
-            rotation = quaternion.to_matrix(np.array(sample_map.mount))
-            calibration = sample_map.calibration
-            matrix = rotation @ calibration.accelerometer_matrix
-            offset = -(matrix @ calibration.accelerometer_bias)
-            self._accel_affine = tuple(matrix.ravel().tolist() + offset.tolist())
+        if self._accel_mount != self.sample_map.mount:
+            self._accel_mount = self.sample_map.mount
+            self._accel_affine = specific_force_map(self.sample_map)
 
     # -- the gyro samples --------------------------------------------------------------------
 
@@ -136,7 +132,7 @@ class FilteredGyroSession(GyroSession):
         self._sample_ns = (sec * NANOSECONDS_PER_SECOND + nanosec if self.use_header_stamps
                            else self.clock_ns())
         if not self._special and accel is not None:  # the inline path: the force mapped here
-            self._force = self._mapped_force(accel)
+            self._force = mapped_force(self._accel_affine, accel)
         published = super().gyro(sec, nanosec, rate, imu, accel)
         force = self._force
         if published and force is not None and self.estimation.started:
@@ -146,30 +142,13 @@ class FilteredGyroSession(GyroSession):
                 force))
         return published
 
-    def _mapped_force(self, accel: Sequence[float]) -> Vec | None:
-        """The body specific force of a sensor-frame one (``None``: none, or not a real one:
-        all zeros, non-finite, beyond the accelerometer limit)."""
-        try:
-            ax, ay, az = accel
-        except (TypeError, ValueError):
-            return None
-        if ax == 0.0 and ay == 0.0 and az == 0.0:
-            return None  # an Imu without accelerometer data
-        a00, a01, a02, a10, a11, a12, a20, a21, a22, c0, c1, c2 = self._accel_affine
-        fx = a00 * ax + a01 * ay + a02 * az + c0
-        fy = a10 * ax + a11 * ay + a12 * az + c1
-        fz = a20 * ax + a21 * ay + a22 * az + c2
-        if 0.0 < fx * fx + fy * fy + fz * fz <= _FORCE_LIMIT_SQUARED:  # NaN fails too
-            return fx, fy, fz
-        return None
-
     def _special_sample(self, sec: int, nanosec: int, rate: Sequence[float],
                         accel: Sequence[float] | None) -> Sequence[float] | None:
         """:meth:`ImuStart._special_sample`; the body specific force kept for the filter when
         it is a real one (finite, not zero, within the accelerometer limit)."""
         self.body_specific_force = None
         body_rate = super()._special_sample(sec, nanosec, rate, accel)
-        force = self.body_specific_force
+        force = cast('Vec | None', self.body_specific_force)  # set by the call above
         if body_rate is not None and force is not None:
             fx, fy, fz = force
             if 0.0 < fx * fx + fy * fy + fz * fz <= _FORCE_LIMIT_SQUARED:  # NaN fails too
@@ -331,3 +310,32 @@ class FilteredGyroSession(GyroSession):
                 level = max(level, LEVEL_WARN)
                 message = problem if message == 'propagating' else f'{message}; {problem}'
         return DiagnosticReport(level, message, tuple(values))
+
+
+def specific_force_map(sample_map: SampleMap) -> tuple[float, ...]:
+    """The body specific force's affine map of a sensor-frame one: ``R N`` (row-major) and
+    ``−R N b_a``, the mount ``R`` and the accelerometer calibration ``N``, ``b_a``."""
+    rotation = quaternion.to_matrix(np.array(sample_map.mount))
+    calibration = sample_map.calibration
+    matrix = rotation @ calibration.accelerometer_matrix
+    offset = -(matrix @ calibration.accelerometer_bias)
+    return tuple(matrix.ravel().tolist() + offset.tolist())
+
+
+def mapped_force(affine: tuple[float, ...], accel: Sequence[float]) -> Vec | None:
+    """The body specific force [m/s²] of a sensor-frame one through ``affine``
+    (:func:`specific_force_map`); ``None``: none, or not a real one (all zeros: an Imu
+    without accelerometer data; non-finite; beyond the accelerometer limit)."""
+    try:
+        ax, ay, az = accel
+    except (TypeError, ValueError):
+        return None
+    if ax == 0.0 and ay == 0.0 and az == 0.0:
+        return None
+    a00, a01, a02, a10, a11, a12, a20, a21, a22, c0, c1, c2 = affine
+    fx = a00 * ax + a01 * ay + a02 * az + c0
+    fy = a10 * ax + a11 * ay + a12 * az + c1
+    fz = a20 * ax + a21 * ay + a22 * az + c2
+    if 0.0 < fx * fx + fy * fy + fz * fz <= _FORCE_LIMIT_SQUARED:  # NaN fails too
+        return fx, fy, fz
+    return None
