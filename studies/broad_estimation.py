@@ -2,13 +2,14 @@
 
 Runs :mod:`rigid_body_attitude.tools.estimation_study` on every trial of the given folders
 (default: ``shared/data/broad_mag`` beside or above the checkout), one set of settings for all:
-the documented defaults, with the IMU's white-noise densities measured once on the first
-trial's initial rest (``imu_noise``'s Allan fit for gyro and accelerometer; the
-magnetometer's standard deviation over √rate). Prints per trial the total, heading and
-inclination RMSE [deg] of the filter and of VQF (``offlineVQF``, defaults), the ratio of the
-totals, the share of motion samples whose NEES lies inside the chi-square 99 % bound (3 dof,
-tilt 2 dof, heading 1 dof) and the median 1σ over the RMSE (total, tilt over inclination,
-heading); then the means per group (undisturbed, disturbed) and over all trials.
+the documented defaults, with the IMU's figures measured once on the first trial
+(:func:`~rigid_body_attitude.tools.estimation_study.dataset_model`: noise densities
+by ``imu_noise``'s Allan fit on its rest, the magnetometer's delay behind the gyro).
+Prints per trial the total, heading and inclination RMSE [deg] of the filter and of VQF
+(``offlineVQF``, defaults), the ratio of the totals, the share of motion samples whose NEES
+lies inside the chi-square 99 % bound (3 dof, tilt 2 dof, heading 1 dof) and the median 1σ
+over the RMSE (total, tilt over inclination, heading); then the means per group (undisturbed,
+disturbed) and over all trials.
 
 Usage: ``python studies/broad_estimation.py [DATA_DIR ...]``. Needs ``vqf``
 (requirements-test.txt).
@@ -48,10 +49,11 @@ def main(argv: list[str] | None = None) -> int:
         print('error: no BROAD trial (.npz) found', file=sys.stderr)
         return 1
     model, magnetometer = dataset_model(load_trial(paths[0]))
-    settings = settings_for(0.0, magnetometer)
-    print(f'noise densities (first trial\'s rest): gyro {model.gyroscope_noise_density:.3g} '
+    settings = settings_for(magnetometer)
+    print(f'first trial\'s figures: noise densities gyro {model.gyroscope_noise_density:.3g} '
           f'rad/s/√Hz, accelerometer {model.accelerometer_noise_density:.3g} m/s²/√Hz, '
-          f'magnetometer {settings.magnetometer_noise_density:.3g} T/√Hz')
+          f'magnetometer {magnetometer.noise_density:.3g} T/√Hz; magnetometer delay '
+          f'{1e3 * magnetometer.delay:.2f} ms, timing 1σ {1e3 * magnetometer.timing:.2f} ms')
     print('| trial | filter total / heading / incl. [deg] | VQF total / heading / incl. '
           '[deg] | total ratio | NEES inside 99 %: 3-dof / tilt / heading | median 1σ / '
           'RMSE: total / tilt / heading |')

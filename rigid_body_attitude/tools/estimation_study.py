@@ -19,10 +19,10 @@ Benchmark for Robust Inertial Orientation Estimation", Data 6(7):72, 2021, secti
 heading: 1 dof), as the share of motion samples; and the median 1σ (total ``√tr P``, tilt
 ``√(P_xx + P_yy)``, heading ``√P_zz``) against the RMSE of the same error.
 
-Noise figures: the gyro's and accelerometer's densities from ``imu_noise`` (Allan deviation)
-on one trial's initial rest, as a user calibrates an IMU once (:func:`dataset_model`); the
-magnetometer's from the same rest (standard deviation over √rate, mean over axes); every
-other figure the documented default.
+Sensor figures: the gyro's, accelerometer's and magnetometer's noise densities from
+``imu_noise``'s Allan fit on one trial's initial rest and the magnetometer's delay from the
+same trial, as a user calibrates an IMU once (:func:`dataset_model`); every other figure the
+documented default.
 """
 
 from __future__ import annotations
@@ -40,12 +40,13 @@ from rigid_body_attitude.core.estimation.estimator import AttitudeEstimator
 from rigid_body_attitude.core.estimation.estimator_settings import EstimatorSettings
 from rigid_body_attitude.core.estimation.filtered_strapdown import FilteredStrapdown
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
+from rigid_body_attitude.core.estimation.magnetometer_timing import magnetometer_delay
 from rigid_body_attitude.core.estimation.rest import RestDetector
 from rigid_body_attitude.tools.allan import allan_curve, fit_noise
 from rigid_body_attitude.tools.broad import BroadTrial
 
-__all__ = ['ALIGN_SECONDS', 'CHI2_99', 'Run', 'TrialFigures', 'broad_errors', 'dataset_model',
-           'figures', 'run_filter', 'run_vqf']
+__all__ = ['ALIGN_SECONDS', 'CHI2_99', 'MagnetometerFigures', 'Run', 'TrialFigures',
+           'broad_errors', 'dataset_model', 'figures', 'run_filter', 'run_vqf', 'settings_for']
 
 FloatArray = NDArray[np.float64]
 
@@ -74,10 +75,24 @@ class TrialFigures:
     median_sigma: tuple[float, float, float] = (math.nan, math.nan, math.nan)
 
 
-def dataset_model(trial: BroadTrial) -> tuple[GyroErrorModel, float]:
-    """The IMU's white-noise densities from one trial's initial rest: gyro and accelerometer
-    by ``imu_noise``'s Allan fit, the magnetometer [T/√Hz] as the rest's standard deviation
-    over √rate (mean over axes). Other figures: the documented defaults."""
+@dataclass(frozen=True)
+class MagnetometerFigures:
+    """A magnetometer's figures measured on one recording: white-noise density [T/√Hz],
+    delay behind the gyro [s] and the 1σ of its sample instants [s] (NaN: no magnetometer)."""
+
+    noise_density: float = math.nan
+    delay: float = math.nan
+    timing: float = math.nan
+
+
+def dataset_model(trial: BroadTrial) -> tuple[GyroErrorModel, MagnetometerFigures]:
+    """The IMU's figures from one trial, as a user measures an IMU once: the white-noise
+    densities of gyro, accelerometer and magnetometer by ``imu_noise``'s Allan fit on the
+    initial rest; the magnetometer's delay behind the gyro by
+    :func:`~rigid_body_attitude.core.estimation.magnetometer_timing.magnetometer_delay` on the
+    whole trial; the 1σ of its sample instants from its own output rate (a sample repeated
+    while the magnetometer has none newer: its age spreads uniformly over the magnetometer's
+    period ``P``, ``P/√12``). Other figures: the documented defaults."""
     rest = trial.first_motion_index
     rate = trial.sampling_rate
     duration = rest / rate
@@ -86,9 +101,13 @@ def dataset_model(trial: BroadTrial) -> tuple[GyroErrorModel, float]:
     model = GyroErrorModel(gyroscope_noise_density=gyro.white,
                            accelerometer_noise_density=accel.white)
     field = trial.field
-    magnetometer = math.nan if field is None else float(
-        np.mean(np.std(field[:rest], axis=0, ddof=1)) / math.sqrt(rate))
-    return model, magnetometer
+    if field is None:
+        return model, MagnetometerFigures()
+    noise = fit_noise(allan_curve(np.asarray(field[:rest]), rate), duration).white
+    delay = magnetometer_delay(np.asarray(trial.gyro), np.asarray(field), rate).delay
+    repeated = float(np.mean(np.all(np.diff(np.asarray(field), axis=0) == 0.0, axis=1)))
+    period = 1.0 / (rate * max(1.0 - repeated, 1e-3))
+    return model, MagnetometerFigures(noise, delay, period / math.sqrt(12.0))
 
 
 def run_filter(trial: BroadTrial, model: GyroErrorModel, settings: EstimatorSettings,
@@ -167,10 +186,12 @@ def figures(trial: BroadTrial, run: Run) -> TrialFigures:
     return TrialFigures(rmse_tuple, inside, (float(sigma[0]), float(sigma[1]), float(sigma[2])))
 
 
-def settings_for(trial_rate: float, magnetometer_noise: float,
+def settings_for(magnetometer: MagnetometerFigures,
                  settings: EstimatorSettings | None = None) -> EstimatorSettings:
-    """``settings`` (default: the defaults) with the measured magnetometer noise."""
+    """``settings`` (default: the defaults) with the measured magnetometer figures."""
     base = settings or EstimatorSettings()
-    if math.isfinite(magnetometer_noise):
-        base = replace(base, magnetometer_noise_density=magnetometer_noise)
+    if math.isfinite(magnetometer.noise_density):
+        base = replace(base, magnetometer_noise_density=magnetometer.noise_density,
+                       magnetometer_delay=magnetometer.delay,
+                       magnetometer_timing=magnetometer.timing)
     return base
