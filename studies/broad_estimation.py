@@ -3,8 +3,10 @@
 Each trial of the given folders (default: ``shared/data/broad_mag`` beside or above the
 checkout) is written as a bag (Imu, MagneticField, ground truth) and replayed through the
 replay tool with the shipped ``imu_filter`` scene and the node's default parameters, one set
-for all trials, plus one calibration file: the kalibr ``imu.yaml`` that ``imu_noise`` writes
-from the first trial's initial rest (:mod:`rigid_body_attitude.tools.estimation_study`). The
+for all trials, plus the IMU's calibration files measured once on the first trial: the kalibr
+``imu.yaml`` that ``imu_noise`` writes from its initial rest, and the magnetometer's figures
+(noise density, delay, timing) in its calibration file
+(:mod:`rigid_body_attitude.tools.estimation_study`). The
 same session fed in this process must give the same outputs (the largest difference is
 printed). Prints per trial the total, heading and inclination RMSE [deg] of the node and of
 VQF (``offlineVQF``, defaults) on the same samples, the ratio of the totals, the share of
@@ -75,10 +77,11 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     with tempfile.TemporaryDirectory() as temporary:
         folder = Path(temporary)
-        calibration = dataset_calibration(load_trial(paths[0]), folder / 'imu.yaml')
-        print(f'calibration_file (imu_noise on {paths[0].stem}\'s rest):')
-        print(calibration.read_text(encoding='utf-8'))
-        values = study_values(calibration_file=str(calibration))
+        files = dataset_calibration(load_trial(paths[0]), folder)
+        for name, path in files.items():
+            print(f'{name} (measured on {paths[0].stem}):')
+            print(Path(path).read_text(encoding='utf-8'))
+        values = study_values(**files)
         _header()
         groups: dict[str, list[tuple[float, ...]]] = {}
         largest = 0.0

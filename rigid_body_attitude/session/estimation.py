@@ -36,11 +36,12 @@ import numpy as np
 
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.estimation_section import EstimationSpec
-from rigid_body_attitude.core.estimation.estimator import AttitudeEstimator
+from rigid_body_attitude.core.estimation.estimator import MAX_FIELD_AGE, AttitudeEstimator
 from rigid_body_attitude.core.estimation.estimator_start import (
     magnetic_start, start_estimator)
 from rigid_body_attitude.core.estimation.gravity_free import gravity_free_acceleration
 from rigid_body_attitude.core.estimation.magnetometer import MagnetometerCalibration
+from rigid_body_attitude.core.estimation.magnetometer_file import MagnetometerFile
 
 __all__ = ['Estimation', 'FIELD_QUEUE', 'STANDARD_GRAVITY']
 
@@ -129,7 +130,8 @@ class Estimation:
         fields = self._fields
         turned = None
         while fields and fields[0][0] <= stamp_ns:
-            turned = self._field_at(q_after, *fields.popleft()) or turned
+            field_ns, field = fields.popleft()
+            turned = self._field_at(q_after, field_ns, field, stamp_ns) or turned
         if not due:
             return turned
         interval = estimator.interval
@@ -139,12 +141,19 @@ class Estimation:
         self._publish()
         return q
 
-    def _field_at(self, q: Quat, stamp_ns: int, field_body: Vec) -> Quat | None:
-        """A field sample paired with the attitude ``q`` of its step; returns the turned
-        attitude when it completed a late heading start."""
+    def _field_at(self, q: Quat, stamp_ns: int, field_body: Vec, step_ns: int
+                  ) -> Quat | None:
+        """A field sample stamped ``stamp_ns``, given with the attitude ``q`` of the step
+        ending at ``step_ns`` (the filter pairs it with the attitude at its own instant, up to
+        :data:`MAX_FIELD_AGE` before); returns the turned attitude when it completed a late
+        heading start."""
         if self.estimator.field is None:
             return self._late_field(q, stamp_ns, field_body)
-        self.estimator.magnetic_field(q, field_body)
+        age = (step_ns - stamp_ns) * 1e-9
+        if age > MAX_FIELD_AGE:  # taken too late to be paired: the gyro ran ahead
+            self.counts['magnetometer_late'] += 1
+            return None
+        self.estimator.magnetic_field(q, field_body, age)
         return None
 
     def _late_field(self, q: Quat, stamp_ns: int, field_body: Vec) -> Quat | None:
@@ -311,11 +320,13 @@ def _matrix(q: Sequence[float]) -> Any:
 
 
 def build_estimation(spec: EstimationSpec, values: Mapping[str, Any], model: Any,
-                     iron: MagnetometerCalibration) -> Estimation:
-    """The :class:`Estimation` of a session: the filter with the parameters' settings."""
+                     magnetometer: MagnetometerFile) -> Estimation:
+    """The :class:`Estimation` of a session: the filter with the scene section's settings,
+    then the parameters', then the magnetometer file's figures."""
     settings = spec.estimator_settings(
         declination=values['magnetic_declination'],
         magnetometer_noise_density=values['magnetometer_noise_density'],
-        accelerometer_random_walk=values['accelerometer_random_walk'])
+        accelerometer_random_walk=values['accelerometer_random_walk'], **magnetometer.settings)
     estimator = AttitudeEstimator(model, settings, values['world_axes'])
-    return Estimation(spec, estimator, iron, max(values['align_seconds'], 0.5))
+    return Estimation(spec, estimator, magnetometer.calibration,
+                      max(values['align_seconds'], 0.5))

@@ -34,7 +34,8 @@ from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.alignment import ALIGNING
 from rigid_body_attitude.core.estimation.magnetometer import MagnetometerCalibration
-from rigid_body_attitude.core.estimation.magnetometer_file import load_magnetometer_calibration
+from rigid_body_attitude.core.estimation.magnetometer_file import (
+    MagnetometerFile, load_magnetometer_calibration)
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.base import OutputSink
@@ -89,14 +90,15 @@ class FilteredGyroSession(GyroSession):
         spec = scene.estimation
         assert spec is not None
         path = values['magnetometer_calibration_file']
-        iron = load_magnetometer_calibration(path) if path else MagnetometerCalibration()
+        magnetometer = load_magnetometer_calibration(path) if path else MagnetometerFile(
+            MagnetometerCalibration(), {})
         super().__init__(scene, values, sink, clock_ns, monotonic)
         noise = self.calibration_noise()
         model = error_model_from(values, noise,
                                  CALIBRATION_KEYS + ('accelerometer_noise_density',))
         walk = noise.get('accelerometer_random_walk', values['accelerometer_random_walk'])
         self.estimation = build_estimation(
-            spec, {**values, 'accelerometer_random_walk': walk}, model, iron)
+            spec, {**values, 'accelerometer_random_walk': walk}, model, magnetometer)
         self.uncertainty = None
         self.wants_steps = True
         self.on_aligned = self._filter_aligned

@@ -20,9 +20,15 @@ Benchmark for Robust Inertial Orientation Estimation", Data 6(7):72, 2021, secti
 heading: 1 dof), as the share of motion samples; and the median 1σ (total ``√tr P``, tilt
 ``√(P_xx + P_yy)``, heading ``√P_zz``) against the RMSE of the same error.
 
-Noise figures: a kalibr ``imu.yaml`` written by ``imu_noise`` (Allan deviation) from one
-trial's initial rest, as a user calibrates an IMU once (:func:`dataset_calibration`), given
-to the node as ``calibration_file``; every other parameter the shipped default.
+The IMU's figures, measured once on one trial as a user measures an IMU
+(:func:`dataset_calibration`): a kalibr ``imu.yaml`` written by ``imu_noise`` (Allan
+deviation of the gyro and accelerometer on the initial rest), given as ``calibration_file``;
+and the magnetometer's calibration file with its figures only (white-noise density by the
+same Allan fit, its delay behind the gyro by
+:func:`~rigid_body_attitude.core.estimation.magnetometer_timing.magnetometer_delay` on the
+whole trial, the 1σ of its sample instants ``P/√12`` from its own output period ``P``: a
+sample repeated while the magnetometer has none newer), given as
+``magnetometer_calibration_file``. Every other parameter is the shipped default.
 """
 
 from __future__ import annotations
@@ -38,6 +44,7 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.bag import BagReader
 from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.estimation.magnetometer_timing import magnetometer_delay
 from rigid_body_attitude.msgs.cdr import stamp_to_ns
 from rigid_body_attitude.msgs.decoders import (
     decode_pose_with_covariance_stamped, decode_quaternion_stamped)
@@ -81,8 +88,9 @@ class TrialFigures:
     median_sigma: tuple[float, float, float] = (math.nan, math.nan, math.nan)
 
 
-def dataset_calibration(trial: BroadTrial, path: Path) -> Path:
-    """Write ``imu_noise``'s kalibr ``imu.yaml`` of the trial's initial rest to ``path``."""
+def dataset_calibration(trial: BroadTrial, folder: Path) -> dict[str, str]:
+    """Write the trial's ``imu.yaml`` and ``magnetometer.yaml`` (module docstring) into
+    ``folder``; the node's parameters naming them."""
     rest = trial.first_motion_index
     rate = trial.sampling_rate
     duration = rest / rate
@@ -90,8 +98,20 @@ def dataset_calibration(trial: BroadTrial, path: Path) -> Path:
                           acc=np.asarray(trial.acc[:rest]), topic='/imu')
     gyro = fit_noise(allan_curve(recording.gyro, rate), duration)
     acc = fit_noise(allan_curve(np.asarray(recording.acc), rate), duration)
-    path.write_text(kalibr_yaml(recording, gyro, acc, '/imu'), encoding='utf-8')
-    return path
+    imu = folder / 'imu.yaml'
+    imu.write_text(kalibr_yaml(recording, gyro, acc, '/imu'), encoding='utf-8')
+    parameters = {'calibration_file': str(imu)}
+    field = trial.field
+    if field is not None:
+        noise = fit_noise(allan_curve(np.asarray(field[:rest]), rate), duration).white
+        delay = magnetometer_delay(np.asarray(trial.gyro), np.asarray(field), rate).delay
+        repeated = float(np.mean(np.all(np.diff(np.asarray(field), axis=0) == 0.0, axis=1)))
+        period = 1.0 / (rate * max(1.0 - repeated, 1e-3))
+        magnetometer = folder / 'magnetometer.yaml'
+        magnetometer.write_text(f'noise_density: {noise:.6e}\ndelay: {max(delay, 0.0):.6e}\n'
+                                f'timing: {period / math.sqrt(12.0):.6e}\n', encoding='utf-8')
+        parameters['magnetometer_calibration_file'] = str(magnetometer)
+    return parameters
 
 
 def study_values(**parameters: Any) -> dict[str, Any]:

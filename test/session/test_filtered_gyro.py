@@ -257,8 +257,12 @@ def test_the_estimation_section_needs_a_gyro_scene():
 def test_the_magnetometer_calibration_file_inverts_the_distortion(tmp_path):
     path = tmp_path / 'mag.yaml'
     path.write_text('hard_iron: [1.0e-6, -2.0e-6, 0.5e-6]\n'
-                    'soft_iron: [[1.1, 0.02, 0.0], [0.02, 0.9, 0.0], [0.0, 0.0, 1.0]]\n')
-    calibration = load_magnetometer_calibration(path)
+                    'soft_iron: [[1.1, 0.02, 0.0], [0.02, 0.9, 0.0], [0.0, 0.0, 1.0]]\n'
+                    'noise_density: 8.0e-8\ndelay: 0.012\n')
+    loaded = load_magnetometer_calibration(path)
+    assert loaded.settings == {'magnetometer_noise_density': 8.0e-8,
+                               'magnetometer_delay': 0.012}
+    calibration = loaded.calibration
     true = np.array([20e-6, -5e-6, -40e-6])
     soft = np.array([[1.1, 0.02, 0.0], [0.02, 0.9, 0.0], [0.0, 0.0, 1.0]])
     measured = soft @ true + np.array([1.0e-6, -2.0e-6, 0.5e-6])
@@ -271,6 +275,8 @@ def test_the_magnetometer_calibration_file_inverts_the_distortion(tmp_path):
     ('soft_iron: [[1, 0, 0], [0, 1, 0]]\n', 'soft_iron'),
     ('scale: 2\n', 'Unknown key'),
     ('{}\n', 'empty'),
+    ('delay: 0.5\n', 'delay'),
+    ('noise_density: -1.0e-8\n', 'noise_density'),
     ('hard_iron: [.nan, 0, 0]\n', 'hard_iron'),
     ('- [unclosed\n', 'Magnetometer calibration file'),
 ])
@@ -285,3 +291,13 @@ def test_a_bad_magnetometer_calibration_file_is_one_error_line(tmp_path, text, m
 def test_a_missing_magnetometer_calibration_file_is_one_error_line(tmp_path):
     with pytest.raises(CalibrationError, match='does not exist'):
         load_magnetometer_calibration(tmp_path / 'none.yaml')
+
+
+def test_the_magnetometer_files_figures_reach_the_filter(open_scene, tmp_path):
+    path = tmp_path / 'mag.yaml'
+    path.write_text('noise_density: 8.0e-8\ndelay: 0.012\ntiming: 0.0014\n')
+    session, _ = open_scene('imu_filter', magnetometer_calibration_file=str(path),
+                            magnetometer_noise_density=1.0e-6)
+    settings = session.estimation.estimator.settings
+    assert (settings.magnetometer_noise_density, settings.magnetometer_delay,
+            settings.magnetometer_timing) == (8.0e-8, 0.012, 0.0014)

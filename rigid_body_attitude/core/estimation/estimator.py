@@ -6,11 +6,14 @@ covariance; this class adds the measurement updates (F. L. Markley, "Attitude er
 representations for Kalman filtering", JGCD 26(2), 2003; J. Solà, "Quaternion kinematics for
 the error-state Kalman filter", 2017, chapter 7), in order, once per update interval:
 
-1. **gravity** (:mod:`.gravity_update`): tilt from the world-frame mean specific force, with
-   the acceleration as measured, inflated noise and an innovation gate;
-2. **zero rate** (:mod:`.zero_rate_update`): the gyro bias while the body rests;
-3. **magnetometer** (:mod:`.magnetometer`): heading only, when the interval's field passes the
-   norm and dip checks of :mod:`.field_reference`.
+1. **gravity**: tilt from the accelerometer, through the velocity (:mod:`.velocity_update`:
+   the interval's velocity change against a bounded velocity; the default) or through the
+   interval's mean specific force with the acceleration as noise (:mod:`.gravity_update`);
+2. **rest** (:mod:`.zero_rate_update`, :mod:`.velocity_update`): zero rate (the gyro bias)
+   and zero velocity while the body rests;
+3. **magnetometer** (:mod:`.magnetometer`): heading only, each sample paired with the
+   attitude at its own instant, when the interval's field passes the norm and dip checks of
+   :mod:`.field_reference`.
 
 Each accepted update is injected at once (:mod:`.kalman_update`): ``q ← exp(δθ) ⊗ q``, the
 gyro bias (and, when estimated, the intrinsic errors and the accelerometer bias) corrected,
@@ -51,11 +54,12 @@ from rigid_body_attitude.core.estimation.filter_covariance import (
     FILTER_STATE_SIZE, FilterCovariance, estimated_mask)
 from rigid_body_attitude.core.estimation.gravity_update import MotionPower, gravity_measurement
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
-from rigid_body_attitude.core.estimation.interval_sums import ImuInterval, MagneticInterval
+from rigid_body_attitude.core.estimation.interval_sums import (
+    ImuInterval, MagneticInterval, RecentTurn)
 from rigid_body_attitude.core.estimation.kalman_update import (
     UpdateResult, injected_attitude, joseph_update)
 from rigid_body_attitude.core.estimation.magnetometer import (
-    MagnetometerCalibration, heading_measurement, heading_only_gain)
+    MagnetometerCalibration, heading_measurement, heading_only_gain, turned_back)
 from rigid_body_attitude.core.estimation.velocity_update import BoundedVelocity
 from rigid_body_attitude.core.estimation.zero_rate_update import (
     RestIntervals, zero_rate_measurement)
@@ -68,6 +72,9 @@ Vec = tuple[float, float, float]
 #: Largest specific force [m/s²] and field [T] magnitudes a sample may have.
 SPECIFIC_FORCE_LIMIT = 1.0e4
 FIELD_LIMIT = 1.0e-2
+#: Largest age [s] of a magnetometer sample behind the last gyro sample (beyond the
+#: magnetometer's own delay) that is paired with the attitude at its instant.
+MAX_FIELD_AGE = 0.1
 
 
 class AttitudeEstimator:
@@ -99,6 +106,7 @@ class AttitudeEstimator:
         self.estimated = estimated_mask(settings.estimate_intrinsic,
                                         settings.estimate_accelerometer_bias)
         self.interval, self.field_interval = ImuInterval(), MagneticInterval()
+        self.recent = RecentTurn(settings.magnetometer_delay + MAX_FIELD_AGE)
         self.motion = MotionPower(settings.motion_power_time, settings.acceleration_time)
         #: The velocity channel (:mod:`.velocity_update`).
         self.velocity = BoundedVelocity(settings.velocity_time, settings.motion_power_time,
@@ -135,6 +143,7 @@ class AttitudeEstimator:
         if covariance is None:
             raise InputError('Expected start() before the first sample')
         covariance.add_sample(q_before, rate, dt)
+        self.recent.add(rate, dt)
         if specific_force is not None:
             fx, fy, fz = specific_force
             if not 0.0 < fx * fx + fy * fy + fz * fz <= SPECIFIC_FORCE_LIMIT ** 2:
@@ -146,14 +155,23 @@ class AttitudeEstimator:
             self.interval.duration += dt
         return self.interval.duration >= self.settings.update_interval
 
-    def magnetic_field(self, q: Quat, field: Vec) -> None:
-        """One magnetometer sample [T], body frame, uncorrected, at the attitude ``q``;
-        InputError for a non-finite, zero or out-of-range field (naming it)."""
+    def magnetic_field(self, q: Quat, field: Vec, age: float = 0.0) -> None:
+        """One magnetometer sample [T], body frame, uncorrected, stamped ``age`` [s] before
+        the attitude ``q`` (the last sample's); it is paired with the attitude at its own
+        instant, ``magnetometer_delay + age`` before ``q`` (:mod:`.magnetometer`). InputError
+        for a non-finite, zero or out-of-range field or age (naming it)."""
         mx, my, mz = field
         if not 0.0 < mx * mx + my * my + mz * mz <= FIELD_LIMIT ** 2:
             raise InputError(f'Expected a finite, non-zero magnetic field of at most '
                              f'{FIELD_LIMIT:g} T, got {tuple(field)!r}')
-        self.field_interval.add(q, self.magnetometer.corrected(field))
+        if not -MAX_FIELD_AGE <= age <= MAX_FIELD_AGE:
+            raise InputError(f'Expected the magnetometer sample\'s age within '
+                             f'{MAX_FIELD_AGE:g} s of the gyro\'s, got {age!r}')
+        corrected = self.magnetometer.corrected(field)
+        lag = self.settings.magnetometer_delay + age
+        if lag > 0.0:
+            corrected = turned_back(corrected, self.recent.turn(lag))
+        self.field_interval.add(q, corrected)
 
     def update(self, q: Quat) -> Quat:
         """The updates of the interval ending at attitude ``q``; returns the corrected
@@ -174,7 +192,8 @@ class AttitudeEstimator:
         elif interval.duration > 0.0:  # no specific force: the velocity is not seen
             self.velocity.unseen(self._state(), interval.duration)
         if self.field is not None and self.field_interval.count:
-            q = self._heading(q, rotation, interval.mean_rate() if interval.count else None)
+            q = self._heading(q, rotation, interval.mean_rate() if interval.count else None,
+                              interval.rms_rate() if interval.count else 0.0)
         self.velocity.clone(self._state())
         interval.clear()
         self.field_interval.clear()
@@ -234,7 +253,8 @@ class AttitudeEstimator:
         result = joseph_update(covariance.p, h, y, r, self.estimated, self.settings.rest_gate)
         return self._injected('zero_rate', result, q, rotation)
 
-    def _heading(self, q: Quat, rotation: FloatArray, rate: Vec | None) -> Quat:
+    def _heading(self, q: Quat, rotation: FloatArray, rate: Vec | None,
+                 rms_rate: float) -> Quat:
         covariance, field = self.covariance, self.field
         assert covariance is not None and field is not None
         count = self.field_interval.count
@@ -242,7 +262,8 @@ class AttitudeEstimator:
         duration = count / self.sample_rate
         speed = math.sqrt(sum(value * value for value in rate)) if rate else 0.0
         outcome = field.check(mean_field, self.up, speed, duration)
-        timing = speed * self.settings.magnetometer_timing
+        timing = math.hypot(speed * self.settings.magnetometer_timing,
+                            0.5 * (rms_rate * self.settings.magnetometer_delay) ** 2)
         if outcome == ACCEPTED and timing > self.settings.magnetic_disturbance_stddev:
             outcome = 'turning'  # the timing error would exceed the disturbance tolerated
         if outcome != ACCEPTED:

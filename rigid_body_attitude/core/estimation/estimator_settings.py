@@ -8,8 +8,12 @@ The gyro's figures (and the accelerometer's noise density and bias prior) are th
 * ``magnetometer_noise_density`` 1.5·10⁻⁷ T/√Hz: a consumer magnetometer (Bosch BMM150 data
   sheet, BST-BMM150-DS001: 0.3-0.6 µT rms noise at 10-30 Hz output rates). Measure yours at
   rest (the standard deviation of a still recording over √rate).
-* ``magnetometer_timing`` 0.01 s: how far a magnetometer sample's instant may lie from the
-  gyro sample it comes with (a magnetometer's own output period, 100 Hz for most parts).
+* ``magnetometer_delay`` 0 s: how long before its stamp a magnetometer sample was taken
+  (its filter's delay and its own sampling); measure it with
+  :func:`~rigid_body_attitude.core.estimation.magnetometer_timing.magnetometer_delay`.
+* ``magnetometer_timing`` 0.01 s: 1σ of the instants of the magnetometer's samples once the
+  delay is taken off (a magnetometer's own output period, 100 Hz for most parts, when the
+  delay is not known; ``P/√12`` for a sample held over its period ``P`` when it is).
 * ``magnetic_disturbance_stddev`` 2° and ``magnetic_disturbance_time`` 10 s: the heading
   disturbance ``d`` (:mod:`.filter_covariance`) a field that passes the norm and dip checks
   still carries indoors (steel in floors and furniture bends the horizontal field by degrees,
@@ -22,7 +26,16 @@ The gyro's figures (and the accelerometer's noise density and bias prior) are th
   norm and dip for that long while the body turns at least that fast is the new reference
   (VQF's ``magNewTime``, ``magNewMinGyr``: a magnet carried with the sensor changes norm
   and dip as the body turns, a new homogeneous field does not).
-* ``acceleration_time`` 0.3 s: the correlation time of the body's acceleration. The
+* ``motion_model`` ``'velocity'``: gravity through a bounded velocity
+  (:mod:`.velocity_update`); ``'acceleration'``: through the interval's mean specific force
+  with the acceleration as noise (:mod:`.gravity_update`).
+* ``velocity_time`` 0.5 s: ``τ_v``, the time a hand-held or arm-borne body takes to reverse
+  its motion, the correlation time of its velocity (:mod:`.velocity_update`; the velocity's
+  power is measured, not set).
+* ``zero_velocity_stddev`` 0.01 m/s: the velocity's 1σ while the rest test holds (a body
+  resting on a table moves by micrometres).
+* ``acceleration_time`` 0.3 s (``'acceleration'`` model): the correlation time of the body's
+  acceleration. The
   accelerometer measures gravity plus acceleration; a filter whose time constant is seconds
   sees the acceleration as white noise of density ``2 σ_a² τ_a`` (its spectrum at low
   frequency), ``σ_a²`` its power, measured as it happens (:mod:`.gravity_update`). Hand-held
@@ -64,6 +77,7 @@ class EstimatorSettings:
     accelerometer_random_walk: float = 3.0e-3
     magnetometer_noise_density: float = 1.5e-7
     magnetometer_timing: float = 0.01
+    magnetometer_delay: float = 0.0
     magnetic_disturbance_stddev: float = 2.0 * _DEGREE
     magnetic_disturbance_time: float = 10.0
     field_norm_tolerance: float = 0.1

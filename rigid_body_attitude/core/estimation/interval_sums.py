@@ -7,6 +7,9 @@ and the duration. Per magnetometer sample (:meth:`MagneticInterval.add`, correct
 and soft iron by
 :class:`~rigid_body_attitude.core.estimation.magnetometer.MagnetometerCalibration`): the
 rotation into the world frame, the sum.
+Per IMU sample too (:meth:`RecentTurn.add`): the rate and step, kept for a short while, so
+that a magnetometer sample taken some milliseconds before the gyro's can be paired with the
+attitude at its own instant (:meth:`RecentTurn.turn`, :mod:`.magnetometer`).
 Averaging in the world frame is what lets the updates run at a low rate: the body may turn
 fast within an interval, the world-frame gravity and field do not (VQF low-passes the
 specific force in an almost-inertial frame for the same reason: D. Laidig, T. Seel,
@@ -16,9 +19,10 @@ Information Fusion 91, 2023, section 3.2).
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Sequence
 
-__all__ = ['ImuInterval', 'MagneticInterval']
+__all__ = ['ImuInterval', 'MagneticInterval', 'RecentTurn']
 
 Quat = tuple[float, float, float, float]
 
@@ -69,6 +73,10 @@ class ImuInterval:
         s, n = self.sums, self.count
         return s[7] / n, s[8] / n, s[9] / n
 
+    def rms_rate(self) -> float:
+        """Root mean square of the body rate's magnitude [rad/s]."""
+        return math.sqrt(self.sums[10] / self.count)
+
     def spreads(self) -> tuple[float, float]:
         """Total standard deviations (over the axes) of the rate [rad/s] and of the specific
         force [m/s²] within the interval."""
@@ -109,3 +117,34 @@ class MagneticInterval:
         """Mean field in the world frame [T]."""
         s, n = self.sums, self.count
         return s[0] / n, s[1] / n, s[2] / n
+
+
+class RecentTurn:
+    """The body's rates over the last ``span`` seconds [s] (module docstring)."""
+
+    def __init__(self, span: float) -> None:
+        self.span = span
+        self._steps: deque[tuple[float, float, float, float]] = deque()
+        self._seconds = 0.0
+
+    def add(self, rate: Sequence[float], dt: float) -> None:
+        """One step: the body rate [rad/s] held over ``dt`` [s]."""
+        self._steps.append((rate[0], rate[1], rate[2], dt))
+        self._seconds += dt
+        while self._steps and self._seconds - self._steps[0][3] >= self.span:
+            self._seconds -= self._steps.popleft()[3]
+
+    def turn(self, seconds: float) -> tuple[float, float, float]:
+        """The body-frame rotation vector [rad] turned over the last ``seconds`` [s] (the
+        sum of ``ω Δt``, the oldest step in part; at most the steps kept)."""
+        x = y = z = 0.0
+        left = seconds
+        for wx, wy, wz, dt in reversed(self._steps):
+            if left <= 0.0:
+                break
+            part = dt if dt <= left else left
+            x += wx * part
+            y += wy * part
+            z += wz * part
+            left -= part
+        return x, y, z

@@ -19,10 +19,21 @@ the disturbance state of :mod:`.filter_covariance`), so the residual is::
 axis, terms on the horizontal ones: a tilt error turns the field's vertical part (the dip,
 68° in Berlin) into a heading error of ``tan(dip)`` times the tilt, and the covariance knows.
 ``v`` is the magnetometer's white noise averaged over the interval's ``k`` samples,
-variance ``σ_m²/(k |m̄_h|²)``, plus the error of its timing: a magnetometer samples at its own
-output rate and its sample is up to ``δt`` (``magnetometer_timing``) older or newer than the
-gyro's, so the body's turn ``|ω| δt`` in between appears as a heading error (variance
-``(|ω| δt)²``, ``|ω|`` the interval's mean rate).
+variance ``σ_m²/(k |m̄_h|²)``, plus the error of its timing.
+
+**Timing.** A magnetometer filters its samples and samples at a rate of its own: the field it
+reports was the field ``d`` (``magnetometer_delay``, measured by
+:mod:`.magnetometer_timing`) before its stamp. Each sample is therefore paired with the
+attitude at its own instant: the body's turn ``φ`` over the last ``d`` (plus the sample's age
+behind the gyro's) is undone, ``m ← exp(−φ) m`` (:func:`turned_back`), before it enters the
+world-frame mean. What remains is the jitter of the instants, 1σ ``δt``
+(``magnetometer_timing``: a sample held until the next has an age spread uniformly over the
+magnetometer's output period ``P``, ``δt = P/√12``), a heading error of variance
+``(|ω̄| δt)²``, and the amplitude the magnetometer's filter takes from a field turning at
+``|ω|`` (a first-order filter of delay ``d`` passes ``1/√(1 + (|ω| d)²)`` of it, a direction
+error of about ``(|ω| d)²/2``, ``|ω|`` the interval's RMS rate). When their sum exceeds the
+disturbance tolerated (``magnetic_disturbance_stddev``) the interval is skipped (outcome
+``turning``).
 
 **Heading only.** The update's gain is kept off the tilt: its rows of the world's horizontal
 axes are zero, and its gyro-bias rows are projected onto the body's vertical (``u uᵀ`` with
@@ -47,7 +58,7 @@ from rigid_body_attitude.core.estimation.filter_covariance import (
     ATTITUDE, DISTURBANCE, FILTER_STATE_SIZE, GYRO_BIAS)
 
 __all__ = ['HeadingMeasurement', 'MagnetometerCalibration', 'heading_angle',
-           'heading_measurement', 'heading_only_gain']
+           'heading_measurement', 'heading_only_gain', 'turned_back']
 
 FloatArray = NDArray[np.float64]
 #: Largest hard-iron offset accepted [T]: 1 mT, twenty times the Earth's field (a magnet
@@ -104,7 +115,7 @@ def heading_measurement(mean_field: FloatArray, east: FloatArray, north: FloatAr
                         timing_variance: float = 0.0) -> HeadingMeasurement:
     """The measurement of the module docstring from the interval's mean world-frame field
     [T]; ``noise_variance`` the per-axis variance of that mean [T²], ``timing_variance`` the
-    heading variance [rad²] of the samples' timing (``(|ω| δt)²``)."""
+    heading variance [rad²] of the samples' timing (module docstring)."""
     e, n = float(east @ mean_field), float(north @ mean_field)
     horizontal2 = e * e + n * n
     gradient = (e * north - n * east) / horizontal2
@@ -130,3 +141,20 @@ def heading_only_gain(estimated: NDArray[np.bool_], up_body: FloatArray
     rows[2] = True
     rows[GYRO_BIAS] = estimated[GYRO_BIAS]
     return rows, np.outer(up_body, up_body)
+
+
+def turned_back(vector: tuple[float, float, float], turn: tuple[float, float, float]
+                ) -> tuple[float, float, float]:
+    """``exp(−φ) v``: a body-frame ``vector`` seen before the body turned by the rotation
+    vector ``turn`` ``φ`` [rad] (Rodrigues' formula, plain floats): the field sample of a
+    delayed magnetometer expressed in the body frame of the gyro's attitude."""
+    x, y, z = turn
+    angle = math.sqrt(x * x + y * y + z * z)
+    if angle < 1e-12:  # guard exact-zero turns
+        return vector
+    kx, ky, kz = x / angle, y / angle, z / angle
+    vx, vy, vz = vector
+    c, s = math.cos(angle), -math.sin(angle)
+    dot = (kx * vx + ky * vy + kz * vz) * (1.0 - c)
+    cx, cy, cz = ky * vz - kz * vy, kz * vx - kx * vz, kx * vy - ky * vx
+    return (vx * c + cx * s + kx * dot, vy * c + cy * s + ky * dot, vz * c + cz * s + kz * dot)

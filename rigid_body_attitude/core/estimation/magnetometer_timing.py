@@ -94,7 +94,7 @@ def magnetometer_delay(rates: FloatArray, fields: FloatArray, sample_rate: float
         if curvature > 0.0:
             shift += 0.5 * (low - high) / curvature * DELAY_STEP
     residual, hard_iron = windows.fit(shift)
-    return MagnetometerDelay(shift / sample_rate,
+    return MagnetometerDelay(float(shift / sample_rate),
                              (float(hard_iron[0]), float(hard_iron[1]), float(hard_iron[2])),
                              math.sqrt(residual), math.sqrt(windows.fit(0.0)[0]),
                              int(starts.size))
