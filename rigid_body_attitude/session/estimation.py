@@ -323,10 +323,11 @@ def build_estimation(spec: EstimationSpec, values: Mapping[str, Any], model: Any
                      magnetometer: MagnetometerFile) -> Estimation:
     """The :class:`Estimation` of a session: the filter with the scene section's settings,
     then the parameters', then the magnetometer file's figures."""
-    settings = spec.estimator_settings(
-        declination=values['magnetic_declination'],
-        magnetometer_noise_density=values['magnetometer_noise_density'],
-        accelerometer_random_walk=values['accelerometer_random_walk'], **magnetometer.settings)
+    settings = spec.estimator_settings(**{
+        'declination': values['magnetic_declination'],
+        'magnetometer_noise_density': values['magnetometer_noise_density'],
+        'accelerometer_random_walk': values['accelerometer_random_walk'],
+        **magnetometer.settings})
     estimator = AttitudeEstimator(model, settings, values['world_axes'])
     return Estimation(spec, estimator, magnetometer.calibration,
                       max(values['align_seconds'], 0.5))
