@@ -261,8 +261,8 @@ PARAMETERS: tuple[Parameter, ...] = (
               'rad: magnetic north east of true north at the site (the imu/mag heading is then '
               'about true north)', -math.pi, math.pi),
     Parameter('magnetometer_calibration_file', str, '',
-              'YAML file of the magnetometer\'s hard_iron [T] and soft_iron (m = S b + h) '
-              '("" = none)', may_be_empty=True),
+              'YAML file of the magnetometer\'s hard_iron [T], soft_iron (m = S b + h), '
+              'noise_density, delay, timing ("" = none)', may_be_empty=True),
     Parameter('accelerometer_noise_density', float, _GYRO_DEFAULTS.accelerometer_noise_density,
               'm/s^2/sqrt(Hz): accelerometer white noise (kalibr name; default BMI088 typical)',
               0.0, 10.0),
