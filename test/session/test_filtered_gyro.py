@@ -301,3 +301,16 @@ def test_the_magnetometer_files_figures_reach_the_filter(open_scene, tmp_path):
     settings = session.estimation.estimator.settings
     assert (settings.magnetometer_noise_density, settings.magnetometer_delay,
             settings.magnetometer_timing) == (8.0e-8, 0.012, 0.0014)
+
+
+def test_reset_levels_again_and_restarts_the_filter(open_scene):
+    session, _ = open_scene('imu_filter', **PARAMETERS)
+    samples = simulate(3.0)
+    run(session, samples)
+    assert session.estimation.started
+    session.reset()
+    assert not session.estimation.started
+    later = [(stamp + 10 * 10**9, *rest) for stamp, *rest in simulate(3.0, seed=2)]
+    errors = run(session, later)
+    assert session.estimation.started and session.alignment.at_rest
+    assert np.degrees(np.linalg.norm(errors, axis=1)).max() < 1.0
