@@ -331,7 +331,10 @@ def _controller_with(controller: NodeReport, plant: NodeReport) -> list[str]:
         if controller.values[frame] != plant.values[frame]:
             found.append(f'the controller\'s {frame} {controller.values[frame]!r} is not the '
                          f'propagator\'s {plant.values[frame]!r}')
-    commands = [e for e in CONTROLLER_INTERFACE if e.direction == 'out' and e.role == 'output']
+    # the controller's command: the body torque, or (actuator reaction_wheels) the wheels'
+    commands = [CONTROLLER_INTERFACE.endpoint(
+        'wheels/command' if controller.values.get('actuator') == 'reaction_wheels'
+        else 'torque', 'out')]
     if plant.situation is not None and not all(any(
             endpoint.name == command.name and endpoint.present(plant.situation)
             for endpoint in NODE_INTERFACE.inputs(plant.situation)) for command in commands):

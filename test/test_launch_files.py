@@ -55,7 +55,19 @@ def values_of(launch: LaunchFile, executable: str) -> dict[str, Any]:
 
 def test_the_package_ships_five_launch_files():
     assert LAUNCH_FILES == ['closed_loop.launch.xml', 'dynamics.launch.xml', 'imu.launch.xml',
-                            'imu_filter.launch.xml', 'managed.launch.py']
+                            'imu_filter.launch.xml', 'managed.launch.py',
+                            'spacecraft_loop.launch.xml']
+
+
+
+def test_spacecraft_loop_gives_both_nodes_the_scene_and_drives_the_wheels():
+    launch = read('spacecraft_loop.launch.xml', {'scene': 'wheel_slew_commanded'})
+    assert problems(launch) == []
+    plant, controller = (values_of(launch, name) for name in (
+        'propagation_node', 'attitude_controller'))
+    assert plant['scene'] == controller['scene'] == 'wheel_slew_commanded'
+    assert (plant['lockstep'], controller['actuator']) == (True, 'reaction_wheels')
+    assert controller['target_rpy'] == (0.0, 0.0, 0.6981317)
 
 
 @pytest.mark.parametrize('name', LAUNCH_FILES)

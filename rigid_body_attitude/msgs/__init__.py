@@ -13,6 +13,8 @@ messages with these, as the replay tool does with a bag's records.
   (the static transforms of a bag's ``/tf_static``).
 * :mod:`~rigid_body_attitude.msgs.cdr`: fast ``struct`` encoders of those messages and the
   float-stamp decoders of bag readers.
+* :mod:`~rigid_body_attitude.msgs.sensor_encoders`: the encoders of the simulated sensors'
+  messages (Imu, MagneticField, PoseWithCovarianceStamped) and of their mounts (TFMessage).
 * :mod:`~rigid_body_attitude.msgs.diagnostics`: the ``DiagnosticArray`` encoder.
 
 Quaternions cross this API scalar-first ``(w, x, y, z)`` as everywhere in the package
@@ -80,6 +82,7 @@ from rigid_body_attitude.msgs.types import (
     FIXED_LAYOUTS,
     FLOAT64,
     IMU,
+    MAGNETIC_FIELD,
     MESSAGE_TYPES,
     POSE_STAMPED,
     POSE_WITH_COVARIANCE_STAMPED,
@@ -97,6 +100,7 @@ __all__ = [
     'FIXED_LAYOUTS',
     'FLOAT64',
     'IMU',
+    'MAGNETIC_FIELD',
     'MESSAGE_TYPES',
     'POSE_STAMPED',
     'POSE_WITH_COVARIANCE_STAMPED',

@@ -93,7 +93,6 @@ __all__ = [
     'quaternion_stamped',
     'quaternion_stamped_encoder',
     'stamp_to_ns',
-    'simulated_imu_encoder',
     'stamped_floats_encoder',
     'transform_encoder',
     'twist_angular',
@@ -462,37 +461,6 @@ def stamped_floats_encoder(frame_id: str, count: int
 
 
 _FLOAT64_LE = Struct('<4sd')
-
-
-def simulated_imu_encoder(frame_id: str, angular_velocity_variance: float,
-                          linear_acceleration_variance: float
-                          ) -> Callable[[int, int, Sequence[float], Sequence[float]], bytes]:
-    """``encode(sec, nanosec, angular_velocity, linear_acceleration)``: a simulated
-    ``sensor_msgs/msg/Imu`` in ``frame_id`` without orientation (``orientation_covariance[0]
-    = −1``, REP-145) and with diagonal rate and acceleration covariances of the given
-    per-sample variances. The header, the orientation and the covariances are packed once;
-    each call is one ``struct`` call of the stamp and the six measured values."""
-    _, constant = _header_struct(frame_id, '')
-    fixed = Struct('<4d9d').pack(*_IDENTITY_XYZW, *_NOT_PROVIDED)
-    gyro_covariance = Struct('<9d').pack(*_diagonal(angular_velocity_variance))
-    acc_covariance = Struct('<9d').pack(*_diagonal(linear_acceleration_variance))
-    pack = Struct(f'<4siI{len(constant) + len(fixed)}s3d{len(gyro_covariance)}s3d'
-                  f'{len(acc_covariance)}s').pack
-    constant += fixed
-
-    def encode(sec: int, nanosec: int, angular_velocity: Sequence[float],
-               linear_acceleration: Sequence[float]) -> bytes:
-        try:
-            return pack(_ENCAPSULATION_LE, sec, nanosec, constant, *angular_velocity,
-                        gyro_covariance, *linear_acceleration, acc_covariance)
-        except struct.error as err:
-            raise _stamp_error(sec, nanosec) from err
-    return encode
-
-
-def _diagonal(variance: float) -> tuple[float, ...]:
-    """A row-major 3×3 covariance with ``variance`` on its diagonal."""
-    return (variance, 0.0, 0.0, 0.0, variance, 0.0, 0.0, 0.0, variance)
 
 
 def encode_float64(value: float) -> bytes:

@@ -3,7 +3,9 @@
 Subscribes (raw CDR, decoded by the package's checked decoders) to ``orientation``
 (geometry_msgs/QuaternionStamped, world_frame), ``twist`` (geometry_msgs/TwistStamped, the
 angular part in body_frame) and ``target`` (geometry_msgs/QuaternionStamped, world_frame), and
-publishes ``torque`` (geometry_msgs/WrenchStamped, body_frame, zero force) and
+publishes ``torque`` (geometry_msgs/WrenchStamped, body_frame, zero force), or with
+``actuator`` ``reaction_wheels`` the scene's wheels' motor torques on ``wheels/command``
+(sensor_msgs/JointState; :class:`~rigid_body_attitude.session.wheel_drive.WheelDrive`), and
 ``/diagnostics``. Remap ``orientation`` and ``twist`` to read an estimator instead of the
 plant's truth. The inputs are served by the package's raw-take loop
 (:class:`~rigid_body_attitude.ros.raw_take_loop.RawTakeLoop`, every queued message per wake-up) and
@@ -49,7 +51,8 @@ from rigid_body_attitude.session.controller_parameters import (
     renamed_problem)
 from rigid_body_attitude.session.interface import CONTROLLER_INTERFACE
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
-from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD
+from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD, load_node_scene
+from rigid_body_attitude.session.wheel_drive import WheelDrive
 
 __all__ = ['AttitudeControllerNode', 'CONTROLLER_NODE_NAME', 'controller_usage', 'main']
 
@@ -73,14 +76,16 @@ class AttitudeControllerNode(Node):
         problem = check_controller_values(values)
         if problem:
             raise InputError(problem)
+        #: ``actuator`` ``reaction_wheels``: the scene's wheel array the torque drives.
+        self.wheel_drive = (WheelDrive(load_node_scene(values['scene']), values['body_frame'])
+                            if values['actuator'] == 'reaction_wheels' else None)
         self.session = ControllerSession(values, self, time.monotonic)
         #: The inputs and the diagnostics timer: served by :meth:`loop`'s raw-take loop (or,
         #: on rclpy's stock executor, as any callback group); the parameter callbacks run in
         #: the executor's thread, so the session is changed under this lock.
         self.loop_group = DedicatedGroup()
         self.session_lock = threading.Lock()
-        self.torque_publisher = create_publisher(
-            self, CONTROLLER_INTERFACE.endpoint('torque', 'out'))
+        self._create_command_publishers()
         self.diagnostics_publisher = DiagnosticsPublisher(self, CONTROLLER_INTERFACE,
                                                           CONTROLLER_NODE_NAME)
         callbacks = {'attitude': self.orientation_callback, 'twist': self.twist_callback,
@@ -95,6 +100,17 @@ class AttitudeControllerNode(Node):
             clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.add_on_set_parameters_callback(self.parameters_callback)
         self.add_post_set_parameters_callback(self.parameters_set_callback)
+
+    def _create_command_publishers(self) -> None:
+        """``torque``, or (``actuator`` ``reaction_wheels``) ``wheels/command`` and, when
+        the plant takes it, ``dipole``."""
+        def publisher(name: str) -> Any:
+            return create_publisher(self, CONTROLLER_INTERFACE.endpoint(name, 'out'))
+        drive = self.wheel_drive
+        self.torque_publisher = publisher('torque') if drive is None else None
+        self.wheels_publisher = None if drive is None else publisher('wheels/command')
+        self.dipole_publisher = (publisher('dipole') if drive is not None
+                                 and drive.answers_dipole else None)
 
     def _declare_parameters(self) -> dict[str, Any]:
         values = {parameter.name: declare_table_parameter(self, parameter)
@@ -174,9 +190,23 @@ class AttitudeControllerNode(Node):
     # -- the session's sink -----------------------------------------------------------------
 
     def torque(self, sec: int, nanosec: int, torque_body: tuple[float, float, float]) -> None:
-        """Publish ``torque`` stamped ``(sec, nanosec)`` in body_frame."""
+        """Publish ``torque`` stamped ``(sec, nanosec)`` in body_frame, or the wheels' motor
+        torques of it (and the rods' dipole) with that stamp."""
+        if self.wheel_drive is not None:
+            self.wheel_drive.answer(sec, nanosec, torque_body, self._publish_wheels,
+                                    self._publish_dipole)
+            return
+        assert self.torque_publisher is not None
         self.torque_publisher.publish(encode_wrench_stamped(
             sec * 1_000_000_000 + nanosec, self.session.body_frame, _ZERO_FORCE, torque_body))
+
+    def _publish_wheels(self, data: bytes) -> None:
+        assert self.wheels_publisher is not None
+        self.wheels_publisher.publish(data)
+
+    def _publish_dipole(self, data: bytes) -> None:
+        assert self.dipole_publisher is not None
+        self.dipole_publisher.publish(data)
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """Publish one ``/diagnostics`` status, stamped with the node clock."""

@@ -18,9 +18,11 @@ same session, so a replayed bag gives the same numbers.
   ``publish_rate``, served by the same raw-take loop (timers only); commands arrive on
   ``torque`` (WrenchStamped) and ``rotor_torque`` (Vector3Stamped) when the scene takes them.
   ``~/reset`` restores the scene's initial state. A scene with ``sensors`` also publishes its
-  simulated IMU (``sensor_msgs/msg/Imu``, :mod:`rigid_body_attitude.session.sensors`) and the
-  sensor's mount on ``/tf_static``. With ``publish_clock`` or ``lockstep`` the scene is its own
-  clock instead: a :class:`~.step_loop.StepLoop` makes the ticks on sim time (``/clock``,
+  simulated IMU, magnetometer and star tracker (``sensor_msgs/msg/Imu``,
+  ``sensor_msgs/msg/MagneticField``, ``geometry_msgs/msg/PoseWithCovarianceStamped``:
+  :mod:`rigid_body_attitude.session.sensors`) and the sensors' mounts on ``/tf_static``.
+  With ``publish_clock`` or ``lockstep`` the scene is its own clock instead: a
+  :class:`~.step_loop.StepLoop` makes the ticks on sim time (``/clock``,
   ``real_time_factor``, lockstep; docs/closed-loop.md).
 * Commands (``set_pose``, ``set_pose_with_covariance``, ``torque``, ``rotor_torque``) are
   coalesced: only the newest of each topic matters, so each callback takes every message queued

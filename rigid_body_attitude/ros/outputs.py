@@ -15,10 +15,11 @@ axis), or all zeros (REP-145: unknown) with the parameter ``covariance`` off.
 marked unknown (:data:`~rigid_body_attitude.session.uncertainty.UNKNOWN_POSITION_VARIANCE`). With
 ``publish_tf`` (:meth:`RosOutputs.enable_tf`) the attitude also goes to ``/tf`` as the transform
 ``world_frame`` -> ``body_frame`` (``tf2_msgs/msg/TFMessage``, CDR bytes too) at the output stamps,
-at most ``tf_rate`` transforms per second of stamps. A dynamics scene with a simulated IMU
-publishes its samples (:meth:`RosOutputs.simulated_imu`, ``sensor_msgs/msg/Imu`` on the
-section's topic) and its mount once on ``/tf_static`` (transient local, as tf2_ros's static
-broadcaster: late subscribers get it). Log lines go through a
+at most ``tf_rate`` transforms per second of stamps. A dynamics scene with simulated sensors
+publishes their samples (:meth:`RosOutputs.simulated_sensor`, each on the topic its section
+names; encoded by the session only when a subscription is matched,
+:meth:`RosOutputs.sensor_wanted`) and their mounts once, in one message, on ``/tf_static``
+(transient local, as tf2_ros's static broadcaster: late subscribers get it). Log lines go through a
 :class:`~.log_queue.LogQueue`: the session logs from the gyro path, which must never wait for a
 slow console.
 """
@@ -34,6 +35,7 @@ from rigid_body_attitude.msgs.cdr import (
     pose_stamped_encoder,
     pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
     transform_encoder)
+from rigid_body_attitude.msgs.sensor_encoders import encode_tf_message
 from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
 from rigid_body_attitude.ros.interface import create_publisher
 from rigid_body_attitude.ros.log_queue import LogQueue
@@ -42,6 +44,7 @@ from rigid_body_attitude.session.interface import NODE_INTERFACE, Situation
 from rigid_body_attitude.session.base import AccelerationEstimate
 from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
 from rigid_body_attitude.session.reports import DiagnosticReport
+from rigid_body_attitude.session.sensors import mount_transforms
 from rigid_body_attitude.session.uncertainty import pose_covariance
 
 __all__ = ['RawOutput', 'RosOutputs']
@@ -115,6 +118,7 @@ class RosOutputs:
         self.twist_raw = raw.get('twist', absent)
         self.energy_raw = raw.get('energy', absent)
         self.momentum_raw = raw.get('angular_momentum', absent)
+        self.wheel_state_raw = raw.get('wheels/state', absent)
         #: Row-major 3×3 ``imu/data`` orientation covariance and 6×6 ``pose_with_covariance``
         #: covariance (:meth:`attitude_covariance`).
         self.orientation_covariance: tuple[float, ...] = _UNKNOWN
@@ -133,23 +137,23 @@ class RosOutputs:
         self.tf_limiter = StampRateLimiter(0.0)
         #: Where :meth:`log` puts its lines (started by the node).
         self.log_queue = LogQueue(node.get_logger())
-        #: Simulated IMU publishers by topic (:meth:`enable_simulated_imu`).
-        self.simulated_imus: dict[str, RawOutput] = {}
+        #: Simulated sensors' publishers by topic (:meth:`enable_simulated_sensors`).
+        self.simulated_sensors: dict[str, RawOutput] = {}
 
-    def enable_simulated_imu(self, body_frame: str, sensor_frame: str,
-                             mount: Quaternion) -> None:
-        """Publish the scene's simulated IMU samples on the topic the scene names and its
-        mount (w, x, y, z) as the static transform ``body_frame`` -> ``sensor_frame`` on
-        ``/tf_static`` when the interface has it (once, stamped with the node clock)."""
+    def enable_simulated_sensors(self, body_frame: str) -> None:
+        """Publish the scene's simulated sensors' samples on the topics the scene names and,
+        when the interface has it, their mounts as static transforms ``body_frame`` ->
+        ``frame_id`` on ``/tf_static`` (one message, once, stamped with the node clock)."""
         scene = self.situation.scene
         for endpoint in NODE_INTERFACE.outputs(self.situation, ('simulated_sensor',)):
             topic = endpoint.topic(scene)
-            self.simulated_imus[topic] = RawOutput(create_publisher(self.node, endpoint, topic))
+            self.simulated_sensors[topic] = RawOutput(create_publisher(self.node, endpoint,
+                                                                       topic))
         for endpoint in NODE_INTERFACE.outputs(self.situation, ('tf_static',)):
             self.tf_static = create_publisher(self.node, endpoint)
             sec, nanosec = self.node.get_clock().now().seconds_nanoseconds()
             RawOutput(self.tf_static).publish(
-                transform_encoder(body_frame, sensor_frame)(sec, nanosec, mount))
+                encode_tf_message(sec, nanosec, mount_transforms(scene, body_frame)))
 
     def enable_tf(self, tf_rate: float) -> None:
         """Publish ``world_frame`` -> ``body_frame`` on ``/tf`` when the interface has it, at
@@ -238,11 +242,21 @@ class RosOutputs:
         if self.momentum_raw.subscription_count():
             self.momentum_raw.publish(self.encode_momentum(sec, nanosec, world_momentum))
 
-    def simulated_imu(self, topic: str, data: bytes) -> None:
-        """A simulated IMU's sample (serialized Imu) on ``topic``."""
-        output = self.simulated_imus.get(topic)
-        if output is not None and output.subscription_count():
+    def sensor_wanted(self, topic: str) -> bool:
+        """Whether ``topic``, a simulated sensor's, has a matched subscription."""
+        output = self.simulated_sensors.get(topic)
+        return output is not None and output.subscription_count() > 0
+
+    def simulated_sensor(self, topic: str, data: bytes) -> None:
+        """A simulated sensor's serialized sample on ``topic``."""
+        output = self.simulated_sensors.get(topic)
+        if output is not None:
             output.publish(data)
+
+    def wheel_state(self, data: bytes) -> None:
+        """``wheels/state`` of a dynamics tick (a serialized JointState)."""
+        if self.wheel_state_raw.subscription_count():
+            self.wheel_state_raw.publish(data)
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the node clock."""

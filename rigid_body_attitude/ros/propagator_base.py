@@ -165,9 +165,7 @@ class PropagatorMixin(Node):
         outputs.log_queue.start()
         if values['publish_tf']:
             outputs.enable_tf(values['tf_rate'])
-        if scene.imu is not None:
-            outputs.enable_simulated_imu(values['body_frame'], scene.imu.frame_id,
-                                         scene.imu.mount())
+        outputs.enable_simulated_sensors(values['body_frame'])
         self._create_inputs(parts)
         self._create_timers(parts)
         parts.reset_service = create_service(

@@ -85,9 +85,18 @@ class OutputSink(Protocol):
         its row-major 3×3 covariance [(m/s²)²], computed when called (an output that
         publishes nothing need not)."""
 
-    def simulated_imu(self, topic: str, data: bytes) -> None:
-        """A simulated IMU's sample (dynamics scenes with ``sensors``): a serialized
-        ``sensor_msgs/msg/Imu`` for the output ``topic``."""
+    def sensor_wanted(self, topic: str) -> bool:
+        """Whether a simulated sensor's sample on the output ``topic`` would reach anyone (a
+        matched subscription, a topic of the output bag): the session encodes it only then."""
+
+    def simulated_sensor(self, topic: str, data: bytes) -> None:
+        """A simulated sensor's sample (dynamics scenes with ``sensors``), serialized, for the
+        output ``topic``: its ``sensor_msgs/msg/Imu``, ``sensor_msgs/msg/MagneticField`` or
+        ``geometry_msgs/msg/PoseWithCovarianceStamped``."""
+
+    def wheel_state(self, data: bytes) -> None:
+        """A dynamics tick's reaction wheels (scenes with ``reaction_wheels``): a serialized
+        ``sensor_msgs/msg/JointState`` for ``wheels/state``, stamped like the attitude."""
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """One diagnostics report."""

@@ -41,6 +41,13 @@ CONTROLLER_PARAMETERS: tuple[Parameter, ...] = (
     Parameter('torque_limit', float, 0.0,
               'N m: each torque component clipped to +-this (0 = no limit)', 0.0, 1e12,
               read_only=False),
+    Parameter('actuator', str, 'body',
+              'what the torque drives: body (torque, WrenchStamped) or reaction_wheels (the '
+              "scene's wheel array, wheels/command: JointState efforts)",
+              choices=('body', 'reaction_wheels')),
+    Parameter('scene', str, '',
+              "the plant's scene (built-in name or file) whose reaction_wheels the controller "
+              'drives (actuator reaction_wheels)', may_be_empty=True),
     Parameter('control_period', float, 0.0,
               's: the torque is recomputed when the input stamps reach a multiple of this and '
               'held in between (0 = at every tick)', 0.0, 3600.0, read_only=False),
@@ -67,13 +74,16 @@ def controller_defaults() -> dict[str, Any]:
 def check_controller_values(values: Mapping[str, Any]) -> str:
     """Why these parameter values are unusable, or ``''`` when they are fine.
 
-    Each value against its declaration, then: distinct frames, at most one of ``target_rpy``
-    and ``target_quaternion_xyzw``, and a target quaternion of unit norm within
-    :data:`UNIT_TOLERANCE`.
+    Each value against its declaration, then: a ``scene`` with ``actuator``
+    ``reaction_wheels``, at most one of ``target_rpy`` and ``target_quaternion_xyzw``, and a
+    target quaternion of unit norm within :data:`UNIT_TOLERANCE`.
     """
     problem = values_problem(values, _BY_NAME)
     if problem:
         return problem
+    if values.get('actuator') == 'reaction_wheels' and not values.get('scene'):
+        return ('Expected parameter `scene` (the plant\'s scene, with its reaction_wheels) '
+                'with `actuator` reaction_wheels, got none')
     if values.get('target_rpy') and values.get('target_quaternion_xyzw'):
         return ('Expected at most one of `target_rpy` and `target_quaternion_xyzw`, got both: '
                 f'{list(values["target_rpy"])} and {list(values["target_quaternion_xyzw"])}')

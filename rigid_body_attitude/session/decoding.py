@@ -13,7 +13,8 @@ decoders of :mod:`rigid_body_attitude.msgs.decoders`; imports no rclpy and no ba
 Each value decoder returns ``(sec, nanosec, frame_id, first, second)``: the header stamp as
 sent (not normalised: the session judges it) and frame, and the message's values (force and
 torque; a vector; attitude (w, x, y, z) and position, or attitude and (position,
-covariance)). A rate decoder returns ``(sec, nanosec, frame_id, rate, accel)``
+covariance); a JointState's names and (position, velocity, effort)). A rate decoder returns
+``(sec, nanosec, frame_id, rate, accel)``
 (:data:`~rigid_body_attitude.msgs.decoders.RateSample`); the handler adds an Imu's own bytes
 (for ``imu/data``). Bytes that are not a valid message of the topic's type raise one of
 :data:`MALFORMED`; the handler hands them to
@@ -29,6 +30,7 @@ from rigid_body_attitude.msgs.decoders import (
     RATE_DECODERS, RateDecoder, decode_magnetic_field, decode_pose_stamped,
     decode_pose_with_covariance_stamped, decode_vector3_stamped, decode_wrench_stamped)
 from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.joint_state import decode_joint_state, JOINT_STATE
 from rigid_body_attitude.msgs.types import (
     IMU, MAGNETIC_FIELD, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED, VECTOR3_STAMPED,
     WRENCH_STAMPED)
@@ -85,10 +87,18 @@ def magnetic_field(data: bytes) -> Decoded:
     return decode_magnetic_field(data)
 
 
+def joint_state(data: bytes) -> Decoded:
+    """JointState: the names and the (position, velocity, effort) fields."""
+    values = decode_joint_state(data)
+    return (values.sec, values.nanosec, values.frame_id, values.names,
+            (values.position, values.velocity, values.effort))
+
+
 #: Decoders of the inputs other than the gyro topics, by message type.
 VALUE_DECODERS: dict[str, Callable[[bytes], Decoded]] = {
     WRENCH_STAMPED: wrench, VECTOR3_STAMPED: vector, POSE_STAMPED: pose,
     POSE_WITH_COVARIANCE_STAMPED: pose_with_covariance, MAGNETIC_FIELD: magnetic_field,
+    JOINT_STATE: joint_state,
 }
 
 
@@ -177,5 +187,10 @@ def _delivery(session: AnySession, endpoint: Endpoint) -> Callable[[Decoded], ob
         return lambda values: session.wrench(values[0], values[1], values[3], values[4])
     if quantity == 'rotor_torque':
         return lambda values: session.rotor_torque(values[0], values[1], values[3])
+    if quantity == 'dipole':
+        return lambda values: session.dipole(values[0], values[1], values[3])
+    if quantity == 'wheel_command':
+        return lambda values: session.wheel_command(values[0], values[1], values[3],
+                                                    *values[4])
     raise ValueError(f'Expected an input the session takes, got {endpoint.name!r} '
                      f'({quantity!r})')

@@ -24,6 +24,7 @@ from typing import Any
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.yaml_files import quote
+from rigid_body_attitude.msgs.joint_state import JOINT_STATE
 from rigid_body_attitude.msgs.tf_message import TF_MESSAGE
 from rigid_body_attitude.msgs.types import (
     ACCEL_WITH_COVARIANCE_STAMPED, CLOCK, DIAGNOSTIC_ARRAY, FLOAT64, IMU, MAGNETIC_FIELD,
@@ -102,6 +103,10 @@ def _always(situation: Situation) -> bool:
 #: The scene keys that name an endpoint (:attr:`Endpoint.named_by`) → the name they give.
 _SCENE_NAMES: dict[str, Callable[[Scene], str]] = {
     'sensors.imu.topic': lambda scene: scene.imu.topic if scene.imu is not None else '',
+    'sensors.magnetometer.topic': lambda scene: (
+        scene.magnetometer.topic if scene.magnetometer is not None else ''),
+    'sensors.star_tracker.topic': lambda scene: (
+        scene.star_tracker.topic if scene.star_tracker is not None else ''),
 }
 
 
@@ -120,7 +125,8 @@ class Endpoint:
             ``reset`` (coalesced), ``transforms``; outputs: ``output``, ``diagnostics``,
             ``clock``, ``tf``, ``tf_static``, ``simulated_sensor``; ``service``.
         quantity: what an input carries for the session (``angular_rate``, ``wrench``,
-            ``rotor_torque``, ``pose``, ``pose_with_covariance``, ``transforms``;
+            ``rotor_torque``, ``wheel_command``, ``dipole``, ``pose``,
+            ``pose_with_covariance``, ``transforms``;
             the controller's ``attitude``, ``twist``, ``target``); ``''`` for outputs.
         when: when it exists, in words (the README's).
         meaning: what it carries, one line.
@@ -231,10 +237,15 @@ def _estimating(update: str) -> Callable[[Situation], bool]:
     return present
 
 
-def _mounted_simulated_imu(situation: Situation) -> bool:
-    """A simulated IMU in a frame other than ``body_frame``."""
-    imu = situation.scene.imu
-    return imu is not None and imu.frame_id != situation.values.get('body_frame')
+def _mounted_simulated_sensor(situation: Situation) -> bool:
+    """A simulated sensor in a frame other than ``body_frame``."""
+    return any(spec.frame_id != situation.values.get('body_frame')
+               for _, spec in situation.scene.sensors.items())
+
+
+def _has_wheels(situation: Situation) -> bool:
+    """The scene has a reaction-wheel array."""
+    return any(name == 'reaction_wheels' for name, _ in situation.scene.effects)
 
 
 _PER_OUTPUT = 'every gyro sample / every tick'
@@ -258,6 +269,17 @@ NODE_INTERFACE = Interface((
              'scenes with a commanded `rotor`', "the rotor's motor torque [N m]",
              quantity='rotor_torque', kinds=(DYNAMICS,), condition=_takes('rotor_torque'),
              qos_overrides=True, replayed=True),
+    Endpoint('wheels/command', JOINT_STATE, _IN, 'command', 'command',
+             'scenes with commanded `reaction_wheels`',
+             'one per array: `name` every wheel, `effort` motor torques [N m] or `velocity` '
+             'speeds [rad/s]', quantity='wheel_command', kinds=(DYNAMICS,),
+             condition=_takes('wheel_torque', 'wheel_speed'), qos_overrides=True,
+             replayed=True),
+    Endpoint('dipole', VECTOR3_STAMPED, _IN, 'command', 'command',
+             'scenes with commanded `magnetorquers`',
+             "the torque rods' dipole [A m²], body axes", quantity='dipole',
+             kinds=(DYNAMICS,), condition=_takes('dipole'), qos_overrides=True,
+             replayed=True),
     Endpoint('set_pose', POSE_STAMPED, _IN, 'command', 'reset', 'always',
              're-initialises the attitude (and position), `world_frame`', quantity='pose',
              qos_overrides=True, replayed=True),
@@ -307,12 +329,28 @@ NODE_INTERFACE = Interface((
     Endpoint('angular_momentum', VECTOR3_STAMPED, _OUT, 'output', 'output',
              'dynamics scenes, every tick', 'the angular momentum [N m s], `world_frame`',
              kinds=(DYNAMICS,), qos_overrides=True, replayed=True),
+    Endpoint('wheels/state', JOINT_STATE, _OUT, 'output', 'output',
+             'scenes with `reaction_wheels`, every tick',
+             'per wheel: angle [rad], speed [rad/s] relative to the body, motor torque [N m]',
+             kinds=(DYNAMICS,), condition=_has_wheels, qos_overrides=True, replayed=True),
     Endpoint('imu', IMU, _OUT, 'output', 'simulated_sensor',
-             'dynamics scenes with a `sensors:` section, at its rate',
+             'dynamics scenes with `sensors.imu`, at its rate',
              'the simulated IMU, sensor frame, stamped with the sample time, REP-145 '
              'covariances', kinds=(DYNAMICS,),
              condition=lambda situation: situation.scene.imu is not None,
              qos_overrides=True, replayed=True, named_by='sensors.imu.topic'),
+    Endpoint('imu/mag', MAGNETIC_FIELD, _OUT, 'output', 'simulated_sensor',
+             'dynamics scenes with `sensors.magnetometer`, at its rate',
+             'the simulated magnetometer [T], sensor frame, stamped with the sample time, its '
+             'white-noise covariance', kinds=(DYNAMICS,),
+             condition=lambda situation: situation.scene.magnetometer is not None,
+             qos_overrides=True, replayed=True, named_by='sensors.magnetometer.topic'),
+    Endpoint('star_tracker', POSE_WITH_COVARIANCE_STAMPED, _OUT, 'output', 'simulated_sensor',
+             'dynamics scenes with `sensors.star_tracker`, at its rate',
+             "the measured attitude of the body, `world_frame`, stamped with the sample time, "
+             'its covariance about world axes (position marked unknown)', kinds=(DYNAMICS,),
+             condition=lambda situation: situation.scene.star_tracker is not None,
+             qos_overrides=True, replayed=True, named_by='sensors.star_tracker.topic'),
     Endpoint('/diagnostics', DIAGNOSTIC_ARRAY, _OUT, 'output', 'diagnostics',
              'once a second', 'rates, counts, rejections by reason, the status and why',
              replayed=True),
@@ -323,8 +361,9 @@ NODE_INTERFACE = Interface((
              '`world_frame` -> `body_frame`, at most `tf_rate` per second of stamps',
              condition=_parameter('publish_tf')),
     Endpoint('/tf_static', TF_MESSAGE, _OUT, 'tf_static', 'tf_static',
-             'dynamics scenes with a simulated IMU', 'its mount `body_frame` -> `frame_id`, once',
-             kinds=(DYNAMICS,), condition=_mounted_simulated_imu),
+             'dynamics scenes with a sensor frame other than `body_frame`',
+             'their mounts `body_frame` -> `frame_id`, one message, once',
+             kinds=(DYNAMICS,), condition=_mounted_simulated_sensor, replayed=True),
     Endpoint('~/reset', TRIGGER, 'service', 'service', 'service', 'always',
              "back to the scene's initial state"),
 ))
@@ -337,8 +376,16 @@ CONTROLLER_INTERFACE = Interface((
              "the plant's body rate (the angular part), `body_frame`", quantity='twist'),
     Endpoint('target', QUATERNION_STAMPED, _IN, 'command', 'sensor', 'always',
              'a new target attitude, `world_frame`', quantity='target'),
-    Endpoint('torque', WRENCH_STAMPED, _OUT, 'latched_output', 'output', 'every tick answered',
+    Endpoint('torque', WRENCH_STAMPED, _OUT, 'latched_output', 'output',
+             '`actuator` `body` (default), every tick answered',
              'the torque, stamped like the tick it answers, `body_frame`, zero force'),
+    Endpoint('wheels/command', JOINT_STATE, _OUT, 'latched_output', 'output',
+             '`actuator` `reaction_wheels`, every tick answered',
+             "the scene's wheels (`name`) and their motor torques [N m] (`effort`), stamped "
+             'like the tick it answers'),
+    Endpoint('dipole', VECTOR3_STAMPED, _OUT, 'latched_output', 'output',
+             '`actuator` `reaction_wheels`, a scene with commanded `magnetorquers`',
+             'a zero dipole [A m²], `body_frame`, stamped like the tick it answers'),
     Endpoint('/diagnostics', DIAGNOSTIC_ARRAY, _OUT, 'output', 'diagnostics', 'once a second',
              'pointing error, counts, rejections by reason, the status and why'),
 ))
@@ -363,9 +410,9 @@ def qos_markdown_table() -> str:
 
 
 def check_scene_topics(scene: Scene) -> None:
-    """A topic named by ``scene`` (a simulated IMU's) may be none of the node's own topics in a
-    dynamics scene (relative, or the absolute ones without their slash); SceneError naming the
-    key otherwise."""
+    """A topic named by ``scene`` (a simulated sensor's) may be none of the node's own topics
+    in a dynamics scene (relative, or the absolute ones without their slash); SceneError naming
+    the key otherwise."""
     reserved = tuple(dict.fromkeys(
         endpoint.name.lstrip('/') for endpoint in NODE_INTERFACE
         if DYNAMICS in endpoint.kinds and not endpoint.named_by

@@ -179,7 +179,8 @@ PARAMETERS: tuple[Parameter, ...] = (
               'rad/s: a gyro sample of a larger magnitude is rejected (out_of_range)', 0.0,
               1.0e6, low_open=True, read_only=False),
     Parameter('torque_timeout', float, 0.0,
-              's: commands (torque, force, rotor torque) are held this long, then zeroed '
+              's: commands (torque, force, rotor torque, wheels, dipole) are held this long, '
+              'then zeroed '
               '(0 = the scene\'s)', 0.0, 3600.0),
     Parameter('integrator', str, '',
               'integrator (dynamics) or strapdown method (gyro) overriding the scene\'s '

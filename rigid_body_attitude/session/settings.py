@@ -17,6 +17,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from rigid_body_attitude.core.dynamics.scene import Scene, load_scene
+from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
@@ -31,7 +32,8 @@ NODE_NAME = 'attitude_propagator'
 #: Seconds between diagnostics messages.
 DIAGNOSTICS_PERIOD = 1.0
 #: Effects whose ``timeout`` the ``torque_timeout`` parameter overrides.
-COMMAND_EFFECTS = ('commanded_torque', 'commanded_force', 'rotor')
+COMMAND_EFFECTS = ('commanded_torque', 'commanded_force', 'rotor', 'reaction_wheels',
+                   'magnetorquers')
 
 #: A session of either rate source (what :func:`open_session` returns).
 AnySession = GyroSession | DynamicsSession
@@ -54,7 +56,12 @@ def load_node_scene(scene: str, integrator: str = '', step: float = 0.0,
     loaded = load_scene(scene).with_overrides(
         integrator=integrator, step=step,
         effect_parameters={name: held for name in COMMAND_EFFECTS} if held else None)
-    check_scene_topics(loaded)
+    try:
+        check_scene_topics(loaded)
+    except SceneError as err:
+        if not loaded.source:
+            raise
+        raise SceneError(f'Scene file {loaded.source!r}: {err}') from err
     return loaded
 
 

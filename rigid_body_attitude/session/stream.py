@@ -313,31 +313,43 @@ class CommandStream(_Counting):
         self.tick_ns: int | None = None
 
     def check(self, value: Sequence[float]) -> str:
-        """The rejection reason of a command value, or ``''``."""
-        vector = _vector(value)
-        if vector is None:
-            return 'non_finite'
-        x, y, z = vector
-        if x * x + y * y + z * z > COMMAND_LIMIT * COMMAND_LIMIT:
+        """The rejection reason of a command value (3 numbers, or one per wheel), or ``''``."""
+        if len(value) == 3:
+            vector = _vector(value)
+            if vector is None:
+                return 'non_finite'
+            x, y, z = vector
+            square = x * x + y * y + z * z
+        else:
+            try:
+                values = [float(item) for item in value]
+            except (TypeError, ValueError):
+                return 'non_finite'
+            if not all(math.isfinite(item) for item in values):
+                return 'non_finite'
+            square = sum(item * item for item in values)
+        if square > COMMAND_LIMIT * COMMAND_LIMIT:
             return 'out_of_range'
         return ''
 
     def add(self, input_name: str, stamp_ns: int, time_s: float,
-            value: Sequence[float]) -> Outcome:
+            value: Sequence[float], key: str = '') -> Outcome:
         """Process one command ``value`` for ``input_name`` stamped ``stamp_ns`` (``time_s``
-        on the propagator's time axis)."""
+        on the propagator's time axis); ``key``: the topic whose stamps are kept, when one
+        topic carries several inputs (a wheel array's torques or speeds)."""
         reason = self.check(value)
         if reason:
             return self._reject(reason)
-        if stamp_ns < self.last_ns.get(input_name, stamp_ns):
+        key = key or input_name
+        if stamp_ns < self.last_ns.get(key, stamp_ns):
             return self._reject('stale_stamp')
         tick_ns = self.tick_ns
         if tick_ns is not None and stamp_ns != tick_ns:
             return self._reject('future_stamp' if stamp_ns > tick_ns else 'stale_stamp')
-        if tick_ns is not None and self.last_ns.get(input_name) == tick_ns:
+        if tick_ns is not None and self.last_ns.get(key) == tick_ns:
             return self._reject('stale_stamp')  # a second answer to the same tick
         self.propagator.command(input_name, time_s, value)
-        self.last_ns[input_name] = stamp_ns
+        self.last_ns[key] = stamp_ns
         return self._accept(_BASELINE)
 
     def reset(self) -> None:
@@ -361,7 +373,7 @@ class ClockDriver(_Counting):
         self.started = False
         self.resuming = False
         #: Integrates up to a time [s]: the propagator's ``advance_to``, or a simulated
-        #: sensor's (:class:`~rigid_body_attitude.session.sensors.ImuSampler`) that samples
+        #: sensors' (:class:`~rigid_body_attitude.session.sensors.SensorSampler`) that samples
         #: on the way.
         self.advance: Callable[[float], int] = propagator.advance_to
 

@@ -157,7 +157,14 @@ class _SeriesSink:
     def invariants(self, *args: Any) -> None:
         """Nothing: a gyro scene."""
 
-    def simulated_imu(self, topic: str, data: bytes) -> None:
+    def sensor_wanted(self, topic: str) -> bool:
+        """No simulated sensor: a gyro scene."""
+        return False
+
+    def simulated_sensor(self, topic: str, data: bytes) -> None:
+        """Nothing: a gyro scene."""
+
+    def wheel_state(self, data: bytes) -> None:
         """Nothing: a gyro scene."""
 
     def diagnostics(self, report: DiagnosticReport) -> None:

@@ -24,7 +24,7 @@ from launch_checks import command_line, problems, static_transform
 from launch_files import LaunchedNode, LaunchFile, read_launch_file
 from lifecycle_msgs.msg import State, Transition
 import numpy as np
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from ros_helpers import Harness, unique_namespace
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
@@ -82,7 +82,11 @@ def test_closed_loop_runs_in_lockstep_on_the_sim_clock(ros, request, processes, 
     harness = Harness(ros, namespace)
     clock = harness.record(Clock, '/clock', QoSProfile(
         depth=10, reliability=ReliabilityPolicy.RELIABLE))
-    torques = harness.record(WrenchStamped, 'torque')
+    # The controller's torque writer is transient local: its whole history reaches a reader
+    # that matches late (the loop runs as fast as the two processes allow).
+    torques = harness.record(WrenchStamped, 'torque', QoSProfile(
+        depth=5000, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL))
     plant, controller = launch.nodes
     node_process = start(plant, tmp_path, processes)
     controller_process = start(controller, tmp_path, processes)
@@ -91,6 +95,7 @@ def test_closed_loop_runs_in_lockstep_on_the_sim_clock(ros, request, processes, 
         assert harness.spin_until(
             lambda: bool(clock) and seconds(clock[-1].clock) >= 2.0, timeout=60.0), (
             f'sim time {seconds(clock[-1].clock) if clock else None}')
+        assert harness.spin_until(lambda: len(torques) >= 200, timeout=30.0), len(torques)
     finally:
         node_stderr = stopped(node_process)
         stopped(controller_process)

@@ -12,6 +12,9 @@ while the attitude ends where the good stream alone takes it. A new input gets t
 treatment by adding one entry. The issue-sized cases (a 200 Hz stream behind a foreign frame
 or thousands of junk transforms, 4 MB frame ids) run against the installed node in a process
 of its own, whose log and resident memory are measured.
+
+A scene's ``sensors`` sections are given at start: each hostile one in
+:data:`SENSOR_SECTIONS` must stop the node with one short error line that names the key.
 """
 
 from __future__ import annotations
@@ -37,16 +40,20 @@ from rclpy.qos import (
 from rclpy.serialization import serialize_message
 from ros_helpers import Harness, stamp, unique_namespace
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu, MagneticField
+from sensor_msgs.msg import Imu, JointState, MagneticField
 from tf2_msgs.msg import TFMessage
 from test_input_qos import connect, missing_stamps, receive_all, RECORD_QOS
 from test_input_qos import start_node as start_node_process
-from test_node_subprocess import stop_with_sigint
+from test_node_subprocess import start as start_installed, stop_with_sigint
+import yaml
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
+from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
+from rigid_body_attitude.msgs.joint_state import joint_state_encoder
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
+from rigid_body_attitude.ros.serve import error_text
 from rigid_body_attitude.core.attitude.quaternion import from_rpy
 
 
@@ -152,6 +159,8 @@ def _exp(rotation_vector: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize('scene, topic, message_type', [
     ('commanded_torque', 'torque', WrenchStamped),
     ('gyrostat', 'rotor_torque', Vector3Stamped),
+    ('wheel_slew_commanded', 'wheels/command', JointState),
+    ('wheel_slew_commanded', 'dipole', Vector3Stamped),
 ])
 def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, message_type):
     """On sim time: a node fed only malformed commands ticks exactly like one fed nothing."""
@@ -166,7 +175,11 @@ def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, mess
         if role == 'hostile':
             good = message_type()
             good.header.stamp = stamp(BASE_NS)
-            for payload in malformed_variants(serialize_message(good)):
+            good_bytes = serialize_message(good)
+            if message_type is JointState:  # exactly the message (rclpy pads after it)
+                good_bytes = joint_state_encoder('', ['wheel_a'])(
+                    good.header.stamp.sec, good.header.stamp.nanosec, (), (), (0.01,))
+            for payload in malformed_variants(good_bytes):
                 send(harness, node, topic, payload)
             assert node.built.session.malformed_by_topic == {topic: 10}
         for k in range(1, 6):
@@ -176,6 +189,93 @@ def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, mess
             assert harness.spin_until(lambda: len(poses) >= k, 5.0)
         outputs[role] = [(m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z)
                          for m in poses[:5]]
+        ros.executor.remove_node(node)
+        node.destroy_node()
+    assert outputs['hostile'] == outputs['quiet']
+
+
+WHEELS = ['wheel_a', 'wheel_b', 'wheel_c', 'wheel_d']
+
+
+SIM_NS = 1000 * 10**9  # the sim clock's ticks: 1000 s + k 50 ms
+
+
+def joint_state(names, position=(), velocity=(), effort=()) -> JointState:
+    message = JointState()
+    message.header.stamp = stamp(SIM_NS)
+    message.name = list(names)
+    message.position, message.velocity, message.effort = (
+        list(position), list(velocity), list(effort))
+    return message
+
+
+def dipole(vector) -> Vector3Stamped:
+    message = Vector3Stamped()
+    message.header.stamp = stamp(SIM_NS)
+    message.header.frame_id = 'base_link'
+    message.vector.x, message.vector.y, message.vector.z = vector
+    return message
+
+
+#: (topic, message, the reason it is counted under): decodable commands the node refuses.
+HOSTILE_ACTUATOR_COMMANDS = [
+    ('wheels/command', joint_state(WHEELS[:3] + ['wheel_x'], effort=[0.01] * 4),
+     'unknown_wheel'),
+    ('wheels/command', joint_state(WHEELS[:2] + WHEELS[:2], effort=[0.01] * 4),
+     'unknown_wheel'),
+    ('wheels/command', joint_state(['x' * 200] * 1000, effort=[0.01] * 1000), 'unknown_wheel'),
+    ('wheels/command', joint_state(WHEELS[:3], effort=[0.01] * 3), 'missing_wheel'),
+    ('wheels/command', joint_state([], effort=[]), 'missing_wheel'),
+    ('wheels/command', joint_state(WHEELS, velocity=[1.0] * 4, effort=[0.01] * 4),
+     'wheel_fields'),
+    ('wheels/command', joint_state(WHEELS), 'wheel_fields'),
+    ('wheels/command', joint_state(WHEELS, position=[0.0] * 4, effort=[0.01] * 4),
+     'wheel_fields'),
+    ('wheels/command', joint_state(WHEELS, effort=[0.01] * 3), 'wheel_lengths'),
+    ('wheels/command', joint_state(WHEELS, velocity=[1.0] * 1000), 'wheel_lengths'),
+    ('wheels/command', joint_state(WHEELS, effort=[math.nan, 0.0, 0.0, 0.0]), 'non_finite'),
+    ('wheels/command', joint_state(WHEELS, velocity=[math.inf, 0.0, 0.0, 0.0]), 'non_finite'),
+    ('wheels/command', joint_state(WHEELS, effort=[1e13, 0.0, 0.0, 0.0]), 'out_of_range'),
+    ('wheels/command', joint_state(WHEELS, velocity=[-1e300] * 4), 'out_of_range'),
+    ('dipole', dipole((math.nan, 0.0, 0.0)), 'non_finite'),
+    ('dipole', dipole((0.0, 1e13, 0.0)), 'out_of_range'),
+    ('dipole', dipole((-1e308, 1e308, 1e308)), 'out_of_range'),
+]
+
+
+def test_hostile_wheel_and_dipole_commands_are_counted_and_change_nothing(ros, request):
+    """On sim time: a node sent every refused command ticks exactly like one sent nothing,
+    its attitude and its wheels alike, and counts each by its reason."""
+    outputs = {}
+    for role in ('hostile', 'quiet'):
+        harness = Harness(ros, unique_namespace(request) + '_' + role)
+        node = start_node(harness, scene='wheel_slew_commanded', use_sim_time=True)
+        harness.publisher(Clock, '/clock')
+        harness.publisher(JointState, 'wheels/command')
+        harness.publisher(Vector3Stamped, 'dipole')
+        poses = harness.record(QuaternionStamped, 'orientation')
+        wheels = harness.record(JointState, 'wheels/state')
+        harness.wait_for_connections()
+        if role == 'hostile':
+            for topic, payload, _ in HOSTILE_ACTUATOR_COMMANDS:
+                send(harness, node, topic, payload)
+            counts = node.built.session.rejection_counts()
+            expected: dict[str, int] = {}
+            for _, _, reason in HOSTILE_ACTUATOR_COMMANDS:
+                expected[reason] = expected.get(reason, 0) + 1
+            assert {reason: counts[reason] for reason in expected} == expected
+            assert node.built.session.commands_accepted == 0
+        for k in range(1, 6):
+            clock = Clock()
+            clock.clock = stamp(SIM_NS + k * 50 * MS)
+            harness.publishers['/clock'].publish(clock)
+            assert harness.spin_until(lambda: len(poses) >= k and len(wheels) >= k, 5.0)
+        outputs[role] = ([(m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z)
+                          for m in poses[:5]],
+                         [(tuple(m.velocity), tuple(m.effort)) for m in wheels[:5]])
+        if role == 'hostile':
+            report = node.built.session.report()
+            assert 'unknown_wheel' in report.message and 'wheel_fields' in report.message
         ros.executor.remove_node(node)
         node.destroy_node()
     assert outputs['hostile'] == outputs['quiet']
@@ -486,6 +586,104 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
         assert np.max(np.abs(q - _exp((good - 1) * 1e-3 * np.array(OMEGA)))) <= 1e-14
     assert lines and max(len(line) for line in lines) < 600
     assert not any('\x1b' in line or '\n' in line for line in lines)
+
+
+# -- the scene's sensors sections: refused at start ----------------------------------------------
+
+_MAGNETOMETER = {'rate': 100.0, 'noise_density': 1e-8, 'intensity': 5e-5}
+
+
+def _magnetometer(**keys: Any) -> dict[str, Any]:
+    return {'sensors': {'magnetometer': {**_MAGNETOMETER, **keys}}}
+
+
+def _star_tracker(**keys: Any) -> dict[str, Any]:
+    return {'sensors': {'star_tracker': {'rate': 10.0, **keys}}}
+
+
+#: Hostile ``sensors`` (and ``sun``) sections of a dynamics scene, one key each (the cases of
+#: studies/hostile_inputs.py's ``sensors sections``) → what the one error line must name.
+SENSOR_SECTIONS: dict[str, tuple[dict[str, Any], str]] = {
+    'magnetometer rate 1e308': (_magnetometer(rate=1e308), 'sensors.magnetometer.rate'),
+    'magnetometer noise density NaN': (_magnetometer(noise_density=math.nan),
+                                       'sensors.magnetometer.noise_density'),
+    'magnetometer without a field': ({'sensors': {'magnetometer': {
+        'rate': 100.0, 'noise_density': 1e-8}}}, 'sensors.magnetometer needs the local field'),
+    'magnetometer soft iron singular': (_magnetometer(soft_iron=[[1, 0, 0], [0, 1, 0],
+                                                                 [0, 0, 0]]),
+                                        'sensors.magnetometer.soft_iron'),
+    'magnetometer soft iron mirrored': (_magnetometer(soft_iron=[[-1, 0, 0], [0, 1, 0],
+                                                                 [0, 0, 1]]),
+                                        'sensors.magnetometer.soft_iron'),
+    'magnetometer hard iron 1e308': (_magnetometer(hard_iron=[1e308, 0, 0]),
+                                     'sensors.magnetometer.hard_iron'),
+    "magnetometer on the node's own topic": (_magnetometer(topic='pose'),
+                                             'sensors.magnetometer.topic'),
+    'magnetometer topic of 5000 characters': (_magnetometer(topic='x' * 5000),
+                                              'sensors.magnetometer.topic'),
+    'magnetometer frame with escape sequences': (_magnetometer(frame_id='\x1b[2J\x07'),
+                                                 'sensors.magnetometer.frame_id'),
+    'magnetometer unknown key': (_magnetometer(noise=1.0), "'noise' in sensors.magnetometer"),
+    'magnetometer seed 2^63': (_magnetometer(seed=2**63), 'sensors.magnetometer.seed'),
+    'star tracker rate 1e4': (_star_tracker(rate=1e4), 'sensors.star_tracker.rate'),
+    'star tracker period off the step': (_star_tracker(rate=300.0),
+                                         'sensors.star_tracker.rate'),
+    'star tracker zero boresight': (_star_tracker(boresight=[0, 0, 0]),
+                                    'sensors.star_tracker.boresight'),
+    'star tracker boresight and mount': (_star_tracker(boresight=[1, 0, 0], mount_rpy=[0, 0, 1]),
+                                         'sensors.star_tracker takes mount_rpy or boresight'),
+    'star tracker zero noise': (_star_tracker(cross_boresight_noise=0.0),
+                                'sensors.star_tracker.cross_boresight_noise'),
+    'star tracker Sun exclusion without a Sun': (_star_tracker(sun_exclusion_angle=0.5),
+                                                 'sensors.star_tracker.sun_exclusion_angle'),
+    'star tracker section a list': ({'sensors': {'star_tracker': [1, 2, 3]}},
+                                    'sensors.star_tracker to be a mapping'),
+    'two sensors on one topic': ({'sensors': {'magnetometer': {**_MAGNETOMETER, 'topic': 'att'},
+                                              'star_tracker': {'rate': 10.0, 'topic': 'att'}}},
+                                 'sensors.star_tracker.topic'),
+    'one frame, two mounts': ({'sensors': {
+        'magnetometer': {**_MAGNETOMETER, 'frame_id': 'f'},
+        'star_tracker': {'rate': 10.0, 'frame_id': 'f', 'boresight': [1, 0, 0]}}},
+        "name the same frame_id 'f'"),
+    'zero Sun direction': ({**_star_tracker(sun_exclusion_angle=0.5),
+                            'sun': {'direction': [0, 0, 0]}}, 'sun.direction'),
+    'sensors in a gyro scene': ({'rate_source': 'gyro', **_magnetometer()},
+                                'simulated sensors need a dynamics scene'),
+}
+
+
+def sensed_scene(path: Path, section: dict[str, Any]) -> str:
+    path.write_text(yaml.safe_dump({'rate_source': 'dynamics', 'step': 0.001,
+                                    'body': {'inertia': {'moments': [1, 2, 3]}}, **section}))
+    return str(path)
+
+
+@pytest.mark.parametrize('name', SENSOR_SECTIONS)
+def test_a_hostile_sensors_section_is_refused_in_one_line_naming_the_key(
+        ros, request, name, tmp_path):
+    """The node in this process refuses the scene: one SceneError, its first line all there
+    is, at most 600 characters, without control characters, naming the key."""
+    section, key = SENSOR_SECTIONS[name]
+    path = sensed_scene(tmp_path / 'sensed.yaml', section)
+    harness = Harness(ros, unique_namespace(request))
+    with pytest.raises(SceneError) as refused:
+        start_node(harness, scene=path)
+    text = str(refused.value)
+    assert error_text(refused.value) == text and len(text) <= 600, text
+    assert text.startswith(f'Scene file {path!r}: ') and key in text, text
+    assert not any(ord(character) < 32 for character in text), text
+
+
+def test_the_installed_node_gives_one_error_line_for_a_hostile_sensors_section(processes,
+                                                                               tmp_path):
+    section, key = SENSOR_SECTIONS['magnetometer frame with escape sequences']
+    process = start_installed('--ros-args', '-p',
+                              f'scene:={sensed_scene(tmp_path / "sensed.yaml", section)}')
+    processes.append(process)
+    _, stderr = process.communicate(timeout=30.0)
+    assert process.returncode == 2
+    assert stderr.startswith('error: Scene file ') and key in stderr
+    assert stderr.count('\n') == 1 and '\x1b' not in stderr and 'Traceback' not in stderr
 
 
 # -- the installed node in a process of its own -------------------------------------------------

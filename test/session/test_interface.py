@@ -1,6 +1,6 @@
 """The nodes' interface table (session/interface.py): which endpoints a scene has, every input's
 decoder found by its type, the README's and docs/closed-loop.md's topic tables equal to the
-table's rendering, and a simulated IMU's topic never one of the node's own."""
+table's rendering, and a simulated sensor's topic never one of the node's own."""
 
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ import pytest
 
 from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
 from rigid_body_attitude.core.errors import SceneError
-from rigid_body_attitude.msgs.types import IMU, TWIST_STAMPED, VECTOR3_STAMPED
+from rigid_body_attitude.msgs.types import (
+    IMU, MAGNETIC_FIELD, POSE_WITH_COVARIANCE_STAMPED, TWIST_STAMPED, VECTOR3_STAMPED)
 from rigid_body_attitude.session.decoding import decoder
 from rigid_body_attitude.session.interface import (
     CONTROLLER_INTERFACE, NODE_INTERFACE, QOS_PROFILES, Situation, check_scene_topics,
@@ -136,3 +137,30 @@ def test_other_names_are_taken(topic):
     scene = dynamics_scene({'imu': {'rate': 200.0, 'topic': topic}})
     check_scene_topics(scene)
     assert scene.imu.topic == topic
+
+
+MAGNETOMETER = {'rate': 100.0, 'noise_density': 1e-8, 'intensity': 5e-5}
+
+
+def test_each_simulated_sensor_is_an_output_on_the_topic_its_section_names():
+    scene = dynamics_scene({'imu': {'rate': 200.0, 'frame_id': 'base_link'},
+                            'magnetometer': {**MAGNETOMETER, 'topic': 'sim/mag',
+                                             'frame_id': 'base_link'},
+                            'star_tracker': {'rate': 5.0, 'frame_id': 'base_link'}})
+    situation = Situation(scene, defaults(), frozenset({'torque'}))
+    sensors = NODE_INTERFACE.outputs(situation, ('simulated_sensor',))
+    assert [(e.topic(scene), e.type) for e in sensors] == [
+        ('imu', IMU), ('sim/mag', MAGNETIC_FIELD), ('star_tracker', POSE_WITH_COVARIANCE_STAMPED)]
+    # every frame is the body's: no mount to publish; one frame off the body: /tf_static
+    assert names(NODE_INTERFACE.outputs(situation, ('tf_static',))) == []
+    moved = dynamics_scene({'star_tracker': {'rate': 5.0, 'frame_id': 'st'}})
+    assert names(NODE_INTERFACE.outputs(Situation(moved, defaults()), ('tf_static',))) == [
+        '/tf_static']
+
+
+@pytest.mark.parametrize('sensor, section', [('magnetometer', MAGNETOMETER),
+                                             ('star_tracker', {'rate': 5.0})])
+def test_a_magnetometer_or_star_tracker_on_a_topic_of_the_node_is_refused(sensor, section):
+    with pytest.raises(SceneError, match=f"sensors.{sensor}.topic to be none of the node's own "
+                                         f"topics .*, got 'twist'"):
+        check_scene_topics(dynamics_scene({sensor: {**section, 'topic': 'twist'}}))

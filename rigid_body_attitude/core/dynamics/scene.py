@@ -454,7 +454,8 @@ GRAVITY_EFFECTS = ('uniform_gravity', 'gravity_about_pivot')
 def _check_sensors(scene: Scene) -> None:
     """Simulated sensors: dynamics scenes only, each period a whole number of steps; the
     IMU's ``gravity`` only where no effect gives it (and the body does not translate); the
-    magnetometer's field given; a Sun for the star tracker's exclusion angle."""
+    magnetometer's field given once (the scene's field model or the section's local field);
+    a Sun for the star tracker's exclusion angle."""
     sensors = list(scene.sensors.items())
     if not sensors:
         return
@@ -474,9 +475,15 @@ def _check_sensors(scene: Scene) -> None:
         raise SceneError(f'sensors.imu.gravity is for a body held in place without gravity '
                          f'effects; scene {quote(scene.name)} has {given_by[0]!r} (the '
                          f'accelerometer takes the gravity of its effects)')
-    if magnetometer is not None and magnetometer.intensity is None:
+    if magnetometer is not None and magnetometer.intensity is None and (
+            scene.magnetic_field is None):
         raise SceneError('sensors.magnetometer needs the local field: intensity [T], '
-                         'inclination and declination [rad]')
+                         'inclination and declination [rad], or the scene\'s magnetic_field '
+                         'section')
+    if magnetometer is not None and magnetometer.intensity is not None and (
+            scene.magnetic_field is not None):
+        raise SceneError('sensors.magnetometer.intensity gives a local field in a scene whose '
+                         'magnetic_field section gives the field; give one of them')
     if star_tracker is not None and star_tracker.sun_exclusion_angle > 0.0 and scene.sun is None:
         raise SceneError('sensors.star_tracker.sun_exclusion_angle needs the Sun\'s direction: '
                          'a sun section (sun: {direction: [x, y, z]})')

@@ -52,8 +52,8 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.core.sensors.section import (
-    ANGLE_LIMIT, MAX_RATE, NOISE_BLOCK, Quat, SensorSection, Vector, limited,
-    mount_quaternion)
+    MAX_RATE, NOISE_BLOCK, Quat, SampledSensorSpec, SensorSection, Vector,
+    limited)
 
 __all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'imu_spec']
 
@@ -85,7 +85,7 @@ _GRAVITY_LIMIT = 1000.0
 
 
 @dataclass(frozen=True)
-class ImuSpec:
+class ImuSpec(SampledSensorSpec):
     """A validated ``sensors.imu`` section (SI units; see the module docstring).
 
     ``gravity``: the world gravity [m/s²] a body held in place feels (only for scenes without
@@ -112,21 +112,6 @@ class ImuSpec:
     accelerometer_range: float = 0.0
     accelerometer_resolution: float = 0.0
 
-    @property
-    def period_ns(self) -> int:
-        """Sample period [ns]: samples are taken at the clock times that are its multiples."""
-        return round(1e9 / self.rate)
-
-    @property
-    def period(self) -> float:
-        """Sample period Δt [s]."""
-        return self.period_ns * 1e-9
-
-    def mount(self) -> Quat:
-        """Rotation (w, x, y, z) of the sensor frame in the body frame: ``Rz(yaw) Ry(pitch)
-        Rx(roll)`` (tf2's ``setRPY``, static_transform_publisher's angles)."""
-        return mount_quaternion(self.mount_rpy)
-
     def error_model(self) -> GyroErrorModel:
         """The gyro's figures as the attitude covariance takes them."""
         return GyroErrorModel(
@@ -152,19 +137,10 @@ def imu_spec(data: Any) -> ImuSpec:
     """Validate a ``sensors.imu`` mapping; one :class:`SceneError` naming the key otherwise."""
     data = _SECTION.mapping(data, set(_BOUNDS) | _OTHER_KEYS, ('rate',))
     numbers: dict[str, Any] = _SECTION.numbers(data, _BOUNDS)
-    spec = replace(ImuSpec(rate=numbers.pop('rate')), **numbers)
-    if 'frame_id' in data:
-        spec = replace(spec, frame_id=_SECTION.frame_id(data['frame_id']))
-    if 'topic' in data:
-        spec = replace(spec, topic=_SECTION.topic(data['topic']))
-    if 'mount_rpy' in data:
-        spec = replace(spec, mount_rpy=_SECTION.triple('mount_rpy', data['mount_rpy'],
-                                                       ANGLE_LIMIT))
+    spec = replace(ImuSpec(rate=numbers.pop('rate')), **numbers, **_SECTION.placement(data))
     if 'gravity' in data:
         spec = replace(spec, gravity=_SECTION.triple('gravity', data['gravity'],
                                                      _GRAVITY_LIMIT))
-    if 'seed' in data:
-        spec = replace(spec, seed=_SECTION.seed(data['seed']))
     return spec
 
 

@@ -66,8 +66,8 @@ from rigid_body_attitude.core.environment.magnetic_field import (
     LocalMagneticField, MagneticFieldModel, WORLD_AXES)
 from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.core.sensors.section import (
-    ANGLE_LIMIT, MAX_RATE, Matrix, NOISE_BLOCK, NormalRows, Quat, SensorSection, Vector,
-    body_to_sensor_matrix, limited, mount_quaternion)
+    MAX_RATE, Matrix, NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec,
+    SensorSection, Vector, body_to_sensor_matrix, limited)
 
 __all__ = ['MagnetometerModel', 'MagnetometerSpec', 'SOFT_IRON_CONDITION_LIMIT',
            'STREAM', 'magnetometer_spec']
@@ -99,7 +99,7 @@ _HARD_IRON_LIMIT = 1e-2
 
 
 @dataclass(frozen=True)
-class MagnetometerSpec:
+class MagnetometerSpec(SampledSensorSpec):
     """A validated ``sensors.magnetometer`` section (SI units; see the module docstring).
 
     ``intensity`` is ``None`` when the section gives no local field (the scene's field model
@@ -122,20 +122,6 @@ class MagnetometerSpec:
     soft_iron: Matrix = _IDENTITY
     range: float = 0.0
     resolution: float = 0.0
-
-    @property
-    def period_ns(self) -> int:
-        """Sample period [ns]: samples are taken at the clock times that are its multiples."""
-        return round(1e9 / self.rate)
-
-    @property
-    def period(self) -> float:
-        """Sample period Δt [s]."""
-        return self.period_ns * 1e-9
-
-    def mount(self) -> Quat:
-        """Rotation (w, x, y, z) of the sensor frame in the body frame (``mount_rpy``)."""
-        return mount_quaternion(self.mount_rpy)
 
     def local_field(self) -> LocalMagneticField | None:
         """The section's constant field, or ``None`` if it gives none."""
@@ -182,15 +168,7 @@ def magnetometer_spec(data: Any) -> MagnetometerSpec:
     if 'world_axes' in data:
         spec = replace(spec, world_axes=_SECTION.choice('world_axes', data['world_axes'],
                                                         tuple(sorted(WORLD_AXES))))
-    if 'frame_id' in data:
-        spec = replace(spec, frame_id=_SECTION.frame_id(data['frame_id']))
-    if 'topic' in data:
-        spec = replace(spec, topic=_SECTION.topic(data['topic']))
-    if 'mount_rpy' in data:
-        spec = replace(spec, mount_rpy=_SECTION.triple('mount_rpy', data['mount_rpy'],
-                                                       ANGLE_LIMIT))
-    if 'seed' in data:
-        spec = replace(spec, seed=_SECTION.seed(data['seed']))
+    spec = replace(spec, **_SECTION.placement(data))
     if 'hard_iron' in data:
         spec = replace(spec, hard_iron=_SECTION.triple('hard_iron', data['hard_iron'],
                                                        _HARD_IRON_LIMIT))

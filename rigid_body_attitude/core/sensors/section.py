@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import re
 import struct
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -24,7 +24,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.yaml_files import Fields, quote
 
-__all__ = ['ANGLE_LIMIT', 'MAX_RATE', 'Matrix', 'NOISE_BLOCK', 'NormalRows',
+__all__ = ['ANGLE_LIMIT', 'MAX_RATE', 'Matrix', 'NOISE_BLOCK', 'NormalRows', 'SampledSensorSpec',
            'Quat', 'SensorSection', 'Vector', 'body_to_sensor_matrix', 'limited',
            'mount_quaternion', 'unit_vector']
 
@@ -86,6 +86,15 @@ class SensorSection:
         when it loads the scene: ``session.interface.check_scene_topics``)."""
         return self._matching('topic', value, _NAME)
 
+    def placement(self, data: dict[str, Any]) -> dict[str, Any]:
+        """The checked values of the keys every sensor has, those ``data`` gives:
+        ``frame_id``, ``topic``, ``mount_rpy`` (|angle| at most :data:`ANGLE_LIMIT`),
+        ``seed``."""
+        checks: dict[str, Callable[[Any], Any]] = {
+            'frame_id': self.frame_id, 'topic': self.topic, 'seed': self.seed,
+            'mount_rpy': lambda value: self.triple('mount_rpy', value, ANGLE_LIMIT)}
+        return {key: check(data[key]) for key, check in checks.items() if key in data}
+
     def seed(self, value: Any) -> int:
         """An integer in ``[0, 2^63)``."""
         if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**63:
@@ -106,6 +115,29 @@ class SensorSection:
                              f'underscores{", dots, dashes" if key == "frame_id" else ""} and '
                              f'slashes, at most 256 characters), got {quote(value)}')
         return value
+
+
+class SampledSensorSpec:
+    """What every sensor spec has: its ``rate`` [Hz] and the mount ``mount_rpy`` [rad] of its
+    frame in the body frame (a mixin of the specs' dataclasses)."""
+
+    rate: float
+    mount_rpy: Vector
+
+    @property
+    def period_ns(self) -> int:
+        """Sample period [ns]: samples are taken at the clock times that are its multiples."""
+        return round(1e9 / self.rate)
+
+    @property
+    def period(self) -> float:
+        """Sample period Δt [s]."""
+        return self.period_ns * 1e-9
+
+    def mount(self) -> Quat:
+        """Rotation (w, x, y, z) of the sensor frame in the body frame: ``Rz(yaw) Ry(pitch)
+        Rx(roll)`` (tf2's ``setRPY``, static_transform_publisher's angles)."""
+        return mount_quaternion(self.mount_rpy)
 
 
 def mount_quaternion(mount_rpy: Vector) -> Quat:

@@ -63,8 +63,8 @@ from rigid_body_attitude.core.attitude.float_quaternion import q_exp, q_multiply
 from rigid_body_attitude.core.environment.sun import SunDirectionModel
 from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.core.sensors.section import (
-    ANGLE_LIMIT, NOISE_BLOCK, NormalRows, Quat, SensorSection, Vector, mount_quaternion,
-    unit_vector)
+    NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec, SensorSection, Vector,
+    mount_quaternion, unit_vector)
 
 __all__ = ['ARCSECOND', 'MAX_STAR_TRACKER_RATE', 'STREAM', 'StarTrackerModel',
            'StarTrackerSpec', 'star_tracker_spec', 'world_covariance']
@@ -92,7 +92,7 @@ _BORESIGHT_LIMIT = 1e6
 
 
 @dataclass(frozen=True)
-class StarTrackerSpec:
+class StarTrackerSpec(SampledSensorSpec):
     """A validated ``sensors.star_tracker`` section (SI units, radians; see the module
     docstring). ``boresight``: the body vector the sensor's z axis points along, given
     instead of ``mount_rpy`` (``None``: the mount is ``mount_rpy``)."""
@@ -107,16 +107,6 @@ class StarTrackerSpec:
     about_boresight_noise: float = _BOUNDS['about_boresight_noise'][0]
     misalignment_stddev: float = 0.0
     sun_exclusion_angle: float = 0.0
-
-    @property
-    def period_ns(self) -> int:
-        """Sample period [ns]: samples are taken at the clock times that are its multiples."""
-        return round(1e9 / self.rate)
-
-    @property
-    def period(self) -> float:
-        """Sample period Δt [s]."""
-        return self.period_ns * 1e-9
 
     def mount(self) -> Quat:
         """Rotation (w, x, y, z) of the sensor frame in the body frame."""
@@ -170,18 +160,10 @@ def star_tracker_spec(data: Any) -> StarTrackerSpec:
     spec = replace(StarTrackerSpec(rate=numbers.pop('rate')), **numbers)
     if 'mount_rpy' in data and 'boresight' in data:
         raise SceneError('sensors.star_tracker takes mount_rpy or boresight, not both')
-    if 'mount_rpy' in data:
-        spec = replace(spec, mount_rpy=_SECTION.triple('mount_rpy', data['mount_rpy'],
-                                                       ANGLE_LIMIT))
+    spec = replace(spec, **_SECTION.placement(data))
     if 'boresight' in data:
         given = _SECTION.triple('boresight', data['boresight'], _BORESIGHT_LIMIT)
         spec = replace(spec, boresight=unit_vector('sensors.star_tracker.boresight', given))
-    if 'frame_id' in data:
-        spec = replace(spec, frame_id=_SECTION.frame_id(data['frame_id']))
-    if 'topic' in data:
-        spec = replace(spec, topic=_SECTION.topic(data['topic']))
-    if 'seed' in data:
-        spec = replace(spec, seed=_SECTION.seed(data['seed']))
     return spec
 
 

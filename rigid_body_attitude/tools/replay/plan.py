@@ -19,7 +19,7 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.msgs import ATTITUDE_DECODERS, IMU, RATE_DECODERS
 from rigid_body_attitude.session.interface import NODE_INTERFACE, Situation
-from rigid_body_attitude.tools.replay.options import ReplayOptions
+from rigid_body_attitude.tools.replay.options import REPLAYED_OUTPUTS, ReplayOptions
 
 __all__ = ['Plan', 'make_plan']
 
@@ -28,6 +28,9 @@ Decoder = Callable[[bytes], tuple[Any, ...]]
 #: The node's gyro topics, in the order the replay looks for them.
 GYRO_TOPICS = tuple(endpoint.name for endpoint in NODE_INTERFACE.inputs_of_quantity(
     'angular_rate'))
+#: The roles of the outputs a replay writes: the session's, the simulated sensors' and their
+#: mounts.
+_WRITTEN = ('output', 'diagnostics', 'simulated_sensor', 'tf_static')
 
 
 @dataclass(frozen=True)
@@ -40,7 +43,8 @@ class Plan:
         inputs: bag topic → the node's input topic it feeds (``torque``, ``rotor_torque``,
             ``set_pose``, ``imu/mag``, ``attitude_measurement``), besides the gyro.
         ground_truth_topic: the bag's ground-truth topic, or ``''``.
-        outputs: output topics to write, in the node's order.
+        outputs: output topic → its message type, in the node's order (a simulated
+            sensor's topic as the scene names it).
         notes: remarks for the user (ignored topics and the like).
     """
 
@@ -48,7 +52,7 @@ class Plan:
     gyro_type: str
     inputs: dict[str, str]
     ground_truth_topic: str
-    outputs: tuple[str, ...]
+    outputs: dict[str, str]
     notes: tuple[str, ...]
 
     @property
@@ -167,11 +171,25 @@ def make_plan(reader: BagReader, scene: Scene, input_names: frozenset[str],
     if options.ground_truth_topic:
         truth_topic = _required(reader, options.ground_truth_topic, 'Ground-truth')
         reader.decoder(truth_topic, ATTITUDE_DECODERS)
-    available = tuple(endpoint.name for endpoint in NODE_INTERFACE.outputs(situation)
-                      if endpoint.replayed)
-    outputs = options.outputs or available
-    missing = [name for name in outputs if name not in available]
+    outputs = _outputs(scene, situation, options.outputs)
+    return Plan(gyro_topic, gyro_type, inputs, truth_topic, outputs, tuple(notes))
+
+
+def _outputs(scene: Scene, situation: Situation, selected: Sequence[str]) -> dict[str, str]:
+    """The output topics (all those replayed for ``situation``, or the ``selected`` ones)
+    and their types; InputError for a topic the node does not have or not for this scene."""
+    available = {endpoint.topic(scene): endpoint.type
+                 for endpoint in NODE_INTERFACE.outputs(situation, _WRITTEN)
+                 if endpoint.replayed}
+    unknown = [name for name in selected
+               if name not in REPLAYED_OUTPUTS and name not in available]
+    if unknown:
+        raise InputError(f'Unknown output topic {unknown[0]!r}; valid choices: '
+                         f'{", ".join(REPLAYED_OUTPUTS)} and the scene\'s sensor topics')
+    missing = [name for name in selected if name not in available]
     if missing:
         raise InputError(f'Output {missing[0]!r} is not published for scene {scene.name!r} '
                          f'with this input; valid choices: {", ".join(available)}')
-    return Plan(gyro_topic, gyro_type, inputs, truth_topic, tuple(outputs), tuple(notes))
+    if not selected:
+        return available
+    return {name: msgtype for name, msgtype in available.items() if name in selected}

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import array
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -47,6 +47,7 @@ LogHandler = Callable[[int, int, str], None]
 
 _ZERO = (0.0, 0.0, 0.0)
 _DIAGNOSTICS_TOPIC = NODE_INTERFACE.endpoint('/diagnostics', 'out').name
+_TF_STATIC_TOPIC = NODE_INTERFACE.endpoint('/tf_static', 'out').name
 _LEVEL_NAMES = {LEVEL_WARN: 'warning', LEVEL_ERROR: 'error'}
 
 
@@ -89,13 +90,14 @@ class OutputSeries:
 class BagSink:
     """Writes a session's outputs to the output bag (only the ``outputs`` selected)."""
 
-    def __init__(self, writer: BagWriter, outputs: Sequence[str], keep_series: bool,
+    def __init__(self, writer: BagWriter, outputs: Mapping[str, str], keep_series: bool,
                  hardware_id: str, log: LogHandler | None = None) -> None:
-        """Topics ``outputs`` on ``writer``; ``keep_series``: keep the values in memory;
-        ``hardware_id``: the diagnostics' (the scene's name); ``log``: gets each log line."""
+        """Topics ``outputs`` (name → message type) on ``writer``; ``keep_series``: keep the
+        values in memory; ``hardware_id``: the diagnostics' (the scene's name); ``log``: gets
+        each log line."""
         self.writer = writer
-        self.ids = {name: writer.add_topic(name, NODE_INTERFACE.endpoint(name, 'out').type).id
-                    for name in outputs}
+        self.ids = {name: writer.add_topic(name, msgtype).id
+                    for name, msgtype in outputs.items()}
         self.records: list[Record] = []
         #: Bag time of the input or tick being handled [ns]: the records' time.
         self.now_ns = 0
@@ -246,12 +248,22 @@ class BagSink:
             self.series.energies.append(energy)
             self.series.momenta.extend(world_momentum)
 
-    def simulated_imu(self, topic: str, data: bytes) -> None:
-        """A simulated IMU's sample on ``topic`` (added to the bag at its first sample)."""
-        if topic not in self.ids:
-            self.ids[topic] = self.writer.add_topic(topic, IMU).id
-            self.counts[topic] = 0
+    def sensor_wanted(self, topic: str) -> bool:
+        """Whether ``topic``, a simulated sensor's, is written to the bag."""
+        return topic in self.ids
+
+    def simulated_sensor(self, topic: str, data: bytes) -> None:
+        """A simulated sensor's serialized sample on ``topic``."""
         self._write(topic, data)
+
+    def static_transforms(self, data: bytes) -> None:
+        """The simulated sensors' mounts: a serialized ``tf2_msgs/msg/TFMessage`` for
+        ``/tf_static``, written when the outputs hold it (once, as the node publishes it)."""
+        self._write(_TF_STATIC_TOPIC, data)
+
+    def wheel_state(self, data: bytes) -> None:
+        """``wheels/state`` of a dynamics tick (a serialized JointState)."""
+        self._write('wheels/state', data)
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the bag time (the node's sim-time clock)."""

@@ -41,9 +41,9 @@ def chi2_interval(dof):
     return stats.chi2.ppf(tail, dof), stats.chi2.ppf(1.0 - tail, dof)
 
 
-def scene(sensors, sun=None, step=0.001, rate_source='dynamics'):
+def scene(sensors, sun=None, step=0.001, rate_source='dynamics', **sections):
     data = {'rate_source': rate_source, 'step': step,
-            'body': {'inertia': {'moments': [1.0, 2.0, 3.0]}}, 'sensors': sensors}
+            'body': {'inertia': {'moments': [1.0, 2.0, 3.0]}}, 'sensors': sensors, **sections}
     if sun is not None:
         data['sun'] = sun
     return scene_from_mapping(data)
@@ -120,6 +120,16 @@ def test_the_scene_needs_the_field_a_dynamics_scene_and_a_whole_number_of_steps(
 
 
 # -- conventions -----------------------------------------------------------------------------
+
+def test_a_scene_field_model_is_the_magnetometers_field_and_excludes_a_local_one():
+    orbit = {'orbit': {'altitude': 500000.0, 'inclination_deg': 97.4},
+             'magnetic_field': {'model': 'tilted_dipole'}}
+    bare = {'rate': 100.0, 'noise_density': 1e-8}
+    assert scene({'magnetometer': bare}, **orbit).magnetometer.intensity is None
+    with pytest.raises(SceneError, match='magnetometer.intensity gives a local field in a '
+                                         'scene whose magnetic_field section'):
+        scene({'magnetometer': {**bare, **FIELD}}, **orbit)
+
 
 def test_a_known_attitude_and_mount_give_the_expected_field():
     """ENU, no declination: the field is (0, H, −Z). The body yawed +90° has its x axis

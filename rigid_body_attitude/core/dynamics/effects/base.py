@@ -96,6 +96,13 @@ class Environment:
     orbit: CircularOrbit | None = None
     magnetic_field: MagneticFieldModel | None = None
 
+    def required_field(self, effect: str) -> MagneticFieldModel:
+        """The magnetic field model, for an effect that acts through it; SceneError naming
+        ``effect`` when the scene has no ``magnetic_field:`` section."""
+        if self.magnetic_field is None:
+            raise SceneError(f"Effect {effect!r} needs the scene's magnetic_field: section")
+        return self.magnetic_field
+
 
 _NO_ENVIRONMENT = Environment()
 

@@ -27,7 +27,6 @@ from rigid_body_attitude.core.dynamics.effects.base import (
     BatchChunk, BodyProperties, FloatArray, nonnegative, Parameter, positive, Quat, register,
     REQUIRED, Vec)
 from rigid_body_attitude.core.dynamics.effects.sampled import SampledTorque
-from rigid_body_attitude.core.errors import SceneError
 
 
 @register
@@ -49,10 +48,7 @@ class Bdot(SampledTorque):
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Check the scene's field; drive the magnetorquers."""
         super().__init__(params, body)
-        model = body.environment.magnetic_field
-        if model is None:
-            raise SceneError(f"Effect {self.name!r} needs the scene's magnetic_field: section")
-        self.model = model
+        self.model = body.environment.required_field(self.name)
         self.actuator = 'magnetorquers'
         self.applies_torque = False
 

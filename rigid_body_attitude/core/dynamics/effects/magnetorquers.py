@@ -6,7 +6,8 @@ Control*, 2014, sec. 3.3 and ch. 7; Basilisk's MtbEffector). The rods lie along 
 (default the body axes); the dipole asked, ``m_cmd``, is shared among them by the
 minimum-norm pseudo-inverse, each rod's dipole clipped to ``±max_dipole``, and ``m`` is what
 the rods give. ``m_cmd`` is the sum of the ``dipole`` input (body axes [A m²], stamped, held
-until ``timeout`` or the next command as ``commanded_torque``'s torque), the dipole of a
+until ``timeout`` or the next command as ``commanded_torque``'s torque; none with
+``commanded: false``), the dipole of a
 ``bdot`` controller in the scene, and, with ``dumping_gain`` ``k > 0`` and ``reaction_wheels``
 in the scene, the cross-product momentum dumping ``k (h_w × B_b) / |B_b|²`` of the wheels'
 stored momentum ``h_w = Σ Jₛᵢ Ωᵢ âᵢ`` (:mod:`rigid_body_attitude.core.control.magnetic`).
@@ -32,7 +33,7 @@ from rigid_body_attitude.core.control.magnetic import dumping_dipole, dumping_di
 from rigid_body_attitude.core.dynamics import wheel_batch
 from rigid_body_attitude.core.dynamics.batch_rows import cross_rows
 from rigid_body_attitude.core.dynamics.effects.base import (
-    BatchChunk, BodyProperties, CommandedEffect, Effect, FloatArray, nonnegative,
+    BatchChunk, BodyProperties, boolean, CommandedEffect, Effect, FloatArray, nonnegative,
     Parameter, positive, Quat, real, register, REQUIRED, TorqueEffect, Vec)
 from rigid_body_attitude.core.dynamics.effects.held import HeldOverStep, RotorState
 from rigid_body_attitude.core.dynamics.effects.sampled import SampledTorque
@@ -72,23 +73,27 @@ class Magnetorquers(CommandedEffect, HeldOverStep, TorqueEffect):
         'dumping_gain': Parameter(nonnegative, 0.0,
                                   'cross-product momentum dumping gain [1/s]; 0: none'),
         'timeout': Parameter(positive, 0.5, 'seconds a dipole command is held [s]'),
+        'commanded': Parameter(boolean, True, 'take dipole commands (false: only B-dot and '
+                                              'dumping of the scene)'),
     }
     inputs = {'dipole': 'dipole_body [A m²] (the rods\' dipole asked, body axes)'}
-    shared_parameters: ClassVar[frozenset[str]] = frozenset({'axes'})
+    shared_parameters: ClassVar[frozenset[str]] = frozenset({'axes', 'commanded'})
 
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Check the scene's field; the rods' allocation."""
         super().__init__(params, body)
-        model = body.environment.magnetic_field
-        if model is None:
-            raise SceneError(f"Effect {self.name!r} needs the scene's magnetic_field: section")
-        self.model = model
+        self.model = body.environment.required_field(self.name)
         axes = self.params['axes']
         self.rod_axes = [tuple(axis) for axis in axes.tolist()]
         self.allocation = np.linalg.pinv(axes.T).tolist()  # (rods, 3)
         self.controllers: list[SampledTorque] = []
         self.wheels: list[RotorState] = []
         self.reset()
+
+    @property
+    def input_names(self) -> frozenset[str]:
+        """``dipole`` unless ``commanded`` is false."""
+        return frozenset(self.inputs) if self.params['commanded'] else frozenset()
 
     def reset(self) -> None:
         """No command; zero dipole; no impulse."""

@@ -30,10 +30,12 @@ Commands: one per array, stamped, held until ``timeout`` (then the motors coast,
 ``stale``) or the next command, with the lockstep contract of ``commanded_torque``:
 ``wheel_torque`` (one motor torque per wheel [N m], in ``names`` order) or ``wheel_speed``
 (one speed per wheel [rad/s]). A command above the limits is clipped and counted
-(``torque_limit``, ``speed_command_limit``). An ``attitude_pd`` controller with
-``actuator: reaction_wheels`` adds its body torque ``τ_c``, allocated over the wheels with the
-minimum-norm pseudo-inverse: ``τₘ = −A⁺ τ_c``, ``A = [â₁ … â_N]`` (the body feels
-``−A τₘ = τ_c`` when the wheels span the three axes).
+(``torque_limit``, ``speed_command_limit``). With ``commanded: false`` the array takes no
+command (only a controller of the scene drives it, and a lockstep loop waits for none). An
+``attitude_pd`` controller with ``actuator: reaction_wheels`` adds its body torque ``τ_c``,
+allocated over the wheels with the minimum-norm pseudo-inverse: ``τₘ = −A⁺ τ_c``,
+``A = [â₁ … â_N]`` (the body feels ``−A τₘ = τ_c`` when the wheels span the three axes;
+:mod:`rigid_body_attitude.core.control.allocation`).
 
 Energy: the total kinetic energy ``½ ωᵀ J' ω + Σ Hᵢ²/(2 Jₛᵢ)`` changes by the work of the
 external torques plus the motors' work ``∫ τₘ Ω dt`` minus the friction loss ``∫ τ_f Ω dt``
@@ -52,9 +54,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from rigid_body_attitude.core.control.allocation import minimum_norm_allocation
 from rigid_body_attitude.core.dynamics.effects.base import (
-    BatchChunk, BodyProperties, CommandedEffect, Effect, FloatArray, HeldInput, nonnegative,
-    Parameter, positive, Quat, real, register, REQUIRED, Vec)
+    BatchChunk, BodyProperties, boolean, CommandedEffect, Effect, FloatArray, HeldInput,
+    nonnegative, Parameter, positive, Quat, real, register, REQUIRED, Vec)
 from rigid_body_attitude.core.dynamics.effects.held import RotorState
 from rigid_body_attitude.core.dynamics.effects.sampled import SampledTorque
 from rigid_body_attitude.core.dynamics import wheel_batch
@@ -127,11 +130,14 @@ class ReactionWheels(CommandedEffect, RotorState):
                                    'wheel speeds relative to the body at t = 0 [rad/s]'),
         'names': Parameter(_names, [], 'wheel names (default wheel_1, wheel_2, ...)'),
         'timeout': Parameter(positive, 0.5, 'seconds a wheel command is held [s]'),
+        'commanded': Parameter(boolean, True, 'take wheel_torque and wheel_speed commands '
+                                              '(false: only a controller of the scene)'),
     }
     inputs = {'wheel_torque': 'motor torque per wheel [N m] (JointState.effort)',
               'wheel_speed': 'speed per wheel relative to the body [rad/s] '
                              '(JointState.velocity)'}
-    shared_parameters: ClassVar[frozenset[str]] = frozenset({'names', 'speed_gain'})
+    shared_parameters: ClassVar[frozenset[str]] = frozenset({'names', 'speed_gain',
+                                                             'commanded'})
 
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Validate; broadcast the per-wheel parameters; no command, wheels at rest."""
@@ -148,10 +154,15 @@ class ReactionWheels(CommandedEffect, RotorState):
             raise SceneError(f'Effect {self.name!r}: parameter \'names\' must be one name per '
                              f'wheel ({count}), got {len(names)}')
         self.names = tuple(names)
-        self.allocation = np.linalg.pinv(axes.T).tolist()  # (N, 3): τₘ = −A⁺ τ_c
+        self.allocation = minimum_norm_allocation(axes)  # (N, 3): τₘ = −A⁺ τ_c
         self.command = HeldInput(self, self.params['timeout'], size=count + 1)
         self.controllers: list[SampledTorque] = []
         self.reset()
+
+    @property
+    def input_names(self) -> frozenset[str]:
+        """``wheel_torque`` and ``wheel_speed`` unless ``commanded`` is false."""
+        return frozenset(self.inputs) if self.params['commanded'] else frozenset()
 
     def input_size(self, input_name: str) -> int:
         """One number per wheel."""
@@ -202,6 +213,13 @@ class ReactionWheels(CommandedEffect, RotorState):
         self.held_rate: Vec = (0.0, 0.0, 0.0)
         self.omega: Vec = (0.0, 0.0, 0.0)
         self.peak_speed = self.time_saturated = self.motor_work = self.friction_loss = 0.0
+        #: Per wheel: time cut at the speed limit [s], episodes of it, time asked beyond
+        #: ``max_torque`` [s], angle relative to the body [rad] in [−π, π] (trapezoidal).
+        self.speed_limited_time = [0.0] * count
+        self.speed_limit_episodes = [0] * count
+        self.torque_limited_time = [0.0] * count
+        self.angles = [0.0] * count
+        self.torque_limited = [False] * count
         self.cut_this_step = False
         self.batch_hold_time = 0.0
 
@@ -257,7 +275,9 @@ class ReactionWheels(CommandedEffect, RotorState):
                 wheel['viscous_friction'][i], h)
             if cut and not self.cutting[i]:
                 self.count('speed_limit')
+                self.speed_limit_episodes[i] += 1
             self.cutting[i] = cut
+            self.torque_limited[i] = abs(command) > wheel['max_torque'][i]
             cut_any = cut_any or cut
             self.motor[i], self.friction[i] = motor, friction
             self.net[i] = motor - friction
@@ -289,14 +309,14 @@ class ReactionWheels(CommandedEffect, RotorState):
             energy += (new * new - old * old) / (2.0 * j)
         self.omega = omega_end
         speeds = self.speeds()
-        for start, end, motor, friction in zip(self.speeds_start, speeds, self.motor,
-                                               self.friction):
+        for i, (start, end, motor, friction) in enumerate(zip(
+                self.speeds_start, speeds, self.motor, self.friction)):
             turned = 0.5 * h * (start + end)  # ∫ Ω dt [rad]
             self.motor_work += motor * turned
             self.friction_loss += friction * turned
             self.peak_speed = max(self.peak_speed, abs(end))
-        if self.cut_this_step:
-            self.time_saturated += h
+            _turn(self.angles, i, turned)
+        _tally_limits(self, h)
         self._sum_held(t + h)
         return energy
 
@@ -336,6 +356,25 @@ class ReactionWheels(CommandedEffect, RotorState):
                      omega_end: FloatArray, chunk: BatchChunk) -> None:
         """Every body's momenta advanced; its totals kept."""
         wheel_batch.commit(self, t, h, omega_end, chunk)
+
+
+def _turn(angles: list[float], i: int, turned: float) -> None:
+    """Wheel ``i``'s angle [rad] turned by ``turned``, kept in [−π, π]."""
+    angle = angles[i] + turned
+    angles[i] = angle if -math.pi <= angle <= math.pi else math.remainder(angle, math.tau)
+
+
+def _tally_limits(wheels: ReactionWheels, h: float) -> None:
+    """A step of ``h`` [s] held: the time at the speed limit (any wheel, and each) and at
+    the torque limit (each)."""
+    if wheels.cut_this_step:
+        wheels.time_saturated += h
+        for i, cut in enumerate(wheels.cutting):
+            if cut:
+                wheels.speed_limited_time[i] += h
+    for i, limited in enumerate(wheels.torque_limited):
+        if limited:
+            wheels.torque_limited_time[i] += h
 
 
 def _dot(axis: tuple[float, ...], vector: Vec) -> float:

@@ -20,7 +20,6 @@ from rigid_body_attitude.core.dynamics.batch_rows import cross_rows
 from rigid_body_attitude.core.dynamics.effects.base import (
     as_vec, BatchChunk, BodyProperties, FloatArray, Parameter, Quat, register, REQUIRED,
     TorqueEffect, Vec, vector3)
-from rigid_body_attitude.core.errors import SceneError
 
 
 @register
@@ -34,10 +33,7 @@ class ResidualDipole(TorqueEffect):
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Check the scene's field."""
         super().__init__(params, body)
-        model = body.environment.magnetic_field
-        if model is None:
-            raise SceneError(f"Effect {self.name!r} needs the scene's magnetic_field: section")
-        self.model = model
+        self.model = body.environment.required_field(self.name)
         self.dipole = as_vec(self.params['dipole'])
 
     def torque(self, t: float, q: Quat, omega: Vec) -> Vec:
