@@ -32,8 +32,11 @@ and heading updates make them observable (a 1 % scale error at 10 rad/s is 6°/s
 the accelerometer bias is considered by default: over minutes of hand-held motion it is not
 separable from the acceleration the gravity update treats as noise, so estimating it lets
 that noise leak into it, while considering it keeps its effect in every gain and in the
-published covariance. The magnetometer's residual hard iron needs no state of its own: a field it
-distorts fails the norm and dip checks or stays within the heading disturbance ``d``.
+published covariance. The magnetometer's hard iron is learned beside the filter
+(:mod:`.hard_iron`: a sphere fit of the sensor-frame field as the body turns, learned only when
+the field lies on a sphere of the local field's norm and the same offset is found again
+``hard_iron_time`` later); a field it cannot explain fails the norm and dip checks
+(:mod:`.field_reference`) or stays within the heading disturbance ``d``.
 """
 
 from __future__ import annotations
@@ -49,32 +52,29 @@ from rigid_body_attitude.core.environment.magnetic_field import WORLD_AXES
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.attitude_update import attitude_measurement
 from rigid_body_attitude.core.estimation.estimator_settings import EstimatorSettings
-from rigid_body_attitude.core.estimation.field_reference import ACCEPTED, FieldReference
+from rigid_body_attitude.core.estimation.field_reference import FieldReference
 from rigid_body_attitude.core.estimation.filter_covariance import (
     FILTER_STATE_SIZE, FilterCovariance, estimated_mask)
 from rigid_body_attitude.core.estimation.gravity_update import MotionPower, gravity_measurement
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
-from rigid_body_attitude.core.estimation.interval_sums import (
-    ImuInterval, MagneticInterval, RecentTurn)
+from rigid_body_attitude.core.estimation.interval_sums import ImuInterval
 from rigid_body_attitude.core.estimation.kalman_update import (
     UpdateResult, injected_attitude, joseph_update)
 from rigid_body_attitude.core.estimation.magnetometer import (
-    MagnetometerCalibration, heading_measurement, heading_only_gain, turned_back)
+    MagnetometerCalibration, heading_only_gain)
+from rigid_body_attitude.core.estimation.magnetometer_channel import (
+    FIELD_LIMIT, MAX_FIELD_AGE, MagnetometerChannel)
 from rigid_body_attitude.core.estimation.velocity_update import BoundedVelocity
 from rigid_body_attitude.core.estimation.zero_rate_update import (
     RestIntervals, zero_rate_measurement)
 
-__all__ = ['AttitudeEstimator', 'SPECIFIC_FORCE_LIMIT']
+__all__ = ['AttitudeEstimator', 'FIELD_LIMIT', 'MAX_FIELD_AGE', 'SPECIFIC_FORCE_LIMIT']
 
 FloatArray = NDArray[np.float64]
 Quat = tuple[float, float, float, float]
 Vec = tuple[float, float, float]
-#: Largest specific force [m/s²] and field [T] magnitudes a sample may have.
+#: Largest specific force magnitude [m/s²] a sample may have.
 SPECIFIC_FORCE_LIMIT = 1.0e4
-FIELD_LIMIT = 1.0e-2
-#: Largest age [s] of a magnetometer sample behind the last gyro sample (beyond the
-#: magnetometer's own delay) that is paired with the attitude at its instant.
-MAX_FIELD_AGE = 0.1
 
 
 class AttitudeEstimator:
@@ -101,12 +101,15 @@ class AttitudeEstimator:
         self.up, self.east, self.north = (np.array(v) for v in (axes.up, axes.east, axes.north))
         self.horizontal = np.stack([self.east, self.north], axis=1)
         self.model, self.settings = model, settings
-        self.magnetometer = magnetometer or MagnetometerCalibration()
         self.sample_rate = float(sample_rate)
         self.estimated = estimated_mask(settings.estimate_intrinsic,
                                         settings.estimate_accelerometer_bias)
-        self.interval, self.field_interval = ImuInterval(), MagneticInterval()
-        self.recent = RecentTurn(settings.magnetometer_delay + MAX_FIELD_AGE)
+        self.interval = ImuInterval()
+        self.counts: Counter[str] = Counter()
+        #: The magnetometer's side (:mod:`.magnetometer_channel`).
+        self.magnetometer_channel = MagnetometerChannel(
+            settings, magnetometer or MagnetometerCalibration(), self.sample_rate,
+            (self.east, self.north, self.up), self.counts)
         self.motion = MotionPower(settings.motion_power_time, settings.acceleration_time)
         #: The velocity channel (:mod:`.velocity_update`).
         self.velocity = BoundedVelocity(settings.velocity_time, settings.motion_power_time,
@@ -114,9 +117,7 @@ class AttitudeEstimator:
                                         settings.zero_velocity_stddev)
         self.rest = RestIntervals(settings.rest_seconds, settings.rest_noise_factor,
                                   settings.max_rest_rate, settings.gravity_tolerance)
-        self.counts: Counter[str] = Counter()
         self.covariance: FilterCovariance | None = None
-        self.field: FieldReference | None = None
         self.gyro_bias: Vec = (0.0, 0.0, 0.0)
         self.accel_bias = np.zeros(3)
         self.intrinsic = np.zeros(9)
@@ -127,11 +128,22 @@ class AttitudeEstimator:
         """Begin from a levelled start (:mod:`.estimator_start`): its covariance, gyro bias
         [rad/s], the specific force's norm at rest [m/s²], the field's reference (or None:
         no magnetometer, the heading stays propagated)."""
-        self.covariance, self.field, self.gravity = covariance, field, float(gravity)
+        self.covariance, self.gravity = covariance, float(gravity)
+        self.magnetometer_channel.reference = field
         self.gyro_bias = (float(gyro_bias[0]), float(gyro_bias[1]), float(gyro_bias[2]))
         self.velocity.restart(covariance)
         self.interval.clear()
-        self.field_interval.clear()
+        self.magnetometer_channel.interval.clear()
+
+    @property
+    def magnetometer(self) -> MagnetometerCalibration:
+        """The magnetometer's correction (extended by the hard iron learned)."""
+        return self.magnetometer_channel.calibration
+
+    @property
+    def field(self) -> FieldReference | None:
+        """The local field's reference (None: no magnetometer)."""
+        return self.magnetometer_channel.reference
 
     def sample(self, q_before: Quat, rate: Vec, dt: float, q_after: Quat,
                specific_force: Vec | None) -> bool:
@@ -143,7 +155,7 @@ class AttitudeEstimator:
         if covariance is None:
             raise InputError('Expected start() before the first sample')
         covariance.add_sample(q_before, rate, dt)
-        self.recent.add(rate, dt)
+        self.magnetometer_channel.recent.add(rate, dt)
         if specific_force is not None:
             fx, fy, fz = specific_force
             if not 0.0 < fx * fx + fy * fy + fz * fz <= SPECIFIC_FORCE_LIMIT ** 2:
@@ -160,18 +172,7 @@ class AttitudeEstimator:
         the attitude ``q`` (the last sample's); it is paired with the attitude at its own
         instant, ``magnetometer_delay + age`` before ``q`` (:mod:`.magnetometer`). InputError
         for a non-finite, zero or out-of-range field or age (naming it)."""
-        mx, my, mz = field
-        if not 0.0 < mx * mx + my * my + mz * mz <= FIELD_LIMIT ** 2:
-            raise InputError(f'Expected a finite, non-zero magnetic field of at most '
-                             f'{FIELD_LIMIT:g} T, got {tuple(field)!r}')
-        if not -MAX_FIELD_AGE <= age <= MAX_FIELD_AGE:
-            raise InputError(f'Expected the magnetometer sample\'s age within '
-                             f'{MAX_FIELD_AGE:g} s of the gyro\'s, got {age!r}')
-        corrected = self.magnetometer.corrected(field)
-        lag = self.settings.magnetometer_delay + age
-        if lag > 0.0:
-            corrected = turned_back(corrected, self.recent.turn(lag))
-        self.field_interval.add(q, corrected)
+        self.magnetometer_channel.add(q, field, age)
 
     def update(self, q: Quat) -> Quat:
         """The updates of the interval ending at attitude ``q``; returns the corrected
@@ -191,12 +192,11 @@ class AttitudeEstimator:
                     q, rotation = self._zero_velocity(q, rotation)
         elif interval.duration > 0.0:  # no specific force: the velocity is not seen
             self.velocity.unseen(self._state(), interval.duration)
-        if self.field is not None and self.field_interval.count:
-            q = self._heading(q, rotation, interval.mean_rate() if interval.count else None,
-                              interval.rms_rate() if interval.count else 0.0)
+        q = self._heading(q, rotation, interval.mean_rate() if interval.count else None,
+                          interval.rms_rate() if interval.count else 0.0)
         self.velocity.clone(self._state())
         interval.clear()
-        self.field_interval.clear()
+        self.magnetometer_channel.interval.clear()
         return q
 
     def _fold(self) -> None:
@@ -255,23 +255,11 @@ class AttitudeEstimator:
 
     def _heading(self, q: Quat, rotation: FloatArray, rate: Vec | None,
                  rms_rate: float) -> Quat:
-        covariance, field = self.covariance, self.field
-        assert covariance is not None and field is not None
-        count = self.field_interval.count
-        mean_field = rotation @ np.array(self.field_interval.mean())
-        duration = count / self.sample_rate
         speed = math.sqrt(sum(value * value for value in rate)) if rate else 0.0
-        outcome = field.check(mean_field, self.up, speed, duration)
-        timing = math.hypot(speed * self.settings.magnetometer_timing,
-                            0.5 * (rms_rate * self.settings.magnetometer_delay) ** 2)
-        if outcome == ACCEPTED and timing > self.settings.magnetic_disturbance_stddev:
-            outcome = 'turning'  # the timing error would exceed the disturbance tolerated
-        if outcome != ACCEPTED:
-            self.counts[f'magnetometer_{outcome}'] += 1
+        measurement = self.magnetometer_channel.measurement(rotation, speed, rms_rate)
+        if measurement is None:
             return q
-        noise = self.settings.magnetometer_noise_density ** 2 * self.sample_rate / count
-        measurement = heading_measurement(mean_field, self.east, self.north,
-                                          self.settings.declination, noise, timing * timing)
+        covariance = self._state()
         rows, projection = heading_only_gain(self.estimated,
                                              covariance.mean_rotation.T @ self.up)
         result = joseph_update(covariance.p, measurement.h, measurement.residual,

@@ -49,6 +49,9 @@ The gyro's figures (and the accelerometer's noise density and bias prior) are th
   ``gravity_tolerance`` 0.5 m/s²: the zero-rate update's rest test on whole update intervals
   (as :class:`~rigid_body_attitude.core.estimation.rest.RestDetector` on samples).
 * ``declination`` 0 rad: magnetic north east of true north (a WMM value for the place).
+* ``learn_hard_iron`` (true) and ``hard_iron_time`` 10 s: whether the magnetometer's hard
+  iron is learned as the body turns, and the forgetting time of that fit (:mod:`.hard_iron`:
+  a magnet fixed to a turning body is learned within about two of it).
 * ``estimate_intrinsic`` (true) and ``estimate_accelerometer_bias`` (false): whether the
   updates estimate the gyro's scale-factor and misalignment errors and the accelerometer bias,
   or only consider them (:mod:`.filter_covariance`, :mod:`.estimator`).
@@ -97,6 +100,8 @@ class EstimatorSettings:
     declination: float = 0.0
     estimate_intrinsic: bool = True
     estimate_accelerometer_bias: bool = False
+    learn_hard_iron: bool = True
+    hard_iron_time: float = 10.0
     motion_model: str = 'velocity'
     velocity_time: float = 0.5
     zero_velocity_stddev: float = 0.01
@@ -110,7 +115,7 @@ class EstimatorSettings:
             value = getattr(self, field.name)
             if field.name == 'motion_model':
                 continue
-            if field.name.startswith('estimate_'):
+            if field.name.startswith(('estimate_', 'learn_')):
                 if not isinstance(value, bool):
                     raise InputError(f'Expected `{field.name}` to be true or false, got '
                                      f'{value!r}')

@@ -9,7 +9,10 @@ interval's mean world-frame field [T] decides (:meth:`FieldReference.check`):
   field_dip_tolerance``; the reference then follows it slowly (an exponential average over
   :data:`TRACKING_TIME`), so a field drifting with temperature or place is tracked;
 * **disturbed** (``field_norm`` or ``field_dip``) otherwise: the interval's field is not used,
-  the heading is carried by the gyro and its covariance grows.
+  the heading is carried by the gyro and its covariance grows;
+* **settling**: a field that passes the checks within :data:`SETTLE_TIME` of a disturbed one
+  (a magnet moving past may pass them for an instant), not used yet (D. Laidig, T. Seel,
+  "VQF", Information Fusion 91, 2023, section 3.4, ``magMinUndisturbedTime``).
 
 A field that stays different but steady (a new room, or a reference learned next to a
 magnet) becomes the reference after ``new_field_seconds`` spent within the tolerances of a
@@ -30,12 +33,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = ['ACCEPTED', 'CANDIDATE_TIME', 'FIELD_DIP', 'FIELD_NORM', 'FieldReference',
-           'TRACKING_TIME', 'field_dip']
+           'SETTLE_TIME', 'SETTLING', 'TRACKING_TIME', 'field_dip']
 
 FloatArray = NDArray[np.float64]
 
 #: Outcomes of :meth:`FieldReference.check`.
-ACCEPTED, FIELD_NORM, FIELD_DIP = 'accepted', 'field_norm', 'field_dip'
+ACCEPTED, FIELD_NORM, FIELD_DIP, SETTLING = 'accepted', 'field_norm', 'field_dip', 'settling'
+#: How long [s] a field must pass the checks after a disturbance before it is used again
+#: (VQF's ``magMinUndisturbedTime``).
+SETTLE_TIME = 0.5
 #: Averaging time of the reference's tracking [s].
 TRACKING_TIME = 60.0
 #: Averaging time of the candidate field [s].
@@ -65,6 +71,7 @@ class FieldReference:
         self.new_field_min_rate = new_field_min_rate
         self._candidate = (norm, dip)
         self._candidate_seconds = 0.0
+        self._clean_seconds = SETTLE_TIME
         #: Intervals found disturbed, by reason; new references adopted.
         self.rejected = {FIELD_NORM: 0, FIELD_DIP: 0}
         self.new_references = 0
@@ -79,8 +86,8 @@ class FieldReference:
     def check(self, field_world: FloatArray, up: FloatArray, rate: float,
               duration: float) -> str:
         """One interval's mean field [T] (world frame), the body's mean rate magnitude
-        [rad/s] and the interval's length [s]: :data:`ACCEPTED`, :data:`FIELD_NORM` or
-        :data:`FIELD_DIP`."""
+        [rad/s] and the interval's length [s]: :data:`ACCEPTED`, :data:`FIELD_NORM`,
+        :data:`FIELD_DIP` or :data:`SETTLING`."""
         norm, dip = float(np.linalg.norm(field_world)), field_dip(field_world, up)
         weight = min(duration / CANDIDATE_TIME, 1.0)
         candidate = self._candidate
@@ -93,14 +100,19 @@ class FieldReference:
                            candidate[1] + weight * (dip - candidate[1]))
         outcome = self._outcome(norm, dip, (self.norm, self.dip))
         if outcome == ACCEPTED:
+            self._clean_seconds += duration
+            if self._clean_seconds < SETTLE_TIME:
+                return SETTLING
             track = min(duration / TRACKING_TIME, 1.0)
             self.norm += track * (norm - self.norm)
             self.dip += track * (dip - self.dip)
             self._candidate_seconds = 0.0
             return ACCEPTED
+        self._clean_seconds = 0.0
         if self._candidate_seconds >= self.new_field_seconds:
             self.norm, self.dip = self._candidate
             self._candidate_seconds = 0.0
+            self._clean_seconds = SETTLE_TIME
             self.new_references += 1
             return self._outcome(norm, dip, (self.norm, self.dip))
         self.rejected[outcome] += 1

@@ -92,15 +92,30 @@ class ImuInterval:
 
 
 class MagneticInterval:
-    """Sum of one interval's magnetometer samples in the world frame (module docstring)."""
+    """Sums of one interval's magnetometer samples in the world frame and in the sensor frame
+    (module docstring)."""
 
     def __init__(self) -> None:
         self.clear()
 
     def clear(self) -> None:
-        """Forget the sum."""
+        """Forget the sums."""
         self.sums = [0.0, 0.0, 0.0]
+        self.body_sums = [0.0, 0.0, 0.0]
         self.count = 0
+
+    def add_body(self, field: Sequence[float]) -> None:
+        """One sample [T] in the sensor frame, corrected for hard and soft iron (the hard-iron
+        fit's data, :mod:`.hard_iron`); :meth:`add` counts it."""
+        b = self.body_sums
+        b[0] += field[0]
+        b[1] += field[1]
+        b[2] += field[2]
+
+    def mean_body(self) -> tuple[float, float, float]:
+        """Mean field in the sensor frame [T]."""
+        b, n = self.body_sums, self.count
+        return b[0] / n, b[1] / n, b[2] / n
 
     def add(self, q: Quat, field: Sequence[float]) -> None:
         """One sample [T], body frame, corrected for hard and soft iron, seen at ``q``."""

@@ -47,7 +47,7 @@ reason: Information Fusion 91, 2023, section 3.4).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -87,6 +87,14 @@ class MagnetometerCalibration:
         if not np.linalg.cond(matrix.reshape(3, 3)) < 1e3:
             raise InputError(f'Expected `soft_iron` to be well conditioned (condition number '
                              f'below 1000), got {self.soft_iron!r}')
+
+    def learned(self, offset: NDArray[np.float64]) -> MagnetometerCalibration:
+        """This correction with a further hard-iron ``offset`` [T] found in the corrected
+        field (:mod:`.hard_iron`): ``S (m − h) − o = S (m − h − S⁻¹ o)``."""
+        extra = np.linalg.solve(np.array(self.soft_iron).reshape(3, 3), offset)
+        h = self.hard_iron
+        return replace(self, hard_iron=(h[0] + float(extra[0]), h[1] + float(extra[1]),
+                                        h[2] + float(extra[2])))
 
     def corrected(self, raw: tuple[float, float, float]) -> tuple[float, float, float]:
         """``S (m_raw − h)`` [T] (plain floats)."""

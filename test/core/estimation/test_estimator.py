@@ -283,3 +283,22 @@ def test_magnetic_field_refuses_an_age_out_of_range():
         estimator.magnetic_field((1.0, 0.0, 0.0, 0.0), (0.0, 18e-6, -45e-6), age=1.0)
     with pytest.raises(InputError, match='age'):
         estimator.magnetic_field((1.0, 0.0, 0.0, 0.0), (0.0, 18e-6, -45e-6), age=math.nan)
+
+
+def test_attached_magnet_is_learned_and_heading_holds():
+    """A magnet fixed to the body from the start of the motion (a 27 µT offset in the
+    sensor frame): the filter learns it as hard iron and the heading holds; without
+    learning, the field is refused and the heading is the gyro's alone."""
+    truth, gyro, accel, field = simulate(90.0, lambda t: 4.0 * rates(t), seed=13)
+    magnet = field + np.array([-3.5e-6, 0.2e-6, 27e-6])
+    errors = {}
+    for learn in (True, False):
+        settings = dataclasses.replace(SETTINGS, learn_hard_iron=learn)
+        estimator, q = started(truth[0], settings=settings, field_body=field[0])
+        estimates, _ = run(estimator, q, gyro + np.array([0.0, 0.0, 2e-3]), accel, magnet)
+        heading = np.degrees(world_errors(truth, estimates)[-1000:, 2])
+        errors[learn] = (math.sqrt(np.mean(heading ** 2)), estimator.counts)
+    assert errors[True][1]['hard_iron_learned'] >= 1
+    assert errors[True][0] < 1.0
+    assert errors[False][1]['hard_iron_learned'] == 0
+    assert errors[False][0] > 2.0 * errors[True][0]
