@@ -182,7 +182,7 @@ class Estimation:
         except InputError:
             self.counts['magnetometer_start_refused'] += 1
             return None
-        self.estimator.field = reference
+        self.estimator.magnetometer_channel.reference = reference
         self._publish()
         return q_new
 
