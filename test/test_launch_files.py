@@ -59,7 +59,6 @@ def test_the_package_ships_five_launch_files():
                             'spacecraft_loop.launch.xml']
 
 
-
 def test_spacecraft_loop_gives_both_nodes_the_scene_and_drives_the_wheels():
     launch = read('spacecraft_loop.launch.xml', {'scene': 'wheel_slew_commanded'})
     assert problems(launch) == []

@@ -26,7 +26,6 @@ from rigid_body_attitude.msgs import (
     imu_with_orientation, pose_stamped_encoder, pose_with_covariance_stamped_encoder,
     quaternion_stamped_encoder)
 from rigid_body_attitude.msgs.cdr import accel_with_covariance_stamped_encoder
-from rigid_body_attitude.msgs.types import IMU
 from rigid_body_attitude.session.base import AccelerationEstimate, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import (
