@@ -57,7 +57,8 @@ def scene_file(tmp_path):
         'initial_state': {'omega_body': [0.3, 0.5, -0.4]},
         'sensors': {
             'imu': {'rate': 200.0, 'frame_id': 'imu_link', 'seed': 3,
-                    'mount_rpy': [0.0, 0.0, 1.0], 'gravity': [0.0, 0.0, -9.80665], **GYRO, **ACCEL},
+                    'mount_rpy': [0.0, 0.0, 1.0], 'gravity': [0.0, 0.0, -9.80665],
+                    **GYRO, **ACCEL},
             'magnetometer': {'rate': 100.0, 'frame_id': 'imu_link', 'seed': 3,
                              'mount_rpy': [0.0, 0.0, 1.0], 'noise_density': FIELD_NOISE,
                              'intensity': 5.0e-5, 'inclination': 1.1, 'declination': 0.0}}}))
