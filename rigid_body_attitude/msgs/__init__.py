@@ -7,7 +7,7 @@ messages with these, as the replay tool does with a bag's records.
   layouts (a header, then float64 fields) the codecs are built from.
 * :mod:`~rigid_body_attitude.msgs.decoders`: checked decoders of the fixed-layout messages
   (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped,
-  PoseWithCovarianceStamped, Float64)
+  PoseWithCovarianceStamped, MagneticField, Float64)
   to plain values, raising :class:`MalformedMessage` for any bytes that are not one.
 * :mod:`~rigid_body_attitude.msgs.odometry`: ``nav_msgs/msg/Odometry``, the encoder of the
   node's ``odom`` and the checked decoder of the controller's.

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = [
+    'ACCEL_WITH_COVARIANCE_STAMPED',
     'CLOCK',
     'DIAGNOSTIC_ARRAY',
     'FIXED_LAYOUTS',
@@ -42,6 +43,7 @@ POSE_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/PoseWithCovarianceStamped'
 TWIST_STAMPED = 'geometry_msgs/msg/TwistStamped'
 FLOAT64 = 'std_msgs/msg/Float64'
 MAGNETIC_FIELD = 'sensor_msgs/msg/MagneticField'
+ACCEL_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/AccelWithCovarianceStamped'
 DIAGNOSTIC_ARRAY = 'diagnostic_msgs/msg/DiagnosticArray'
 #: A header, ``child_frame_id`` (a second string), then float64 only (:data:`ODOMETRY_BODY`).
 ODOMETRY = 'nav_msgs/msg/Odometry'
@@ -94,6 +96,9 @@ FIXED_LAYOUTS: dict[str, Layout] = {
         + tuple(f'pose.covariance[{index}]' for index in range(36))),
     FLOAT64: Layout(False, ('data',)),
     MAGNETIC_FIELD: Layout(True, _vector('magnetic_field') + _covariance('magnetic_field')),
+    ACCEL_WITH_COVARIANCE_STAMPED: Layout(
+        True, _vector('accel.accel.linear') + _vector('accel.accel.angular')
+        + tuple(f'accel.covariance[{index}]' for index in range(36))),
 }
 
 #: The float64 fields of ``nav_msgs/msg/Odometry`` after its header and ``child_frame_id``

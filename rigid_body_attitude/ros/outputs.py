@@ -34,7 +34,8 @@ from typing import Any
 from rclpy.node import Node
 
 from rigid_body_attitude.msgs.cdr import (
-    encode_float64, imu_with_orientation, pose_stamped_encoder,
+    accel_with_covariance_stamped_encoder, encode_float64, imu_with_orientation,
+    pose_stamped_encoder,
     pose_with_covariance_stamped_encoder, quaternion_stamped_encoder, stamped_floats_encoder,
     transform_encoder)
 from rigid_body_attitude.msgs.odometry import odometry_encoder
@@ -43,6 +44,7 @@ from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
 from rigid_body_attitude.ros.interface import create_publisher
 from rigid_body_attitude.ros.log_queue import LogQueue
 from rigid_body_attitude.ros.rclpy_internals import raw_output
+from rigid_body_attitude.session.base import AccelerationEstimate
 from rigid_body_attitude.session.interface import Endpoint, NODE_INTERFACE, Situation
 from rigid_body_attitude.session.outputs import OutputSample, StampRateLimiter
 from rigid_body_attitude.session.reports import DiagnosticReport
@@ -152,6 +154,7 @@ class RosOutputs:
         self.pose_raw = raw.get('pose', absent)
         self.imu_raw = raw.get('imu/data', absent)
         self.pose_covariance_raw = raw.get('pose_with_covariance')
+        self.acceleration_raw = raw.get('accel/filtered', absent)
         self.twist_raw = raw.get('twist', absent)
         self.odom_raw = raw.get('odom', absent)
         self.energy_raw = raw.get('energy', absent)
@@ -216,6 +219,7 @@ class RosOutputs:
         self.encode_twist = stamped_floats_encoder(body_frame, 6)
         self.encode_odom = odometry_encoder(world_frame, body_frame)
         self.encode_tf = transform_encoder(world_frame, body_frame)
+        self.encode_acceleration = accel_with_covariance_stamped_encoder(body_frame)
 
     # -- OutputSink -------------------------------------------------------------------------
 
@@ -238,6 +242,12 @@ class RosOutputs:
                 sec, nanosec, _ZERO_POSITION, attitude, self.pose_covariance))
         if self.tf_raw is not None:
             self._publish_tf(sec, nanosec, attitude)
+
+    def acceleration(self, sec: int, nanosec: int, estimate: AccelerationEstimate) -> None:
+        """``accel/filtered`` of one filtered gyro sample (computed when subscribed)."""
+        output = self.acceleration_raw
+        if output.subscription_count():
+            output.publish(self.encode_acceleration(sec, nanosec, *estimate()))
 
     def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
         """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``

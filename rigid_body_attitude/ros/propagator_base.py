@@ -39,6 +39,7 @@ from rigid_body_attitude.ros.parameters import (
     declare_table_parameter, parameter_values, ros_value)
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
 from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.interface import Endpoint, NODE_INTERFACE, Situation
 from rigid_body_attitude.session.mount_gate import MountGate
@@ -197,6 +198,8 @@ class PropagatorMixin(Node):
             if isinstance(session, GyroSession):
                 parts.mount_gate = MountGate(session, self.get_parameter('tf_timeout').value,
                                              time.monotonic)
+                if isinstance(session, FilteredGyroSession):
+                    session.frame_mount = parts.mount_gate.mount_of
                 parts.tf_static_subscription = create_subscription(
                     self, endpoint, self.tf_static_callback)
         for endpoint in NODE_INTERFACE.inputs(parts.situation):
