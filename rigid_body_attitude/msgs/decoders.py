@@ -73,6 +73,7 @@ from rigid_body_attitude.msgs.types import (
     FIXED_LAYOUTS,
     FLOAT64,
     IMU,
+    MAGNETIC_FIELD,
     POSE_STAMPED,
     POSE_WITH_COVARIANCE_STAMPED,
     QUATERNION_STAMPED,
@@ -95,6 +96,7 @@ __all__ = [
     'decode_imu',
     'decode_imu_motion',
     'decode_imu_rate',
+    'decode_magnetic_field',
     'decode_pose_stamped',
     'decode_pose_with_covariance_stamped',
     'decode_quaternion_stamped',
@@ -441,6 +443,7 @@ _twist = _whole(TWIST_STAMPED)
 _pose = _whole(POSE_STAMPED)
 _pose_with_covariance = _whole(POSE_WITH_COVARIANCE_STAMPED)
 _quaternion = _whole(QUATERNION_STAMPED)
+_magnetic_field = _whole(MAGNETIC_FIELD)
 
 
 def _without_acceleration(decode_rate: StampedFloatsDecoder) -> RateDecoder:
@@ -486,6 +489,13 @@ def decode_pose_with_covariance_stamped(
     sec, nanosec, frame_id, values = _pose_with_covariance(data)
     px, py, pz, x, y, z, w = values[:7]
     return sec, nanosec, frame_id, (px, py, pz), (w, x, y, z), values[7:]
+
+
+def decode_magnetic_field(data: bytes) -> tuple[int, int, str, Floats, Floats]:
+    """``(sec, nanosec, frame_id, field, covariance)`` of a ``sensor_msgs/msg/MagneticField``
+    (field [T], sensor frame; covariance: the 9 row-major values)."""
+    sec, nanosec, frame_id, values = _magnetic_field(data)
+    return sec, nanosec, frame_id, values[:3], values[3:]
 
 
 def decode_quaternion_stamped(data: bytes) -> tuple[int, int, str, Floats]:

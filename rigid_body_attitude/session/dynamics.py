@@ -219,8 +219,12 @@ class DynamicsSession(Session):
         self.commands.tick_ns = now_ns
 
     def republish(self) -> None:
-        """The outputs of the current state again (lockstep's first tick, until answered)."""
+        """The outputs of the current state again, the simulated sensors' last samples first
+        (lockstep's first tick, until answered: a controller that subscribed late gets the
+        magnetometer sample it waits for too)."""
         if self.clock.started:
+            if self.sensors is not None:
+                self.sensors.resend()
             self._publish()
 
     def lockstep_answered(self) -> bool:

@@ -420,12 +420,15 @@ class ClockDriver(_Counting):
                 propagator.state.time = now  # the pause: not integrated across
                 return self._accept(_BASELINE)
         last = propagator.state.time
-        if now < last - self.time_jump_threshold:
+        # Compared in whole nanoseconds: a tick exactly time_jump_threshold after the last
+        # (1 Hz ticks, a 1 s threshold) is no jump, whatever the round-off of the seconds.
+        step_ns, threshold_ns = round((now - last) * 1e9), round(self.time_jump_threshold * 1e9)
+        if step_ns < -threshold_ns:
             propagator.reset(time=self.start(now))
             return self._reject('time_jump', reset=True)
         if now <= last:
             return self._reject('stale_stamp')
-        if now - last > self.time_jump_threshold:
+        if step_ns > threshold_ns:
             propagator.state.time = now
             return self._reject('gap')
         self.advance(now)

@@ -7,12 +7,11 @@ from __future__ import annotations
 
 import pytest
 
-from rigid_body_attitude.core.propagator import DynamicsPropagator
-from rigid_body_attitude.core.sensors.magnetometer import MagnetometerModel
 from rigid_body_attitude.msgs.decoders import parse_stamped
 from rigid_body_attitude.msgs.types import FIXED_LAYOUTS, MAGNETIC_FIELD
 
 from conftest import MS
+from magnetic_loop import core_field_samples
 
 SCENE = 'bdot_detumbling_commanded'  # orbit, tilted dipole, 10 Hz magnetometer, dipole input
 TICK_NS = 100 * MS
@@ -39,24 +38,6 @@ def run(session, clocks, first_ns: int, ticks: int = TICKS, before=None) -> None
         session.tick(clocks.now_ns)
 
 
-def core_samples(first_ns: int, stamps: list[int]) -> list[tuple[float, ...]]:
-    """The core from t = 0: the scene's propagator stopped at the same ticks and sample
-    instants (scene times measured from ``first_ns``) and the magnetometer model."""
-    from rigid_body_attitude.core.dynamics.scene import load_scene
-    scene = load_scene(SCENE)
-    propagator = DynamicsPropagator(scene)
-    model = MagnetometerModel(scene.sensors.magnetometer, scene.magnetic_field)
-    stops = sorted({*(k * TICK_NS for k in range(TICKS)), *(s - first_ns for s in stamps)})
-    wanted = {s - first_ns for s in stamps}
-    samples = []
-    for offset_ns in stops:
-        t = offset_ns * 1e-9
-        propagator.advance_to(t)
-        if offset_ns in wanted:
-            samples.append(model.sample(t, propagator.state.attitude_tuple()))
-    return samples
-
-
 @pytest.mark.parametrize('first_ns', [
     1_700_000_000 * 10**9 + 370 * MS,  # wall time, 0.37 s into a second
     1000 * 10**9 + 370 * MS,           # a sim clock at 1000.37 s
@@ -72,7 +53,8 @@ def test_the_field_samples_are_the_core_propagators_from_t0_whatever_the_first_t
         assert stamps == [first_ns + k * TICK_NS for k in range(TICKS)]
     assert 0 <= stamps[0] - first_ns < TICK_NS and len(stamps) >= TICKS - 1
     # the same bits as the core from t = 0 at the same scene times
-    assert [body for _, body in samples] == core_samples(first_ns, stamps)
+    assert [body for _, body in samples] == core_field_samples(SCENE, first_ns, TICK_NS, TICKS,
+                                                               stamps)
 
 
 def test_two_clock_origins_with_the_same_phase_give_the_same_samples(open_scene, clocks):
