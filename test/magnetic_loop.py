@@ -117,7 +117,9 @@ def spacecraft_loop(scene_name: str, controller_values: dict, publish_rate: floa
     plant_sink = _PlantSink(values['world_frame'], values['body_frame'])
     clock = [0]
     plant = open_session(scene, values, plant_sink, lambda: clock[0], lambda: 0.0)
-    chosen = controller_defaults() | {'scene': scene_name} | controller_values
+    chosen = controller_defaults() | {'scene': scene_name} | {
+        key: tuple(value) if isinstance(value, list) else value
+        for key, value in controller_values.items()}
     assert check_controller_values(chosen) == ''
     drive = WheelDrive(scene) if chosen['actuator'] == 'reaction_wheels' else None
     answers = _ControllerSink(drive)
