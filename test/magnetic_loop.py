@@ -12,6 +12,7 @@ carries float64 exactly), so a ROS run of the same loop gives the same bits.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 import math
 from dataclasses import dataclass, field
 
@@ -47,6 +48,7 @@ class _PlantSink:
     body_frame: str
     ticks: list[Tick] = field(default_factory=list)
     controller: ControllerSession | None = None
+    wheel_speeds: Callable[[tuple[float, ...]], None] | None = None
     use_header_stamps: bool = True
 
     def dynamics(self, sec, nanosec, sample, velocity_body):
@@ -61,6 +63,8 @@ class _PlantSink:
 
     def wheel_state(self, data):
         state = decode_joint_state(data)
+        if self.wheel_speeds is not None:
+            self.wheel_speeds(state.velocity)
         self.controller.wheel_state(state.sec, state.nanosec, state.names, state.velocity)
 
     def sensor_wanted(self, topic):
@@ -108,13 +112,17 @@ class _ControllerSink:
 
 
 def spacecraft_loop(scene_name: str, controller_values: dict, publish_rate: float,
-                    seconds: float, stop_rate_deg_s: float = 0.0) -> list[Tick]:
+                    seconds: float, stop_rate_deg_s: float = 0.0,
+                    wheel_speeds: Callable[[tuple[float, ...]], None] | None = None
+                    ) -> list[Tick]:
     """Run the loop for ``seconds`` of sim time (ticks at ``publish_rate``) or until the body
-    rate falls below ``stop_rate_deg_s``; the plant's ticks."""
+    rate falls below ``stop_rate_deg_s``; the plant's ticks (``wheel_speeds``: called with
+    each tick's ``wheels/state`` speeds)."""
     scene = load_node_scene(scene_name)
     values = defaults() | {'scene': scene_name, 'lockstep': True,
                            'publish_rate': publish_rate, 'real_time_factor': 0.0}
-    plant_sink = _PlantSink(values['world_frame'], values['body_frame'])
+    plant_sink = _PlantSink(values['world_frame'], values['body_frame'],
+                            wheel_speeds=wheel_speeds)
     clock = [0]
     plant = open_session(scene, values, plant_sink, lambda: clock[0], lambda: 0.0)
     chosen = controller_defaults() | {'scene': scene_name} | {
