@@ -485,6 +485,88 @@ def tf_static_classes(seed: int) -> Iterator[AttackClass]:
                       counted=20_001)
 
 
+def field_message(at_ns: int, field: tuple[float, float, float], frame: str = 'base_link',
+                  sec_nanosec: tuple[int, int] | None = None) -> Any:
+    """A MagneticField [T] stamped ``at_ns`` (or the raw ``sec_nanosec``)."""
+    from sensor_msgs.msg import MagneticField
+    message = MagneticField()
+    message.header.stamp, message.header.frame_id = stamp(at_ns), frame
+    if sec_nanosec is not None:
+        message.header.stamp.sec, message.header.stamp.nanosec = sec_nanosec
+    f = message.magnetic_field
+    f.x, f.y, f.z = field
+    return message
+
+
+def magnetometer_classes(seed: int) -> Iterator[AttackClass]:
+    """``imu/mag`` of the attitude filter: malformed bytes, absurd and non-finite fields,
+    frames without a mount, zero and invalid stamps."""
+    from rclpy.serialization import serialize_message
+    earth = (2e-5, 0.0, -4e-5)
+    # In a frame without a mount: a variant that still decodes (the transport pads a cut
+    # payload with zeros) is refused as such, never taken.
+    good = serialize_message(field_message(BASE_NS, earth, 'elsewhere'))
+    for name, payloads in malformed_cases(good, seed + 3).items():
+        yield AttackClass(name, payloads, 'malformed|magnetometer_no_mount|'
+                          'magnetometer_invalid_stamp|magnetometer_stale_stamp|'
+                          'magnetometer_out_of_range|magnetometer_non_finite')
+    fields = [(math.nan, 0.0, 0.0), (0.0, math.inf, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0),
+              (1e308, 1e308, 1e308), (0.0, -1e200, 0.0)] * 2
+    yield AttackClass('fields NaN, Inf, zero or beyond any magnetometer', [
+        field_message(BASE_NS + k * MS + MS // 2, f) for k, f in enumerate(fields)],
+        'magnetometer_non_finite|magnetometer_out_of_range')
+    frames = ['elsewhere', '', '\x1b[2J\x07', 'x' * 2**20, 'imu_link', 'base_link ']
+    frames = [frame for frame in frames if frame != '']  # '' is the body's: a good field
+    yield AttackClass('fields in a frame without a mount (1 MiB and escapes included)', [
+        field_message(BASE_NS + k * MS + MS // 2, earth, frame)
+        for k, frame in enumerate(frames)], 'magnetometer_no_mount')
+    yield AttackClass('zero and invalid stamps', [
+        field_message(BASE_NS, earth, sec_nanosec=pair) for pair in
+        [(0, 0), (BASE_NS // 10**9, 10**9), (BASE_NS // 10**9, 2**32 - 1), (-5, 0)] * 3],
+        'magnetometer_invalid_stamp')
+
+
+def measurement_message(at_ns: int, q: tuple[float, ...], frame: str = 'world',
+                        block: list[float] | None = None) -> Any:
+    """An attitude measurement (PoseWithCovarianceStamped) with its orientation block."""
+    message = _covariance_pose(block or [1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 1e-4])
+    message.header.stamp, message.header.frame_id = stamp(at_ns), frame
+    o = message.pose.pose.orientation
+    o.w, o.x, o.y, o.z = q
+    return message
+
+
+def measurement_classes(seed: int) -> Iterator[AttackClass]:
+    """``attitude_measurement``: malformed bytes, wrong frames, zero or NaN quaternions,
+    hostile covariance blocks, stamps far from the gyro's."""
+    from rclpy.serialization import serialize_message
+    unit = (1.0, 0.0, 0.0, 0.0)
+    good = serialize_message(measurement_message(BASE_NS, unit, 'map'))  # decodable: refused
+    reasons = 'attitude_measurement_wrong_frame|attitude_measurement_stale_measurement'
+    for name, payloads in malformed_cases(good, seed + 4).items():
+        yield AttackClass(name, payloads, f'malformed|{reasons}|'
+                          'attitude_measurement_invalid_covariance|'
+                          'attitude_measurement_invalid_pose|attitude_measurement_non_finite')
+    at = BASE_NS + MS // 2
+    yield AttackClass('another frame (1 MiB included), zero or NaN quaternion', [
+        measurement_message(at, unit, frame) for frame in ('map', '', 'x' * 2**20)] + [
+        measurement_message(at, (0.0, 0.0, 0.0, 0.0)),
+        measurement_message(at, (math.nan, 0.0, 0.0, 1.0))],
+        'attitude_measurement_wrong_frame|attitude_measurement_invalid_pose|'
+        'attitude_measurement_non_finite')
+    yield AttackClass('orientation blocks huge, unphysical or not PSD', [
+        measurement_message(at, unit, block=block) for block in _hostile_orientation_blocks()],
+        'attitude_measurement_invalid_covariance')
+    yield AttackClass('stamps far from the gyro\'s', [
+        measurement_message(at + sign * 10**10, unit) for sign in (1, -1) * 3],
+        'attitude_measurement_stale_measurement')
+
+
+def _field_type() -> Any:
+    from sensor_msgs.msg import MagneticField
+    return MagneticField
+
+
 def send_mount(running: 'RunningNode') -> None:
     """The IMU's mount ``base_link`` -> ``imu_link`` (identity), then a moment to read it."""
     running.publishers['/tf_static'].publish(tf_message(
@@ -524,6 +606,10 @@ SURFACES = [
             before_last=send_mount),
     Surface('imu accelerometer', 'imu', _imu_type, accel_classes,
             parameters=('align_seconds:=0.3',), at_rest=True),
+    Surface('imu/mag', 'imu/mag', _field_type, magnetometer_classes,
+            parameters=('scene:=imu_filter',)),
+    Surface('attitude_measurement', 'attitude_measurement', _pose_covariance_type,
+            measurement_classes, parameters=('scene:=imu_filter',)),
 ]
 
 
@@ -840,6 +926,15 @@ def scene_files(folder: Path) -> dict[str, Path]:
         'alias bomb (error text)': _alias_bomb(b'rate_source'),
         'YAML syntax error': b'body: {inertia: [1, 2\n',
         '20 MB file': b'# ' + b'x' * (20 * 2**20) + b'\n',
+        'estimation section not a mapping': b'rate_source: gyro\n'
+                                            b'body: {inertia: {moments: [1, 2, 3]}}\n'
+                                            b'estimation: [gravity]\n',
+        'estimation on a dynamics scene': b'rate_source: dynamics\n'
+                                          b'body: {inertia: {moments: [1, 2, 3]}}\n'
+                                          b'estimation: {magnetometer: true}\n',
+        'estimation settings NaN, negative, unknown': (
+            b'rate_source: gyro\nbody: {inertia: {moments: [1, 2, 3]}}\n'
+            b'estimation: {settings: {gravity_gate: .nan, update_interval: -1, wind: 3}}\n'),
         **spacecraft_scene_files(),
     }
     paths = {}
@@ -969,6 +1064,27 @@ def _alias_bomb(key: bytes) -> bytes:
     return b'\n'.join(lines) + b'\n'
 
 
+def magnetometer_files(folder: Path) -> dict[str, Path]:
+    """Hostile magnetometer calibration files."""
+    files = {
+        'not UTF-8': b'hard_iron: [\xff, 0, 0]\n',
+        'hard_iron 1e308': b'hard_iron: [1e308, 0, 0]\n',
+        'soft_iron singular': b'soft_iron: [[1, 0, 0], [1, 0, 0], [0, 0, 1]]\n',
+        'soft_iron a mirror': b'soft_iron: [[-1, 0, 0], [0, 1, 0], [0, 0, 1]]\n',
+        'soft_iron NaN': b'soft_iron: [[.nan, 0, 0], [0, 1, 0], [0, 0, 1]]\n',
+        'alias bomb': _alias_bomb(b'hard_iron'),
+        '20 MB file': b'# ' + b'x' * (20 * 2**20) + b'\n',
+        'unknown key': b'scale: 2\n',
+    }
+    paths = {}
+    for name, content in files.items():
+        path = folder / ('mag_' + name.replace(' ', '_') + '.yaml')
+        path.write_bytes(content)
+        paths[name] = path
+    paths['missing file'] = folder / 'no_such_magnetometer.yaml'
+    return paths
+
+
 def start_attack(name: str, cases: dict[str, list[str]], domain: int) -> Result:
     """Each case must end at start with one ``error:`` line, exit 2, within a second."""
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
@@ -999,7 +1115,9 @@ def parameter_cases() -> dict[str, list[str]]:
         ('max_dt', '-1.0'), ('max_angular_rate', '0.0'), ('time_jump_threshold', '1e300'),
         ('constant_dt', 'true'), ('use_header_stamps', '2.0'), ('step', '.inf'),
         ('world_frame', "''"), ('body_frame', 'world'), ('integrator', 'no_such'),
-        ('scene', 'no_such_scene'), ('scene', 'x' * 5000), ('step', '-0.001')]}
+        ('scene', 'no_such_scene'), ('scene', 'x' * 5000), ('step', '-0.001'),
+        ('magnetic_declination', '4.0'), ('magnetometer_noise_density', '-1.0'),
+        ('accelerometer_noise_density', '.inf'), ('accelerometer_random_walk', 'true')]}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -1041,7 +1159,8 @@ def _said(result: Result) -> Result:
 
 
 #: The start-time classes: what a user gives at start.
-START_CLASSES = ('scene files', 'sensors sections', 'parameters')
+START_CLASSES = ('scene files', 'sensors sections', 'parameters',
+                 'magnetometer calibration files')
 
 
 def start_attacks(domain: int, classes: tuple[str, ...] | list[str]) -> list[Result]:
@@ -1054,7 +1173,10 @@ def start_attacks(domain: int, classes: tuple[str, ...] | list[str]) -> list[Res
                             for name, path in scene_files(Path(folder)).items()},
             'sensors sections': {name: ['-p', f'scene:={path}']
                                  for name, path in sensor_scene_files(Path(folder)).items()},
-            'parameters': parameter_cases()}
+            'parameters': parameter_cases(),
+            'magnetometer calibration files': {
+                name: ['-p', 'scene:=imu_filter', '-p', f'magnetometer_calibration_file:={path}']
+                for name, path in magnetometer_files(Path(folder)).items()}}
         for name in START_CLASSES:
             if name not in classes:
                 continue

@@ -55,7 +55,8 @@ def values_of(launch: LaunchFile, executable: str) -> dict[str, Any]:
 
 def test_the_package_ships_five_launch_files():
     assert LAUNCH_FILES == ['closed_loop.launch.xml', 'dynamics.launch.xml', 'imu.launch.xml',
-                            'managed.launch.py', 'spacecraft_loop.launch.xml']
+                            'imu_filter.launch.xml', 'managed.launch.py',
+                            'spacecraft_loop.launch.xml']
 
 
 def test_spacecraft_loop_gives_both_nodes_the_scene_and_drives_the_wheels():
@@ -89,6 +90,15 @@ def test_imu_starts_the_strapdown_node_and_the_mount_on_the_imu_topic():
     assert (mount.package, mount.arguments) == ('tf2_ros', [
         '--x', '0.0', '--y', '0.0', '--z', '0.2', '--roll', '3.14159', '--pitch', '0.0',
         '--yaw', '0.0', '--frame-id', 'chassis', '--child-frame-id', 'camera_imu'])
+
+
+def test_imu_filter_starts_the_filter_on_madgwicks_topics():
+    launch = read('imu_filter.launch.xml', {'magnetic_declination': '0.07'})
+    assert problems(launch) == []
+    node = node_of(launch, 'propagation_node')
+    assert node.remaps == [('imu', 'imu/data_raw'), ('imu/mag', 'imu/mag')]
+    values = values_of(launch, 'propagation_node')
+    assert (values['scene'], values['magnetic_declination']) == ('imu_filter', 0.07)
 
 
 def test_dynamics_starts_the_scene_given():

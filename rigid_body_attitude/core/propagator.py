@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.attitude.float_quaternion import finite_vec3
 from rigid_body_attitude.core.dynamics.diagnostics import Diagnostics, DiagnosticsTracker
 from rigid_body_attitude.core.dynamics.euler import inertia_without_rotors, RigidBodyModel
 from rigid_body_attitude.core.dynamics.effects import (
@@ -204,21 +205,21 @@ class _Propagator:
         self.tracker = DiagnosticsTracker(self.energy(), self.world_momentum())
 
     def command(self, input_name: str, t: float, value: ArrayLike) -> None:
-        """Pass a commanded input (e.g. ``torque`` [N m, body]) stamped ``t`` to its effects.
-
-        Raises :class:`InputError` for an input no effect takes or a non-finite value; a
-        command holds 3 numbers, or as many as its effect says (one per wheel of
-        ``wheel_torque``).
-        """
-        if input_name not in self.input_routes:
+        """Pass a commanded input (e.g. ``torque`` [N m, body]) stamped ``t`` to its effects:
+        3 numbers, or as many as its effect says (one per wheel of ``wheel_torque``);
+        :class:`InputError` for an input no effect takes or a non-finite value."""
+        routes = self.input_routes.get(input_name)
+        if routes is None:
             raise InputError(f'Scene {self.scene.name!r} takes no input {input_name!r}; '
                              f'inputs: {", ".join(sorted(self.input_routes)) or "(none)"}')
-        size = self.input_routes[input_name][0].input_size(input_name)
-        vector = _command_vector(input_name, value, size)
-        if vector.shape != (size,) or not math.isfinite(t):
+        size = routes[0].input_size(input_name)
+        vector: Vec | FloatArray | None = finite_vec3(value) if size == 3 else None  # no NumPy
+        if vector is None:
+            vector = _command_vector(input_name, value, size)
+        if (isinstance(vector, np.ndarray) and vector.shape != (size,)) or not math.isfinite(t):
             raise InputError(f'Expected `{input_name}` as {size} finite numbers at a finite '
-                             f'time, got {vector.tolist()!r} at t={t!r}')
-        for effect in self.input_routes[input_name]:
+                             f'time, got {np.asarray(vector).tolist()!r} at t={t!r}')
+        for effect in routes:
             effect.accept_input(input_name, t, vector)
 
     def counters(self) -> dict[str, int]:
@@ -248,6 +249,10 @@ class _Propagator:
         return rotation
 
     def world_momentum(self) -> FloatArray:
+        """:meth:`world_momentum_tuple` as an array [N m s]."""
+        return np.array(self.world_momentum_tuple())
+
+    def world_momentum_tuple(self) -> Vec:
         """World-frame angular momentum ``R(q)(J' ω + h)`` [N m s] (plain float math; ``J'``
         is ``J`` without wheels)."""
         p, q, r = self.state.omega_tuple()
@@ -260,9 +265,9 @@ class _Propagator:
             mx, my, mz = mx + hx, my + hy, mz + hz
         w, x, y, z = self.state.attitude_tuple()
         tx, ty, tz = 2.0 * (y * mz - z * my), 2.0 * (z * mx - x * mz), 2.0 * (x * my - y * mx)
-        return np.array([mx + w * tx + (y * tz - z * ty),
-                         my + w * ty + (z * tx - x * tz),
-                         mz + w * tz + (x * ty - y * tx)])
+        return (mx + w * tx + (y * tz - z * ty),
+                my + w * ty + (z * tx - x * tz),
+                mz + w * tz + (x * ty - y * tx))
 
     def diagnostics(self) -> Diagnostics:
         """Energy, momentum and their drift, energy-balance residual, norm error."""

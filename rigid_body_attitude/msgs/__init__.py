@@ -7,8 +7,10 @@ messages with these, as the replay tool does with a bag's records.
   layouts (a header, then float64 fields) the codecs are built from.
 * :mod:`~rigid_body_attitude.msgs.decoders`: checked decoders of the fixed-layout messages
   (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped,
-  PoseWithCovarianceStamped, Float64)
+  PoseWithCovarianceStamped, MagneticField, Float64)
   to plain values, raising :class:`MalformedMessage` for any bytes that are not one.
+* :mod:`~rigid_body_attitude.msgs.odometry`: ``nav_msgs/msg/Odometry``, the encoder of the
+  node's ``odom`` and the checked decoder of the controller's.
 * :mod:`~rigid_body_attitude.msgs.tf_message`: the checked decoder of ``tf2_msgs/TFMessage``
   (the static transforms of a bag's ``/tf_static``).
 * :mod:`~rigid_body_attitude.msgs.cdr`: fast ``struct`` encoders of those messages and the
@@ -74,6 +76,8 @@ from rigid_body_attitude.msgs.decoders import (
     decode_vector3_stamped,
     decode_wrench_stamped,
 )
+from rigid_body_attitude.msgs.odometry import (
+    Odometry, decode_odometry, encode_odometry, odometry_encoder)
 from rigid_body_attitude.msgs.tf_message import TF_MESSAGE, Transform, decode_tf_message
 from rigid_body_attitude.msgs.diagnostics import DiagnosticStatus, encode_diagnostic_array
 from rigid_body_attitude.msgs.errors import MalformedMessage
@@ -84,6 +88,8 @@ from rigid_body_attitude.msgs.types import (
     IMU,
     MAGNETIC_FIELD,
     MESSAGE_TYPES,
+    ODOMETRY,
+    ODOMETRY_BODY,
     POSE_STAMPED,
     POSE_WITH_COVARIANCE_STAMPED,
     QUATERNION_STAMPED,
@@ -102,6 +108,9 @@ __all__ = [
     'IMU',
     'MAGNETIC_FIELD',
     'MESSAGE_TYPES',
+    'ODOMETRY',
+    'ODOMETRY_BODY',
+    'Odometry',
     'POSE_STAMPED',
     'POSE_WITH_COVARIANCE_STAMPED',
     'QUATERNION_STAMPED',
@@ -123,6 +132,7 @@ __all__ = [
     'decode_imu',
     'decode_imu_motion',
     'decode_imu_rate',
+    'decode_odometry',
     'decode_pose_stamped',
     'decode_pose_with_covariance_stamped',
     'decode_quaternion_stamped',
@@ -134,6 +144,7 @@ __all__ = [
     'encode_diagnostic_array',
     'encode_float64',
     'encode_imu',
+    'encode_odometry',
     'encode_pose_stamped',
     'encode_pose_with_covariance_stamped',
     'encode_quaternion_stamped',
@@ -146,6 +157,7 @@ __all__ = [
     'imu_acceleration',
     'imu_rates',
     'imu_with_orientation',
+    'odometry_encoder',
     'pose_orientation',
     'pose_position',
     'pose_stamped_encoder',

@@ -77,6 +77,9 @@ __all__ = [
     'encode_twist_stamped',
     'encode_vector3_stamped',
     'encode_wrench_stamped',
+    'UNKNOWN_ANGULAR_ACCELERATION_VARIANCE',
+    'accel_with_covariance_stamped_encoder',
+    'encode_magnetic_field',
     'float64_value',
     'header_frame_id',
     'header_stamp_ns',
@@ -498,6 +501,47 @@ def transform_encoder(parent_frame: str, child_frame: str
         w, x, y, z = attitude
         try:
             return pack(_ENCAPSULATION_LE, 1, sec, nanosec, constant, 0.0, 0.0, 0.0, x, y, z, w)
+        except struct.error as err:
+            raise _stamp_error(sec, nanosec) from err
+    return encode
+
+
+def encode_magnetic_field(stamp_ns: int, frame_id: str, field: Sequence[float],
+                          covariance: Sequence[float] = _UNKNOWN_COVARIANCE) -> bytes:
+    """CDR bytes of a ``sensor_msgs/msg/MagneticField`` (field [T], sensor frame; covariance:
+    the 9 row-major values [T²], all zeros = unknown)."""
+    values = tuple(covariance)
+    if len(values) != 9:
+        raise InputError(f'Expected `covariance` to have 9 values, got {len(values)}')
+    return _pack(frame_id, stamp_ns, _vector(field, 'field') + values)
+
+
+#: The angular block of an ``accel/filtered`` covariance: not estimated (REP-145 has no
+#: marker for a block; a large finite variance, as the position of ``pose_with_covariance``).
+UNKNOWN_ANGULAR_ACCELERATION_VARIANCE = 1e9
+
+
+def accel_with_covariance_stamped_encoder(
+        frame_id: str) -> Callable[[int, int, Sequence[float], Sequence[float]], bytes]:
+    """``encode(sec, nanosec, linear, covariance)``: a
+    ``geometry_msgs/msg/AccelWithCovarianceStamped`` of one frame with the linear acceleration
+    [m/s²] and its row-major 3×3 covariance [(m/s²)²]; the angular part zero with
+    :data:`UNKNOWN_ANGULAR_ACCELERATION_VARIANCE` on its diagonal. One ``struct`` call."""
+    pack, constant = _header_struct(frame_id, '42d')
+    unknown = UNKNOWN_ANGULAR_ACCELERATION_VARIANCE
+
+    def encode(sec: int, nanosec: int, linear: Sequence[float],
+               covariance: Sequence[float]) -> bytes:
+        ax, ay, az = linear
+        c = covariance
+        try:
+            return pack(_ENCAPSULATION_LE, sec, nanosec, constant, ax, ay, az, 0.0, 0.0, 0.0,
+                        c[0], c[1], c[2], 0.0, 0.0, 0.0,
+                        c[3], c[4], c[5], 0.0, 0.0, 0.0,
+                        c[6], c[7], c[8], 0.0, 0.0, 0.0,
+                        0.0, 0.0, 0.0, unknown, 0.0, 0.0,
+                        0.0, 0.0, 0.0, 0.0, unknown, 0.0,
+                        0.0, 0.0, 0.0, 0.0, 0.0, unknown)
         except struct.error as err:
             raise _stamp_error(sec, nanosec) from err
     return encode

@@ -1,17 +1,20 @@
 """The ``attitude_controller`` node: quaternion-feedback PD over ROS, an rclpy adapter.
 
-Subscribes (raw CDR, decoded by the package's checked decoders) to ``orientation``
-(geometry_msgs/QuaternionStamped, world_frame), ``twist`` (geometry_msgs/TwistStamped, the
-angular part in body_frame) and ``target`` (geometry_msgs/QuaternionStamped, world_frame), and
-publishes ``torque`` (geometry_msgs/WrenchStamped, body_frame, zero force), or with
-``actuator`` ``reaction_wheels`` the scene's wheels' motor torques on ``wheels/command``
+Subscribes (raw CDR, decoded by the package's checked decoders) to ``odom``
+(nav_msgs/Odometry: the pose in world_frame, the twist in body_frame) or, with
+``state_input`` ``orientation_twist``, to ``orientation`` (geometry_msgs/QuaternionStamped,
+world_frame) and ``twist`` (geometry_msgs/TwistStamped, the angular part in body_frame); and to
+``target`` (geometry_msgs/QuaternionStamped, world_frame). Publishes ``torque``
+(geometry_msgs/WrenchStamped, body_frame, zero force), or with ``actuator``
+``reaction_wheels`` the scene's wheels' motor torques on ``wheels/command``
 (sensor_msgs/JointState; :class:`~rigid_body_attitude.session.wheel_drive.WheelDrive`), and
 ``/diagnostics``. With torque rods (``actuator`` ``magnetorquers``: B-dot; or the wheels'
 scene's commanded rods: dumping) it publishes ``dipole`` (geometry_msgs/Vector3Stamped) and
 reads the magnetometer (``imu/mag``, sensor_msgs/MagneticField), the plant's ``wheels/state``
 (dumping) and ``/tf_static`` (the magnetometer's mount;
-:mod:`~rigid_body_attitude.session.magnetic_control`). Remap ``orientation`` and ``twist`` to read an estimator instead of the
-plant's truth. The inputs are served by the package's raw-take loop
+:mod:`~rigid_body_attitude.session.magnetic_control`). Remap ``odom`` to read an estimator
+(robot_localization's ``odometry/filtered``) instead of the plant's truth. The inputs are
+served by the package's raw-take loop
 (:class:`~rigid_body_attitude.ros.raw_take_loop.RawTakeLoop`, every queued message per wake-up) and
 the parameter services by an executor in a second thread; on rclpy's stock executor path
 (:mod:`~rigid_body_attitude.ros.rclpy_internals`) one executor serves all. Everything else
@@ -38,11 +41,12 @@ from rcl_interfaces.msg import SetParametersResult
 
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.msgs.cdr import encode_vector3_stamped, encode_wrench_stamped
+from rigid_body_attitude.msgs.cdr import encode_vector3_stamped, stamped_floats_encoder
 from rigid_body_attitude.msgs.decoders import (
     decode_magnetic_field, decode_quaternion_stamped, decode_twist_stamped)
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.joint_state import decode_joint_state
+from rigid_body_attitude.msgs.odometry import decode_odometry
 from rigid_body_attitude.msgs.tf_message import decode_tf_message
 from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
 from rigid_body_attitude.ros.parameters import (
@@ -50,12 +54,12 @@ from rigid_body_attitude.ros.parameters import (
 from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, RawTakeLoop
 from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
 from rigid_body_attitude.ros.interface import create_publisher, create_subscription
-from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
+from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, raw_output
 from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
     CONTROLLER_PARAMETERS, check_controller_values, RENAMED_CONTROLLER_PARAMETERS,
-    renamed_problem)
+    renamed_problem, STATE_INPUTS)
 from rigid_body_attitude.session.interface import CONTROLLER_INTERFACE
 from rigid_body_attitude.session.magnetic_control import magnetic_control
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
@@ -69,7 +73,8 @@ _ZERO_FORCE = (0.0, 0.0, 0.0)
 
 
 class AttitudeControllerNode(Node):
-    """Answers each tick's ``orientation`` and ``twist`` with a ``torque`` of the same stamp.
+    """Answers each tick's state (``odom``, or ``orientation`` and ``twist``) with a ``torque``
+    of the same stamp.
 
     Keyword arguments go to :class:`rclpy.node.Node` (``context``, ``namespace``,
     ``parameter_overrides``, ``cli_args``, ...), e.g.
@@ -96,15 +101,21 @@ class AttitudeControllerNode(Node):
         self.loop_group = DedicatedGroup()
         self.session_lock = threading.Lock()
         self._create_command_publishers()
+        #: ``torque``'s CDR publish (``None`` with wheels) and its encoders by body_frame.
+        self._publish_torque = (None if self.torque_publisher is None
+                                else raw_output(self.torque_publisher)[1])
+        self._encoders: dict[str, Any] = {}
         self.diagnostics_publisher = DiagnosticsPublisher(self, CONTROLLER_INTERFACE,
                                                           CONTROLLER_NODE_NAME)
-        callbacks = {'attitude': self.orientation_callback, 'twist': self.twist_callback,
-                     'target': self.target_callback,
+        callbacks = {'odometry': self.odometry_callback, 'attitude': self.orientation_callback,
+                     'twist': self.twist_callback, 'target': self.target_callback,
                      'magnetic_field': self.magnetometer_callback,
                      'wheel_state': self.wheel_state_callback,
                      'transforms': self.tf_static_callback}
-        wanted = ('attitude', 'twist', 'target', *(magnetic.inputs if magnetic else ()))
-        #: (subscription, callback) of each input of :data:`CONTROLLER_INTERFACE` wanted.
+        wanted = (*STATE_INPUTS[values['state_input']], 'target',
+                  *(magnetic.inputs if magnetic else ()))
+        #: (subscription, callback) of each input of :data:`CONTROLLER_INTERFACE` that
+        #: ``state_input`` and the torque rods ask for.
         self.inputs = [
             (create_subscription(self, endpoint, callbacks[endpoint.quantity], self.loop_group),
              callbacks[endpoint.quantity])
@@ -168,6 +179,19 @@ class AttitudeControllerNode(Node):
             self.session.publish_diagnostics()
 
     # -- inputs (raw CDR) -------------------------------------------------------------------
+
+    def odometry_callback(self, data: bytes) -> None:
+        """``odom``: the plant's attitude and body rate in one message."""
+        try:
+            odometry = decode_odometry(data)
+        except MalformedMessage as err:
+            with self.session_lock:
+                self.session.malformed('odom', err.reason)
+            return
+        with self.session_lock:
+            self.session.odometry(odometry.sec, odometry.nanosec, odometry.frame_id,
+                                  odometry.child_frame_id, odometry.orientation,
+                                  odometry.angular)
 
     def orientation_callback(self, data: bytes) -> None:
         """``orientation``: the plant's attitude."""
@@ -243,9 +267,14 @@ class AttitudeControllerNode(Node):
         if self.wheel_drive is not None:
             self.wheel_drive.answer(sec, nanosec, torque_body, self._publish_wheels)
             return
-        assert self.torque_publisher is not None
-        self.torque_publisher.publish(encode_wrench_stamped(
-            sec * 1_000_000_000 + nanosec, self.session.body_frame, _ZERO_FORCE, torque_body))
+        assert self._publish_torque is not None
+        frame = self.session.body_frame
+        encode = self._encoders.get(frame)
+        if encode is None:  # the header packed once per body_frame
+            encode = self._encoders[frame] = stamped_floats_encoder(frame, 6)
+            if len(self._encoders) > 16:
+                self._encoders = {frame: encode}
+        self._publish_torque(encode(sec, nanosec, _ZERO_FORCE + torque_body))
 
     def _publish_wheels(self, data: bytes) -> None:
         assert self.wheels_publisher is not None
@@ -275,8 +304,8 @@ def controller_usage() -> str:
     return '\n'.join([
         'usage: attitude_controller [-h] [--ros-args -p NAME:=VALUE ... [-r FROM:=TO] ...]',
         '',
-        'Quaternion-feedback PD attitude control: reads orientation and twist, publishes',
-        'torque stamped like the tick it answers. See docs/closed-loop.md.',
+        'Quaternion-feedback PD attitude control: reads odom (or orientation and twist),',
+        'publishes torque stamped like the tick it answers. See docs/closed-loop.md.',
         '',
         'options:',
         '  -h, --help  print this text and exit (ROS is not started)',

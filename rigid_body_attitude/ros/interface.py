@@ -11,9 +11,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 import importlib
-from typing import Any
+from typing import Any, cast
 
 from rclpy.callback_groups import CallbackGroup
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos_overriding_options import QoSOverridingOptions
@@ -39,19 +40,27 @@ def _overriding(endpoint: Endpoint) -> dict[str, Any]:
     return {'qos_overriding_options': QoSOverridingOptions.with_default_policies()}
 
 
-def create_subscription(node: Node, endpoint: Endpoint, callback: Callable[[bytes], None],
+def create_subscription(node: Node, endpoint: Endpoint, callback: Callable[[bytes], object],
                         callback_group: CallbackGroup | None = None) -> Subscription:
     """A raw subscription of the input ``endpoint`` on ``node``."""
+    # (rclpy ignores what a callback returns; the raw-take loop reads it: DRAINED)
     return node.create_subscription(
-        interface_class(endpoint.type), endpoint.name, callback, qos_profile(endpoint.qos),
+        interface_class(endpoint.type), endpoint.name, cast('Callable[[bytes], None]', callback),
+        qos_profile(endpoint.qos),
         callback_group=callback_group, raw=True, **_overriding(endpoint))
 
 
-def create_publisher(node: Node, endpoint: Endpoint, name: str = '') -> Publisher:
+def create_publisher(node: Node, endpoint: Endpoint, name: str = '',
+                     on_matched: Callable[[], None] | None = None) -> Publisher:
     """The publisher of the output ``endpoint`` on ``node`` (``name``: the name a scene gives
-    it, else the endpoint's)."""
+    it, else the endpoint's); ``on_matched`` is called (by the executor serving the node's
+    default callback group) when a subscription matches it or leaves it."""
+    options: dict[str, Any] = _overriding(endpoint)
+    if on_matched is not None:
+        options['event_callbacks'] = PublisherEventCallbacks(
+            matched=lambda status: on_matched())
     return node.create_publisher(interface_class(endpoint.type), name or endpoint.name,
-                                 qos_profile(endpoint.qos), **_overriding(endpoint))
+                                 qos_profile(endpoint.qos), **options)
 
 
 def create_service(node: Node, endpoint: Endpoint, callback: Callable[[Any, Any], Any]

@@ -168,18 +168,19 @@ class ManagedPropagatorNode(PropagatorMixin, LifecycleNode):
 
     # -- callbacks --------------------------------------------------------------------------
 
-    def gated(self, handler: Callable[[bytes], None]) -> Callable[[bytes], None]:
-        """``handler`` while active; otherwise the message is counted ``inactive``."""
-        def gate(data: bytes) -> None:
+    def gated(self, handler: Callable[[bytes], object]) -> Callable[[bytes], object]:
+        """``handler`` while active (its result returned); otherwise the message is counted
+        ``inactive``."""
+        def gate(data: bytes) -> object:
             if self.active:
-                handler(data)
-                return
+                return handler(data)
             parts = self.built
             with parts.state_lock:
                 session = parts.session
                 session.rejections['inactive'] += 1
                 session.warn('inactive', 'input while the node is not active: not integrated '
                              '(activate it)')
+            return None
         return gate
 
     def diagnostics_callback(self) -> None:

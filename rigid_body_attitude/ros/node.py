@@ -81,7 +81,7 @@ class AttitudePropagatorNode(PropagatorMixin):
                   if timer is not None]
         if parts.sim_clock is not None and isinstance(parts.session, DynamicsSession):
             return step_loop(self.context, parts.session, parts.sim_clock,
-                             _served(parts, ('command',)), timers, parts.clock_publisher,
+                             _served(parts, ('command',)), timers, parts.clock_output,
                              parts.state_lock, parts.outputs)
         return RawTakeLoop(self.context, _served(parts, ('sensor',)), timers)
 
@@ -93,7 +93,7 @@ class AttitudePropagatorNode(PropagatorMixin):
 
 
 def _served(parts: NodeParts, roles: tuple[str, ...]
-            ) -> list[tuple[Any, Callable[[bytes], None]]]:
+            ) -> list[tuple[Any, Callable[[bytes], object]]]:
     """(subscription, handler) of the inputs of ``roles``."""
     return [(parts.subscriptions_by_topic[endpoint.name], parts.handlers[endpoint.name])
             for endpoint in NODE_INTERFACE.inputs(parts.situation, roles)]

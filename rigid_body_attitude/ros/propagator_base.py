@@ -21,7 +21,6 @@ from typing import Any
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
-from rclpy.publisher import Publisher
 from rclpy.service import Service
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
@@ -33,14 +32,14 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import (
     ANGULAR_RATE, decoder, input_handler, MALFORMED)
-from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup
-from rigid_body_attitude.ros.interface import (
-    create_publisher, create_service, create_subscription)
-from rigid_body_attitude.ros.outputs import RosOutputs
+from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, DRAINED
+from rigid_body_attitude.ros.interface import create_service, create_subscription
+from rigid_body_attitude.ros.outputs import RawOutput, RosOutputs
 from rigid_body_attitude.ros.parameters import (
     declare_table_parameter, parameter_values, ros_value)
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
 from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.interface import Endpoint, NODE_INTERFACE, Situation
 from rigid_body_attitude.session.mount_gate import MountGate
@@ -71,7 +70,7 @@ class NodeParts:
         situation: what decides the node's endpoints (:data:`NODE_INTERFACE`).
         loop_group: the callback group of the sensor inputs and timers, which the raw-take
             loop claims.
-        clock_publisher: ``/clock`` (``publish_clock``), or ``None``.
+        clock_output: ``/clock`` (``publish_clock``), or ``None``.
         subscriptions_by_topic, takers, handlers: per input topic, its raw subscription, its
             take function and its callback.
         mount_gate: the gyro samples' mount gate (gyro scenes), or ``None``.
@@ -89,10 +88,10 @@ class NodeParts:
     session: AnySession
     situation: Situation
     loop_group: DedicatedGroup = field(default_factory=DedicatedGroup)
-    clock_publisher: Publisher | None = None
+    clock_output: RawOutput | None = None
     subscriptions_by_topic: dict[str, Subscription] = field(default_factory=dict)
     takers: dict[str, Callable[[], bytes | None]] = field(default_factory=dict)
-    handlers: dict[str, Callable[[bytes], None]] = field(default_factory=dict)
+    handlers: dict[str, Callable[[bytes], object]] = field(default_factory=dict)
     mount_gate: MountGate | None = None
     tf_static_subscription: Subscription | None = None
     output_timer: Timer | None = None
@@ -157,8 +156,8 @@ class PropagatorMixin(Node):
         parts = self.parts = NodeParts(
             threading.Lock(), clock_ns, scene, publish_rate, outputs, sim_clock, session,
             Situation(scene, values, session.propagator.input_names))
-        parts.clock_publisher = next(
-            (create_publisher(self, endpoint)
+        parts.clock_output = next(
+            (RawOutput.of(self, endpoint)
              for endpoint in NODE_INTERFACE.outputs(parts.situation, ('clock',))), None)
         outputs.set_frames(values['world_frame'], values['body_frame'])
         outputs.log_queue.start()
@@ -199,6 +198,8 @@ class PropagatorMixin(Node):
             if isinstance(session, GyroSession):
                 parts.mount_gate = MountGate(session, self.get_parameter('tf_timeout').value,
                                              time.monotonic)
+                if isinstance(session, FilteredGyroSession):
+                    session.frame_mount = parts.mount_gate.mount_of
                 parts.tf_static_subscription = create_subscription(
                     self, endpoint, self.tf_static_callback)
         for endpoint in NODE_INTERFACE.inputs(parts.situation):
@@ -212,7 +213,7 @@ class PropagatorMixin(Node):
             parts.subscriptions_by_topic[topic] = subscription
             parts.takers[topic] = raw_taker(subscription)
 
-    def gated(self, handler: Callable[[bytes], None]) -> Callable[[bytes], None]:
+    def gated(self, handler: Callable[[bytes], object]) -> Callable[[bytes], object]:
         """The callback of an input topic around the session's ``handler``: ``handler``
         itself (the managed node lets it through only while active)."""
         return handler
@@ -231,16 +232,17 @@ class PropagatorMixin(Node):
         return locked
 
     def _command_callback(self, parts: NodeParts, endpoint: Endpoint
-                          ) -> Callable[[bytes], None]:
+                          ) -> Callable[[bytes], object]:
         """The callback of a command topic: it also takes every message queued behind the
         one it was given and hands only the newest decodable one to the session (the others
-        are counted ``superseded``; malformed ones ``malformed``). On rclpy's stock path
-        nothing more is taken: each message comes to the callback."""
+        are counted ``superseded``; malformed ones ``malformed``), and returns
+        :data:`~.raw_take_loop.DRAINED`. On rclpy's stock path nothing more is taken: each
+        message comes to the callback."""
         topic = endpoint.name
         decode, handle = decoder(topic), input_handler(parts.session, topic)
         session, lock, takers = parts.session, parts.state_lock, parts.takers
 
-        def coalesce(data: bytes) -> None:
+        def coalesce(data: bytes) -> object:
             take = takers[topic]
             newest: bytes | None = None
             superseded = 0
@@ -260,6 +262,7 @@ class PropagatorMixin(Node):
                     session.rejections['superseded'] += superseded
                 if newest is not None:
                     handle(newest)
+            return DRAINED
         return coalesce
 
     def tf_static_callback(self, data: bytes) -> None:

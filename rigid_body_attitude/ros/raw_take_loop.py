@@ -32,7 +32,8 @@ from rclpy.timer import Timer
 from rigid_body_attitude.ros.rclpy_internals import (
     entity_handle, new_wait_set, raw_taker, timer_runner)
 
-__all__ = ['DedicatedGroup', 'EVENT_CHECK_PERIOD', 'RawTakeLoop', 'Handler', 'WAIT_TIMEOUT_NS']
+__all__ = ['DRAINED', 'DedicatedGroup', 'EVENT_CHECK_PERIOD', 'RawTakeLoop', 'Handler',
+           'WAIT_TIMEOUT_NS']
 
 #: Nanoseconds one wait may last before the loop re-checks its context (guards wake it first).
 WAIT_TIMEOUT_NS = 1_000_000_000
@@ -43,6 +44,10 @@ EVENT_CHECK_PERIOD = 1.0
 
 #: A handler gets one message's serialized (CDR) bytes.
 Handler = Callable[[bytes], Any]
+
+#: What a handler returns when it took every message queued behind the one it was given
+#: (a command topic's coalescing handler): the loop then asks that subscription for no more.
+DRAINED = 'drained'
 
 
 class DedicatedGroup(MutuallyExclusiveCallbackGroup):
@@ -146,7 +151,7 @@ class RawTakeLoop:
                 with_events = monotonic() >= next_event_check
                 self._fill(wait_set, guards, with_events)
                 wait_set.wait(WAIT_TIMEOUT_NS)
-                self.handle_ready()
+                self.handle_ready(wait_set)
                 if with_events:
                     next_event_check = monotonic() + EVENT_CHECK_PERIOD
                     for event in events:
@@ -155,13 +160,19 @@ class RawTakeLoop:
         finally:
             wait_set.destroy_when_not_in_use()
 
-    def handle_ready(self) -> None:
-        """Hand every queued message to its handler; run the timers that are due."""
-        for _, take, handler in self.served:
+    def handle_ready(self, wait_set: Any) -> None:
+        """Hand every queued message of the subscriptions ``wait_set`` found ready to its
+        handler (one that returns :data:`DRAINED` took the rest of its queue itself); run
+        the timers that are due. A subscription the wait did not find ready is not asked: an
+        empty take costs as much as a message's."""
+        for index, (_, take, handler) in enumerate(self.served):
+            if not wait_set.is_ready('subscription', index):
+                continue
             data = take()
             while data is not None:
-                handler(data)
                 self.handled += 1
+                if handler(data) is DRAINED:
+                    break
                 data = take()
         for run_if_due in self._run_if_due:
             run_if_due()

@@ -47,7 +47,7 @@ STOCK_EXECUTOR_VARIABLE = 'RIGID_BODY_ATTITUDE_STOCK_EXECUTOR'
 #: The methods of the binding's ``WaitSet`` that :class:`~.raw_take_loop.RawTakeLoop` calls, itself
 #: or through rclpy's event handlers.
 WAIT_SET_METHODS = ('add_event', 'add_guard_condition', 'add_subscription', 'add_timer',
-                    'clear_entities', 'destroy_when_not_in_use', 'wait')
+                    'clear_entities', 'destroy_when_not_in_use', 'is_ready', 'wait')
 
 #: Binding attribute → the methods of it that the fast path calls.
 BINDING_METHODS: dict[str, tuple[str, ...]] = {

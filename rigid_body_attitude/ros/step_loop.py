@@ -19,7 +19,6 @@ import time
 from typing import Any
 
 from rclpy.context import Context
-from rclpy.publisher import Publisher
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 
@@ -108,22 +107,22 @@ class StepLoop(RawTakeLoop):
         message to its handler and run the due timers. False once the loop is to end."""
         self._fill(wait_set, self.guard_handles(), False)
         wait_set.wait(int(timeout_s * 1e9))
-        self.handle_ready()
+        self.handle_ready(wait_set)
         return self.context.ok() and not self._stopping.is_set()
 
 
 def step_loop(context: Context, session: DynamicsSession, clock: SimClock,
               served: Sequence[tuple[Subscription, Handler]], timers: Sequence[Timer],
-              clock_publisher: Publisher | None, lock: threading.Lock,
+              clock_output: RawOutput | None, lock: threading.Lock,
               outputs: RosOutputs) -> StepLoop:
     """The :class:`StepLoop` of a node: its ticks publish ``/clock`` (raw bytes, when
-    ``clock_publisher`` has subscribers) and tick ``session`` under ``lock``; a lockstep timeout
+    ``clock_output`` has subscribers) and tick ``session`` under ``lock``; a lockstep timeout
     is counted and logged through ``outputs``."""
-    raw = RawOutput(clock_publisher) if clock_publisher is not None else None
+    raw = clock_output
     tick = session.lockstep_tick if clock.lockstep else session.tick
 
     def publish_clock(now_ns: int) -> None:
-        if raw is not None and raw.subscription_count():
+        if raw is not None and raw.matched():
             raw.publish(encode_clock(now_ns))
 
     def sim_tick() -> None:

@@ -1,9 +1,12 @@
-"""The attitude controller without ROS: pairing of stamped inputs, sample and hold, checks.
+"""The attitude controller without ROS: the plant's stamped state, sample and hold, checks.
 
-The plant publishes ``orientation`` (world_frame) and ``twist`` (body_frame, the body rate)
-for each tick ``k`` stamped ``t_k``. :class:`ControllerSession` answers each tick with one
-torque stamped ``t_k`` exactly, once it holds both inputs of that stamp; so its output depends
-on the stamped inputs only, never on when they arrive. With a ``control_period`` ``P > 0`` the
+The plant publishes its state for each tick ``k`` stamped ``t_k``: ``odom`` (pose in
+world_frame, twist in body_frame, one message: :meth:`ControllerSession.odometry`) or, with
+``state_input`` ``orientation_twist``, ``orientation`` (world_frame) and ``twist``
+(body_frame, the body rate). :class:`ControllerSession` answers each tick with one torque
+stamped ``t_k`` exactly, once it holds the tick's attitude and rate (an ``odom`` message, or
+both messages of that stamp, paired); so its output depends on the stamped inputs only, never
+on when they arrive. With a ``control_period`` ``P > 0`` the
 torque is recomputed only at the first tick of each interval ``[n P, (n+1) P)`` of stamps
 (integer nanoseconds, so the choice is exact) and otherwise the held torque is sent again,
 stamped ``t_k`` (sample and hold). The law is
@@ -111,6 +114,9 @@ class ControllerSession(MagneticTicks):
         self.held: tuple[int, Vector] | None = None  # (control interval, torque)
         self._last_sample: tuple[Sequence[float], Quaternion] | None = None
         self.apply(values)
+        #: What the diagnostics say the controller waits for (``state_input``).
+        self.waiting_for = ('odom' if values.get('state_input', 'odom') == 'odom'
+                            else 'orientation and twist of equal stamps')
 
     def apply(self, values: Mapping[str, Any]) -> None:
         """Take (run-time) parameters; a new target or gain acts from the next tick on (the
@@ -139,6 +145,23 @@ class ControllerSession(MagneticTicks):
         stamp_ns = self._checked('twist', sec, nanosec, frame_id, self.body_frame, angular)
         if stamp_ns is not None:
             self._pend('twist', stamp_ns, tuple(angular))
+
+    def odometry(self, sec: int, nanosec: int, frame_id: str, child_frame_id: str,
+                 attitude: Sequence[float], angular: Sequence[float]) -> None:
+        """The plant's state in one message (nav_msgs/Odometry): the attitude (w, x, y, z),
+        body → ``frame_id`` (world_frame), and the body rate [rad/s] in ``child_frame_id``
+        (body_frame), stamped ``(sec, nanosec)``; answered at once."""
+        stamp_ns = self._checked('odom', sec, nanosec, frame_id, self.world_frame, attitude)
+        if stamp_ns is None:
+            return
+        if child_frame_id != self.body_frame:
+            self._reject('wrong_frame', f'odom: child frame {child_frame_id[:100]!r}, '
+                                        f'expected {self.body_frame!r}')
+            return
+        if not all(math.isfinite(value) for value in angular):
+            self._reject('non_finite', 'odom: a non-finite value (NaN or Inf)')
+            return
+        self._answer(stamp_ns, tuple(attitude), tuple(angular))
 
     def target_message(self, sec: int, nanosec: int, frame_id: str,
                        attitude: Sequence[float]) -> None:
@@ -217,15 +240,16 @@ class ControllerSession(MagneticTicks):
             self.repeated += 1  # the held torque of this tick's interval is sent again
         self.last_stamp = stamp_ns
         interval = stamp_ns // self.period_ns if self.period_ns else stamp_ns
-        recompute = self.held is None or self.held[0] != interval
-        if recompute:
-            self.held = (interval, self._compute(stamp_ns, attitude, rate) if self.torque_out
-                         else _ZERO)
+        held = self.held
+        recompute = held is None or held[0] != interval
+        if held is None or recompute:
+            held = self.held = (interval, self._compute(stamp_ns, attitude, rate)
+                                if self.torque_out else _ZERO)
         sec, nanosec = divmod(stamp_ns, 1_000_000_000)
         if magnetic is not None:
             self.sink.dipole(sec, nanosec, magnetic.answer(stamp_ns, recompute))
         if self.torque_out:
-            self.sink.torque(sec, nanosec, self.held[1])
+            self.sink.torque(sec, nanosec, held[1])
         self.answered += 1
         self._period_answered += 1
 
@@ -272,9 +296,9 @@ class ControllerSession(MagneticTicks):
         problems = [f'{count} {reason}' for reason, count in
                     sorted(self._period_rejections.items())]
         if not self._period_answered:
-            waiting = 'orientation and twist of equal stamps'
+            waiting = self.waiting_for
             if self.parked and self.magnetic is not None:
-                waiting = self.magnetic.waiting_for(min(self.parked))
+                waiting = self.magnetic.waiting_for(min(self.parked)) or waiting
             problems.insert(0, f'no tick answered: waiting for {waiting}')
         values = (
             ('ticks answered', str(self.answered)), ('torques computed', str(self.computed)),

@@ -14,18 +14,30 @@ from typing import Any
 
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, values_problem
 
-__all__ = ['CONTROLLER_PARAMETERS', 'RENAMED_CONTROLLER_PARAMETERS', 'UNIT_TOLERANCE',
-           'check_controller_values', 'controller_defaults', 'renamed_problem']
+__all__ = ['CONTROLLER_PARAMETERS', 'RENAMED_CONTROLLER_PARAMETERS', 'STATE_INPUTS',
+           'UNIT_TOLERANCE', 'check_controller_values', 'controller_defaults',
+           'renamed_problem']
 
 #: Largest ``| |q| − 1 |`` of a quaternion taken as an attitude (parameter or message).
 UNIT_TOLERANCE = 1e-3
 
 _NODE = {parameter.name: parameter for parameter in PARAMETERS}
 
+#: ``state_input`` → the quantities of the controller's interface
+#: (:data:`~rigid_body_attitude.session.interface.CONTROLLER_INTERFACE`) it subscribes to.
+STATE_INPUTS: dict[str, tuple[str, ...]] = {
+    'odom': ('odometry',),
+    'orientation_twist': ('attitude', 'twist'),
+}
+
 #: Every parameter of the controller, in the order ``--help`` and the README list them.
 CONTROLLER_PARAMETERS: tuple[Parameter, ...] = (
     _NODE['world_frame'],
     _NODE['body_frame'],
+    Parameter('state_input', str, 'odom',
+              "the plant's state: odom (nav_msgs/Odometry, pose and twist in one message) or "
+              'orientation_twist (QuaternionStamped and TwistStamped, paired by stamp)',
+              choices=tuple(STATE_INPUTS)),
     Parameter('target_rpy', tuple, (),
               'rad: [roll, pitch, yaw] of the target attitude of body_frame in world_frame, as '
               'static_transform_publisher takes them ([] = target_quaternion_xyzw, or the '

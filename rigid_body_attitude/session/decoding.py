@@ -27,13 +27,15 @@ from collections.abc import Callable
 from typing import Any
 
 from rigid_body_attitude.msgs.decoders import (
-    RATE_DECODERS, RateDecoder, decode_pose_stamped, decode_pose_with_covariance_stamped,
-    decode_vector3_stamped, decode_wrench_stamped)
+    RATE_DECODERS, RateDecoder, decode_magnetic_field, decode_pose_stamped,
+    decode_pose_with_covariance_stamped, decode_vector3_stamped, decode_wrench_stamped)
 from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.joint_state import decode_joint_state, JOINT_STATE
 from rigid_body_attitude.msgs.types import (
-    IMU, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED)
+    IMU, MAGNETIC_FIELD, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED, VECTOR3_STAMPED,
+    WRENCH_STAMPED)
 from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.imu_start import frame_refused
 from rigid_body_attitude.session.interface import Endpoint, NODE_INTERFACE
@@ -80,6 +82,11 @@ def pose_with_covariance(data: bytes) -> Decoded:
     return sec, nanosec, frame_id, attitude, (position, covariance)
 
 
+def magnetic_field(data: bytes) -> Decoded:
+    """MagneticField: the field [T] and its 9 row-major covariance values."""
+    return decode_magnetic_field(data)
+
+
 def joint_state(data: bytes) -> Decoded:
     """JointState: the names and the (position, velocity, effort) fields."""
     values = decode_joint_state(data)
@@ -90,7 +97,8 @@ def joint_state(data: bytes) -> Decoded:
 #: Decoders of the inputs other than the gyro topics, by message type.
 VALUE_DECODERS: dict[str, Callable[[bytes], Decoded]] = {
     WRENCH_STAMPED: wrench, VECTOR3_STAMPED: vector, POSE_STAMPED: pose,
-    POSE_WITH_COVARIANCE_STAMPED: pose_with_covariance, JOINT_STATE: joint_state,
+    POSE_WITH_COVARIANCE_STAMPED: pose_with_covariance, MAGNETIC_FIELD: magnetic_field,
+    JOINT_STATE: joint_state,
 }
 
 
@@ -168,6 +176,12 @@ def _delivery(session: AnySession, endpoint: Endpoint) -> Callable[[Decoded], ob
         return lambda values: session.set_pose(values[2], values[3], values[4])
     if quantity == 'pose_with_covariance':
         return lambda values: session.set_pose(values[2], values[3], *values[4])
+    if quantity == 'magnetic_field':
+        assert isinstance(session, FilteredGyroSession), endpoint.name
+        return lambda values: session.magnetic_field(*values[:4])
+    if quantity == 'attitude_measurement':
+        assert isinstance(session, FilteredGyroSession), endpoint.name
+        return lambda values: session.attitude_measurement(*values[:4], values[4][1])
     assert isinstance(session, DynamicsSession), endpoint.name  # commands: dynamics scenes
     if quantity == 'wrench':
         return lambda values: session.wrench(values[0], values[1], values[3], values[4])

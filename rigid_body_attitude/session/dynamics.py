@@ -305,18 +305,24 @@ class DynamicsSession(Session):
         counts.lag, counts.tick_period = self._lag, self.tick_period
         if self.sim_clock is not None:
             self.sim_clock.report(counts)
-        if self.wheels is not None:
-            values, problems = self.wheels.report()
-            counts.actuator_values += tuple(values) + tuple(
-                (f'rejected {reason}', str(self.rejections[reason]))
-                for reason in WHEEL_REASONS)
-            counts.actuator_problems += tuple(problems)
-        if self.rods is not None:
-            counts.actuator_values += tuple(self.rods.values())
+        _actuator_counts(counts, self.wheels, self.rods, self.rejections)
         self._work = self._simulated = self._lag = 0.0
 
 
+def _actuator_counts(counts: PeriodCounts, wheels: WheelArray | None,
+                     rods: MagnetorquerReport | None, rejections: Counter[str]) -> None:
+    """The wheels' and the rods' lines of the period's report."""
+    if wheels is not None:
+        values, problems = wheels.report()
+        counts.actuator_values += tuple(values) + tuple(
+            (f'rejected {reason}', str(rejections[reason])) for reason in WHEEL_REASONS)
+        counts.actuator_problems += tuple(problems)
+    if rods is not None:
+        counts.actuator_values += tuple(rods.values())
+
+
 def _finite(sample: OutputSample) -> bool:
-    return all(math.isfinite(value) for value in (
-        *sample.attitude, *sample.position, *sample.omega_body, sample.energy,
-        *sample.world_momentum))
+    values = (*sample.attitude, *sample.position, *sample.omega_body, sample.energy,
+              *sample.world_momentum)
+    # a NaN or an infinity makes the sum non-finite; a finite sum settles it in one call
+    return math.isfinite(sum(values)) or all(math.isfinite(value) for value in values)

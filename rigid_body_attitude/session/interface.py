@@ -27,9 +27,9 @@ from rigid_body_attitude.core.yaml_files import quote
 from rigid_body_attitude.msgs.joint_state import JOINT_STATE
 from rigid_body_attitude.msgs.tf_message import TF_MESSAGE
 from rigid_body_attitude.msgs.types import (
-    CLOCK, DIAGNOSTIC_ARRAY, FLOAT64, IMU, MAGNETIC_FIELD, POSE_STAMPED,
-    POSE_WITH_COVARIANCE_STAMPED, QUATERNION_STAMPED, TRIGGER, TWIST_STAMPED, VECTOR3_STAMPED,
-    WRENCH_STAMPED)
+    ACCEL_WITH_COVARIANCE_STAMPED, CLOCK, DIAGNOSTIC_ARRAY, FLOAT64, IMU, MAGNETIC_FIELD,
+    ODOMETRY, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED, QUATERNION_STAMPED, TRIGGER,
+    TWIST_STAMPED, VECTOR3_STAMPED, WRENCH_STAMPED)
 
 __all__ = ['CONTROLLER_INTERFACE', 'Endpoint', 'INPUT_DEPTH', 'Interface', 'NODE_INTERFACE',
            'OUTPUT_DEPTH', 'QOS_PROFILES', 'QosProfile', 'Situation', 'check_scene_topics',
@@ -196,6 +196,11 @@ class Interface(tuple[Endpoint, ...]):
         return [endpoint for endpoint in self.present(situation)
                 if endpoint.direction == 'out' and endpoint.role in roles]
 
+    def inputs_of_quantity(self, quantity: str) -> list[Endpoint]:
+        """The inputs carrying ``quantity`` (``angular_rate``: the gyro topics), in order."""
+        return [endpoint for endpoint in self
+                if endpoint.direction == 'in' and endpoint.quantity == quantity]
+
     def endpoint(self, name: str, direction: str = 'in') -> Endpoint:
         """The endpoint ``name`` of ``direction`` (KeyError naming it when there is none)."""
         for endpoint in self:
@@ -220,6 +225,17 @@ def _takes(*input_names: str) -> Callable[[Situation], bool]:
 def _parameter(name: str) -> Callable[[Situation], bool]:
     """The boolean parameter ``name`` is set."""
     return lambda situation: situation.flag(name)
+
+
+def _estimating(update: str) -> Callable[[Situation], bool]:
+    """The scene's ``estimation`` section switches ``update`` (``magnetometer`` or
+    ``attitude``) on."""
+    def present(situation: Situation) -> bool:
+        spec = situation.scene.estimation
+        if spec is None:
+            return False
+        return {'magnetometer': spec.magnetometer, 'attitude': spec.attitude}[update]
+    return present
 
 
 def _mounted_simulated_sensor(situation: Situation) -> bool:
@@ -275,6 +291,17 @@ NODE_INTERFACE = Interface((
     Endpoint('/tf_static', TF_MESSAGE, _IN, 'tf_static_listener', 'transforms', 'gyro scenes',
              "the mount `body_frame` -> the Imu's frame", quantity='transforms',
              kinds=(GYRO,), replayed=True),
+    Endpoint('imu/mag', MAGNETIC_FIELD, _IN, 'sensor_input', 'sensor',
+             'scenes with `estimation: {magnetometer: true}`',
+             "the magnetometer [T], its sensor frame (mount as the Imu's): heading updates",
+             quantity='magnetic_field', kinds=(GYRO,), condition=_estimating('magnetometer'),
+             qos_overrides=True, replayed=True),
+    Endpoint('attitude_measurement', POSE_WITH_COVARIANCE_STAMPED, _IN, 'sensor_input',
+             'sensor', 'scenes with `estimation: {attitude: true}`',
+             'an attitude measurement (star tracker, motion capture) with its covariance, '
+             '`world_frame`: an update (not a reset)', quantity='attitude_measurement',
+             kinds=(GYRO,), condition=_estimating('attitude'), qos_overrides=True,
+             replayed=True),
     Endpoint('orientation', QUATERNION_STAMPED, _OUT, 'output', 'output', _PER_OUTPUT,
              'the attitude, `world_frame`', qos_overrides=True, replayed=True),
     Endpoint('pose', POSE_STAMPED, _OUT, 'output', 'output', _PER_OUTPUT,
@@ -289,9 +316,17 @@ NODE_INTERFACE = Interface((
              '`orientation` in `world_frame` (REP-145)', kinds=(GYRO,),
              condition=lambda situation: situation.imu_input, qos_overrides=True,
              replayed=True),
+    Endpoint('accel/filtered', ACCEL_WITH_COVARIANCE_STAMPED, _OUT, 'output', 'output',
+             'scenes with an `estimation` section, per `imu` sample',
+             'the gravity-free acceleration with its covariance, `body_frame`',
+             kinds=(GYRO,), condition=lambda situation: situation.imu_input and (
+                 situation.scene.estimation is not None), qos_overrides=True, replayed=True),
     Endpoint('twist', TWIST_STAMPED, _OUT, 'output', 'output', 'dynamics scenes, every tick',
              'the body rate (and velocity), `body_frame`', kinds=(DYNAMICS,),
              qos_overrides=True, replayed=True),
+    Endpoint('odom', ODOMETRY, _OUT, 'output', 'output', 'dynamics scenes, every tick',
+             'the pose (`world_frame`) and the twist (`body_frame`) in one message, '
+             'covariances zero (exact)', kinds=(DYNAMICS,), qos_overrides=True, replayed=True),
     Endpoint('energy', FLOAT64, _OUT, 'output', 'output', 'dynamics scenes, every tick',
              "the body's kinetic energy [J] (a gyro scene simulates no body)",
              kinds=(DYNAMICS,), qos_overrides=True, replayed=True),
@@ -339,9 +374,14 @@ NODE_INTERFACE = Interface((
 
 #: The endpoints of ``attitude_controller``.
 CONTROLLER_INTERFACE = Interface((
-    Endpoint('orientation', QUATERNION_STAMPED, _IN, 'command', 'sensor', 'always',
-             "the plant's attitude, `world_frame`", quantity='attitude'),
-    Endpoint('twist', TWIST_STAMPED, _IN, 'command', 'sensor', 'always',
+    Endpoint('odom', ODOMETRY, _IN, 'command', 'sensor', '`state_input` `odom` (default)',
+             "the plant's attitude (pose, `world_frame`) and body rate (twist, angular part, "
+             '`body_frame`)', quantity='odometry'),
+    Endpoint('orientation', QUATERNION_STAMPED, _IN, 'command', 'sensor',
+             '`state_input` `orientation_twist`', "the plant's attitude, `world_frame`",
+             quantity='attitude'),
+    Endpoint('twist', TWIST_STAMPED, _IN, 'command', 'sensor',
+             '`state_input` `orientation_twist`',
              "the plant's body rate (the angular part), `body_frame`", quantity='twist'),
     Endpoint('target', QUATERNION_STAMPED, _IN, 'command', 'sensor', 'always',
              'a new target attitude, `world_frame`', quantity='target'),

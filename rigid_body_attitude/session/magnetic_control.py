@@ -48,7 +48,7 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 from rigid_body_attitude.core.attitude.quaternion import from_rpy, rotate_floats
 from rigid_body_attitude.core.control.magnetic import bdot_dipole, dumping_dipole
@@ -61,6 +61,8 @@ from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.mount import StaticTransforms
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, seconds_to_ns
 from rigid_body_attitude.session.wheel_drive import WheelDrive
+
+_Kept = TypeVar('_Kept')
 
 __all__ = ['MAX_FIELD', 'MAX_KEPT', 'MagneticControl', 'Refusal', 'magnetic_control']
 
@@ -165,7 +167,7 @@ class MagneticControl:
         """Static transforms from ``/tf_static``; how many were refused, by reason."""
         return self.transforms.add_all(transforms)
 
-    def _keep(self, kept: dict[int, object], stamp_ns: int, value: object,
+    def _keep(self, kept: dict[int, _Kept], stamp_ns: int, value: _Kept,
               topic: str) -> Refusal:
         kept[stamp_ns] = value
         if len(kept) > MAX_KEPT:

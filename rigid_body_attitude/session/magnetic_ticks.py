@@ -13,6 +13,7 @@ has them.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterable, Sequence
 
 from rigid_body_attitude.msgs.tf_message import Transform
@@ -28,7 +29,7 @@ MAX_PARKED = 64
 Values = tuple[float, ...]
 
 
-class MagneticTicks:
+class MagneticTicks(ABC):
     """The magnetic inputs of a controller session and its waiting ticks (a mixin: the
     session gives :meth:`_reject` and :meth:`_answer`)."""
 
@@ -36,13 +37,13 @@ class MagneticTicks:
     #: Complete ticks waiting for their magnetometer sample: stamp → (attitude, rate).
     parked: dict[int, tuple[Values, Values]]
 
+    @abstractmethod
     def _reject(self, reason: str, text: str) -> None:
         """Count and warn about a refused input (the session's)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _answer(self, stamp_ns: int, attitude: Values, rate: Values) -> None:
         """Answer a complete tick (the session's)."""
-        raise NotImplementedError
 
     def magnetometer(self, sec: int, nanosec: int, frame_id: str,
                      field: Sequence[float]) -> None:

@@ -90,6 +90,12 @@ class MountGate:
             self._mounts = self.transforms.resolved(self.session.body_frame)
         return refused
 
+    def mount_of(self, frame: str) -> Quaternion | None:
+        """The rotation (w, x, y, z) of ``frame`` into ``body_frame`` from the static
+        transforms received so far (None: no chain): another sensor's mount (``imu/mag``)."""
+        entry = self._mounts.get(frame)
+        return entry[0] if entry is not None else None
+
     def tf_static(self, data: bytes, lock: threading.Lock) -> None:
         """One ``/tf_static`` message: decoded with the checked decoder (a malformed one
         counted for the topic), its refusals counted, the held samples handed on when their

@@ -20,6 +20,7 @@ from rigid_body_attitude.core.dynamics.scene import Scene, load_scene
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.interface import check_scene_topics
 
@@ -67,5 +68,7 @@ def load_node_scene(scene: str, integrator: str = '', step: float = 0.0,
 def open_session(scene: Scene, values: Mapping[str, Any], sink: OutputSink,
                  clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> AnySession:
     """The session of the scene's rate source (see :class:`~.base.Session`)."""
-    kind = GyroSession if scene.rate_source == 'gyro' else DynamicsSession
+    if scene.rate_source != 'gyro':
+        return DynamicsSession(scene, values, sink, clock_ns, monotonic)
+    kind = GyroSession if scene.estimation is None else FilteredGyroSession
     return kind(scene, values, sink, clock_ns, monotonic)

@@ -7,7 +7,9 @@ See ``docs/data.md``; converted bags carry the citation in their ``custom_data``
 
 A trial archive (``.npz``, converted from BROAD's HDF5 files, values unchanged) holds
 ``sampling_rate`` (Hz), ``imu_gyr`` (N, 3) rad/s and ``imu_acc`` (N, 3) m/s² in the IMU (body)
-frame, ``opt_quat_wxyz`` (N, 4) the optical attitude of the IMU frame w.r.t. an ENU world frame
+frame, ``imu_mag`` (N, 3) µT in the trials that carry a magnetometer
+(:attr:`BroadTrial.field` holds it in tesla), ``opt_quat_wxyz`` (N, 4) the optical attitude
+of the IMU frame w.r.t. an ENU world frame
 (scalar first, body → world as in :mod:`rigid_body_attitude.core.attitude.quaternion`; NaN rows
 where the
 cameras lost the body), ``movement`` (N,) bool, and ``info``. Sample ``i`` is at
@@ -59,6 +61,8 @@ class BroadTrial:
     ground_truth: FloatArray
     movement: NDArray[np.bool_]
     info: str
+    #: The magnetometer [T], IMU frame, (N, 3); None in a trial without one.
+    field: FloatArray | None = None
 
     @property
     def sample_count(self) -> int:
@@ -132,12 +136,13 @@ def load_trial(path: str | Path) -> BroadTrial:
     acc = _array(arrays, 'imu_acc', path, (count, 3))
     ground_truth = _array(arrays, 'opt_quat_wxyz', path, (count, 4)).astype(np.float64)
     movement = _array(arrays, 'movement', path, (count,))
+    field = _array(arrays, 'imu_mag', path, (count, 3)) * 1e-6 if 'imu_mag' in arrays else None
     rate = float(_array(arrays, 'sampling_rate', path, ()))
     info = str(_array(arrays, 'info', path, ())) if 'info' in arrays else ''
     if not np.isfinite(rate) or rate <= 0.0:
         raise InputError(f'Expected `sampling_rate` in {str(path)!r} to be positive, got {rate}')
-    for key, array in (('imu_gyr', gyro), ('imu_acc', acc)):
-        if not np.all(np.isfinite(array)):
+    for key, array in (('imu_gyr', gyro), ('imu_acc', acc), ('imu_mag', field)):
+        if array is not None and not np.all(np.isfinite(array)):
             raise InputError(f'Expected {key!r} in {str(path)!r} to be finite')
     if movement.dtype != np.bool_:
         raise InputError(f'Expected `movement` in {str(path)!r} to be bool, got {movement.dtype}')
@@ -149,7 +154,8 @@ def load_trial(path: str | Path) -> BroadTrial:
     return BroadTrial(name=path.stem, sampling_rate=rate, gyro=_readonly(gyro, np.float64),
                       acc=_readonly(acc, np.float64),
                       ground_truth=_readonly(ground_truth, np.float64),
-                      movement=_readonly(movement, np.bool_), info=info)
+                      movement=_readonly(movement, np.bool_), info=info,
+                      field=None if field is None else _readonly(field, np.float64))
 
 
 def _check_ground_truth(ground_truth: FloatArray, path: Path) -> None:
@@ -185,17 +191,20 @@ def trial_to_bag(trial: BroadTrial, path: str | Path, *, storage: str = 'sqlite3
                  frame_id: str = 'base_link', world_frame: str = 'world') -> dict[str, int]:
     """Write ``trial`` as a bag; returns the message count per topic.
 
-    ``sensor_msgs/msg/Imu`` (raw gyro and accelerometer, bias *not* removed) on ``imu_topic``
-    and ``geometry_msgs/msg/QuaternionStamped`` on ``ground_truth_topic`` (lost samples
-    skipped), with header stamps and bag times ``i / sampling_rate``. The Imu's ``frame_id``
-    defaults to ``base_link``, the node's ``body_frame``: the optical truth is the attitude of
-    the IMU itself, so the IMU is the body and no mount is needed. The citation, licence and
-    the rest-phase bias estimate go into the bag's ``custom_data`` (:func:`attribution`).
+    ``sensor_msgs/msg/Imu`` (raw gyro and accelerometer, bias *not* removed) on ``imu_topic``,
+    ``geometry_msgs/msg/QuaternionStamped`` on ``ground_truth_topic`` (lost samples skipped)
+    and, when the trial has a magnetometer, ``sensor_msgs/msg/MagneticField`` [T] on
+    ``imu/mag`` (each before the Imu of its sample), with header stamps and bag times
+    ``i / sampling_rate``. The ``frame_id`` defaults to ``base_link``, the node's
+    ``body_frame``: the optical truth is the attitude of the IMU itself, so the IMU is the body
+    and no mount is needed. The citation, licence and the rest-phase bias estimate go into the
+    bag's ``custom_data`` (:func:`attribution`).
     """
     return write_bag(path, stamps=trial.stamps, rates=trial.gyro, accelerations=trial.acc,
                      ground_truth=trial.ground_truth, imu_topic=imu_topic,
                      ground_truth_topic=ground_truth_topic, frame_id=frame_id,
-                     world_frame=world_frame, storage=storage, custom_data=attribution(trial))
+                     world_frame=world_frame, storage=storage, custom_data=attribution(trial),
+                     magnetic_fields=trial.field)
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -182,10 +182,10 @@ SET_POSE = ('set_pose', 'set_pose_with_covariance')
 
 @pytest.mark.parametrize('scene, inputs, outputs', [
     ('strapdown', {'imu', 'angular_velocity', *SET_POSE}, {'imu/data', 'pose_with_covariance'}),
-    ('torque_free_box', {*SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
-    ('commanded_torque', {'torque', *SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
-    ('free_flyer', {'torque', *SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
-    ('gyrostat', {'rotor_torque', *SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
+    ('torque_free_box', {*SET_POSE}, {'twist', 'odom', 'energy', 'angular_momentum'}),
+    ('commanded_torque', {'torque', *SET_POSE}, {'twist', 'odom', 'energy', 'angular_momentum'}),
+    ('free_flyer', {'torque', *SET_POSE}, {'twist', 'odom', 'energy', 'angular_momentum'}),
+    ('gyrostat', {'rotor_torque', *SET_POSE}, {'twist', 'odom', 'energy', 'angular_momentum'}),
 ])
 def test_subscriptions_exist_only_for_the_inputs_the_scene_uses(ros, request, scene, inputs,
                                                                 outputs):

@@ -40,7 +40,7 @@ from rclpy.qos import (
 from rclpy.serialization import serialize_message
 from ros_helpers import Harness, stamp, unique_namespace
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu, JointState
+from sensor_msgs.msg import Imu, JointState, MagneticField
 from tf2_msgs.msg import TFMessage
 from test_input_qos import connect, missing_stamps, receive_all, RECORD_QOS
 from test_input_qos import start_node as start_node_process
@@ -441,6 +441,70 @@ def non_finite_specific_forces() -> list[Imu]:
     return at_rest_cases([(math.nan, 0.0, 9.8), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf)])
 
 
+def _field(at_ns: int, field: tuple[float, float, float], frame: str = 'base_link',
+           sec_nanosec: tuple[int, int] | None = None) -> MagneticField:
+    message = MagneticField()
+    message.header.stamp = stamp(at_ns)
+    if sec_nanosec is not None:
+        message.header.stamp.sec, message.header.stamp.nanosec = sec_nanosec
+    message.header.frame_id = frame
+    f = message.magnetic_field
+    f.x, f.y, f.z = field
+    return message
+
+
+def hostile_fields() -> list[MagneticField]:
+    """Fields NaN, Inf, zero or beyond any magnetometer; frames without a mount (1 MiB and an
+    escape sequence included); zero and invalid stamps: none may reach the filter."""
+    earth = (2e-5, 0.0, -4e-5)
+    at = [BASE_NS + k * MS + MS // 2 for k in range(12)]
+    return [_field(at[0], (math.nan, 0.0, 0.0)), _field(at[1], (0.0, math.inf, 0.0)),
+            _field(at[2], (0.0, 0.0, 0.0)), _field(at[3], (1.0, 0.0, 0.0)),
+            _field(at[4], (1e308, 1e308, 1e308)), _field(at[5], earth, 'elsewhere'),
+            _field(at[6], earth, 'x' * 2**20), _field(at[7], earth, '\x1b[2J\x07'),
+            _field(at[8], earth, sec_nanosec=(0, 0)),
+            _field(at[9], earth, sec_nanosec=(BASE_NS // 10**9, 10**9))]
+
+
+def malformed_fields() -> list[bytes]:
+    return malformed_variants(serialize_message(_field(BASE_NS, (2e-5, 0.0, -4e-5))))
+
+
+def _measurement(at_ns: int, q: tuple[float, ...], frame: str = 'world',
+                 block: list[float] | None = None) -> PoseWithCovarianceStamped:
+    message = PoseWithCovarianceStamped()
+    message.header.stamp, message.header.frame_id = stamp(at_ns), frame
+    o = message.pose.pose.orientation
+    o.w, o.x, o.y, o.z = q
+    covariance = [0.0] * 36
+    block = block or [1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 1e-4]
+    for row in range(3):
+        covariance[7 * row] = 1e9
+        covariance[21 + 6 * row:24 + 6 * row] = [float(v) for v in block[3 * row:3 * row + 3]]
+    message.pose.covariance = covariance
+    return message
+
+
+def hostile_measurements() -> list[PoseWithCovarianceStamped]:
+    """Attitude measurements in another frame, zero or NaN quaternions, covariance blocks
+    huge, unphysical or not PSD, stamps far from the gyro's: none may correct the attitude."""
+    at = BASE_NS + MS // 2
+    blocks = [[1e308, 0, 0, 0, 1e308, 0, 0, 0, 1e308], [1, 0, 0, 0, -1, 0, 0, 0, 1],
+              [1, 0.5, 0, 0, 1, 0, 0, 0, 1], [math.nan, 0, 0, 0, 1, 0, 0, 0, 1],
+              [1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 10.0]]
+    return ([_measurement(at, UNIT, frame) for frame in ('map', '', 'x' * 2**20)]
+            + [_measurement(at, (0.0, 0.0, 0.0, 0.0)), _measurement(at, (math.nan, 0, 0, 1))]
+            + [_measurement(at, UNIT, block=block) for block in blocks]
+            + [_measurement(at + 10**10, UNIT), _measurement(at - 10**10, UNIT)])
+
+
+def malformed_measurements() -> list[bytes]:
+    return malformed_variants(serialize_message(_measurement(BASE_NS, UNIT)))
+
+
+_FILTER = dict(parameters=dict(scene='imu_filter'))
+_MEASUREMENT_REASONS = tuple(f'attitude_measurement_{reason}' for reason in (
+    'wrong_frame', 'invalid_pose', 'non_finite', 'invalid_covariance', 'stale_measurement'))
 _TF = dict(imu_frame='imu_link', latched=True, before_last=send_mount)
 #: Every surface and hostile class the in-process node is fed. Add an entry to cover a new
 #: input (its topic, message type, cases and the reasons they must be counted under).
@@ -457,6 +521,15 @@ SURFACES = [
     Surface('imu: specific force NaN or Inf while levelling', 'imu', Imu,
             non_finite_specific_forces, ('non_finite',), at_rest=True,
             parameters=dict(align_seconds=0.3)),
+    Surface('imu/mag: hostile fields', 'imu/mag', MagneticField, hostile_fields,
+            ('magnetometer_non_finite', 'magnetometer_out_of_range', 'magnetometer_no_mount',
+             'magnetometer_invalid_stamp'), **_FILTER),
+    Surface('imu/mag: malformed bytes', 'imu/mag', MagneticField, malformed_fields,
+            ('malformed',), **_FILTER),
+    Surface('attitude_measurement: hostile measurements', 'attitude_measurement',
+            PoseWithCovarianceStamped, hostile_measurements, _MEASUREMENT_REASONS, **_FILTER),
+    Surface('attitude_measurement: malformed bytes', 'attitude_measurement',
+            PoseWithCovarianceStamped, malformed_measurements, ('malformed',), **_FILTER),
 ]
 
 
@@ -465,7 +538,7 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
     """Each case after a good sample: all counted under the surface's reasons, every log line
     short, and the attitude exactly the good stream's."""
     harness = Harness(ros, unique_namespace(request))
-    node = start_node(harness, scene='strapdown', **surface.parameters)
+    node = start_node(harness, **{'scene': 'strapdown', **surface.parameters})
     lines: list[str] = []
     log = node.built.outputs.log
 

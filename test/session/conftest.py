@@ -31,6 +31,11 @@ class RecordingSink:
     mounts: list[tuple[float, ...] | None] = field(default_factory=list)
     simulated: list[tuple[str, bytes]] = field(default_factory=list)
     wheel_states: list[bytes] = field(default_factory=list)
+    accelerations: list[tuple[int, int, tuple[float, ...], tuple[float, ...]]] = field(
+        default_factory=list)
+
+    def acceleration(self, sec, nanosec, estimate):
+        self.accelerations.append((sec, nanosec, *estimate()))
 
     def sensor_mount(self, q_body_sensor):
         self.mounts.append(q_body_sensor)

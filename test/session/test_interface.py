@@ -88,7 +88,7 @@ def test_a_dynamics_scene_has_the_commands_its_propagator_takes_and_the_body_out
     present = [(endpoint.direction, endpoint.topic(scene))
                for endpoint in NODE_INTERFACE.present(situation)]
     assert [name for direction, name in present if direction == 'out'] == [
-        'orientation', 'pose', 'twist', 'energy', 'angular_momentum', 'sim/imu',
+        'orientation', 'pose', 'twist', 'odom', 'energy', 'angular_momentum', 'sim/imu',
         '/diagnostics', '/clock', '/tf', '/tf_static']
     assert ('service', '~/reset') in present
     quiet = Situation(dynamics_scene(), defaults(), frozenset({'torque'}))

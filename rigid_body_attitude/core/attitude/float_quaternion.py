@@ -14,8 +14,8 @@ from collections.abc import Sequence
 from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.errors import IntegratorError
 
-__all__ = ['Quat', 'SERIES_THRESHOLD', 'Vec', 'q_exp', 'q_multiply', 'q_normalize',
-           'q_rotate_step']
+__all__ = ['Quat', 'SERIES_THRESHOLD', 'Vec', 'finite_vec3', 'q_exp', 'q_multiply',
+           'q_normalize', 'q_rotate_step']
 
 Quat = tuple[float, float, float, float]
 Vec = tuple[float, float, float]
@@ -59,3 +59,14 @@ def q_normalize(q: Sequence[float]) -> Quat:
 def q_rotate_step(q: Sequence[float], vx: float, vy: float, vz: float) -> Quat:
     """``normalize(q ⊗ exp(v))``: the exact update for the rotation vector ``v`` (body)."""
     return q_normalize(q_multiply(q, q_exp(vx, vy, vz)))
+
+
+def finite_vec3(value: object) -> Vec | None:
+    """``value`` when it is a tuple of 3 finite floats, else ``None`` (for the caller's
+    general check): a command's vector checked without NumPy."""
+    if type(value) is tuple and len(value) == 3:
+        x, y, z = value
+        if (type(x) is float and type(y) is float and type(z) is float
+                and math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+            return x, y, z
+    return None

@@ -25,6 +25,8 @@ the effects; only the effects it names are constructed. Format::
     sun: {direction: [1, 0, 0]}    # world axes, towards the Sun (core/environment/sun.py)
     orbit: {altitude: 500000.0, inclination_deg: 97.4}   # spacecraft scenes (world: inertial)
     magnetic_field: {model: tilted_dipole}               # or igrf, local (core/environment)
+    estimation: {magnetometer: true}  # gyro scenes: the filter's updates
+                                   # (core/estimation/estimation_section.py)
 
 Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`scene_path`).
 
@@ -68,6 +70,8 @@ from rigid_body_attitude.core.errors import AttitudeError, InertiaError, SceneEr
 from rigid_body_attitude.core.dynamics.euler import inertia_without_rotors
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.environment.sun import ConstantSunDirection, sun_section
+from rigid_body_attitude.core.estimation.estimation_section import (
+    EstimationSpec, estimation_section)
 from rigid_body_attitude.core.paths import config_folders
 from rigid_body_attitude.core.sensors.imu import ImuSpec
 from rigid_body_attitude.core.sensors.magnetometer import MagnetometerSpec
@@ -83,7 +87,8 @@ FloatArray = NDArray[np.float64]
 
 RATE_SOURCES = ('dynamics', 'gyro')
 _TOP_KEYS = {'name', 'description', 'rate_source', 'integrator', 'step', 'body',
-             'initial_state', 'effects', 'sensors', 'sun', 'orbit', 'magnetic_field'}
+             'initial_state', 'effects', 'sensors', 'sun', 'orbit', 'magnetic_field',
+             'estimation'}
 _REQUIRED_TOP_KEYS = ('rate_source', 'body')
 _BODY_KEYS = {'mass', 'inertia'}
 _STATE_KEYS = {'attitude', 'omega_body'}
@@ -120,6 +125,8 @@ class Scene:
         sun: the Sun's direction of the ``sun`` section, or None.
         orbit: the ``orbit`` section (world: Earth-centred inertial), or None.
         magnetic_field: the ``magnetic_field`` section's model, or None.
+        estimation: the measurement updates of the ``estimation`` section (gyro scenes), or
+            None (pure propagation).
     """
 
     name: str
@@ -137,6 +144,7 @@ class Scene:
     sun: ConstantSunDirection | None = None
     orbit: CircularOrbit | None = None
     magnetic_field: MagneticFieldModel | None = None
+    estimation: EstimationSpec | None = None
 
     @property
     def imu(self) -> ImuSpec | None:
@@ -256,7 +264,11 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
         sun=sun_section(data.get('sun')),
         orbit=orbit,
         magnetic_field=magnetic_field_section(data.get('magnetic_field'), orbit),
+        estimation=estimation_section(data.get('estimation')),
     )
+    if scene.estimation is not None and rate_source != 'gyro':
+        raise SceneError('estimation: the measurement updates need a gyro scene (rate_source: '
+                         'gyro)')
     _check_effects(scene)
     _check_sensors(scene)
     return scene

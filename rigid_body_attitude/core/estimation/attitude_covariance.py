@@ -47,7 +47,7 @@ from rigid_body_attitude.core.estimation.gyro_error_model import (
 )
 
 __all__ = ['AttitudeCovariance', 'AttitudeStddev', 'DEFAULT_BATCH_SIZE', 'MAX_ATTITUDE_VARIANCE',
-           'checked_attitude_covariance', 'transition_blocks']
+           'checked_attitude_covariance', 'propagated_covariance', 'transition_blocks']
 
 FloatArray = NDArray[np.float64]
 
@@ -226,7 +226,7 @@ class AttitudeCovariance:
             if dt.size == 0:
                 return
         coupling = transition_blocks(q, rates, dt)
-        self._p = _propagated(self._p, coupling, float(dt.sum()), self.model)
+        self._p = propagated_covariance(self._p, coupling, float(dt.sum()), self.model)
 
     @property
     def covariance(self) -> FloatArray:
@@ -281,8 +281,8 @@ def _all_good(q: FloatArray, rates: FloatArray, dt: FloatArray) -> bool:
                 and np.isfinite(dt.sum()) and float(np.abs(q).sum(axis=1).min()) > 0.0)
 
 
-def _propagated(p: FloatArray, coupling: FloatArray, duration: float,
-                model: GyroErrorModel) -> FloatArray:
+def propagated_covariance(p: FloatArray, coupling: FloatArray, duration: float,
+                          model: GyroErrorModel) -> FloatArray:
     """``Φ P Φᵀ + Q`` with ``Φ = [[I, coupling], [0, I]]``, symmetrised and floored."""
     pax = p[:3, 3:]
     cross = pax + coupling @ p[3:, 3:]

@@ -26,6 +26,7 @@ from rigid_body_attitude.msgs.tf_message import TF_MESSAGE, decode_tf_message
 from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.decoding import Handler
 from rigid_body_attitude.session.interface import NODE_INTERFACE
+from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.mount import StaticTransforms, drop_no_mount, set_found_mount
 
@@ -59,7 +60,11 @@ class BagMount:
 
     def apply(self, session: GyroSession) -> None:
         """Set ``session``'s mount from the transforms when the node would wait for it, and
-        its IMU frame (``imu_frame``: records in another frame are refused)."""
+        its IMU frame (``imu_frame``: records in another frame are refused); the other
+        sensors' mounts (``imu/mag``) from the same transforms."""
+        if isinstance(session, FilteredGyroSession):
+            transforms, body_frame = self.transforms, session.body_frame
+            session.frame_mount = lambda frame: transforms.rotation(body_frame, frame)
         frame = self.sensor_frame
         if not session.mount_needed(frame):
             if frame:  # records in other frames are refused, as the node refuses them

@@ -95,6 +95,11 @@ class ReplayOptions:
     initial_yaw_stddev: float = _DEFAULT['initial_yaw_stddev']
     set_pose_stddev: float = _DEFAULT['set_pose_stddev']
     tilt_stddev_warn: float = _DEFAULT['tilt_stddev_warn']
+    magnetic_declination: float = _DEFAULT['magnetic_declination']
+    magnetometer_calibration_file: str = _DEFAULT['magnetometer_calibration_file']
+    accelerometer_noise_density: float = _DEFAULT['accelerometer_noise_density']
+    accelerometer_random_walk: float = _DEFAULT['accelerometer_random_walk']
+    magnetometer_noise_density: float = _DEFAULT['magnetometer_noise_density']
     gyro_topic: str = ''
     torque_topic: str = NODE_INTERFACE.endpoint('torque').name
     rotor_torque_topic: str = NODE_INTERFACE.endpoint('rotor_torque').name

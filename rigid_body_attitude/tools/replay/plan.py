@@ -26,7 +26,8 @@ __all__ = ['Plan', 'make_plan']
 Decoder = Callable[[bytes], tuple[Any, ...]]
 
 #: The node's gyro topics, in the order the replay looks for them.
-GYRO_TOPICS = NODE_INTERFACE.names('in', ('sensor',))
+GYRO_TOPICS = tuple(endpoint.name for endpoint in NODE_INTERFACE.inputs_of_quantity(
+    'angular_rate'))
 #: The roles of the outputs a replay writes: the session's, the simulated sensors' and their
 #: mounts.
 _WRITTEN = ('output', 'diagnostics', 'simulated_sensor', 'tf_static')
@@ -40,7 +41,7 @@ class Plan:
         gyro_topic: the bag's gyro topic (``''`` for dynamics scenes).
         gyro_type: its message type (its decoder: the rate registry's), or ``''``.
         inputs: bag topic → the node's input topic it feeds (``torque``, ``rotor_torque``,
-            ``set_pose``), besides the gyro.
+            ``set_pose``, ``imu/mag``, ``attitude_measurement``), besides the gyro.
         ground_truth_topic: the bag's ground-truth topic, or ``''``.
         outputs: output topic → its message type, in the node's order (a simulated
             sensor's topic as the scene names it).
@@ -156,9 +157,11 @@ def make_plan(reader: BagReader, scene: Scene, input_names: frozenset[str],
     situation = Situation(scene, options.parameters(), input_names, gyro_type == IMU)
     inputs = {}
     for endpoint in NODE_INTERFACE:
-        if endpoint.direction != 'in' or endpoint.role not in ('command', 'reset'):
+        sample_input = endpoint.role == 'sensor' and endpoint.name not in GYRO_TOPICS
+        if endpoint.direction != 'in' or not (
+                endpoint.role in ('command', 'reset') or sample_input):
             continue
-        command = endpoint.role == 'command'
+        command = endpoint.role == 'command' or sample_input
         found = _command_topic(reader, _bag_name(options, endpoint.name), endpoint.name,
                                endpoint.present(situation), (endpoint.type,),
                                notes if command else [])

@@ -25,7 +25,9 @@ from rigid_body_attitude.msgs import (
     encode_quaternion_stamped, encode_twist_stamped, encode_vector3_stamped,
     imu_with_orientation, pose_stamped_encoder, pose_with_covariance_stamped_encoder,
     quaternion_stamped_encoder)
-from rigid_body_attitude.session.base import Session
+from rigid_body_attitude.msgs.cdr import accel_with_covariance_stamped_encoder
+from rigid_body_attitude.msgs.odometry import odometry_encoder
+from rigid_body_attitude.session.base import AccelerationEstimate, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, body_frame_velocity)
@@ -116,6 +118,7 @@ class BagSink:
         self._pose = self.ids.get('pose')
         self._imu = self.ids.get('imu/data')
         self._pose_covariance = self.ids.get('pose_with_covariance')
+        self._acceleration = self.ids.get('accel/filtered')
         #: Rotation (w, x, y, z) of the IMU's frame in the body frame for ``imu/data``
         #: (:meth:`sensor_mount`; ``None``: identity).
         self.imu_mount: Quaternion | None = None
@@ -129,6 +132,8 @@ class BagSink:
         self.encode_orientation = quaternion_stamped_encoder(world_frame)
         self.encode_pose = pose_stamped_encoder(world_frame)
         self.encode_pose_covariance = pose_with_covariance_stamped_encoder(world_frame)
+        self.encode_odom = odometry_encoder(world_frame, body_frame)
+        self.encode_acceleration = accel_with_covariance_stamped_encoder(body_frame)
 
     def start_from(self, start: GroundTruthStart, session: Session) -> None:
         """Set ``session``'s attitude from the ground truth at the first output due."""
@@ -182,6 +187,13 @@ class BagSink:
             series.attitudes.extend(attitude)
             series.positions.extend(_ZERO)
 
+    def acceleration(self, sec: int, nanosec: int, estimate: AccelerationEstimate) -> None:
+        """``accel/filtered`` of one filtered gyro sample (computed when written)."""
+        if self._acceleration is not None:
+            self.records.append((self._acceleration, self.now_ns, self.encode_acceleration(
+                sec, nanosec, *estimate())))
+            self.counts['accel/filtered'] += 1
+
     def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
         """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``
         and the others the body's (``None``: identity, nothing composed per sample)."""
@@ -204,7 +216,7 @@ class BagSink:
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:
-        """``orientation``, ``pose`` and ``twist`` of one dynamics tick."""
+        """``orientation``, ``pose``, ``twist`` and ``odom`` of one dynamics tick."""
         stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
         session = self.session
         if self._aligning and session is not None and self.start is not None and (
@@ -218,6 +230,9 @@ class BagSink:
                                                 sample.attitude))
         self._write('twist', encode_twist_stamped(stamp_ns, self.body_frame, velocity_body,
                                                   sample.omega_body))
+        if 'odom' in self.ids:
+            self._write('odom', self.encode_odom(sec, nanosec, sample.position, sample.attitude,
+                                                 velocity_body, sample.omega_body))
         self.last_attitude, self.last_stamp_ns = sample.attitude, stamp_ns
         if self.series is not None:
             self.series.attitude_stamps_ns.append(stamp_ns)

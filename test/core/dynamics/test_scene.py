@@ -199,7 +199,8 @@ def effects_list():
 BAD_SCENES = [
     ('unknown top-level key', f'rate_source: dynamics\nbody: {BODY}\nintegrater: rk4',
      r"Unknown key 'integrater' in scene; valid keys: body, description, effects, "
-     r'initial_state, integrator, magnetic_field, name, orbit, rate_source, sensors, step'),
+     r'estimation, initial_state, integrator, magnetic_field, name, orbit, rate_source, '
+     r'sensors, step, sun'),
     ('missing rate_source', f'body: {BODY}', r"Missing key 'rate_source' in scene; valid keys"),
     ('missing body', 'rate_source: dynamics', r"Missing key 'body' in scene; valid keys"),
     ('bad rate_source', f'rate_source: imu\nbody: {BODY}',

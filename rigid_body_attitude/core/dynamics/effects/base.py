@@ -177,6 +177,8 @@ def as_quat(attitude: Sequence[float] | FloatArray) -> Quat:
 
 def as_vec(vector: Sequence[float] | FloatArray) -> Vec:
     """A 3-vector as a plain-float tuple."""
+    if type(vector) is tuple and len(vector) == 3 and all(type(v) is float for v in vector):
+        return vector  # already one (the propagator's commands)
     x, y, z = np.asarray(vector, dtype=np.float64).tolist()
     return x, y, z
 
@@ -221,7 +223,7 @@ class Effect:
         """Add one to the counter ``reason`` (reported in the diagnostics)."""
         self.counters[reason] = self.counters.get(reason, 0) + 1
 
-    def accept_input(self, input_name: str, t: float, value: FloatArray) -> None:
+    def accept_input(self, input_name: str, t: float, value: Vec | FloatArray) -> None:
         """Take a commanded input (only called for names in :attr:`inputs`)."""
         raise SceneError(f'Effect {self.name!r} takes no input {input_name!r}')
 
@@ -541,7 +543,7 @@ class CommandedEffect(Effect):
         """Drop every held command."""
         self.command.reset()
 
-    def accept_input(self, input_name: str, t: float, value: FloatArray) -> None:
+    def accept_input(self, input_name: str, t: float, value: Vec | FloatArray) -> None:
         """Hold ``value`` from ``t``."""
         self.command.set(t, value)
 

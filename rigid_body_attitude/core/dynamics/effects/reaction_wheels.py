@@ -168,8 +168,9 @@ class ReactionWheels(CommandedEffect, RotorState):
         """One number per wheel."""
         return self.wheel_count
 
-    def accept_input(self, input_name: str, t: float, value: FloatArray) -> None:
+    def accept_input(self, input_name: str, t: float, value: Vec | FloatArray) -> None:
         """Hold a torque or speed command from ``t``, clipped to the limits (counted)."""
+        value = np.asarray(value, dtype=np.float64)
         limit = self.wheel['max_torque' if input_name == 'wheel_torque' else 'max_speed']
         clipped = np.clip(value, -np.asarray(limit), limit)
         if np.any(clipped != value):
