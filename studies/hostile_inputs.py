@@ -710,12 +710,12 @@ def _stamp_classes(topic: str) -> Iterator[CommandClass]:
         at(lambda k: 0, (k, nanosec)) for k, nanosec in enumerate([10**9, 2**32 - 1] * 3)
     ] + [at(lambda k: 0, (-1, 0)), at(lambda k: 0, (-(2**31), 5))], 'invalid_stamp',
         alone=True)
-    yield CommandClass('stamps off the tick: wall time, 2^31 - 1 s, 1 ns either side, the next '
-                       'tick, 1 ns', [
+    off_the_tick = [
         at(lambda k: BASE_NS), at(lambda k: (2**31 - 1) * 10**9),
         at(lambda k: k * TICK_NS + 1), at(lambda k: (k + 1) * TICK_NS),
-        at(lambda k: k * TICK_NS - 1), at(lambda k: 1)] * 2, 'future_stamp|stale_stamp',
-        alone=True)
+        at(lambda k: k * TICK_NS - 1), at(lambda k: 1)]
+    yield CommandClass('stamps off the tick: wall time, 2^31 - 1 s, 1 ns either side, the next '
+                       'tick, 1 ns', off_the_tick * 2, 'future_stamp|stale_stamp', alone=True)
 
 
 def wheel_command_classes(seed: int) -> Iterator[CommandClass]:
