@@ -34,6 +34,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.estimation.alignment import ALIGNED, GravityAligner
@@ -45,6 +46,7 @@ __all__ = ['AlignmentResult', 'Levelling', 'SampleMap', 'heading']
 
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
+FloatArray = NDArray[np.float64]
 Affine = tuple[float, float, float, float, float, float, float, float, float, float, float,
                float]
 
@@ -97,7 +99,7 @@ class SampleMap:
         self.calibration = calibration if calibration is not None else ImuCalibration()
         self.gyro_bias: Vec = (0.0, 0.0, 0.0)
         #: ``(I + Ê)⁻¹``, the inverse of the gyro's estimated intrinsic errors (body frame).
-        self._intrinsic_inverse = np.eye(3)
+        self._intrinsic_inverse: FloatArray = np.eye(3)
         self.set_mount(mount)
 
     def set_mount(self, mount: Sequence[float] | None) -> None:
@@ -124,8 +126,11 @@ class SampleMap:
         estimate ``Ê`` of the intrinsic errors it undoes (9 numbers, row-major, body frame;
         ``None``: none): ``ω = (I + Ê)⁻¹ (ω_body − b)`` (module docstring)."""
         self.gyro_bias = bias
-        self._intrinsic_inverse = (np.eye(3) if intrinsic is None else np.linalg.inv(
-            np.eye(3) + np.reshape(np.asarray(intrinsic, dtype=np.float64), (3, 3))))
+        inverse: FloatArray = np.eye(3)
+        if intrinsic is not None:
+            matrix: FloatArray = np.reshape(np.asarray(intrinsic, dtype=np.float64), (3, 3))
+            inverse = np.asarray(np.linalg.inv(inverse + matrix), dtype=np.float64)
+        self._intrinsic_inverse = inverse
         self._update_affine()
 
     def bias_removed(self, body_rate: Sequence[float]) -> Vec:

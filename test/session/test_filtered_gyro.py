@@ -140,6 +140,7 @@ def test_the_gyros_scale_and_misalignment_errors_are_learned_and_taken_off_the_s
     a = np.reshape(session.sample_map.affine[:9], (3, 3))
     expected = np.linalg.solve(np.eye(3) + estimate, probe - np.array(estimator.gyro_bias))
     assert a @ probe + session.sample_map.affine[9:] == pytest.approx(expected, abs=1e-12)
+    assert session.sample_map.bias_removed(probe) == pytest.approx(expected, abs=1e-12)
     errors = quaternion.log(quaternion.multiply(np.array(truths),
                                                 quaternion.conjugate(np.array(estimates))))
     assert np.degrees(np.linalg.norm(errors, axis=1)).max() < 3.0
