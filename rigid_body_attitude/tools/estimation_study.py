@@ -124,15 +124,11 @@ def run_filter(trial: BroadTrial, model: GyroErrorModel, settings: EstimatorSett
     gyro, acc = trial.gyro.tolist(), trial.acc.tolist()
     fields = trial.field.tolist() if trial.field is not None and use_magnetometer else None
     dt = 1.0 / rate
-    block = None
     for k in range(count):
         field = fields[k] if fields is not None else None
         if strapdown.add(gyro[k], acc[k], field, dt):
             attitude[k] = strapdown.attitude
-            state = estimator.covariance
-            if state is not None and (block is None or block is not state.p):
-                block = state.p
-            covariance[k] = block[:3, :3] if block is not None else np.nan
+            covariance[k] = estimator.published_covariance(strapdown.attitude, strapdown.rate)
     return Run(attitude, covariance)
 
 

@@ -75,6 +75,8 @@ Quat = tuple[float, float, float, float]
 Vec = tuple[float, float, float]
 #: Largest specific force magnitude [m/s²] a sample may have.
 SPECIFIC_FORCE_LIMIT = 1.0e4
+#: Share of the accelerometer's range at which an axis counts as clipped.
+CLIP_FRACTION = 0.98
 
 
 class AttitudeEstimator:
@@ -115,6 +117,8 @@ class AttitudeEstimator:
         self.velocity = BoundedVelocity(settings.velocity_time, settings.motion_power_time,
                                         model.accelerometer_noise_density,
                                         settings.zero_velocity_stddev)
+        #: Specific force [m/s²] at or beyond which an axis is taken as clipped.
+        self._clip = CLIP_FRACTION * settings.accelerometer_range
         self.rest = RestIntervals(settings.rest_seconds, settings.rest_noise_factor,
                                   settings.max_rest_rate, settings.gravity_tolerance)
         self.covariance: FilterCovariance | None = None
@@ -163,6 +167,8 @@ class AttitudeEstimator:
                                  f'{SPECIFIC_FORCE_LIMIT:g} m/s^2, got {tuple(specific_force)!r}')
             b = self.accel_bias
             self.interval.add(q_after, rate, (fx - b[0], fy - b[1], fz - b[2]), dt)
+            if max(abs(fx), abs(fy), abs(fz)) >= self._clip:
+                self.interval.clipped += dt
         else:
             self.interval.duration += dt
         return self.interval.duration >= self.settings.update_interval
@@ -212,6 +218,11 @@ class AttitudeEstimator:
 
     def _velocity_change(self, q: Quat, rotation: FloatArray) -> tuple[Quat, FloatArray]:
         covariance, duration = self._state(), self.interval.count / self.sample_rate
+        if self.interval.clipped > 0.0:  # the clipped part of the velocity change is unknown
+            self.velocity.unseen(covariance, duration,
+                                 (self.settings.accelerometer_range * self.interval.clipped) ** 2)
+            self.counts['velocity_clipped'] += 1
+            return q, rotation
         force_sum = np.array(self.interval.mean_world_force()) * duration
         h, y, r = self.velocity.change(covariance, force_sum, duration, self.gravity, self.up)
         result = joseph_update(covariance.p, h, y, r, self.estimated)
@@ -303,6 +314,20 @@ class AttitudeEstimator:
             turn = np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * cross @ cross
             rotation = turn @ rotation
         return q, rotation
+
+    def published_covariance(self, q: Quat, rate: Vec) -> FloatArray:
+        """The 3×3 world-frame attitude covariance [rad²] to publish with the attitude ``q``
+        at the body rate ``rate`` [rad/s]: the filter's, plus the uncertainty of the instant
+        the samples represent (``sample_timing`` ``σ_t``: an IMU's own filter delays its
+        samples by a millisecond or two; a turn at ``ω`` moves the attitude by ``ω σ_t`` in
+        that time, ``σ_t² ω_w ω_wᵀ`` with ``ω_w`` the world-frame rate)."""
+        p = self._state().p[:3, :3].copy()
+        w, x, y, z = q
+        rx, ry, rz = rate
+        tx, ty, tz = 2.0 * (y * rz - z * ry), 2.0 * (z * rx - x * rz), 2.0 * (x * ry - y * rx)
+        world = np.array([rx + w * tx + (y * tz - z * ty), ry + w * ty + (z * tx - x * tz),
+                          rz + w * tz + (x * ty - y * tx)]) * self.settings.sample_timing
+        return p + np.outer(world, world)
 
     @property
     def state_size(self) -> int:

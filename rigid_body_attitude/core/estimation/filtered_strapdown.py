@@ -45,6 +45,8 @@ class FilteredStrapdown:
         self.aligner = aligner
         self.use_magnetometer = use_magnetometer
         self.attitude: Quat = (1.0, 0.0, 0.0, 0.0)
+        #: The last bias-corrected body rate [rad/s].
+        self.rate: Vec = (0.0, 0.0, 0.0)
         self.started = False
         self._field_sum = [0.0, 0.0, 0.0]
         self._field_count = 0
@@ -57,6 +59,7 @@ class FilteredStrapdown:
         estimator = self.estimator
         b = estimator.gyro_bias
         corrected = (rate[0] - b[0], rate[1] - b[1], rate[2] - b[2])
+        self.rate = corrected
         q_before = self.attitude
         q = scalar_exp_step(q_before, corrected, dt)
         due = estimator.sample(q_before, corrected, dt, q, specific_force)
