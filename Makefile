@@ -9,7 +9,7 @@
 # and a C/C++ compiler) and this package, installed (not editable) the way colcon lays out an
 # ament_python package. Stamp files in .venv make a second run fast: the requirements are
 # re-installed when a requirements file changes, tf2_msgs re-built when its interface package
-# changes, the package when any of its sources, config files or packaging files change.
+# changes, the package when any of its sources, config or launch files or packaging files change.
 #
 # The interpreter: the newest of python3.12, then python3.11 (on PATH, else a pyenv install of
 # that version), then python3 if it is 3.12 or 3.11; an existing venv keeps the interpreter it
@@ -57,7 +57,7 @@ PIP_INSTALL := $(PIP) install --progress-bar off
 # What the installed package is built from. Directories are listed too: their time stamps change
 # when a file is added or removed.
 PACKAGE_FILES := setup.py setup.cfg package.xml LICENSE resource/$(PACKAGE) \
-	$(shell find $(PACKAGE) config scripts/launchers -name __pycache__ -prune \
+	$(shell find $(PACKAGE) config launch scripts/launchers -name __pycache__ -prune \
 		-o ! -name '*.pyc' -print 2>/dev/null)
 
 # tf2_msgs has no wheel: it is built from its interface package against the venv's ROS 2 wheels
@@ -108,7 +108,7 @@ test: install $(TEST_REQUIREMENTS_STAMP)
 
 # The same paths as test/test_flake8.py.
 lint: install $(TEST_REQUIREMENTS_STAMP)
-	$(VENV_PYTHON) -m flake8 $(PACKAGE) test $(wildcard bench) setup.py scripts/ros2run
+	$(VENV_PYTHON) -m flake8 $(PACKAGE) test $(wildcard bench) launch setup.py scripts/ros2run
 
 install: $(TF2_MSGS_STAMP) $(PACKAGE_STAMP)
 
@@ -151,7 +151,8 @@ $(TF2_MSGS_STAMP): $(REQUIREMENTS_STAMP) $(TF2_MSGS_FILES)
 $(PACKAGE_STAMP): $(REQUIREMENTS_STAMP) $(PACKAGE_FILES)
 	rm -rf $(STAGE_DIR)
 	mkdir -p $(STAGE_DIR)
-	cp -R setup.py setup.cfg package.xml LICENSE resource config scripts $(PACKAGE) $(STAGE_DIR)/
+	cp -R setup.py setup.cfg package.xml LICENSE resource config launch scripts $(PACKAGE) \
+		$(STAGE_DIR)/
 	find $(STAGE_DIR) -name __pycache__ -prune -exec rm -rf {} +
 	$(PIP_INSTALL) --no-deps --no-build-isolation --use-pep517 --force-reinstall $(STAGE_DIR)
 	rm -rf $(STAGE_DIR)

@@ -6,6 +6,7 @@ Whatever installs it, a prefix ends up with the layout ROS 2 expects::
     <prefix>/share/ament_index/resource_index/packages/rigid_body_attitude   (empty marker)
     <prefix>/share/rigid_body_attitude/package.xml
     <prefix>/share/rigid_body_attitude/config/...                  scenes and parameter files
+    <prefix>/share/rigid_body_attitude/launch/...                  what `ros2 launch` starts
     <prefix>/lib/rigid_body_attitude/<executable>                  what `ros2 run` starts
 
 ``ros2 run rigid_body_attitude propagation_node`` finds the package prefix through the ament
@@ -70,14 +71,15 @@ def package_version() -> str:
     return root.findtext('version').strip()
 
 
-def config_data_files() -> list[tuple[str, list[str]]]:
-    """Return data_files entries shipping config/ recursively to share/<package>/config."""
+def shared_data_files(folder: str) -> list[tuple[str, list[str]]]:
+    """Return data_files entries shipping ``folder`` (config/, launch/) recursively to
+    share/<package>/<folder>."""
     entries = []
-    config_dir = SOURCE_DIR / 'config'
-    for directory in sorted(p for p in [config_dir, *config_dir.rglob('*')] if p.is_dir()):
+    top = SOURCE_DIR / folder
+    for directory in sorted(p for p in [top, *top.rglob('*')] if p.is_dir()):
         files = sorted(
             str(p.relative_to(SOURCE_DIR)) for p in directory.iterdir()
-            if p.is_file() and not p.name.startswith('.'))
+            if p.is_file() and not p.name.startswith('.') and p.suffix != '.pyc')
         if files:
             target = Path('share', PACKAGE_NAME, directory.relative_to(SOURCE_DIR))
             entries.append((str(target), files))
@@ -93,10 +95,11 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + PACKAGE_NAME]),
         ('share/' + PACKAGE_NAME, ['package.xml']),
         ('lib/' + PACKAGE_NAME, ['scripts/launchers/' + name for name in EXECUTABLES]),
-        *config_data_files(),
+        *shared_data_files('config'),
+        *shared_data_files('launch'),
     ],
     install_requires=['numpy', 'PyYAML', 'scipy', 'rosbags', 'apsw', 'matplotlib', 'tqdm',
-                      'allantools', 'dask[distributed]', 'pyarrow'],
+                      'allantools', 'dask[distributed]', 'pyarrow', 'ppigrf'],
     python_requires='>=3.11, <3.13',
     zip_safe=True,
     maintainer='rigid_body_attitude developers',

@@ -7,6 +7,9 @@ message costs a few microseconds of Python. Pacing is against absolute due times
 (``t0 + i / rate``): the loop sleeps only when it is ahead and otherwise publishes every
 message that is due, so short stalls are caught up in a burst instead of lowering the rate.
 
+``--mag-every N`` also publishes a ``sensor_msgs/MagneticField`` (``--mag`` [T], reliable) on
+``imu/mag`` with every N-th Imu, stamped alike: the attitude filter's magnetometer.
+
 ``--gyro`` and ``--accel`` set the message's ``angular_velocity`` [rad/s] and
 ``linear_acceleration`` [m/s²]; all zero acceleration (the default) means "no accelerometer
 data", so the node does not level. Gravity there (``--accel 0.3,-0.4,9.79``) with a rate under
@@ -26,7 +29,9 @@ import time
 
 from _common import IMU_TOPIC, imu_cdr, reliable_qos, set_stamp_ns
 import rclpy
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, MagneticField
+
+from rigid_body_attitude.msgs.cdr import encode_magnetic_field
 
 
 #: The message's frame: the node's default ``body_frame``, so the rates are body rates and the
@@ -46,8 +51,10 @@ def _vector(text: str) -> tuple:
     return values
 
 
-def _paced_publish(publish_raw, message: bytearray, rate_hz: float, count: int) -> dict:
-    """Publish ``count`` copies of ``message`` at ``rate_hz``; return pacing statistics."""
+def _paced_publish(publish_raw, message: bytearray, rate_hz: float, count: int,
+                   field=None) -> dict:
+    """Publish ``count`` copies of ``message`` at ``rate_hz``; return pacing statistics.
+    ``field``: ``(publish_raw, message, every)`` of the magnetometer, or None."""
     period_ns = 1e9 / rate_hz
     monotonic_ns = time.monotonic_ns
     wall_ns = time.time_ns
@@ -65,6 +72,9 @@ def _paced_publish(publish_raw, message: bytearray, rate_hz: float, count: int) 
         max_lag_ns = max(max_lag_ns, now_ns - due_ns)
         last_stamp = wall_ns()
         set_stamp_ns(message, last_stamp)
+        if field is not None and sent % field[2] == 0:
+            set_stamp_ns(field[1], last_stamp)
+            field[0](bytes(field[1]))
         publish_raw(bytes(message))
         if sent == 0:
             first_stamp = last_stamp
@@ -87,6 +97,10 @@ def main() -> int:
     parser.add_argument('--accel', type=_vector, default=(0.0, 0.0, 0.0),
                         help='linear_acceleration AX,AY,AZ [m/s^2] (default: zeros, i.e. no '
                              'accelerometer data)')
+    parser.add_argument('--mag-every', type=int, default=0,
+                        help='publish a MagneticField on imu/mag with every N-th Imu (0: none)')
+    parser.add_argument('--mag', type=_vector, default=(0.0, 2.0e-5, -4.0e-5),
+                        help='magnetic_field MX,MY,MZ [T] (default %(default)s)')
     parser.add_argument('--settle', type=float, default=0.5,
                         help='seconds to wait after the first match before publishing')
     parser.add_argument('--match-timeout', type=float, default=20.0)
@@ -95,6 +109,7 @@ def main() -> int:
     rclpy.init(args=[sys.argv[0]] + ros_args)
     node = rclpy.create_node('bench_imu_publisher')
     publisher = node.create_publisher(Imu, IMU_TOPIC, reliable_qos())
+    field_publisher = node.create_publisher(MagneticField, 'imu/mag', reliable_qos())
     try:
         deadline = time.monotonic() + args.match_timeout
         while publisher.get_subscription_count() < 1:
@@ -106,9 +121,15 @@ def main() -> int:
         time.sleep(args.settle)
         message = imu_cdr(args.gyro, BODY_FRAME, args.accel)
         publish_raw = publisher.handle.publish_raw
-        _paced_publish(publish_raw, message, args.rate, max(1, int(args.warmup * args.rate)))
+        field = None
+        if args.mag_every > 0:
+            field = (field_publisher.handle.publish_raw, bytearray(encode_magnetic_field(
+                0, BODY_FRAME, args.mag)), args.mag_every)
+        _paced_publish(publish_raw, message, args.rate, max(1, int(args.warmup * args.rate)),
+                       field)
         _emit(event='start', wall_ns=time.time_ns())
-        stats = _paced_publish(publish_raw, message, args.rate, int(args.duration * args.rate))
+        stats = _paced_publish(publish_raw, message, args.rate, int(args.duration * args.rate),
+                               field)
         _emit(event='end', wall_ns=time.time_ns(), **stats)
         sys.stdin.read()
     except KeyboardInterrupt:

@@ -13,7 +13,7 @@ PUBLISHER_SHORTFALL = 0.97
 #: The node's CPU at 1 kHz may be at most this multiple of the fast relay's in the same run,
 #: by node target: ``node_nocov`` (levelled, mount, calibration) as the default node,
 #: ``node_full`` (the same with the covariance) 1.2×.
-CPU_FACTOR_1KHZ = {'node': 1.15, 'node_nocov': 1.15, 'node_full': 1.2}
+CPU_FACTOR_1KHZ = {'node': 1.15, 'node_nocov': 1.15, 'node_full': 1.2, 'node_filter': 1.3}
 #: The node loses nothing up to this rate, and its p99 is at most ``P99_LIMIT_MS`` up to
 #: ``P99_LIMIT_HZ``.
 ZERO_LOSS_HZ = 5000.0

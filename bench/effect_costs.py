@@ -8,8 +8,9 @@ no, one and three effects, in one run.
 * **Per step** [µs]: ``DynamicsPropagator.advance_to`` over ``--steps`` steps of 1 ms (in
   calls of 20 steps, a 50 Hz tick) on a 1/2/3 kg m² body at 1 rad/s, for every integrator that
   takes torques, with no effect, with gravity gradient, and with gravity gradient, viscous
-  damping and a world-fixed constant torque. This is the whole propagator step: integrator,
-  effects, energy-balance work.
+  damping and a world-fixed constant torque, and with actuators (four reaction wheels driven by
+  a PD controller, torque rods dumping their momentum in the tilted-dipole field). This is the
+  whole propagator step: integrator, effects, energy-balance work.
 * **RK4 kernel**: the written-out RK4 step (:mod:`.integrators.rk4_kernel`) against the generic
   one (:func:`.integrators.rk4_kernel.rk4_work_step`) on the same models.
 
@@ -33,7 +34,10 @@ sys.path.insert(0, str(REPO))
 
 from rigid_body_attitude.core.attitude import quaternion  # noqa: E402
 from rigid_body_attitude.core.dynamics.effects import (  # noqa: E402
-    BodyProperties, EFFECTS, ForceEffect, RateCorrection, RotorEffect, TorqueEffect)
+    BodyProperties, EFFECTS, Environment, ForceEffect, HeldOverStep, RateCorrection,
+    RotorEffect, RotorState, TorqueEffect)
+from rigid_body_attitude.core.environment.orbit import CircularOrbit  # noqa: E402
+from rigid_body_attitude.core.environment.tilted_dipole import TiltedDipoleField  # noqa: E402
 from rigid_body_attitude.core.dynamics.inertia import Inertia  # noqa: E402
 from rigid_body_attitude.core.dynamics.integrators import torque_integrators  # noqa: E402
 from rigid_body_attitude.core.dynamics.integrators.rk4_kernel import (  # noqa: E402
@@ -49,8 +53,19 @@ EFFECT_PARAMETERS: dict[str, dict[str, Any]] = {
     'gravity_about_pivot': {'centre_of_mass': [0.0, 0.0, 0.1]},
     'viscous_damping': {'coefficient': [0.1, 0.2, 0.3]},
     'rotor': {'momentum': [0.0, 2.0, 0.0]},
+    'attitude_pd': {'kp': 0.5, 'kd': 2.0, 'control_period': 0.02},
     'gyro_bias': {'bias': [0.01, 0.0, 0.0]}, 'earth_rate': {'latitude': 48.0},
+    'reaction_wheels': {'axes': [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]],
+                        'spin_inertia': 0.01, 'max_torque': 0.05, 'max_speed': 600.0,
+                        'coulomb_friction': 1e-4, 'viscous_friction': 1e-6,
+                        'initial_speed': [100.0, -50.0, 80.0, 20.0]},
+    'magnetorquers': {'max_dipole': 1.0}, 'residual_dipole': {'dipole': [0.05, 0.0, -0.02]},
+    'bdot': {'gain': 1.0e5, 'control_period': 0.1},
 }
+#: The orbit and field of the effects that act through the magnetic field.
+MAGNETIC_EFFECTS = ('magnetorquers', 'residual_dipole', 'bdot')
+ORBIT_SECTIONS = {'orbit': {'altitude': 500000.0, 'inclination_deg': 97.4},
+                  'magnetic_field': {'model': 'tilted_dipole'}}
 #: Effect sets of the per-step table.
 EFFECT_SETS = {
     'none': [],
@@ -59,6 +74,11 @@ EFFECT_SETS = {
         {'gravity_gradient': {'orbit_radius': 7.0e6}},
         {'viscous_damping': {'coefficient': 0.01}},
         {'constant_torque': {'torque': [0.0, 0.01, 0.0], 'frame': 'world'}}],
+    'actuators (4 wheels, PD on them, rods dumping)': [
+        {'reaction_wheels': EFFECT_PARAMETERS['reaction_wheels']},
+        {'attitude_pd': {'kp': 0.5, 'kd': 2.0, 'control_period': 0.02,
+                         'actuator': 'reaction_wheels'}},
+        {'magnetorquers': {'max_dipole': 1.0, 'dumping_gain': 0.001}}],
 }
 STEP = 1e-3
 TICK_STEPS = 20
@@ -89,15 +109,23 @@ def evaluation_calls(effect: Any) -> tuple[Callable[[], object], Callable[[], ob
 
 def effect_rows(repeats: int) -> list[dict[str, Any]]:
     """Cost per evaluation of every registered effect."""
+    orbit = CircularOrbit(6878137.0, 1.7)
     body = BodyProperties(Inertia([1.0, 2.0, 3.0]), 2.0)
+    magnetic = BodyProperties(body.inertia, body.mass,
+                              Environment(orbit, TiltedDipoleField(orbit)))
     rows = []
     for name in sorted(EFFECTS):
-        effect = EFFECTS[name](EFFECT_PARAMETERS.get(name, {}), body)
+        effect = EFFECTS[name](EFFECT_PARAMETERS.get(name, {}),
+                               magnetic if name in MAGNETIC_EFFECTS else body)
         calls = evaluation_calls(effect)
         if calls is None:
             continue
-        if name in ('commanded_torque', 'commanded_force'):
+        if name in ('commanded_torque', 'commanded_force', 'magnetorquers'):
             effect.accept_input(next(iter(effect.inputs)), 0.0, np.array([0.1, 0.2, 0.3]))
+        if isinstance(effect, RotorState):
+            effect.start(W)
+        if isinstance(effect, HeldOverStep):
+            effect.hold(1.0, STEP, Q, W)
         rows.append({'effect': name, 'kind': _kind(effect),
                      'plain_float_us': best_us(calls[0], repeats, 20000),
                      'array_us': best_us(calls[1], repeats, 20000)})
@@ -122,10 +150,16 @@ def step_rows(steps: int, repeats: int) -> list[dict[str, Any]]:
                 'rate_source': 'dynamics', 'integrator': integrator, 'step': STEP,
                 'body': {'inertia': {'moments': [1.0, 2.0, 3.0]}},
                 'initial_state': {'attitude': list(Q), 'omega_body': list(W)},
-                'effects': effects})
+                'effects': effects, **_sections(effects)})
             row[label] = min(_propagate(scene, steps) for _ in range(repeats))
         rows.append(row)
     return rows
+
+
+def _sections(effects: list[dict[str, Any]]) -> dict[str, Any]:
+    """The orbit and field sections when an effect acts through the field."""
+    return ORBIT_SECTIONS if any(name in MAGNETIC_EFFECTS for effect in effects
+                                 for name in effect) else {}
 
 
 def _propagate(scene: Any, steps: int) -> float:
@@ -143,7 +177,7 @@ def kernel_rows(repeats: int) -> list[dict[str, Any]]:
     for label, effects in EFFECT_SETS.items():
         scene = scene_from_mapping({'rate_source': 'dynamics',
                                     'body': {'inertia': {'moments': [1.0, 2.0, 3.0]}},
-                                    'effects': effects})
+                                    'effects': effects, **_sections(effects)})
         model = DynamicsPropagator(scene).model
         kernel = rk4_kernel(model)
         state = Q + W

@@ -70,7 +70,9 @@ NODE_ARGS = ['--ros-args', '-p', 'scene:=strapdown']
 DEFAULT_TARGETS = ('node', 'relay', 'fast_relay')
 #: ``node_full``: the node with the whole real-IMU front end besides levelling (which needs
 #: ``--imu-accel``): this mount and a calibration file (:data:`CALIBRATION`, written to a
-#: temporary folder); ``node_nocov`` is the same without the covariance.
+#: temporary folder); ``node_nocov`` is the same without the covariance; ``node_filter`` the
+#: same with the ``imu_filter`` scene (the attitude filter: with ``--imu-accel`` gravity and
+#: ``--mag-every`` it levels, then runs every update).
 FULL_NODE_MOUNT_RPY = '[0.02, -0.03, 1.5707963]'
 #: A plain calibration file (``rigid_body_attitude.core.estimation.calibration``): gyro bias,
 #: scale and misalignment, applied by the node's inline affine map.
@@ -179,6 +181,8 @@ def default_targets(calibration: Path) -> Dict[str, List[str]]:
                        '-p', f'calibration_file:={calibration}']
         targets.update(node=node, node_full=full,
                        node_nocov=full + ['-p', 'covariance:=false'],
+                       # the attitude filter: the imu_filter scene on the same front end
+                       node_filter=full + ['-p', 'scene:=imu_filter'],
                        # the default node served by rclpy's stock executor (its fallback)
                        node_stock=['env', 'RIGID_BODY_ATTITUDE_STOCK_EXECUTOR=1'] + node)
     targets['relay'] = [python, str(BENCH / 'relay.py')]
@@ -248,7 +252,8 @@ def start_processes(session: Session, target_argv: List[str], rate: float, durat
     subscriber.wait_event('matched', args.match_timeout, watch=[target])
     publisher = session.start('publisher', [
         python, str(BENCH / '_publisher.py'), '--rate', str(rate), '--duration', str(duration),
-        '--warmup', str(warmup), '--gyro', args.imu_gyro, '--accel', args.imu_accel],
+        '--warmup', str(warmup), '--gyro', args.imu_gyro, '--accel', args.imu_accel,
+        '--mag-every', str(args.mag_every)],
         json_stdout=True, extra_env=endpoint_env)
     publisher.wait_event('matched', args.match_timeout, watch=[target])
     return {'target': target, 'publisher': publisher, 'subscriber': subscriber}
@@ -448,7 +453,8 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                              '(default %(default)s)')
     parser.add_argument('--targets', default=None,
                         help='comma-separated built-in targets: node, node_full, node_nocov, '
-                             'node_stock, relay, fast_relay (default: node, relay, fast_relay; '
+                             'node_filter, node_stock, relay, fast_relay (default: node, relay, '
+                             'fast_relay; '
                              '"none": only the --target ones)')
     parser.add_argument('--target', action='append', default=[], metavar='LABEL=COMMAND',
                         help='an extra target command line (repeatable)')
@@ -463,6 +469,9 @@ def parse_args(argv: Optional[List[str]] = None) -> argparse.Namespace:
                         help='linear_acceleration of the published Imu [m/s^2]; zeros (the '
                              'default) = no accelerometer data, gravity = the node levels '
                              'in the warm-up (with --imu-gyro under 0.05 rad/s)')
+    parser.add_argument('--mag-every', type=int, default=0,
+                        help='also publish a MagneticField on imu/mag with every N-th Imu '
+                             '(node_filter; 0: none, the default)')
     parser.add_argument('--depth', type=int, default=QUEUE_DEPTH,
                         help='KEEP_LAST depth of the publisher, subscriber and relays '
                              '(default %(default)s)')

@@ -1,15 +1,18 @@
-"""The attitude filter on the BROAD trials with magnetometer, beside VQF, in one table.
+"""The node's attitude filter on the BROAD trials with magnetometer, beside VQF, in one table.
 
-Runs :mod:`rigid_body_attitude.tools.estimation_study` on every trial of the given folders
-(default: ``shared/data/broad_mag`` beside or above the checkout), one set of settings for all:
-the documented defaults, with the IMU's figures measured once on the first trial
-(:func:`~rigid_body_attitude.tools.estimation_study.dataset_model`: noise densities
-by ``imu_noise``'s Allan fit on its rest, the magnetometer's delay behind the gyro).
-Prints per trial the total, heading and inclination RMSE [deg] of the filter and of VQF
-(``offlineVQF``, defaults), the ratio of the totals, the share of motion samples whose NEES
-lies inside the chi-square 99 % bound (3 dof, tilt 2 dof, heading 1 dof) and the median 1σ
-over the RMSE (total, tilt over inclination, heading); then the means per group (undisturbed,
-disturbed) and over all trials.
+Each trial of the given folders (default: ``shared/data/broad_mag`` beside or above the
+checkout) is written as a bag (Imu, MagneticField, ground truth) and replayed through the
+replay tool with the shipped ``imu_filter`` scene and the node's default parameters, one set
+for all trials, plus the IMU's calibration files measured once on the first trial: the kalibr
+``imu.yaml`` that ``imu_noise`` writes from its initial rest, and the magnetometer's figures
+(noise density, delay, timing) in its calibration file
+(:mod:`rigid_body_attitude.tools.estimation_study`). The
+same session fed in this process must give the same outputs (the largest difference is
+printed). Prints per trial the total, heading and inclination RMSE [deg] of the node and of
+VQF (``offlineVQF``, defaults) on the same samples, the ratio of the totals, the share of
+motion samples whose NEES lies inside the chi-square 99 % bound (3 dof, tilt 2 dof, heading
+1 dof) and the median 1σ over the RMSE (total, tilt over inclination, heading); then the
+means per group (undisturbed, disturbed) and over all trials.
 
 Usage: ``python studies/broad_estimation.py [DATA_DIR ...]``. Needs ``vqf``
 (requirements-test.txt).
@@ -21,13 +24,16 @@ from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from rigid_body_attitude.tools.broad import load_trial
+from typing import Any
+
+from rigid_body_attitude.tools.broad import BroadTrial, load_trial
 from rigid_body_attitude.tools.estimation_study import (
-    dataset_model, figures, run_filter, run_vqf, settings_for)
+    Run, TrialFigures, dataset_calibration, figures, run_replay, run_session, study_values)
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
@@ -36,6 +42,27 @@ def default_folders() -> list[Path]:
     """Any ``shared/data/broad_mag`` beside or above the checkout."""
     return [parent / 'shared' / 'data' / 'broad_mag' for parent in REPO_ROOT.parents
             if (parent / 'shared' / 'data' / 'broad_mag').is_dir()][:1]
+
+
+def run_vqf(trial: BroadTrial, use_magnetometer: bool = True) -> Run:
+    """VQF (offline, defaults) over the trial's samples: 9D with a magnetometer, else 6D."""
+    from vqf import offlineVQF  # type: ignore[import-untyped]  # test requirements' VQF
+
+    gyro = np.ascontiguousarray(trial.gyro, dtype=np.float64)
+    acc = np.ascontiguousarray(trial.acc, dtype=np.float64)
+    if use_magnetometer and trial.field is not None:
+        field = np.ascontiguousarray(trial.field * 1e6, dtype=np.float64)
+        out: dict[str, Any] = offlineVQF(gyro, acc, field, 1.0 / trial.sampling_rate, None)
+        return Run(np.asarray(out['quat9D']), None)
+    out = offlineVQF(gyro, acc, None, 1.0 / trial.sampling_rate, None)
+    return Run(np.asarray(out['quat6D']), None)
+
+
+def _header() -> None:
+    print('| trial | node total / heading / incl. [deg] | VQF total / heading / incl. '
+          '[deg] | total ratio | NEES inside 99 %: 3-dof / tilt / heading | median 1σ / '
+          'RMSE: total / tilt / heading |')
+    print('| --- | --- | --- | --- | --- | --- |')
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -48,36 +75,44 @@ def main(argv: list[str] | None = None) -> int:
     if not paths:
         print('error: no BROAD trial (.npz) found', file=sys.stderr)
         return 1
-    model, magnetometer = dataset_model(load_trial(paths[0]))
-    settings = settings_for(magnetometer)
-    print(f'first trial\'s figures: noise densities gyro {model.gyroscope_noise_density:.3g} '
-          f'rad/s/√Hz, accelerometer {model.accelerometer_noise_density:.3g} m/s²/√Hz, '
-          f'magnetometer {magnetometer.noise_density:.3g} T/√Hz; magnetometer delay '
-          f'{1e3 * magnetometer.delay:.2f} ms, timing 1σ {1e3 * magnetometer.timing:.2f} ms')
-    print('| trial | filter total / heading / incl. [deg] | VQF total / heading / incl. '
-          '[deg] | total ratio | NEES inside 99 %: 3-dof / tilt / heading | median 1σ / '
-          'RMSE: total / tilt / heading |')
-    print('| --- | --- | --- | --- | --- | --- |')
-    groups: dict[str, list[tuple[float, ...]]] = {}
-    for path in paths:
-        trial = load_trial(path)
-        ours, vqf = figures(trial, run_filter(trial, model, settings)), figures(
-            trial, run_vqf(trial))
-        t, h, i = ours.rmse
-        useful = (ours.median_sigma[0] / t, ours.median_sigma[1] / i, ours.median_sigma[2] / h)
-        print(f'| {trial.name} | {t:.2f} / {h:.2f} / {i:.2f} | {vqf.rmse[0]:.2f} / '
-              f'{vqf.rmse[1]:.2f} / {vqf.rmse[2]:.2f} | {t / vqf.rmse[0]:.2f} | '
-              + ' / '.join(f'{100 * share:.1f} %' for share in ours.inside) + ' | '
-              + ' / '.join(f'{ratio:.1f}' for ratio in useful) + ' |', flush=True)
-        group = 'disturbed' if 'disturbed' in trial.name.replace('undisturbed', '') else (
-            'undisturbed')
-        groups.setdefault(group, []).append((*ours.rmse, *vqf.rmse))
+    with tempfile.TemporaryDirectory() as temporary:
+        folder = Path(temporary)
+        files = dataset_calibration(load_trial(paths[0]), folder)
+        for name, path in files.items():
+            print(f'{name} (measured on {paths[0].stem}):')
+            print(Path(path).read_text(encoding='utf-8'))
+        values = study_values(**files)
+        _header()
+        groups: dict[str, list[tuple[float, ...]]] = {}
+        largest = 0.0
+        for path in paths:
+            trial = load_trial(path)
+            replayed = run_replay(trial, values, folder)
+            largest = max(largest, float(np.nanmax(np.abs(
+                replayed.attitude - run_session(trial, values).attitude))))
+            ours, vqf = figures(trial, replayed), figures(trial, run_vqf(trial))
+            _row(trial.name, ours, vqf)
+            group = 'disturbed' if 'disturbed' in trial.name.replace('undisturbed', '') else (
+                'undisturbed')
+            groups.setdefault(group, []).append((*ours.rmse, *vqf.rmse))
     groups['all'] = [row for rows in list(groups.values()) for row in rows]
     for name, rows in groups.items():
         mean = np.mean(np.array(rows), axis=0)
         print(f'| mean, {name} ({len(rows)}) | {mean[0]:.2f} / {mean[1]:.2f} / {mean[2]:.2f} | '
               f'{mean[3]:.2f} / {mean[4]:.2f} / {mean[5]:.2f} | {mean[0] / mean[3]:.2f} | | |')
+    print(f'replay against the session fed in this process: largest quaternion component '
+          f'difference {largest:.3g}')
     return 0
+
+
+def _row(name: str, ours: TrialFigures, vqf: TrialFigures) -> None:
+    """One trial's row."""
+    t, h, i = ours.rmse
+    useful = (ours.median_sigma[0] / t, ours.median_sigma[1] / i, ours.median_sigma[2] / h)
+    print(f'| {name} | {t:.2f} / {h:.2f} / {i:.2f} | {vqf.rmse[0]:.2f} / '
+          f'{vqf.rmse[1]:.2f} / {vqf.rmse[2]:.2f} | {t / vqf.rmse[0]:.2f} | '
+          + ' / '.join(f'{100 * share:.1f} %' for share in ours.inside) + ' | '
+          + ' / '.join(f'{ratio:.1f}' for ratio in useful) + ' |', flush=True)
 
 
 if __name__ == '__main__':

@@ -12,6 +12,7 @@ table this prints (or writes to ``--out``)::
 
     .venv/bin/python studies/hostile_inputs.py            # about five minutes
     .venv/bin/python studies/hostile_inputs.py --surface /tf_static   # one surface
+    .venv/bin/python studies/hostile_inputs.py --start 'sensors sections'  # one start class
     .venv/bin/python studies/hostile_inputs.py --domain 91 --out /tmp/hostile.md
 """
 
@@ -484,6 +485,88 @@ def tf_static_classes(seed: int) -> Iterator[AttackClass]:
                       counted=20_001)
 
 
+def field_message(at_ns: int, field: tuple[float, float, float], frame: str = 'base_link',
+                  sec_nanosec: tuple[int, int] | None = None) -> Any:
+    """A MagneticField [T] stamped ``at_ns`` (or the raw ``sec_nanosec``)."""
+    from sensor_msgs.msg import MagneticField
+    message = MagneticField()
+    message.header.stamp, message.header.frame_id = stamp(at_ns), frame
+    if sec_nanosec is not None:
+        message.header.stamp.sec, message.header.stamp.nanosec = sec_nanosec
+    f = message.magnetic_field
+    f.x, f.y, f.z = field
+    return message
+
+
+def magnetometer_classes(seed: int) -> Iterator[AttackClass]:
+    """``imu/mag`` of the attitude filter: malformed bytes, absurd and non-finite fields,
+    frames without a mount, zero and invalid stamps."""
+    from rclpy.serialization import serialize_message
+    earth = (2e-5, 0.0, -4e-5)
+    # In a frame without a mount: a variant that still decodes (the transport pads a cut
+    # payload with zeros) is refused as such, never taken.
+    good = serialize_message(field_message(BASE_NS, earth, 'elsewhere'))
+    for name, payloads in malformed_cases(good, seed + 3).items():
+        yield AttackClass(name, payloads, 'malformed|magnetometer_no_mount|'
+                          'magnetometer_invalid_stamp|magnetometer_stale_stamp|'
+                          'magnetometer_out_of_range|magnetometer_non_finite')
+    fields = [(math.nan, 0.0, 0.0), (0.0, math.inf, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0),
+              (1e308, 1e308, 1e308), (0.0, -1e200, 0.0)] * 2
+    yield AttackClass('fields NaN, Inf, zero or beyond any magnetometer', [
+        field_message(BASE_NS + k * MS + MS // 2, f) for k, f in enumerate(fields)],
+        'magnetometer_non_finite|magnetometer_out_of_range')
+    frames = ['elsewhere', '', '\x1b[2J\x07', 'x' * 2**20, 'imu_link', 'base_link ']
+    frames = [frame for frame in frames if frame != '']  # '' is the body's: a good field
+    yield AttackClass('fields in a frame without a mount (1 MiB and escapes included)', [
+        field_message(BASE_NS + k * MS + MS // 2, earth, frame)
+        for k, frame in enumerate(frames)], 'magnetometer_no_mount')
+    yield AttackClass('zero and invalid stamps', [
+        field_message(BASE_NS, earth, sec_nanosec=pair) for pair in
+        [(0, 0), (BASE_NS // 10**9, 10**9), (BASE_NS // 10**9, 2**32 - 1), (-5, 0)] * 3],
+        'magnetometer_invalid_stamp')
+
+
+def measurement_message(at_ns: int, q: tuple[float, ...], frame: str = 'world',
+                        block: list[float] | None = None) -> Any:
+    """An attitude measurement (PoseWithCovarianceStamped) with its orientation block."""
+    message = _covariance_pose(block or [1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 1e-4])
+    message.header.stamp, message.header.frame_id = stamp(at_ns), frame
+    o = message.pose.pose.orientation
+    o.w, o.x, o.y, o.z = q
+    return message
+
+
+def measurement_classes(seed: int) -> Iterator[AttackClass]:
+    """``attitude_measurement``: malformed bytes, wrong frames, zero or NaN quaternions,
+    hostile covariance blocks, stamps far from the gyro's."""
+    from rclpy.serialization import serialize_message
+    unit = (1.0, 0.0, 0.0, 0.0)
+    good = serialize_message(measurement_message(BASE_NS, unit, 'map'))  # decodable: refused
+    reasons = 'attitude_measurement_wrong_frame|attitude_measurement_stale_measurement'
+    for name, payloads in malformed_cases(good, seed + 4).items():
+        yield AttackClass(name, payloads, f'malformed|{reasons}|'
+                          'attitude_measurement_invalid_covariance|'
+                          'attitude_measurement_invalid_pose|attitude_measurement_non_finite')
+    at = BASE_NS + MS // 2
+    yield AttackClass('another frame (1 MiB included), zero or NaN quaternion', [
+        measurement_message(at, unit, frame) for frame in ('map', '', 'x' * 2**20)] + [
+        measurement_message(at, (0.0, 0.0, 0.0, 0.0)),
+        measurement_message(at, (math.nan, 0.0, 0.0, 1.0))],
+        'attitude_measurement_wrong_frame|attitude_measurement_invalid_pose|'
+        'attitude_measurement_non_finite')
+    yield AttackClass('orientation blocks huge, unphysical or not PSD', [
+        measurement_message(at, unit, block=block) for block in _hostile_orientation_blocks()],
+        'attitude_measurement_invalid_covariance')
+    yield AttackClass('stamps far from the gyro\'s', [
+        measurement_message(at + sign * 10**10, unit) for sign in (1, -1) * 3],
+        'attitude_measurement_stale_measurement')
+
+
+def _field_type() -> Any:
+    from sensor_msgs.msg import MagneticField
+    return MagneticField
+
+
 def send_mount(running: 'RunningNode') -> None:
     """The IMU's mount ``base_link`` -> ``imu_link`` (identity), then a moment to read it."""
     running.publishers['/tf_static'].publish(tf_message(
@@ -523,6 +606,10 @@ SURFACES = [
             before_last=send_mount),
     Surface('imu accelerometer', 'imu', _imu_type, accel_classes,
             parameters=('align_seconds:=0.3',), at_rest=True),
+    Surface('imu/mag', 'imu/mag', _field_type, magnetometer_classes,
+            parameters=('scene:=imu_filter',)),
+    Surface('attitude_measurement', 'attitude_measurement', _pose_covariance_type,
+            measurement_classes, parameters=('scene:=imu_filter',)),
 ]
 
 
@@ -553,6 +640,16 @@ def scene_files(folder: Path) -> dict[str, Path]:
         'alias bomb (error text)': _alias_bomb(b'rate_source'),
         'YAML syntax error': b'body: {inertia: [1, 2\n',
         '20 MB file': b'# ' + b'x' * (20 * 2**20) + b'\n',
+        'estimation section not a mapping': b'rate_source: gyro\n'
+                                            b'body: {inertia: {moments: [1, 2, 3]}}\n'
+                                            b'estimation: [gravity]\n',
+        'estimation on a dynamics scene': b'rate_source: dynamics\n'
+                                          b'body: {inertia: {moments: [1, 2, 3]}}\n'
+                                          b'estimation: {magnetometer: true}\n',
+        'estimation settings NaN, negative, unknown': (
+            b'rate_source: gyro\nbody: {inertia: {moments: [1, 2, 3]}}\n'
+            b'estimation: {settings: {gravity_gate: .nan, update_interval: -1, wind: 3}}\n'),
+        **spacecraft_scene_files(),
     }
     paths = {}
     for name, content in files.items():
@@ -562,6 +659,116 @@ def scene_files(folder: Path) -> dict[str, Path]:
     return paths
 
 
+#: A dynamics scene the ``sensors`` cases complete (YAML flow mappings, one line each).
+_SENSED_SCENE = 'rate_source: dynamics\nstep: 0.001\nbody: {inertia: {moments: [1, 2, 3]}}\n'
+_MAGNETOMETER = 'rate: 100.0, noise_density: 1.0e-8, intensity: 5.0e-5'
+
+
+def _magnetometer(extra: str) -> str:
+    return f'sensors: {{magnetometer: {{{_MAGNETOMETER}, {extra}}}}}\n'
+
+
+def _star_tracker(extra: str) -> str:
+    return f'sensors: {{star_tracker: {{rate: 10.0, {extra}}}}}\n'
+
+
+#: The ``sensors`` (and ``sun``) sections of a scene, hostile: one key each.
+SENSOR_SECTIONS = {
+    'magnetometer rate 1e308': _magnetometer('rate: 1.0e+308'),
+    'magnetometer noise density NaN': _magnetometer('noise_density: .nan'),
+    'magnetometer without a field': 'sensors: {magnetometer: {rate: 100.0, '
+                                    'noise_density: 1.0e-8}}\n',
+    'magnetometer soft iron singular': _magnetometer('soft_iron: [[1, 0, 0], [0, 1, 0], '
+                                                     '[0, 0, 0]]'),
+    'magnetometer soft iron mirrored': _magnetometer('soft_iron: [[-1, 0, 0], [0, 1, 0], '
+                                                     '[0, 0, 1]]'),
+    'magnetometer hard iron 1e308': _magnetometer('hard_iron: [1.0e+308, 0, 0]'),
+    "magnetometer on the node's own topic": _magnetometer('topic: pose'),
+    'magnetometer topic of 5000 characters': _magnetometer('topic: ' + 'x' * 5000),
+    'magnetometer frame with escape sequences': _magnetometer('frame_id: "\\e[2J\\a"'),
+    'magnetometer unknown key': _magnetometer('noise: 1.0'),
+    'magnetometer seed 2^63': _magnetometer('seed: 9223372036854775808'),
+    'star tracker rate 1e4': _star_tracker('rate: 1.0e+4'),
+    'star tracker period off the step': _star_tracker('rate: 300.0'),
+    'star tracker zero boresight': _star_tracker('boresight: [0, 0, 0]'),
+    'star tracker boresight and mount': _star_tracker('boresight: [1, 0, 0], '
+                                                      'mount_rpy: [0, 0, 1]'),
+    'star tracker zero noise': _star_tracker('cross_boresight_noise: 0.0'),
+    'star tracker Sun exclusion without a Sun': _star_tracker('sun_exclusion_angle: 0.5'),
+    'star tracker section a list': 'sensors: {star_tracker: [1, 2, 3]}\n',
+    'two sensors on one topic': f'sensors: {{magnetometer: {{{_MAGNETOMETER}, topic: att}}, '
+                                f'star_tracker: {{rate: 10.0, topic: att}}}}\n',
+    'one frame, two mounts': f'sensors: {{magnetometer: {{{_MAGNETOMETER}, frame_id: f}}, '
+                             f'star_tracker: {{rate: 10.0, frame_id: f, '
+                             f'boresight: [1, 0, 0]}}}}\n',
+    'zero Sun direction': (_star_tracker('sun_exclusion_angle: 0.5')
+                           + 'sun: {direction: [0, 0, 0]}\n'),
+}
+
+
+def sensor_scene_files(folder: Path) -> dict[str, Path]:
+    """Dynamics scenes with a hostile ``sensors`` section each (and a gyro scene with
+    sensors)."""
+    files = {name: _SENSED_SCENE + section for name, section in SENSOR_SECTIONS.items()}
+    files['sensors in a gyro scene'] = ('rate_source: gyro\nbody: {inertia: {moments: [1, 2, '
+                                        '3]}}\n' + _magnetometer('seed: 1'))
+    paths = {}
+    for index, (name, content) in enumerate(files.items()):
+        path = folder / f'sensors_{index}.yaml'
+        path.write_text(content)
+        paths[name] = path
+    return paths
+
+
+_SPACECRAFT = (b'rate_source: dynamics\nbody: {inertia: {moments: [8, 10, 6]}}\n'
+               b'orbit: {altitude: 500000.0, inclination_deg: 97.4}\n')
+
+
+def spacecraft_scene_files() -> dict[str, bytes]:
+    """Hostile reaction_wheels, magnetorquers, residual_dipole, bdot, orbit and
+    magnetic_field sections of a spacecraft scene."""
+    field = b'magnetic_field: {model: tilted_dipole}\n'
+    wheels = b'{axes: [[1, 0, 0]], spin_inertia: 0.01, max_torque: 0.02, max_speed: 600'
+    return {
+        'reaction_wheels 17 wheels': _SPACECRAFT + b'effects: [reaction_wheels: {axes: ['
+        + b', '.join([b'[1, 0, 0]'] * 17) + b'], spin_inertia: 1, max_torque: 1, '
+        b'max_speed: 1}]\n',
+        'reaction_wheels zero axis': _SPACECRAFT + b'effects: [reaction_wheels: {axes: '
+        b'[[0, 0, 0]], spin_inertia: 0.01, max_torque: 0.02, max_speed: 600}]\n',
+        'reaction_wheels spin inertia 1e308': _SPACECRAFT + b'effects: [reaction_wheels: '
+        b'{axes: [[1, 0, 0]], spin_inertia: 1e308, max_torque: 0.02, max_speed: 600}]\n',
+        'reaction_wheels names twice': _SPACECRAFT + b'effects: [reaction_wheels: {axes: '
+        b'[[1, 0, 0], [0, 1, 0]], spin_inertia: 0.01, max_torque: 0.02, max_speed: 600, '
+        b'names: [a, a]}]\n',
+        'reaction_wheels speed gain too high for the step': _SPACECRAFT + b'step: 0.1\n'
+        b'effects: [reaction_wheels: ' + wheels + b', speed_gain: 100}]\n',
+        'reaction_wheels commanded "yes"': _SPACECRAFT + b'effects: [reaction_wheels: '
+        + wheels + b', commanded: "yes"}]\n',
+        'magnetorquers without a field': _SPACECRAFT + b'effects: [magnetorquers: '
+        b'{max_dipole: 1}]\n',
+        'magnetorquers max_dipole -1': _SPACECRAFT + field + b'effects: [magnetorquers: '
+        b'{max_dipole: -1}]\n',
+        'magnetorquers dumping without wheels': _SPACECRAFT + field + b'effects: '
+        b'[magnetorquers: {max_dipole: 1, dumping_gain: 0.001}]\n',
+        'residual_dipole NaN': _SPACECRAFT + field + b'effects: [residual_dipole: '
+        b'{dipole: [.nan, 0, 0]}]\n',
+        'bdot without magnetorquers': _SPACECRAFT + field + b'effects: [bdot: '
+        b'{gain: 1, control_period: 1.0}]\n',
+        'bdot period not a whole number of steps': _SPACECRAFT + field + b'step: 0.1\n'
+        b'effects: [magnetorquers: {max_dipole: 1}, bdot: {gain: 1, control_period: 0.15}]\n',
+        'orbit altitude -1 km': b'rate_source: dynamics\nbody: {inertia: {moments: [1, 2, 3]}}'
+        b'\norbit: {altitude: -1000.0}\n',
+        'orbit epoch 1e308': b'rate_source: dynamics\nbody: {inertia: {moments: [1, 2, 3]}}'
+        b'\norbit: {altitude: 500000.0, epoch: 1e308}\n',
+        'magnetic_field igrf in 2200': b'rate_source: dynamics\nbody: {inertia: {moments: '
+        b'[1, 2, 3]}}\norbit: {altitude: 500000.0, epoch: 2200-01-01T00:00:00Z}\n'
+        b'magnetic_field: {model: igrf}\n',
+        'magnetic_field without an orbit': b'rate_source: dynamics\nbody: {inertia: '
+        b'{moments: [1, 2, 3]}}\nmagnetic_field: {model: tilted_dipole}\n',
+        'magnetic_field unknown model': _SPACECRAFT + b'magnetic_field: {model: wmm}\n',
+    }
+
+
 def _alias_bomb(key: bytes) -> bytes:
     lines = [b'a0: &a0 "lol lol lol lol lol lol lol lol"']
     for level in range(1, 10):
@@ -569,6 +776,27 @@ def _alias_bomb(key: bytes) -> bytes:
         lines.append(b'a%d: &a%d [%s]' % (level, level, refs))
     lines.append(key + b': *a9')
     return b'\n'.join(lines) + b'\n'
+
+
+def magnetometer_files(folder: Path) -> dict[str, Path]:
+    """Hostile magnetometer calibration files."""
+    files = {
+        'not UTF-8': b'hard_iron: [\xff, 0, 0]\n',
+        'hard_iron 1e308': b'hard_iron: [1e308, 0, 0]\n',
+        'soft_iron singular': b'soft_iron: [[1, 0, 0], [1, 0, 0], [0, 0, 1]]\n',
+        'soft_iron a mirror': b'soft_iron: [[-1, 0, 0], [0, 1, 0], [0, 0, 1]]\n',
+        'soft_iron NaN': b'soft_iron: [[.nan, 0, 0], [0, 1, 0], [0, 0, 1]]\n',
+        'alias bomb': _alias_bomb(b'hard_iron'),
+        '20 MB file': b'# ' + b'x' * (20 * 2**20) + b'\n',
+        'unknown key': b'scale: 2\n',
+    }
+    paths = {}
+    for name, content in files.items():
+        path = folder / ('mag_' + name.replace(' ', '_') + '.yaml')
+        path.write_bytes(content)
+        paths[name] = path
+    paths['missing file'] = folder / 'no_such_magnetometer.yaml'
+    return paths
 
 
 def start_attack(name: str, cases: dict[str, list[str]], domain: int) -> Result:
@@ -601,7 +829,9 @@ def parameter_cases() -> dict[str, list[str]]:
         ('max_dt', '-1.0'), ('max_angular_rate', '0.0'), ('time_jump_threshold', '1e300'),
         ('constant_dt', 'true'), ('use_header_stamps', '2.0'), ('step', '.inf'),
         ('world_frame', "''"), ('body_frame', 'world'), ('integrator', 'no_such'),
-        ('scene', 'no_such_scene'), ('scene', 'x' * 5000), ('step', '-0.001')]}
+        ('scene', 'no_such_scene'), ('scene', 'x' * 5000), ('step', '-0.001'),
+        ('magnetic_declination', '4.0'), ('magnetometer_noise_density', '-1.0'),
+        ('accelerometer_noise_density', '.inf'), ('accelerometer_random_walk', 'true')]}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -610,33 +840,52 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--seed', type=int, default=7)
     parser.add_argument('--surface', action='append', default=None,
                         choices=[surface.name for surface in SURFACES],
-                        help='attack only this surface (repeatable); no start-time attacks')
+                        help='attack only this surface (repeatable); no start-time attacks '
+                             'unless --start names some')
+    parser.add_argument('--start', action='append', default=None, choices=START_CLASSES,
+                        help='only this start-time class (repeatable); no surface unless '
+                             '--surface names some')
     parser.add_argument('--out', type=Path, default=None,
                         help='write the table here instead of printing it')
     args = parser.parse_args(argv)
     results = []
     for surface in SURFACES:
-        if args.surface and surface.name not in args.surface:
+        if (args.surface or args.start) and surface.name not in (args.surface or ()):
             continue
         for hostile in surface.classes(args.seed):
             result = attack(args.domain, surface, hostile)
             print(f'{result.name}: {result.cases} cases: {result.outcome} '
                   f'(RSS {result.rss_growth_mib:+.1f} MiB)', flush=True)
             results.append(result)
-    if not args.surface:
-        results += start_attacks(args.domain)
+    if args.start or not args.surface:
+        results += start_attacks(args.domain, args.start or START_CLASSES)
     write_report(results, args.out, args.seed)
     return 0 if all(not r.outcome.startswith('FAILED') for r in results) else 1
 
 
-def start_attacks(domain: int) -> list[Result]:
-    """The scene files and parameters a user may give."""
+#: The start-time classes: what a user gives at start.
+START_CLASSES = ('scene files', 'sensors sections', 'parameters',
+                 'magnetometer calibration files')
+
+
+def start_attacks(domain: int, classes: tuple[str, ...] | list[str]) -> list[Result]:
+    """The scene files and parameters a user may give (the ``classes`` of
+    :data:`START_CLASSES`)."""
     results = []
     with tempfile.TemporaryDirectory() as folder:
-        scenes = {name: ['-p', f'scene:={path}']
-                  for name, path in scene_files(Path(folder)).items()}
-        for name, cases in (('scene files', scenes), ('parameters', parameter_cases())):
-            result = start_attack(name, cases, domain)
+        cases_of = {
+            'scene files': {name: ['-p', f'scene:={path}']
+                            for name, path in scene_files(Path(folder)).items()},
+            'sensors sections': {name: ['-p', f'scene:={path}']
+                                 for name, path in sensor_scene_files(Path(folder)).items()},
+            'parameters': parameter_cases(),
+            'magnetometer calibration files': {
+                name: ['-p', 'scene:=imu_filter', '-p', f'magnetometer_calibration_file:={path}']
+                for name, path in magnetometer_files(Path(folder)).items()}}
+        for name in START_CLASSES:
+            if name not in classes:
+                continue
+            result = start_attack(name, cases_of[name], domain)
             print(f'{result.name}: {result.cases} cases: {result.outcome}', flush=True)
             results.append(result)
     return results

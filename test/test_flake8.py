@@ -6,8 +6,10 @@ import sys
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
-# The package, its tests, benchmarks and studies, and the packaging and helper scripts (Python).
-CHECKED_PATHS = ['rigid_body_attitude', 'test', 'bench', 'studies', 'setup.py', 'scripts/ros2run']
+# The package, its tests, benchmarks, studies and launch files, and the packaging and helper
+# scripts (Python).
+CHECKED_PATHS = ['rigid_body_attitude', 'test', 'bench', 'studies', 'launch', 'setup.py',
+                 'scripts/ros2run']
 
 
 def test_flake8_clean():

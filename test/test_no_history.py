@@ -1,6 +1,6 @@
 """The shipped files speak to users: no account of the project's own development history.
 
-Scanned: ``README.md``, everything under ``docs/`` and ``config/``, ``package.xml``,
+Scanned: ``README.md``, everything under ``docs/``, ``config/`` and ``launch/``, ``package.xml``,
 ``setup.py``, ``setup.cfg``, and the comments and strings (docstrings included) of the
 package's and the benchmarks' Python files. Refused: numbered stages of the project's work
 ("session 9", "issue 13", "item 5", "sweep 3"), references to the investigation notes, and
@@ -36,10 +36,10 @@ TEXT_SUFFIXES = {'.md', '.yaml', '.yml', '.xml', '.txt', '.cfg', '.csv', '.rst',
 def shipped_files() -> list[Path]:
     """Every shipped text file this test scans, sorted."""
     files = [REPO_ROOT / name for name in ('README.md', 'package.xml', 'setup.py', 'setup.cfg')]
-    for folder in ('docs', 'config'):
+    for folder in ('docs', 'config', 'launch'):
         files += [path for path in (REPO_ROOT / folder).rglob('*')
                   if path.is_file() and path.suffix in TEXT_SUFFIXES]
-    for folder in ('rigid_body_attitude', 'bench', 'studies'):
+    for folder in ('rigid_body_attitude', 'bench', 'studies', 'launch'):
         files += (REPO_ROOT / folder).rglob('*.py')
     return sorted(path for path in files if path.is_file())
 
@@ -86,7 +86,8 @@ def test_scanned_set_holds_the_shipped_files():
     names = {path.relative_to(REPO_ROOT).as_posix() for path in shipped_files()}
     assert {'README.md', 'package.xml', 'setup.py', 'config/fastdds.xml',
             'rigid_body_attitude/__init__.py', 'bench/node_throughput.py',
-            'studies/broad_strapdown.py'} <= names
+            'studies/broad_strapdown.py', 'launch/imu.launch.xml', 'launch/managed.launch.py'
+            } <= names
     assert any(name.startswith('docs/') for name in names)
 
 

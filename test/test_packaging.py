@@ -1,9 +1,9 @@
 """The installed layout: what colcon would produce for an ament_python package, in the venv.
 
 ``make test`` installs the package (not editable) into the virtual env that runs the tests, so
-these tests check the install itself: the ament index marker, package.xml and config/ under
-``share/``, executables under ``lib/rigid_body_attitude/`` found the way ``ros2 run`` finds them,
-and a core that never imports rclpy.
+these tests check the install itself: the ament index marker, package.xml, config/ and launch/
+under ``share/``, executables under ``lib/rigid_body_attitude/`` found the way ``ros2 run`` finds
+them, and a core that never imports rclpy.
 """
 
 import ast
@@ -59,7 +59,7 @@ ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'pyth
 #: in requirements.txt, named in a comment of package.xml and in docs/setup.md's pip line.
 WITHOUT_ROSDEP_KEY = {'apsw': 'apsw', 'dask': 'dask',
                       'distributed': 'distributed', 'pyarrow': 'pyarrow',
-                      'allantools': 'allantools'}
+                      'allantools': 'allantools', 'ppigrf': 'ppigrf'}
 REQUIRED_TEST_DEPENDS = {'python3-pytest'}
 
 # Run in a fresh interpreter: refuses rclpy through a meta path finder (so an import anywhere,
@@ -165,6 +165,16 @@ def test_config_installed_recursively():
         assert filecmp.cmp(source_config / relative, installed_config / relative, shallow=False)
     assert sorted((installed_config / 'scenes').glob('*.yaml')), 'no scene installed'
     assert sorted((installed_config / 'campaigns').glob('*.yaml')), 'no campaign installed'
+
+
+def test_launch_files_installed_where_ros2_launch_looks():
+    source_files = {p.name for p in (REPO_ROOT / 'launch').iterdir() if p.is_file()}
+    installed_launch = SHARE_DIR / 'launch'
+    # (pip byte-compiles managed.launch.py into __pycache__, as ros2 launch does when it loads it)
+    assert {p.name for p in installed_launch.iterdir() if p.is_file()} == source_files
+    assert {'imu.launch.xml', 'managed.launch.py'} <= source_files
+    for name in source_files:
+        assert filecmp.cmp(REPO_ROOT / 'launch' / name, installed_launch / name, shallow=False)
 
 
 @pytest.mark.parametrize('name', sorted(EXECUTABLES))
@@ -417,7 +427,7 @@ def test_colcon_style_install_puts_executables_in_lib_package(tmp_path):
     source.mkdir()
     for name in ('setup.py', 'setup.cfg', 'package.xml', 'LICENSE'):
         shutil.copy2(REPO_ROOT / name, source / name)
-    for name in ('resource', 'config', 'scripts', PACKAGE):
+    for name in ('resource', 'config', 'launch', 'scripts', PACKAGE):
         shutil.copytree(REPO_ROOT / name, source / name,
                         ignore=shutil.ignore_patterns('__pycache__'))
     prefix = tmp_path / 'install'
@@ -439,4 +449,6 @@ def test_colcon_style_install_puts_executables_in_lib_package(tmp_path):
     assert (prefix / 'share' / PACKAGE / 'package.xml').is_file()
     assert (prefix / 'share' / 'ament_index' / 'resource_index' / 'packages' / PACKAGE).is_file()
     assert sorted((prefix / 'share' / PACKAGE / 'config' / 'scenes').glob('*.yaml'))
+    assert {p.name for p in (prefix / 'share' / PACKAGE / 'launch').iterdir()} == {
+        p.name for p in (REPO_ROOT / 'launch').iterdir() if p.is_file()}
     assert not (prefix / 'bin').exists()

@@ -160,7 +160,7 @@ CORE_ROOMS = {
     'dynamics': ('attitude', 'environment', 'estimation', 'control', 'sensors'),
 }
 CORE_SHARED = ('errors', 'registry', 'paths', 'yaml_files')
-THIRD_PARTY_IN_CORE = ('numpy', 'scipy', 'yaml')
+THIRD_PARTY_IN_CORE = ('numpy', 'scipy', 'yaml', 'ppigrf')
 
 
 def test_core_rooms_import_only_the_rooms_below_them():
@@ -180,7 +180,7 @@ def test_core_rooms_import_only_the_rooms_below_them():
 
 
 def test_the_core_imports_no_node_layer():
-    allowed = ('numpy', 'scipy', 'yaml', 'rigid_body_attitude.core')
+    allowed = ('numpy', 'scipy', 'yaml', 'ppigrf', 'rigid_body_attitude.core')
     assert imports_outside(['core'], allowed) == []
 
 
@@ -201,3 +201,85 @@ def test_architecture_lists_every_module_and_subpackage():
                 and f'{path.name}/' not in text]
     assert missing == []
     assert not listed_in_architecture(Path('core/no_such_module.py'), text)
+
+
+def import_unit(relative):
+    """The room or layer of docs/architecture.md's import table that holds the module at
+    ``relative`` (a path in the package), or ``None`` for the package's own ``__init__``."""
+    parts = relative.parts
+    if parts[0] == 'core':
+        if len(parts) > 2:
+            return f'core/{parts[1]}/'
+        return 'core/propagator.py' if parts[1] == 'propagator.py' else 'core/*.py'
+    if len(parts) == 1:
+        return None if parts[0] == '__init__.py' else parts[0]
+    return f'{parts[0]}/'
+
+
+def actual_imports(root=PACKAGE):
+    """Room or layer → (the rooms and layers it imports, the outside packages it imports),
+    function-level imports included."""
+    modules = {module_name(path, root): path for path in root.rglob('*.py')}
+    found = {}
+    for path in sorted(root.rglob('*.py')):
+        unit = import_unit(path.relative_to(root))
+        if unit is None:
+            continue
+        inside, outside = found.setdefault(unit, (set(), set()))
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+                targets = [f'{node.module}.{alias.name}' if f'{node.module}.{alias.name}' in
+                           modules else node.module for alias in node.names]
+            else:
+                continue
+            for target in targets:
+                top = target.split('.')[0]
+                if top != root.name:
+                    if top not in sys.stdlib_module_names:
+                        outside.add(top)
+                    continue
+                while target not in modules:
+                    target = target.rpartition('.')[0]
+                imported = import_unit(modules[target].relative_to(root))
+                if imported not in (None, unit):
+                    inside.add(imported)
+    return found
+
+
+def documented_imports(text):
+    """The import table of docs/architecture.md: room or layer → (rooms and layers, outside
+    packages)."""
+    table = {}
+    for line in text.splitlines():
+        match = re.match(r'\| `([^`]+)`[^|]*\| ([^|]*)\| ([^|]*)\|$', line)
+        if match:
+            inside = set(re.findall(r'`([^`]+)`', match.group(2)))
+            outside = {name.strip() for name in match.group(3).split(',') if name.strip()}
+            table[match.group(1)] = (inside, outside)
+    return table
+
+
+def test_the_architecture_import_table_is_the_packages_imports():
+    """Every room of core/ and every layer (msgs, session, ros, bag, tools, console) imports
+    exactly what docs/architecture.md's table says: nothing more, nothing less."""
+    text = (PACKAGE.parent / 'docs' / 'architecture.md').read_text()
+    documented, actual = documented_imports(text), actual_imports()
+    assert {'core/dynamics/', 'msgs/', 'session/', 'ros/', 'bag/', 'tools/'} <= set(actual)
+    assert documented == actual
+
+
+def test_the_import_table_check_sees_an_import_the_table_lacks(tmp_path):
+    root = tmp_path / 'pkg'
+    (root / 'core' / 'attitude').mkdir(parents=True)
+    (root / 'msgs').mkdir()
+    for folder in (root, root / 'core', root / 'core' / 'attitude', root / 'msgs'):
+        (folder / '__init__.py').write_text('')
+    (root / 'core' / 'attitude' / 'q.py').write_text('import numpy\n')
+    (root / 'msgs' / 'm.py').write_text('def f():\n    from pkg.core.attitude import q\n')
+    assert actual_imports(root) == {'core/*.py': (set(), set()),
+                                    'core/attitude/': (set(), {'numpy'}),
+                                    'msgs/': ({'core/attitude/'}, set())}
+    table = documented_imports('| `msgs/` | `core/*.py` | |\n')
+    assert table == {'msgs/': ({'core/*.py'}, set())}

@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Collection, Iterable, Iterator, Mapping
 from pathlib import Path
 from types import TracebackType
-from typing import NamedTuple
+from typing import NamedTuple, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,6 +47,8 @@ from rigid_body_attitude.msgs.types import (
 __all__ = ['SERIES_DECODERS', 'BagMessage', 'BagReader', 'Series', 'read_messages',
            'read_series']
 
+#: A decoder of any signature, as a table by message type holds them.
+AnyDecoder = TypeVar('AnyDecoder')
 #: ``(topic, bag_time_ns, msgtype, cdr_bytes)``; plain tuples are yielded for speed.
 BagMessage = tuple[str, int, str, bytes]
 #: A topic selection: names, or names mapped to the message types the caller can use.
@@ -137,12 +139,12 @@ class BagReader:
             selected.extend(found)
         return selected
 
-    def decoder(self, topic: str, decoders: Mapping[str, Decoder]) -> Decoder:
+    def decoder(self, topic: str, decoders: Mapping[str, AnyDecoder]) -> AnyDecoder:
         """The decoder in ``decoders`` (msgtype → decoder) for ``topic``'s type, or BagError.
 
-        Use with :data:`~rigid_body_attitude.msgs.cdr.RATE_DECODERS`,
-        :data:`~rigid_body_attitude.msgs.cdr.TORQUE_DECODERS` or
-        :data:`~rigid_body_attitude.msgs.cdr.ATTITUDE_DECODERS`.
+        Use with :data:`~rigid_body_attitude.msgs.decoders.RATE_DECODERS` (integer stamps),
+        :data:`SERIES_DECODERS`, :data:`~rigid_body_attitude.msgs.cdr.TORQUE_DECODERS` or
+        :data:`~rigid_body_attitude.msgs.cdr.ATTITUDE_DECODERS` (float stamps).
         """
         (connection, *others) = self.connections({topic: decoders.keys()})
         if any(other.msgtype != connection.msgtype for other in others):

@@ -38,6 +38,7 @@ from rigid_body_attitude.bag.serde import typestore
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.msgs.cdr import (
     encode_imu,
+    encode_magnetic_field,
     encode_pose_stamped,
     encode_quaternion_stamped,
     encode_vector3_stamped,
@@ -46,6 +47,7 @@ from rigid_body_attitude.msgs.cdr import (
 )
 from rigid_body_attitude.msgs.types import (
     IMU,
+    MAGNETIC_FIELD,
     POSE_STAMPED,
     QUATERNION_STAMPED,
     VECTOR3_STAMPED,
@@ -285,7 +287,8 @@ def write_bag(path: str | Path, *, stamps: ArrayLike, rates: ArrayLike | None = 
               ground_truth_type: str = 'QuaternionStamped', frame_id: str = 'base_link',
               world_frame: str = 'world', storage: str = 'sqlite3',
               custom_data: Mapping[str, str] | None = None,
-              validate: bool = True) -> dict[str, int]:
+              validate: bool = True, magnetic_fields: ArrayLike | None = None,
+              magnetic_field_topic: str = 'imu/mag') -> dict[str, int]:
     """Write sample arrays as a rosbag2 bag; returns the message count per topic.
 
     Row ``i`` of every array belongs to header stamp ``stamps[i]`` (s) and is recorded at bag
@@ -296,6 +299,9 @@ def write_bag(path: str | Path, *, stamps: ArrayLike, rates: ArrayLike | None = 
     * ``rates`` (N, 3) rad/s, body frame: ``sensor_msgs/msg/Imu`` on ``imu_topic`` (with
       ``accelerations`` (N, 3) m/s² if given; REP-145 ``covariance[0] = −1`` for the fields not
       provided) and/or ``geometry_msgs/msg/Vector3Stamped`` on ``angular_velocity_topic``.
+    * ``magnetic_fields`` (N, 3) T, body frame: ``sensor_msgs/msg/MagneticField`` on
+      ``magnetic_field_topic`` (covariance unknown), each row written before the Imu of the
+      same row.
     * ``torques`` / ``forces`` (N, 3), body frame: ``geometry_msgs/msg/WrenchStamped`` on
       ``torque_topic`` (the missing one is zero).
     * ``ground_truth`` (N, 4) scalar-first ``(w, x, y, z)``, body → world: ``QuaternionStamped``
@@ -312,6 +318,13 @@ def write_bag(path: str | Path, *, stamps: ArrayLike, rates: ArrayLike | None = 
                     torque_topic=torque_topic, ground_truth_topic=ground_truth_topic,
                     ground_truth_type=ground_truth_type, frame_id=frame_id,
                     world_frame=world_frame, validate=validate)
+    if magnetic_fields is not None:
+        stamp_ns = _stamps_ns(_column(stamps, 'stamps'), 'stamps')
+        field_rows = _rows(magnetic_fields, 'magnetic_fields', len(stamp_ns), 3,
+                           validate).tolist()
+        _check_topics({'magnetic_field_topic': magnetic_field_topic})
+        streams.insert(0, (magnetic_field_topic, MAGNETIC_FIELD, lambda i: encode_magnetic_field(
+            stamp_ns[i], frame_id, field_rows[i])))
     bag_times = _bag_times(receive_times, _column(stamps, 'stamps'))
     counts = {topic: 0 for topic, _, _ in streams}
     with BagWriter(path, storage=storage, custom_data=custom_data) as writer:

@@ -23,11 +23,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
+from rigid_body_attitude.core.attitude.float_quaternion import finite_vec3
 from rigid_body_attitude.core.dynamics.diagnostics import Diagnostics, DiagnosticsTracker
-from rigid_body_attitude.core.dynamics.euler import RigidBodyModel
+from rigid_body_attitude.core.dynamics.euler import inertia_without_rotors, RigidBodyModel
 from rigid_body_attitude.core.dynamics.effects import (
-    CommandedEffect, ConservativeTorque, Effect, ForceEffect, RateCorrection, RotorEffect,
-    SampledTorque, StatefulEffect, TorqueEffect)
+    CommandedEffect, ConservativeTorque, Effect, ForceEffect, HeldOverStep, RateCorrection,
+    RotorEffect, RotorState, SampledTorque, StatefulEffect, TorqueEffect)
 from rigid_body_attitude.core.dynamics.effects.base import ForceSum
 from rigid_body_attitude.core.dynamics.effects.sampled import segment_end
 from rigid_body_attitude.core.errors import InputError, IntegratorError
@@ -75,7 +76,7 @@ class PropagatorState:
         return p, q, r
 
 
-class GyroState(PropagatorState):
+class FloatTupleState(PropagatorState):
     """A :class:`PropagatorState` that keeps attitude and rate as float tuples.
 
     The gyro hot path (:meth:`GyroPropagator.advance`, once per sample) and the dynamics steps
@@ -150,7 +151,12 @@ class _Propagator:
         self.effects: list[Effect] = scene.build_effects()
         self.stateful = [e for e in self.effects if isinstance(e, StatefulEffect)]
         self.rotors = [e for e in self.effects if isinstance(e, RotorEffect)]
-        self._inertia_entries = tuple(scene.inertia.tensor.ravel().tolist())
+        #: Effects held over each step, and the rotors with a state of their own among them.
+        self.held = [e for e in self.effects if isinstance(e, HeldOverStep)]
+        self.wheels = [e for e in self.effects if isinstance(e, RotorState)]
+        #: ``J'``: the body's inertia with the wheels' spin inertia taken out.
+        self._inertia_entries = tuple(
+            inertia_without_rotors(scene.inertia, self.effects).tensor.ravel().tolist())
         self.input_routes: dict[str, list[Effect]] = {}
         for effect in self.effects:
             for input_name in effect.input_names:
@@ -173,6 +179,8 @@ class _Propagator:
             effect.reset()
         self.state = self._state_type(time, self.scene.initial_attitude.copy(),
                                       self.scene.initial_omega_body.copy())
+        for wheel in self.wheels:
+            wheel.start(self.state.omega_tuple())
         self._sync_position()
         self.tracker = DiagnosticsTracker(self.energy(), self.world_momentum())
 
@@ -197,18 +205,21 @@ class _Propagator:
         self.tracker = DiagnosticsTracker(self.energy(), self.world_momentum())
 
     def command(self, input_name: str, t: float, value: ArrayLike) -> None:
-        """Pass a commanded input (e.g. ``torque`` [N m, body]) stamped ``t`` to its effects.
-
-        Raises :class:`InputError` for an input no effect takes or a non-finite value.
-        """
-        if input_name not in self.input_routes:
+        """Pass a commanded input (e.g. ``torque`` [N m, body]) stamped ``t`` to its effects:
+        3 numbers, or as many as its effect says (one per wheel of ``wheel_torque``);
+        :class:`InputError` for an input no effect takes or a non-finite value."""
+        routes = self.input_routes.get(input_name)
+        if routes is None:
             raise InputError(f'Scene {self.scene.name!r} takes no input {input_name!r}; '
                              f'inputs: {", ".join(sorted(self.input_routes)) or "(none)"}')
-        vector = quaternion.as_vector(value, input_name)
-        if vector.shape != (3,) or not math.isfinite(t):
-            raise InputError(f'Expected `{input_name}` as 3 finite numbers at a finite time, '
-                             f'got {vector.tolist()!r} at t={t!r}')
-        for effect in self.input_routes[input_name]:
+        size = routes[0].input_size(input_name)
+        vector: Vec | FloatArray | None = finite_vec3(value) if size == 3 else None  # no NumPy
+        if vector is None:
+            vector = _command_vector(input_name, value, size)
+        if (isinstance(vector, np.ndarray) and vector.shape != (size,)) or not math.isfinite(t):
+            raise InputError(f'Expected `{input_name}` as {size} finite numbers at a finite '
+                             f'time, got {np.asarray(vector).tolist()!r} at t={t!r}')
+        for effect in routes:
             effect.accept_input(input_name, t, vector)
 
     def counters(self) -> dict[str, int]:
@@ -225,17 +236,25 @@ class _Propagator:
         return np.array((x, y, z))
 
     def energy(self) -> float:
-        """Kinetic energy [J]: rotation plus the effects' own (translation)."""
+        """Kinetic energy [J]: rotation ``½ ωᵀ J' ω`` plus the effects' own (translation, the
+        wheels' ``Σ Hᵢ²/(2 Jₛᵢ)``)."""
         p, q, r = self.state.omega_tuple()
         j00, j01, j02, _, j11, j12, _, _, j22 = self._inertia_entries
         rotation = 0.5 * (j00 * p * p + j11 * q * q + j22 * r * r) + (
             j01 * p * q + j02 * p * r + j12 * q * r)
+        if self.wheels:
+            rotation += sum(wheel.kinetic_energy() for wheel in self.wheels)
         if self.stateful:
             return rotation + sum(effect.kinetic_energy() for effect in self.stateful)
         return rotation
 
     def world_momentum(self) -> FloatArray:
-        """World-frame angular momentum ``R(q)(J ω + h)`` [N m s] (plain float math)."""
+        """:meth:`world_momentum_tuple` as an array [N m s]."""
+        return np.array(self.world_momentum_tuple())
+
+    def world_momentum_tuple(self) -> Vec:
+        """World-frame angular momentum ``R(q)(J' ω + h)`` [N m s] (plain float math; ``J'``
+        is ``J`` without wheels)."""
         p, q, r = self.state.omega_tuple()
         j00, j01, j02, j10, j11, j12, j20, j21, j22 = self._inertia_entries
         mx = j00 * p + j01 * q + j02 * r
@@ -246,9 +265,9 @@ class _Propagator:
             mx, my, mz = mx + hx, my + hy, mz + hz
         w, x, y, z = self.state.attitude_tuple()
         tx, ty, tz = 2.0 * (y * mz - z * my), 2.0 * (z * mx - x * mz), 2.0 * (x * my - y * mx)
-        return np.array([mx + w * tx + (y * tz - z * ty),
-                         my + w * ty + (z * tx - x * tz),
-                         mz + w * tz + (x * ty - y * tx)])
+        return (mx + w * tx + (y * tz - z * ty),
+                my + w * ty + (z * tx - x * tz),
+                mz + w * tz + (x * ty - y * tx))
 
     def diagnostics(self) -> Diagnostics:
         """Energy, momentum and their drift, energy-balance residual, norm error."""
@@ -263,8 +282,8 @@ class _Propagator:
 class DynamicsPropagator(_Propagator):
     """Integrates Euler's equations and the attitude with the scene's integrator and step."""
 
-    _state_type = GyroState
-    state: GyroState
+    _state_type = FloatTupleState
+    state: FloatTupleState
 
     def __init__(self, scene: Scene) -> None:
         """Build the scene's effects, the body model and the integrator."""
@@ -350,7 +369,11 @@ class DynamicsPropagator(_Propagator):
 
     def _checked_step(self, q: Quat, omega: Vec, t: float,
                       h: float) -> tuple[Quat, Vec, float]:
-        """One integrator step and the stateful effects' step; a non-finite result raises."""
+        """One integrator step and the stateful effects' step; a non-finite result raises.
+        Effects held over the step hold their output from the state at ``t`` first; wheels
+        advance their state at the end (their energy change joins the work)."""
+        if self.held:
+            return self._held_step(q, omega, t, h)
         if self.potentials:
             new_q, new_omega = self.integrator.advance_floats(q, omega, t, h, self.model)
             work = sum(effect.potential(q) - effect.potential(new_q)
@@ -362,6 +385,21 @@ class DynamicsPropagator(_Propagator):
             raise IntegratorError(f'Integration produced a non-finite state: attitude '
                                   f'{list(new_q)!r}, omega_body {list(new_omega)!r}; reduce '
                                   f'the step')
+        for effect in self.stateful:
+            work += effect.advance(t, h, q, new_q, self.force_sum)
+        return new_q, new_omega, work
+
+    def _held_step(self, q: Quat, omega: Vec, t: float, h: float) -> tuple[Quat, Vec, float]:
+        """:meth:`_checked_step` with the effects held over the step."""
+        for held in self.held:
+            held.hold(t, h, q, omega)
+        new_q, new_omega, work = self.integrator.advance_with_work(q, omega, t, h, self.model)
+        if not math.isfinite(new_omega[0] + new_omega[1] + new_omega[2] + work):
+            raise IntegratorError(f'Integration produced a non-finite state: attitude '
+                                  f'{list(new_q)!r}, omega_body {list(new_omega)!r}; reduce '
+                                  f'the step')
+        for wheel in self.wheels:
+            work += wheel.commit(t, h, omega, new_omega)
         for effect in self.stateful:
             work += effect.advance(t, h, q, new_q, self.force_sum)
         return new_q, new_omega, work
@@ -457,8 +495,8 @@ class DynamicsPropagator(_Propagator):
 class GyroPropagator(_Propagator):
     """Strapdown integration of measured body rates with the scene's strapdown method."""
 
-    _state_type = GyroState
-    state: GyroState
+    _state_type = FloatTupleState
+    state: FloatTupleState
 
     def __init__(self, scene: Scene) -> None:
         """Build the rate corrections and the strapdown method named by the scene."""
@@ -522,6 +560,20 @@ class GyroPropagator(_Propagator):
         attitude = self.method.propagate(state.attitude_tuple(), state.omega_tuple(), omega,
                                          t - state.time)
         state.set_sample(t, attitude, omega)
+
+
+def _command_vector(input_name: str, value: ArrayLike, size: int) -> FloatArray:
+    """A command's numbers as a finite float array (3: a body vector), or InputError."""
+    if size == 3:
+        return quaternion.as_vector(value, input_name)
+    try:
+        vector = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise InputError(f'Expected `{input_name}` as {size} finite numbers, got '
+                         f'{value!r}') from err
+    if not np.all(np.isfinite(vector)):
+        raise InputError(f'Expected `{input_name}` to be finite, got {vector.tolist()!r}')
+    return vector
 
 
 def _positive_finite(value: object) -> bool:

@@ -7,12 +7,16 @@ messages with these, as the replay tool does with a bag's records.
   layouts (a header, then float64 fields) the codecs are built from.
 * :mod:`~rigid_body_attitude.msgs.decoders`: checked decoders of the fixed-layout messages
   (Imu, Vector3Stamped, WrenchStamped, TwistStamped, QuaternionStamped, PoseStamped,
-  PoseWithCovarianceStamped, Float64)
+  PoseWithCovarianceStamped, MagneticField, Float64)
   to plain values, raising :class:`MalformedMessage` for any bytes that are not one.
+* :mod:`~rigid_body_attitude.msgs.odometry`: ``nav_msgs/msg/Odometry``, the encoder of the
+  node's ``odom`` and the checked decoder of the controller's.
 * :mod:`~rigid_body_attitude.msgs.tf_message`: the checked decoder of ``tf2_msgs/TFMessage``
   (the static transforms of a bag's ``/tf_static``).
 * :mod:`~rigid_body_attitude.msgs.cdr`: fast ``struct`` encoders of those messages and the
   float-stamp decoders of bag readers.
+* :mod:`~rigid_body_attitude.msgs.sensor_encoders`: the encoders of the simulated sensors'
+  messages (Imu, MagneticField, PoseWithCovarianceStamped) and of their mounts (TFMessage).
 * :mod:`~rigid_body_attitude.msgs.diagnostics`: the ``DiagnosticArray`` encoder.
 
 Quaternions cross this API scalar-first ``(w, x, y, z)`` as everywhere in the package
@@ -24,7 +28,6 @@ return header stamps as float seconds (resolution 2.4·10⁻⁷ s at epoch times
 
 from rigid_body_attitude.msgs.cdr import (
     ATTITUDE_DECODERS,
-    RATE_DECODERS,
     TORQUE_DECODERS,
     Decoder,
     encode_float64,
@@ -57,8 +60,9 @@ from rigid_body_attitude.msgs.cdr import (
 )
 from rigid_body_attitude.msgs.decoders import (
     ENCAPSULATIONS,
-    GYRO_DECODERS,
-    GyroDecoder,
+    RATE_DECODERS,
+    RateDecoder,
+    RateSample,
     decode_float64,
     decode_header,
     decode_imu,
@@ -72,6 +76,8 @@ from rigid_body_attitude.msgs.decoders import (
     decode_vector3_stamped,
     decode_wrench_stamped,
 )
+from rigid_body_attitude.msgs.odometry import (
+    Odometry, decode_odometry, encode_odometry, odometry_encoder)
 from rigid_body_attitude.msgs.tf_message import TF_MESSAGE, Transform, decode_tf_message
 from rigid_body_attitude.msgs.diagnostics import DiagnosticStatus, encode_diagnostic_array
 from rigid_body_attitude.msgs.errors import MalformedMessage
@@ -80,7 +86,10 @@ from rigid_body_attitude.msgs.types import (
     FIXED_LAYOUTS,
     FLOAT64,
     IMU,
+    MAGNETIC_FIELD,
     MESSAGE_TYPES,
+    ODOMETRY,
+    ODOMETRY_BODY,
     POSE_STAMPED,
     POSE_WITH_COVARIANCE_STAMPED,
     QUATERNION_STAMPED,
@@ -96,9 +105,12 @@ __all__ = [
     'ENCAPSULATIONS',
     'FIXED_LAYOUTS',
     'FLOAT64',
-    'GYRO_DECODERS',
     'IMU',
+    'MAGNETIC_FIELD',
     'MESSAGE_TYPES',
+    'ODOMETRY',
+    'ODOMETRY_BODY',
+    'Odometry',
     'POSE_STAMPED',
     'POSE_WITH_COVARIANCE_STAMPED',
     'QUATERNION_STAMPED',
@@ -110,7 +122,8 @@ __all__ = [
     'WRENCH_STAMPED',
     'Decoder',
     'DiagnosticStatus',
-    'GyroDecoder',
+    'RateDecoder',
+    'RateSample',
     'Layout',
     'MalformedMessage',
     'Transform',
@@ -119,6 +132,7 @@ __all__ = [
     'decode_imu',
     'decode_imu_motion',
     'decode_imu_rate',
+    'decode_odometry',
     'decode_pose_stamped',
     'decode_pose_with_covariance_stamped',
     'decode_quaternion_stamped',
@@ -130,6 +144,7 @@ __all__ = [
     'encode_diagnostic_array',
     'encode_float64',
     'encode_imu',
+    'encode_odometry',
     'encode_pose_stamped',
     'encode_pose_with_covariance_stamped',
     'encode_quaternion_stamped',
@@ -142,6 +157,7 @@ __all__ = [
     'imu_acceleration',
     'imu_rates',
     'imu_with_orientation',
+    'odometry_encoder',
     'pose_orientation',
     'pose_position',
     'pose_stamped_encoder',

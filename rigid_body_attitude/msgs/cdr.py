@@ -58,7 +58,6 @@ from rigid_body_attitude.msgs.types import (
     IMU,
     POSE_STAMPED,
     QUATERNION_STAMPED,
-    TWIST_STAMPED,
     VECTOR3_STAMPED,
     WRENCH_STAMPED,
 )
@@ -67,7 +66,6 @@ from rigid_body_attitude.core.attitude.quaternion import multiply_floats
 
 __all__ = [
     'ATTITUDE_DECODERS',
-    'RATE_DECODERS',
     'TORQUE_DECODERS',
     'Decoder',
     'encode_clock',
@@ -79,6 +77,9 @@ __all__ = [
     'encode_twist_stamped',
     'encode_vector3_stamped',
     'encode_wrench_stamped',
+    'UNKNOWN_ANGULAR_ACCELERATION_VARIANCE',
+    'accel_with_covariance_stamped_encoder',
+    'encode_magnetic_field',
     'float64_value',
     'header_frame_id',
     'header_stamp_ns',
@@ -92,7 +93,6 @@ __all__ = [
     'quaternion_stamped',
     'quaternion_stamped_encoder',
     'stamp_to_ns',
-    'simulated_imu_encoder',
     'stamped_floats_encoder',
     'transform_encoder',
     'twist_angular',
@@ -194,14 +194,6 @@ def pose_position(data: bytes) -> tuple[float, Floats]:
 def float64_value(data: bytes) -> float:
     """The value of a ``std_msgs/msg/Float64`` (no header, so no stamp)."""
     return decode_float64(data)
-
-
-#: Decoders of a body-frame angular rate, by message type.
-RATE_DECODERS: dict[str, Decoder] = {
-    IMU: imu_rates,
-    VECTOR3_STAMPED: vector3_stamped,
-    TWIST_STAMPED: twist_angular,
-}
 
 
 #: Decoders of a body-frame torque, by message type.
@@ -471,37 +463,6 @@ def stamped_floats_encoder(frame_id: str, count: int
 _FLOAT64_LE = Struct('<4sd')
 
 
-def simulated_imu_encoder(frame_id: str, angular_velocity_variance: float,
-                          linear_acceleration_variance: float
-                          ) -> Callable[[int, int, Sequence[float], Sequence[float]], bytes]:
-    """``encode(sec, nanosec, angular_velocity, linear_acceleration)``: a simulated
-    ``sensor_msgs/msg/Imu`` in ``frame_id`` without orientation (``orientation_covariance[0]
-    = −1``, REP-145) and with diagonal rate and acceleration covariances of the given
-    per-sample variances. The header, the orientation and the covariances are packed once;
-    each call is one ``struct`` call of the stamp and the six measured values."""
-    _, constant = _header_struct(frame_id, '')
-    fixed = Struct('<4d9d').pack(*_IDENTITY_XYZW, *_NOT_PROVIDED)
-    gyro_covariance = Struct('<9d').pack(*_diagonal(angular_velocity_variance))
-    acc_covariance = Struct('<9d').pack(*_diagonal(linear_acceleration_variance))
-    pack = Struct(f'<4siI{len(constant) + len(fixed)}s3d{len(gyro_covariance)}s3d'
-                  f'{len(acc_covariance)}s').pack
-    constant += fixed
-
-    def encode(sec: int, nanosec: int, angular_velocity: Sequence[float],
-               linear_acceleration: Sequence[float]) -> bytes:
-        try:
-            return pack(_ENCAPSULATION_LE, sec, nanosec, constant, *angular_velocity,
-                        gyro_covariance, *linear_acceleration, acc_covariance)
-        except struct.error as err:
-            raise _stamp_error(sec, nanosec) from err
-    return encode
-
-
-def _diagonal(variance: float) -> tuple[float, ...]:
-    """A row-major 3×3 covariance with ``variance`` on its diagonal."""
-    return (variance, 0.0, 0.0, 0.0, variance, 0.0, 0.0, 0.0, variance)
-
-
 def encode_float64(value: float) -> bytes:
     """CDR bytes of a ``std_msgs/msg/Float64``."""
     try:
@@ -540,6 +501,47 @@ def transform_encoder(parent_frame: str, child_frame: str
         w, x, y, z = attitude
         try:
             return pack(_ENCAPSULATION_LE, 1, sec, nanosec, constant, 0.0, 0.0, 0.0, x, y, z, w)
+        except struct.error as err:
+            raise _stamp_error(sec, nanosec) from err
+    return encode
+
+
+def encode_magnetic_field(stamp_ns: int, frame_id: str, field: Sequence[float],
+                          covariance: Sequence[float] = _UNKNOWN_COVARIANCE) -> bytes:
+    """CDR bytes of a ``sensor_msgs/msg/MagneticField`` (field [T], sensor frame; covariance:
+    the 9 row-major values [T²], all zeros = unknown)."""
+    values = tuple(covariance)
+    if len(values) != 9:
+        raise InputError(f'Expected `covariance` to have 9 values, got {len(values)}')
+    return _pack(frame_id, stamp_ns, _vector(field, 'field') + values)
+
+
+#: The angular block of an ``accel/filtered`` covariance: not estimated (REP-145 has no
+#: marker for a block; a large finite variance, as the position of ``pose_with_covariance``).
+UNKNOWN_ANGULAR_ACCELERATION_VARIANCE = 1e9
+
+
+def accel_with_covariance_stamped_encoder(
+        frame_id: str) -> Callable[[int, int, Sequence[float], Sequence[float]], bytes]:
+    """``encode(sec, nanosec, linear, covariance)``: a
+    ``geometry_msgs/msg/AccelWithCovarianceStamped`` of one frame with the linear acceleration
+    [m/s²] and its row-major 3×3 covariance [(m/s²)²]; the angular part zero with
+    :data:`UNKNOWN_ANGULAR_ACCELERATION_VARIANCE` on its diagonal. One ``struct`` call."""
+    pack, constant = _header_struct(frame_id, '42d')
+    unknown = UNKNOWN_ANGULAR_ACCELERATION_VARIANCE
+
+    def encode(sec: int, nanosec: int, linear: Sequence[float],
+               covariance: Sequence[float]) -> bytes:
+        ax, ay, az = linear
+        c = covariance
+        try:
+            return pack(_ENCAPSULATION_LE, sec, nanosec, constant, ax, ay, az, 0.0, 0.0, 0.0,
+                        c[0], c[1], c[2], 0.0, 0.0, 0.0,
+                        c[3], c[4], c[5], 0.0, 0.0, 0.0,
+                        c[6], c[7], c[8], 0.0, 0.0, 0.0,
+                        0.0, 0.0, 0.0, unknown, 0.0, 0.0,
+                        0.0, 0.0, 0.0, 0.0, unknown, 0.0,
+                        0.0, 0.0, 0.0, 0.0, 0.0, unknown)
         except struct.error as err:
             raise _stamp_error(sec, nanosec) from err
     return encode

@@ -24,9 +24,9 @@ they are (physical bounds are the session's job).
 
 ``sec`` is the int32 and ``nanosec`` the uint32 of the header stamp, as sent; vectors are
 tuples of floats; quaternions scalar-first (the message holds ``(x, y, z, w)``; see
-:mod:`rigid_body_attitude.core.attitude.quaternion`). :data:`GYRO_DECODERS` maps each gyro message
-type
-to its rate decoder.
+:mod:`rigid_body_attitude.core.attitude.quaternion`). :data:`RATE_DECODERS` is the one registry
+of rate decoders: each gyro message type (Imu, Vector3Stamped, TwistStamped's angular part) to
+the decoder of ``(sec, nanosec, frame_id, (ωx, ωy, ωz), (ax, ay, az) or None)``.
 
 What is taken. Layout (OMG CDR): a 4-byte encapsulation header, then ``std_msgs/Header``
 (``int32 sec`` at payload offset 0, ``uint32 nanosec`` at 4, ``uint32 n`` at 8, ``n`` string
@@ -73,6 +73,7 @@ from rigid_body_attitude.msgs.types import (
     FIXED_LAYOUTS,
     FLOAT64,
     IMU,
+    MAGNETIC_FIELD,
     POSE_STAMPED,
     POSE_WITH_COVARIANCE_STAMPED,
     QUATERNION_STAMPED,
@@ -83,15 +84,19 @@ from rigid_body_attitude.msgs.types import (
 
 __all__ = [
     'ENCAPSULATIONS',
-    'GYRO_DECODERS',
     'Floats',
-    'GyroDecoder',
+    'RATE_DECODERS',
+    'RateDecoder',
+    'RateSample',
+    'StampedFloats',
+    'StampedFloatsDecoder',
     'body_offset',
     'decode_float64',
     'decode_header',
     'decode_imu',
     'decode_imu_motion',
     'decode_imu_rate',
+    'decode_magnetic_field',
     'decode_pose_stamped',
     'decode_pose_with_covariance_stamped',
     'decode_quaternion_stamped',
@@ -103,10 +108,10 @@ __all__ = [
 ]
 
 Floats = tuple[float, ...]
-#: ``(sec, nanosec, frame_id, (x, y, z))``.
-GyroSample = tuple[int, int, str, Floats]
-#: A decoder of a body-frame rate: CDR bytes → ``(sec, nanosec, frame_id, (ωx, ωy, ωz))``.
-GyroDecoder = Callable[[bytes], GyroSample]
+#: ``(sec, nanosec, frame_id, values)``: a header and float64 fields (a vector, a wrench...).
+StampedFloats = tuple[int, int, str, Floats]
+#: A decoder of a stamped message's float64 fields: CDR bytes → :data:`StampedFloats`.
+StampedFloatsDecoder = Callable[[bytes], StampedFloats]
 
 
 class Encapsulation(NamedTuple):
@@ -292,7 +297,7 @@ def body_offset(data: bytes, msgtype: str, count: int) -> tuple[int, bool]:
     return parsed.body_offset, parsed.encapsulation.little_endian
 
 
-def _decoder(msgtype: str, count: int, at: int, width: int) -> GyroDecoder:
+def _decoder(msgtype: str, count: int, at: int, width: int) -> StampedFloatsDecoder:
     """A decoder of ``(sec, nanosec, frame_id, body[at:at + width])``.
 
     Three paths, each taken only if the one before does not apply: one ``struct`` call for a
@@ -308,7 +313,7 @@ def _decoder(msgtype: str, count: int, at: int, width: int) -> GyroDecoder:
     primed = _primed(b'\x00', '', count, at, width)
     missed = b''
 
-    def decode_other(data: bytes) -> GyroSample:
+    def decode_other(data: bytes) -> StampedFloats:
         """The second and third paths."""
         nonlocal primed, missed
         try:
@@ -327,7 +332,7 @@ def _decoder(msgtype: str, count: int, at: int, width: int) -> GyroDecoder:
         parsed = parse_stamped(data, msgtype, count)
         return parsed.sec, parsed.nanosec, parsed.frame_id, parsed.body[at:at + width]
 
-    def decode_vector(data: bytes) -> GyroSample:
+    def decode_vector(data: bytes) -> StampedFloats:
         unpack_all, length_and_frame, frame_id, size = primed
         try:
             encapsulation, sec, nanosec, frame, x, y, z = unpack_all(data, 0)
@@ -337,7 +342,7 @@ def _decoder(msgtype: str, count: int, at: int, width: int) -> GyroDecoder:
             pass
         return decode_other(data)
 
-    def decode_fields(data: bytes) -> GyroSample:
+    def decode_fields(data: bytes) -> StampedFloats:
         unpack_all, length_and_frame, frame_id, size = primed
         try:
             fields = unpack_all(data, 0)
@@ -361,14 +366,17 @@ decode_twist_angular.__doc__ = ('``(sec, nanosec, frame_id, (ωx, ωy, ωz))``: 
                                 'velocity of a ``geometry_msgs/msg/TwistStamped`` [rad/s].')
 
 
-#: ``(sec, nanosec, frame_id, (ωx, ωy, ωz), (ax, ay, az) or None)``.
-ImuMotion = tuple[int, int, str, Floats, Floats | None]
+#: A gyro sample: ``(sec, nanosec, frame_id, (ωx, ωy, ωz), (ax, ay, az) or None)``, the rate
+#: [rad/s] and the specific force [m/s²] when the message provides one (an Imu), sensor frame.
+RateSample = tuple[int, int, str, Floats, Floats | None]
+#: A rate decoder: CDR bytes → :data:`RateSample`.
+RateDecoder = Callable[[bytes], RateSample]
 # After the angular velocity: its covariance (9 float64, skipped), the linear acceleration and
 # the first element of its covariance (-1: not provided, REP-145).
 _IMU_MOTION_TAIL = f'{8 * (_IMU_ACCELERATION_AT - _IMU_RATE_AT - 3)}x4d'
 
 
-def _imu_motion_decoder() -> Callable[[bytes], ImuMotion]:
+def _imu_motion_decoder() -> RateDecoder:
     """The decoder of an Imu's rate and specific force: the three paths of :func:`_decoder`
     with the acceleration read by the same ``struct`` call."""
     field_at = 8 * _IMU_RATE_AT
@@ -379,7 +387,7 @@ def _imu_motion_decoder() -> Callable[[bytes], ImuMotion]:
     primed = _primed(b'\x00', '', IMU_COUNT, _IMU_RATE_AT, 3, _IMU_MOTION_TAIL)
     missed = b''
 
-    def decode_other(data: bytes) -> ImuMotion:
+    def decode_other(data: bytes) -> RateSample:
         nonlocal primed, missed
         try:
             encapsulation, sec, nanosec, length = header(data, 0)
@@ -403,7 +411,7 @@ def _imu_motion_decoder() -> Callable[[bytes], ImuMotion]:
                 body[_IMU_RATE_AT:_IMU_RATE_AT + 3],
                 None if body[accel_at + 3] == -1.0 else body[accel_at:accel_at + 3])
 
-    def decode_imu_motion(data: bytes) -> ImuMotion:
+    def decode_imu_motion(data: bytes) -> RateSample:
         """``(sec, nanosec, frame_id, (ωx, ωy, ωz), (ax, ay, az))`` of a
         ``sensor_msgs/msg/Imu``: rate [rad/s] and specific force [m/s²] in its frame; the
         acceleration is ``None`` when its covariance says "not provided" (element 0 is −1,
@@ -424,7 +432,7 @@ def _imu_motion_decoder() -> Callable[[bytes], ImuMotion]:
 decode_imu_motion = _imu_motion_decoder()
 
 
-def _whole(msgtype: str) -> GyroDecoder:
+def _whole(msgtype: str) -> StampedFloatsDecoder:
     """A decoder of every float64 of a fixed-layout message."""
     count = FIXED_LAYOUTS[msgtype].count
     return _decoder(msgtype, count, 0, count)
@@ -435,12 +443,24 @@ _twist = _whole(TWIST_STAMPED)
 _pose = _whole(POSE_STAMPED)
 _pose_with_covariance = _whole(POSE_WITH_COVARIANCE_STAMPED)
 _quaternion = _whole(QUATERNION_STAMPED)
+_magnetic_field = _whole(MAGNETIC_FIELD)
 
-#: Rate decoders by gyro message type (TwistStamped: its angular part).
-GYRO_DECODERS: dict[str, GyroDecoder] = {
-    IMU: decode_imu_rate,
-    VECTOR3_STAMPED: decode_vector3_stamped,
-    TWIST_STAMPED: decode_twist_angular,
+
+def _without_acceleration(decode_rate: StampedFloatsDecoder) -> RateDecoder:
+    """The rate decoder of a type that carries no specific force."""
+    def decode(data: bytes) -> RateSample:
+        sec, nanosec, frame_id, rate = decode_rate(data)
+        return sec, nanosec, frame_id, rate, None
+    decode.__doc__ = f'{decode_rate.__doc__} No specific force (``None``).'
+    return decode
+
+
+#: THE rate decoders, by gyro message type (TwistStamped: its angular part): the node's gyro
+#: topics and any gyro topic of a bag are decoded through these.
+RATE_DECODERS: dict[str, RateDecoder] = {
+    IMU: decode_imu_motion,
+    VECTOR3_STAMPED: _without_acceleration(decode_vector3_stamped),
+    TWIST_STAMPED: _without_acceleration(decode_twist_angular),
 }
 
 
@@ -469,6 +489,13 @@ def decode_pose_with_covariance_stamped(
     sec, nanosec, frame_id, values = _pose_with_covariance(data)
     px, py, pz, x, y, z, w = values[:7]
     return sec, nanosec, frame_id, (px, py, pz), (w, x, y, z), values[7:]
+
+
+def decode_magnetic_field(data: bytes) -> tuple[int, int, str, Floats, Floats]:
+    """``(sec, nanosec, frame_id, field, covariance)`` of a ``sensor_msgs/msg/MagneticField``
+    (field [T], sensor frame; covariance: the 9 row-major values)."""
+    sec, nanosec, frame_id, values = _magnetic_field(data)
+    return sec, nanosec, frame_id, values[:3], values[3:]
 
 
 def decode_quaternion_stamped(data: bytes) -> tuple[int, int, str, Floats]:

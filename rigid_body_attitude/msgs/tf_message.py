@@ -19,7 +19,7 @@ from typing import NamedTuple
 from rigid_body_attitude.msgs.decoders import ENCAPSULATIONS, Floats
 from rigid_body_attitude.msgs.errors import MalformedMessage
 
-__all__ = ['MAX_TF_TRANSFORMS', 'TF_MESSAGE', 'Transform', 'decode_tf_message']
+__all__ = ['CdrReader', 'MAX_TF_TRANSFORMS', 'TF_MESSAGE', 'Transform', 'decode_tf_message']
 
 TF_MESSAGE = 'tf2_msgs/msg/TFMessage'
 #: Most transforms one message may hold (a hostile count is refused before any work).
@@ -40,45 +40,51 @@ class Transform(NamedTuple):
     rotation: Floats
 
 
-class _Reader:
-    """Bounds-checked reads at payload offsets of one message."""
+class CdrReader:
+    """Bounds-checked reads at payload offsets of one message of type ``msgtype`` (its
+    :class:`MalformedMessage` s name it), from the first byte after the encapsulation."""
 
-    def __init__(self, raw: bytes, little_endian: bool, float64_alignment: int) -> None:
-        self.raw, self.offset = raw, 4
+    def __init__(self, raw: bytes, little_endian: bool, float64_alignment: int,
+                 msgtype: str = TF_MESSAGE) -> None:
+        """Read ``raw`` in the byte order and float64 alignment of its encapsulation."""
+        self.raw, self.offset, self.msgtype = raw, 4, msgtype
         self.order = '<' if little_endian else '>'
         self.alignment = float64_alignment
 
     def _take(self, size: int, alignment: int) -> int:
         start = 4 + -(-(self.offset - 4) // alignment) * alignment
         if start + size > len(self.raw):
-            raise MalformedMessage(TF_MESSAGE, f'truncated: {len(self.raw)} bytes, '
-                                               f'{start + size} needed')
+            raise MalformedMessage(self.msgtype, f'truncated: {len(self.raw)} bytes, '
+                                                 f'{start + size} needed')
         self.offset = start + size
         return start
 
     def uint32s(self, fmt: str) -> tuple[int, ...]:
+        """The 4-byte integers of ``fmt`` (``'iI'``) at the next multiple of 4."""
         size = struct.calcsize(fmt)
         values: tuple[int, ...] = struct.unpack_from(self.order + fmt, self.raw,
                                                      self._take(size, 4))
         return values
 
     def float64s(self, count: int) -> Floats:
+        """``count`` float64 at the next multiple of the float64 alignment."""
         at = self._take(8 * count, self.alignment)
         values: Floats = struct.unpack_from(f'{self.order}{count}d', self.raw, at)
         return values
 
     def string(self, name: str) -> str:
+        """The CDR string ``name`` (a length, the bytes with one terminating NUL, UTF-8)."""
         (length,) = self.uint32s('I')
         if length == 0 or length > len(self.raw):
-            raise MalformedMessage(TF_MESSAGE, f'{name} length {length} in a message of '
-                                               f'{len(self.raw)} bytes')
+            raise MalformedMessage(self.msgtype, f'{name} length {length} in a message of '
+                                                 f'{len(self.raw)} bytes')
         text = self.raw[self._take(length, 1):self.offset]
         if text.find(0) != length - 1:
-            raise MalformedMessage(TF_MESSAGE, f'{name} is not NUL-terminated once')
+            raise MalformedMessage(self.msgtype, f'{name} is not NUL-terminated once')
         try:
             return text[:-1].decode('utf-8')
         except UnicodeDecodeError as err:
-            raise MalformedMessage(TF_MESSAGE, f'{name} is not UTF-8 (byte {err.start})'
+            raise MalformedMessage(self.msgtype, f'{name} is not UTF-8 (byte {err.start})'
                                    ) from None
 
 
@@ -93,14 +99,14 @@ def decode_tf_message(data: bytes) -> list[Transform]:
     encapsulation = ENCAPSULATIONS.get(raw[0] << 8 | raw[1])
     if encapsulation is None:
         raise MalformedMessage(TF_MESSAGE, f'bad encapsulation 0x{raw[0] << 8 | raw[1]:04x}')
-    reader = _Reader(raw, encapsulation.little_endian, encapsulation.float64_alignment)
+    reader = CdrReader(raw, encapsulation.little_endian, encapsulation.float64_alignment)
     (count,) = reader.uint32s('I')
     if count > MAX_TF_TRANSFORMS or 8 + count * _SMALLEST_TRANSFORM > len(raw):
         raise MalformedMessage(TF_MESSAGE, f'{count} transforms in {len(raw)} bytes')
     return [_transform(reader) for _ in range(count)]
 
 
-def _transform(reader: _Reader) -> Transform:
+def _transform(reader: CdrReader) -> Transform:
     sec, nanosec = reader.uint32s('iI')
     parent = reader.string('frame_id')
     child = reader.string('child_frame_id')

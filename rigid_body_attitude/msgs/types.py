@@ -14,14 +14,20 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = [
+    'ACCEL_WITH_COVARIANCE_STAMPED',
+    'CLOCK',
     'DIAGNOSTIC_ARRAY',
     'FIXED_LAYOUTS',
     'FLOAT64',
     'IMU',
+    'MAGNETIC_FIELD',
     'MESSAGE_TYPES',
+    'ODOMETRY',
+    'ODOMETRY_BODY',
     'POSE_STAMPED',
     'POSE_WITH_COVARIANCE_STAMPED',
     'QUATERNION_STAMPED',
+    'TRIGGER',
     'TWIST_STAMPED',
     'VECTOR3_STAMPED',
     'WRENCH_STAMPED',
@@ -36,7 +42,14 @@ POSE_STAMPED = 'geometry_msgs/msg/PoseStamped'
 POSE_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/PoseWithCovarianceStamped'
 TWIST_STAMPED = 'geometry_msgs/msg/TwistStamped'
 FLOAT64 = 'std_msgs/msg/Float64'
+MAGNETIC_FIELD = 'sensor_msgs/msg/MagneticField'
+ACCEL_WITH_COVARIANCE_STAMPED = 'geometry_msgs/msg/AccelWithCovarianceStamped'
 DIAGNOSTIC_ARRAY = 'diagnostic_msgs/msg/DiagnosticArray'
+#: A header, ``child_frame_id`` (a second string), then float64 only (:data:`ODOMETRY_BODY`).
+ODOMETRY = 'nav_msgs/msg/Odometry'
+#: Types the node uses through rclpy only (no codec here).
+CLOCK = 'rosgraph_msgs/msg/Clock'
+TRIGGER = 'std_srvs/srv/Trigger'
 
 
 @dataclass(frozen=True)
@@ -82,7 +95,20 @@ FIXED_LAYOUTS: dict[str, Layout] = {
         True, _vector('pose.pose.position') + _quaternion('pose.pose.orientation')
         + tuple(f'pose.covariance[{index}]' for index in range(36))),
     FLOAT64: Layout(False, ('data',)),
+    MAGNETIC_FIELD: Layout(True, _vector('magnetic_field') + _covariance('magnetic_field')),
+    ACCEL_WITH_COVARIANCE_STAMPED: Layout(
+        True, _vector('accel.accel.linear') + _vector('accel.accel.angular')
+        + tuple(f'accel.covariance[{index}]' for index in range(36))),
 }
 
-#: Every message type the package reads or writes (DiagnosticArray: variable layout).
-MESSAGE_TYPES: tuple[str, ...] = (*FIXED_LAYOUTS, DIAGNOSTIC_ARRAY)
+#: The float64 fields of ``nav_msgs/msg/Odometry`` after its header and ``child_frame_id``
+#: (``stamped`` false: the header comes before the string; :mod:`~.odometry` reads both).
+ODOMETRY_BODY = Layout(
+    False, _vector('pose.pose.position') + _quaternion('pose.pose.orientation')
+    + tuple(f'pose.covariance[{index}]' for index in range(36))
+    + _vector('twist.twist.linear') + _vector('twist.twist.angular')
+    + tuple(f'twist.covariance[{index}]' for index in range(36)))
+
+#: Every message type the package reads or writes (DiagnosticArray: variable layout;
+#: Odometry: two strings, then :data:`ODOMETRY_BODY`).
+MESSAGE_TYPES: tuple[str, ...] = (*FIXED_LAYOUTS, ODOMETRY, DIAGNOSTIC_ARRAY)

@@ -1,1 +1,1 @@
-"""The only subpackage that imports rclpy: the node, its gyro loop and its middleware set-up."""
+"""The only subpackage that imports rclpy: the nodes, their raw-take loop, the middleware."""

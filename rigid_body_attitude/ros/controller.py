@@ -1,12 +1,17 @@
 """The ``attitude_controller`` node: quaternion-feedback PD over ROS, an rclpy adapter.
 
-Subscribes (raw CDR, decoded by the package's checked decoders) to ``orientation``
-(geometry_msgs/QuaternionStamped, world_frame), ``twist`` (geometry_msgs/TwistStamped, the
-angular part in body_frame) and ``target`` (geometry_msgs/QuaternionStamped, world_frame), and
-publishes ``torque`` (geometry_msgs/WrenchStamped, body_frame, zero force) and
-``/diagnostics``. Remap ``orientation`` and ``twist`` to read an estimator instead of the
-plant's truth. The inputs are served by the package's raw-take loop
-(:class:`~rigid_body_attitude.ros.gyro_loop.GyroLoop`, every queued message per wake-up) and
+Subscribes (raw CDR, decoded by the package's checked decoders) to ``odom``
+(nav_msgs/Odometry: the pose in world_frame, the twist in body_frame) or, with
+``state_input`` ``orientation_twist``, to ``orientation`` (geometry_msgs/QuaternionStamped,
+world_frame) and ``twist`` (geometry_msgs/TwistStamped, the angular part in body_frame); and to
+``target`` (geometry_msgs/QuaternionStamped, world_frame). Publishes ``torque``
+(geometry_msgs/WrenchStamped, body_frame, zero force), or with ``actuator``
+``reaction_wheels`` the scene's wheels' motor torques on ``wheels/command``
+(sensor_msgs/JointState; :class:`~rigid_body_attitude.session.wheel_drive.WheelDrive`), and
+``/diagnostics``. Remap ``odom`` to read an estimator (robot_localization's
+``odometry/filtered``) instead of the plant's truth. The inputs are served by the package's
+raw-take loop
+(:class:`~rigid_body_attitude.ros.raw_take_loop.RawTakeLoop`, every queued message per wake-up) and
 the parameter services by an executor in a second thread; on rclpy's stock executor path
 (:mod:`~rigid_body_attitude.ros.rclpy_internals`) one executor serves all. Everything else
 (pairing by stamp, sample and hold, checks, counts) is
@@ -25,8 +30,6 @@ from typing import Any
 
 import rclpy
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
@@ -34,31 +37,36 @@ from rcl_interfaces.msg import SetParametersResult
 
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.msgs.cdr import encode_wrench_stamped
+from rigid_body_attitude.msgs.cdr import stamped_floats_encoder
 from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_twist_stamped
 from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.odometry import decode_odometry
 from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
-from rigid_body_attitude.ros.node import ros_value
-from rigid_body_attitude.ros.propagator_base import declare_table_parameter, parameter_values
-from rigid_body_attitude.ros.gyro_loop import DedicatedGroup, GyroLoop
-from rigid_body_attitude.ros.rclpy_internals import fast_path_problem
+from rigid_body_attitude.ros.parameters import (
+    declare_retired_parameters, declare_table_parameter, parameter_values, ros_value)
+from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, RawTakeLoop
+from rigid_body_attitude.ros.diagnostics import DiagnosticsPublisher
+from rigid_body_attitude.ros.interface import create_publisher, create_subscription
+from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, raw_output
 from rigid_body_attitude.ros.serve import run_executable, serve_beside_executor, SERVING_LINE
-from rigid_body_attitude.ros.qos import COMMAND_QOS, CONTROLLER_OUTPUT_QOS, OUTPUT_QOS
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
-    CONTROLLER_PARAMETERS, check_controller_values)
-from rigid_body_attitude.session.reports import LEVEL_WARN
-from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD
+    CONTROLLER_PARAMETERS, check_controller_values, RENAMED_CONTROLLER_PARAMETERS,
+    renamed_problem, STATE_INPUTS)
+from rigid_body_attitude.session.interface import CONTROLLER_INTERFACE
+from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
+from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD, load_node_scene
+from rigid_body_attitude.session.wheel_drive import WheelDrive
 
 __all__ = ['AttitudeControllerNode', 'CONTROLLER_NODE_NAME', 'controller_usage', 'main']
 
 CONTROLLER_NODE_NAME = 'attitude_controller'
 _ZERO_FORCE = (0.0, 0.0, 0.0)
-_LEVEL_BYTES = {0: DiagnosticStatus.OK, LEVEL_WARN: DiagnosticStatus.WARN}
 
 
 class AttitudeControllerNode(Node):
-    """Answers each tick's ``orientation`` and ``twist`` with a ``torque`` of the same stamp.
+    """Answers each tick's state (``odom``, or ``orientation`` and ``twist``) with a ``torque``
+    of the same stamp.
 
     Keyword arguments go to :class:`rclpy.node.Node` (``context``, ``namespace``,
     ``parameter_overrides``, ``cli_args``, ...), e.g.
@@ -73,32 +81,54 @@ class AttitudeControllerNode(Node):
         problem = check_controller_values(values)
         if problem:
             raise InputError(problem)
+        #: ``actuator`` ``reaction_wheels``: the scene's wheel array the torque drives.
+        self.wheel_drive = (WheelDrive(load_node_scene(values['scene']), values['body_frame'])
+                            if values['actuator'] == 'reaction_wheels' else None)
         self.session = ControllerSession(values, self, time.monotonic)
         #: The inputs and the diagnostics timer: served by :meth:`loop`'s raw-take loop (or,
         #: on rclpy's stock executor, as any callback group); the parameter callbacks run in
         #: the executor's thread, so the session is changed under this lock.
         self.loop_group = DedicatedGroup()
         self.session_lock = threading.Lock()
-        self.torque_publisher = self.create_publisher(
-            WrenchStamped, 'torque', CONTROLLER_OUTPUT_QOS)
-        self.diagnostics_publisher = self.create_publisher(
-            DiagnosticArray, '/diagnostics', OUTPUT_QOS)
+        self._create_command_publishers()
+        #: ``torque``'s CDR publish (``None`` with wheels) and its encoders by body_frame.
+        self._publish_torque = (None if self.torque_publisher is None
+                                else raw_output(self.torque_publisher)[1])
+        self._encoders: dict[str, Any] = {}
+        self.diagnostics_publisher = DiagnosticsPublisher(self, CONTROLLER_INTERFACE,
+                                                          CONTROLLER_NODE_NAME)
+        callbacks = {'odometry': self.odometry_callback, 'attitude': self.orientation_callback,
+                     'twist': self.twist_callback, 'target': self.target_callback}
+        wanted = (*STATE_INPUTS[values['state_input']], 'target')
+        #: (subscription, callback) of each input of :data:`CONTROLLER_INTERFACE` that
+        #: ``state_input`` asks for.
         self.inputs = [
-            self.create_subscription(QuaternionStamped, 'orientation', self.orientation_callback,
-                                     COMMAND_QOS, callback_group=self.loop_group, raw=True),
-            self.create_subscription(TwistStamped, 'twist', self.twist_callback, COMMAND_QOS,
-                                     callback_group=self.loop_group, raw=True),
-            self.create_subscription(QuaternionStamped, 'target', self.target_callback,
-                                     COMMAND_QOS, callback_group=self.loop_group, raw=True)]
+            (create_subscription(self, endpoint, callbacks[endpoint.quantity], self.loop_group),
+             callbacks[endpoint.quantity])
+            for endpoint in CONTROLLER_INTERFACE
+            if endpoint.direction == 'in' and endpoint.quantity in wanted]
         self.diagnostics_timer = self.create_timer(
             DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group,
             clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.add_on_set_parameters_callback(self.parameters_callback)
         self.add_post_set_parameters_callback(self.parameters_set_callback)
 
+    def _create_command_publishers(self) -> None:
+        """``torque``, or (``actuator`` ``reaction_wheels``) ``wheels/command`` and, when
+        the plant takes it, ``dipole``."""
+        def publisher(name: str) -> Any:
+            return create_publisher(self, CONTROLLER_INTERFACE.endpoint(name, 'out'))
+        drive = self.wheel_drive
+        self.torque_publisher = publisher('torque') if drive is None else None
+        self.wheels_publisher = None if drive is None else publisher('wheels/command')
+        self.dipole_publisher = (publisher('dipole') if drive is not None
+                                 and drive.answers_dipole else None)
+
     def _declare_parameters(self) -> dict[str, Any]:
-        return {parameter.name: declare_table_parameter(self, parameter)
-                for parameter in CONTROLLER_PARAMETERS}
+        values = {parameter.name: declare_table_parameter(self, parameter)
+                  for parameter in CONTROLLER_PARAMETERS}
+        declare_retired_parameters(self, RENAMED_CONTROLLER_PARAMETERS, renamed_problem)
+        return values
 
     def parameter_values(self) -> dict[str, Any]:
         """Current values of the controller's parameters by name."""
@@ -106,6 +136,10 @@ class AttitudeControllerNode(Node):
 
     def parameters_callback(self, parameters: list[RosParameter]) -> SetParametersResult:
         """Refuse run-time values the parameter table finds unusable."""
+        retired = [p.name for p in parameters if p.name in RENAMED_CONTROLLER_PARAMETERS
+                   and p.value is not None]
+        if retired:
+            return SetParametersResult(successful=False, reason=renamed_problem(retired[0]))
         values = self.parameter_values()
         by_name = {p.name: p for p in CONTROLLER_PARAMETERS}
         values.update({p.name: ros_value(by_name[p.name], p.value) for p in parameters
@@ -119,13 +153,11 @@ class AttitudeControllerNode(Node):
         with self.session_lock:
             self.session.apply(values)
 
-    def loop(self) -> GyroLoop:
+    def loop(self) -> RawTakeLoop:
         """The package's raw-take loop serving the inputs and the diagnostics timer (one
         reused wait set, every queued message taken per wake-up); creating it takes them
         away from every executor."""
-        return GyroLoop(self.context, list(zip(self.inputs, (
-            self.orientation_callback, self.twist_callback, self.target_callback))),
-            [self.diagnostics_timer])
+        return RawTakeLoop(self.context, self.inputs, [self.diagnostics_timer])
 
     def diagnostics_callback(self) -> None:
         """Publish this period's diagnostics."""
@@ -133,6 +165,19 @@ class AttitudeControllerNode(Node):
             self.session.publish_diagnostics()
 
     # -- inputs (raw CDR) -------------------------------------------------------------------
+
+    def odometry_callback(self, data: bytes) -> None:
+        """``odom``: the plant's attitude and body rate in one message."""
+        try:
+            odometry = decode_odometry(data)
+        except MalformedMessage as err:
+            with self.session_lock:
+                self.session.malformed('odom', err.reason)
+            return
+        with self.session_lock:
+            self.session.odometry(odometry.sec, odometry.nanosec, odometry.frame_id,
+                                  odometry.child_frame_id, odometry.orientation,
+                                  odometry.angular)
 
     def orientation_callback(self, data: bytes) -> None:
         """``orientation``: the plant's attitude."""
@@ -170,19 +215,32 @@ class AttitudeControllerNode(Node):
     # -- the session's sink -----------------------------------------------------------------
 
     def torque(self, sec: int, nanosec: int, torque_body: tuple[float, float, float]) -> None:
-        """Publish ``torque`` stamped ``(sec, nanosec)`` in body_frame."""
-        self.torque_publisher.publish(encode_wrench_stamped(
-            sec * 1_000_000_000 + nanosec, self.session.body_frame, _ZERO_FORCE, torque_body))
+        """Publish ``torque`` stamped ``(sec, nanosec)`` in body_frame, or the wheels' motor
+        torques of it (and the rods' dipole) with that stamp."""
+        if self.wheel_drive is not None:
+            self.wheel_drive.answer(sec, nanosec, torque_body, self._publish_wheels,
+                                    self._publish_dipole)
+            return
+        assert self._publish_torque is not None
+        frame = self.session.body_frame
+        encode = self._encoders.get(frame)
+        if encode is None:  # the header packed once per body_frame
+            encode = self._encoders[frame] = stamped_floats_encoder(frame, 6)
+            if len(self._encoders) > 16:
+                self._encoders = {frame: encode}
+        self._publish_torque(encode(sec, nanosec, _ZERO_FORCE + torque_body))
 
-    def diagnostics(self, report: Any) -> None:
+    def _publish_wheels(self, data: bytes) -> None:
+        assert self.wheels_publisher is not None
+        self.wheels_publisher.publish(data)
+
+    def _publish_dipole(self, data: bytes) -> None:
+        assert self.dipole_publisher is not None
+        self.dipole_publisher.publish(data)
+
+    def diagnostics(self, report: DiagnosticReport) -> None:
         """Publish one ``/diagnostics`` status, stamped with the node clock."""
-        status = DiagnosticStatus(
-            level=_LEVEL_BYTES[report.level], name=self.get_fully_qualified_name(),
-            message=report.message, hardware_id=CONTROLLER_NODE_NAME,
-            values=[KeyValue(key=key, value=value) for key, value in report.values])
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
-        self.diagnostics_publisher.publish(array)
+        self.diagnostics_publisher.publish(report)
 
     def log(self, level: int, text: str) -> None:
         """A log line of the session."""
@@ -198,8 +256,8 @@ def controller_usage() -> str:
     return '\n'.join([
         'usage: attitude_controller [-h] [--ros-args -p NAME:=VALUE ... [-r FROM:=TO] ...]',
         '',
-        'Quaternion-feedback PD attitude control: reads orientation and twist, publishes',
-        'torque stamped like the tick it answers. See docs/closed-loop.md.',
+        'Quaternion-feedback PD attitude control: reads odom (or orientation and twist),',
+        'publishes torque stamped like the tick it answers. See docs/closed-loop.md.',
         '',
         'options:',
         '  -h, --help  print this text and exit (ROS is not started)',

@@ -17,7 +17,8 @@ PropagatorMixin`):
   active are not integrated: they are counted as ``rejected inactive`` in ``/diagnostics``,
   whose status says ``inactive`` (WARN), and warned about (throttled). Reactivated, the node
   goes on from the attitude it had, without integrating across the pause.
-* ``cleanup`` and ``shutdown`` destroy every entity ``configure`` created and drop the session.
+* ``cleanup`` and ``shutdown`` destroy every entity ``configure`` created and drop what it built
+  (:class:`~.propagator_base.NodeParts`, one attribute).
 
 Transitions the state machine does not have from the current state (``activate`` before
 ``configure``, ``configure`` twice, ...) are refused: ``ChangeState`` answers
@@ -41,7 +42,8 @@ from rclpy.parameter import Parameter as RosParameter
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import AttitudeError, InputError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text
-from rigid_body_attitude.ros.propagator_base import parameter_values, PropagatorMixin
+from rigid_body_attitude.ros.parameters import parameter_values
+from rigid_body_attitude.ros.propagator_base import PropagatorMixin
 from rigid_body_attitude.ros.rclpy_internals import RCLError
 from rigid_body_attitude.ros.serve import error_text, run_executable, SERVING_LINE
 from rigid_body_attitude.session.parameters import PARAMETERS
@@ -63,6 +65,8 @@ class ManagedPropagatorNode(PropagatorMixin, LifecycleNode):
         super().__init__(NODE_NAME, **node_options)
         #: Whether inputs reach the session (the node is active).
         self.active = False
+        #: What configure built (``None`` while unconfigured).
+        self.parts = None
         #: Parameter name → why its value given at start was refused.
         self.parameter_problems: dict[str, str] = {}
         for parameter in PARAMETERS:
@@ -95,27 +99,29 @@ class ManagedPropagatorNode(PropagatorMixin, LifecycleNode):
         if problem:
             self.get_logger().error(f'configure refused: {problem}')
             return _FAILURE
-        if self.output_timer is not None:
-            self.output_timer.cancel()
+        if self.built.output_timer is not None:
+            self.built.output_timer.cancel()
         self.get_logger().info('configured (inactive: activate to integrate)')
         return _SUCCESS
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Inputs through to the session (the next one a new baseline), output timer on."""
-        with self.state_lock:
-            self.session.resume()
+        parts = self.built
+        with parts.state_lock:
+            parts.session.resume()
             self.active = True
-        if self.output_timer is not None:
-            self.output_timer.reset()
+        if parts.output_timer is not None:
+            parts.output_timer.reset()
         self.get_logger().info('active')
         return _SUCCESS
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Inputs counted and dropped, output timer off; the state kept."""
-        with self.state_lock:
+        parts = self.built
+        with parts.state_lock:
             self.active = False
-        if self.output_timer is not None:
-            self.output_timer.cancel()
+        if parts.output_timer is not None:
+            parts.output_timer.cancel()
         self.get_logger().info('inactive: inputs are not integrated until activated')
         return _SUCCESS
 
@@ -142,12 +148,11 @@ class ManagedPropagatorNode(PropagatorMixin, LifecycleNode):
                 *self.clients, *self.guards]
 
     def _release(self) -> None:
-        """Stop the log queue, destroy every entity created since configure began, drop the
-        session."""
+        """Stop the log queue, destroy every entity created since configure began, drop what
+        configure built (:attr:`parts`)."""
         self.active = False
-        outputs = self.__dict__.get('outputs')
-        if outputs is not None:
-            outputs.log_queue.stop()
+        if self.parts is not None:
+            self.parts.outputs.log_queue.stop()
         destroyers: list[tuple[Callable[[Any], Any], list[Any]]] = [
             (self.destroy_publisher, list(self.publishers)),
             (self.destroy_subscription, list(self.subscriptions)),
@@ -159,25 +164,23 @@ class ManagedPropagatorNode(PropagatorMixin, LifecycleNode):
             for entity in entities:
                 if entity not in self._kept:
                     destroy(entity)
-        self.configured = False
-        for name in ('session', 'outputs', 'scene', 'mount_gate', 'handlers', 'takers',
-                     'subscriptions_by_topic', 'sim_clock', 'output_timer',
-                     'diagnostics_timer', 'reset_service', 'clock_publisher'):
-            self.__dict__.pop(name, None)
+        self.parts = None
 
     # -- callbacks --------------------------------------------------------------------------
 
-    def gated(self, handler: Callable[[bytes], None]) -> Callable[[bytes], None]:
-        """``handler`` while active; otherwise the message is counted ``inactive``."""
-        def gate(data: bytes) -> None:
+    def gated(self, handler: Callable[[bytes], object]) -> Callable[[bytes], object]:
+        """``handler`` while active (its result returned); otherwise the message is counted
+        ``inactive``."""
+        def gate(data: bytes) -> object:
             if self.active:
-                handler(data)
-                return
-            with self.state_lock:
-                session = self.session
+                return handler(data)
+            parts = self.built
+            with parts.state_lock:
+                session = parts.session
                 session.rejections['inactive'] += 1
                 session.warn('inactive', 'input while the node is not active: not integrated '
                              '(activate it)')
+            return None
         return gate
 
     def diagnostics_callback(self) -> None:
@@ -185,8 +188,9 @@ class ManagedPropagatorNode(PropagatorMixin, LifecycleNode):
         if self.active:
             super().diagnostics_callback()
             return
-        with self.state_lock:
-            self.outputs.diagnostics(inactive_report(self.session.report()))
+        parts = self.built
+        with parts.state_lock:
+            parts.outputs.diagnostics(inactive_report(parts.session.report()))
 
     def parameters_set_callback(self, parameters: list[RosParameter]) -> None:
         """A value set again clears the problem of the one given at start."""

@@ -17,7 +17,7 @@ file's comment says why):
   participant's event thread, which wakes up for it. The profile sets 10 ms; the timer then
   fires at most 100 times a second.
 
-Nothing else: rmw_fastrtps publishes synchronously by default (the gyro loop's thread hands
+Nothing else: rmw_fastrtps publishes synchronously by default (the raw-take loop's thread hands
 every output sample to the readers itself), and the node leaves
 ``RMW_FASTRTPS_PUBLICATION_MODE`` to the user's environment (docs/tuning.md).
 

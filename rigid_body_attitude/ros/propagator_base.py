@@ -3,115 +3,106 @@
 The plain node (:class:`~.node.AttitudePropagatorNode`, executable ``propagation_node``) builds
 it all when it starts; the managed node (:class:`~.managed_node.ManagedPropagatorNode`,
 executable ``managed_propagation_node``) builds it on ``configure`` and releases it on
-``cleanup``. Both declare the parameters of
+``cleanup``. What is built (scene, session, outputs, subscriptions, timers, services) is one
+:class:`NodeParts`, the node's :attr:`~PropagatorMixin.parts`: releasing it is one
+assignment, so nothing built can outlive a cleanup. Both declare the parameters of
 :data:`rigid_body_attitude.session.parameters.PARAMETERS` and serve the same topics, services
 and timers with the same callbacks (:mod:`~.node` describes them).
 """
 
 from __future__ import annotations
 
-import array
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
-from geometry_msgs.msg import (
-    PoseStamped, PoseWithCovarianceStamped, Vector3Stamped, WrenchStamped)
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import (
-    InvalidParameterTypeException, ParameterException, ParameterUninitializedException)
 from rclpy.node import Node
 from rclpy.parameter import Parameter as RosParameter
-from rclpy.qos_overriding_options import QoSOverridingOptions
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
-from rosgraph_msgs.msg import Clock as ClockMessage
-from sensor_msgs.msg import Imu
+from rclpy.service import Service
+from rclpy.subscription import Subscription
+from rclpy.timer import Timer
+from rcl_interfaces.msg import SetParametersResult
 from std_srvs.srv import Trigger
-from tf2_msgs.msg import TFMessage
 
+from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.base import LEVEL_INFO
-from rigid_body_attitude.session.decoding import DECODERS, input_handler, MALFORMED
-from rigid_body_attitude.ros.gyro_loop import DedicatedGroup
-from rigid_body_attitude.ros.outputs import RosOutputs
-from rigid_body_attitude.ros.qos import (
-    CLOCK_QOS, COMMAND_QOS, GYRO_QOS, TF_STATIC_LISTENER_QOS)
-from rigid_body_attitude.ros.tf_lookup import MountGate
+from rigid_body_attitude.session.decoding import (
+    ANGULAR_RATE, decoder, input_handler, MALFORMED)
+from rigid_body_attitude.ros.raw_take_loop import DedicatedGroup, DRAINED
+from rigid_body_attitude.ros.interface import create_service, create_subscription
+from rigid_body_attitude.ros.outputs import RawOutput, RosOutputs
+from rigid_body_attitude.ros.parameters import (
+    declare_table_parameter, parameter_values, ros_value)
 from rigid_body_attitude.ros.rclpy_internals import clock_nanoseconds, raw_taker
 from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.session.interface import Endpoint, NODE_INTERFACE, Situation
+from rigid_body_attitude.session.mount_gate import MountGate
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, check_values
 from rigid_body_attitude.session.settings import (
-    DIAGNOSTICS_PERIOD, input_topics, load_node_scene, open_session, AnySession,
-    timer_period_ns)
+    DIAGNOSTICS_PERIOD, load_node_scene, open_session, AnySession, timer_period_ns)
 from rigid_body_attitude.session.sim_clock import SimClock, sim_clock_for, sim_clock_problem
 
-__all__ = ['LOG_EVERY_PERIODS', 'PropagatorMixin', 'declare_table_parameter',
-           'parameter_descriptor', 'parameter_values',
-           'ros_value']
+__all__ = ['LOG_EVERY_PERIODS', 'NodeParts', 'PropagatorMixin']
 
 #: Diagnostics periods between INFO log lines.
 LOG_EVERY_PERIODS = 5
 
-_GYRO_TOPICS = ('imu', 'angular_velocity')
-_MESSAGE_TYPES = {'imu': Imu, 'angular_velocity': Vector3Stamped, 'torque': WrenchStamped,
-                  'rotor_torque': Vector3Stamped, 'set_pose': PoseStamped,
-                  'set_pose_with_covariance': PoseWithCovarianceStamped}
 
+@dataclass
+class NodeParts:
+    """Everything a propagator node builds from its parameters, held as one object.
 
-def parameter_descriptor(parameter: Parameter) -> ParameterDescriptor:
-    """The ROS descriptor of a parameter of the table."""
-    limits = []
-    if parameter.type is float:
-        low = parameter.low if parameter.low is not None else -float('inf')
-        high = parameter.high if parameter.high is not None else float('inf')
-        limits = [FloatingPointRange(from_value=low, to_value=high)]
-    return ParameterDescriptor(
-        name=parameter.name, description=parameter.description,
-        read_only=parameter.read_only, floating_point_range=limits)
+    Attributes:
+        state_lock: held by every callback that touches the session.
+        clock_ns: the node clock in nanoseconds (receive times; ``use_sim_time`` makes it the
+            ``/clock``).
+        scene: the scene with the node's overrides.
+        publish_rate: the output timer's rate [Hz] (dynamics scenes).
+        outputs: the session's sink over the publishers.
+        sim_clock: the scene's own clock (``publish_clock``, ``lockstep``), or ``None``.
+        session: the session of the scene's rate source.
+        situation: what decides the node's endpoints (:data:`NODE_INTERFACE`).
+        loop_group: the callback group of the sensor inputs and timers, which the raw-take
+            loop claims.
+        clock_output: ``/clock`` (``publish_clock``), or ``None``.
+        subscriptions_by_topic, takers, handlers: per input topic, its raw subscription, its
+            take function and its callback.
+        mount_gate: the gyro samples' mount gate (gyro scenes), or ``None``.
+        tf_static_subscription: ``/tf_static`` (gyro scenes), or ``None``.
+        output_timer, diagnostics_timer, reset_service: the timers and ``~/reset``.
+        diagnostics_count: diagnostics periods so far.
+    """
 
+    state_lock: threading.Lock
+    clock_ns: Callable[[], int]
+    scene: Scene
+    publish_rate: float
+    outputs: RosOutputs
+    sim_clock: SimClock | None
+    session: AnySession
+    situation: Situation
+    loop_group: DedicatedGroup = field(default_factory=DedicatedGroup)
+    clock_output: RawOutput | None = None
+    subscriptions_by_topic: dict[str, Subscription] = field(default_factory=dict)
+    takers: dict[str, Callable[[], bytes | None]] = field(default_factory=dict)
+    handlers: dict[str, Callable[[bytes], object]] = field(default_factory=dict)
+    mount_gate: MountGate | None = None
+    tf_static_subscription: Subscription | None = None
+    output_timer: Timer | None = None
+    diagnostics_timer: Timer | None = None
+    reset_service: Service | None = None
+    diagnostics_count: int = 0
 
-def ros_value(parameter: Parameter, value: Any) -> Any:
-    """A parameter's value as the table takes it: a double array (rclpy gives a list or an
-    ``array.array``, ``None`` when not set) as a tuple; other values as they are."""
-    if parameter.type is not tuple:
-        return value
-    if value is None:
-        return parameter.default
-    return tuple(value) if isinstance(value, (list, tuple, array.array)) else value
-
-
-def parameter_values(node: Node, table: Sequence[Parameter] = PARAMETERS) -> dict[str, Any]:
-    """Current values of ``node``'s parameters of ``table`` by name (``None``: a double
-    array not set)."""
-    values = {}
-    for parameter in table:
-        try:
-            value = node.get_parameter(parameter.name).value
-        except ParameterUninitializedException:  # a double array not set
-            value = None
-        values[parameter.name] = ros_value(parameter, value)
-    return values
-
-
-def declare_table_parameter(node: Node, parameter: Parameter, ignore_override: bool = False
-                            ) -> Any:
-    """Declare ``parameter`` of a table on ``node`` (with the value given at start unless
-    ``ignore_override``); its value, or :class:`InputError` naming it."""
-    # A double array without a value ([]: not set) is declared by its type (an empty list
-    # would make it a byte array); unset, it reads as the table's default.
-    default = (RosParameter.Type.DOUBLE_ARRAY if parameter.type is tuple
-               else parameter.default)
-    try:
-        return ros_value(parameter, node.declare_parameter(
-            parameter.name, default, parameter_descriptor(parameter),
-            ignore_override=ignore_override).value)
-    except InvalidParameterTypeException as err:
-        raise InputError(f'Expected parameter `{parameter.name}` to be a '
-                         f'{parameter.type_text}: {str(err)[:200]}') from err
-    except ParameterException as err:
-        raise InputError(f'Bad parameter `{parameter.name}`: {str(err)[:200]}') from err
+    @property
+    def is_dynamics(self) -> bool:
+        """Whether the scene integrates Euler's equations (else gyro samples)."""
+        return isinstance(self.session, DynamicsSession)
 
 
 class PropagatorMixin(Node):
@@ -119,64 +110,67 @@ class PropagatorMixin(Node):
     class it is mixed into (no ``__init__`` of its own).
 
     :meth:`declare_parameters_of_table` declares the parameters; :meth:`build` loads the
-    scene and creates the session, publishers, subscriptions, timers and ``~/reset`` (bad
-    parameters or a bad scene raise :class:`InputError` or
+    scene and creates the session, publishers, subscriptions, timers and ``~/reset``, all held
+    by :attr:`parts` (bad parameters or a bad scene raise :class:`InputError` or
     :class:`~rigid_body_attitude.core.errors.SceneError`). Every callback that touches the
-    session holds :attr:`state_lock`.
+    session holds the parts' ``state_lock``.
     """
 
-    #: Whether :meth:`build` made the session and its entities.
-    configured = False
+    #: What :meth:`build` made (``None``: nothing built, or released).
+    parts: NodeParts | None = None
+
+    @property
+    def configured(self) -> bool:
+        """Whether :meth:`build` made the session and its entities."""
+        return self.parts is not None
+
+    @property
+    def built(self) -> NodeParts:
+        """:attr:`parts`, which must exist (the node was built)."""
+        parts = self.parts
+        if parts is None:
+            raise RuntimeError('Expected a built node, got one not configured')
+        return parts
 
     def build(self, values: dict[str, Any]) -> None:
         """Load the scene of the parameter ``values`` and create the session, topics, timers
-        and services."""
+        and services: :attr:`parts`."""
         problem = check_values(values)
         if problem:
             raise InputError(problem)
-        #: The node clock in nanoseconds (receive times; ``use_sim_time`` makes it the
-        #: ``/clock``).
-        self.clock_ns = clock_nanoseconds(self.get_clock())
-        self.state_lock = threading.Lock()
-        self.scene = load_node_scene(values['scene'], values['integrator'], values['step'],
-                                     values['torque_timeout'])
-        self.publish_rate: float = values['publish_rate']
-        self.outputs = RosOutputs(self, self.scene.rate_source == 'gyro',
-                                  values['covariance'])
-        self.outputs.hardware_id = self.scene.name
-        self.sim_clock: SimClock | None = sim_clock_for(
-            values, timer_period_ns(self.publish_rate), time.monotonic)
-        self.session: AnySession = open_session(self.scene, values, self.outputs, (
-            self.clock_ns if self.sim_clock is None else self.sim_clock.now), time.monotonic)
-        problem = self.session.check(values) or sim_clock_problem(
-            values, self.scene, getattr(self.session, 'command_inputs', ()))
+        clock_ns = clock_nanoseconds(self.get_clock())
+        scene = load_node_scene(values['scene'], values['integrator'], values['step'],
+                                values['torque_timeout'])
+        publish_rate: float = values['publish_rate']
+        outputs = RosOutputs(self, Situation(scene, values))
+        outputs.diagnostics_publisher.hardware_id = scene.name
+        sim_clock = sim_clock_for(values, timer_period_ns(publish_rate), time.monotonic)
+        session: AnySession = open_session(scene, values, outputs, (
+            clock_ns if sim_clock is None else sim_clock.now), time.monotonic)
+        problem = session.check(values) or sim_clock_problem(
+            values, scene, getattr(session, 'command_inputs', ()))
         if problem:
             raise InputError(problem)
-        if isinstance(self.session, DynamicsSession):
-            self.session.sim_clock = self.sim_clock
-        self.clock_publisher = (self.create_publisher(ClockMessage, '/clock', CLOCK_QOS)
-                                if values['publish_clock'] else None)
-        self.outputs.set_frames(values['world_frame'], values['body_frame'])
-        self.outputs.log_queue.start()
+        if isinstance(session, DynamicsSession):
+            session.sim_clock = sim_clock
+        parts = self.parts = NodeParts(
+            threading.Lock(), clock_ns, scene, publish_rate, outputs, sim_clock, session,
+            Situation(scene, values, session.propagator.input_names))
+        parts.clock_output = next(
+            (RawOutput.of(self, endpoint)
+             for endpoint in NODE_INTERFACE.outputs(parts.situation, ('clock',))), None)
+        outputs.set_frames(values['world_frame'], values['body_frame'])
+        outputs.log_queue.start()
         if values['publish_tf']:
-            self.outputs.enable_tf(values['tf_rate'])
-        imu = self.scene.imu
-        if imu is not None:
-            self.outputs.enable_simulated_imu(imu.topic, values['body_frame'], imu.frame_id,
-                                              imu.mount())
-        self._create_inputs()
-        self._create_timers()
-        self.reset_service = self.create_service(Trigger, '~/reset', self.reset_callback)
-        self.configured = True
+            outputs.enable_tf(values['tf_rate'])
+        outputs.enable_simulated_sensors(values['body_frame'])
+        self._create_inputs(parts)
+        self._create_timers(parts)
+        parts.reset_service = create_service(
+            self, NODE_INTERFACE.endpoint('~/reset', 'service'), self.reset_callback)
         self.get_logger().info(
-            f'scene {self.scene.name!r} ({self.scene.rate_source}, {self.scene.integrator}'
-            f'{", step %g s" % self.scene.step if self.is_dynamics else ""}): '
-            f'{self.scene.description}')
-
-    @property
-    def is_dynamics(self) -> bool:
-        """Whether the scene integrates Euler's equations (else gyro samples)."""
-        return isinstance(self.session, DynamicsSession)
+            f'scene {scene.name!r} ({scene.rate_source}, {scene.integrator}'
+            f'{", step %g s" % scene.step if parts.is_dynamics else ""}): {scene.description}')
 
     # -- set-up -----------------------------------------------------------------------------
 
@@ -191,66 +185,65 @@ class PropagatorMixin(Node):
         """Declare ``parameter`` (:func:`declare_table_parameter`)."""
         return declare_table_parameter(self, parameter, ignore_override)
 
-    def _create_inputs(self) -> None:
-        """Raw subscriptions for the inputs the scene uses (and set_pose); ``/tf_static``
-        for gyro scenes (the mount).
+    def _create_inputs(self, parts: NodeParts) -> None:
+        """Raw subscriptions for the inputs of :data:`NODE_INTERFACE` present for the scene
+        (``/tf_static`` for gyro scenes: the mount).
 
-        The gyro subscriptions share a :class:`DedicatedGroup`, so :func:`~.serve.main`'s
-        :class:`~.gyro_loop.GyroLoop` can take them over
-        (:meth:`~.node.AttitudePropagatorNode.gyro_loop`).
+        The sensor subscriptions (and, on the scene's own sim clock, the commands) share the
+        parts' :class:`DedicatedGroup`, so :func:`~.serve.main`'s raw-take loop can take them
+        over (:meth:`~.node.AttitudePropagatorNode.serving_loop`).
         """
-        self.loop_group = DedicatedGroup()  # gyro subscriptions and the timers
-        self.subscriptions_by_topic = {}
-        self.takers: dict[str, Callable[[], bytes | None]] = {}
-        self.handlers: dict[str, Callable[[bytes], None]] = {}
-        self.mount_gate: MountGate | None = None
-        session = self.session
-        if isinstance(session, GyroSession):
-            self.mount_gate = MountGate(session, self.get_parameter('tf_timeout').value,
-                                        time.monotonic)
-            self.tf_static_subscription = self.create_subscription(
-                TFMessage, '/tf_static', self.tf_static_callback, TF_STATIC_LISTENER_QOS,
-                raw=True)
-        for topic in input_topics(self.scene, session.propagator.input_names):
-            gyro = topic in _GYRO_TOPICS
-            handler = self.gated(
-                self._gyro_handler(topic) if gyro else self._command_callback(topic))
-            self.handlers[topic] = handler
-            self.subscriptions_by_topic[topic] = self.create_subscription(
-                _MESSAGE_TYPES[topic], topic, handler, GYRO_QOS if gyro else COMMAND_QOS,
-                callback_group=self.loop_group if gyro or self.sim_clock else None,
-                qos_overriding_options=QoSOverridingOptions.with_default_policies(), raw=True)
-            self.takers[topic] = raw_taker(self.subscriptions_by_topic[topic])
+        session = parts.session
+        for endpoint in NODE_INTERFACE.inputs(parts.situation, ('transforms',)):
+            if isinstance(session, GyroSession):
+                parts.mount_gate = MountGate(session, self.get_parameter('tf_timeout').value,
+                                             time.monotonic)
+                if isinstance(session, FilteredGyroSession):
+                    session.frame_mount = parts.mount_gate.mount_of
+                parts.tf_static_subscription = create_subscription(
+                    self, endpoint, self.tf_static_callback)
+        for endpoint in NODE_INTERFACE.inputs(parts.situation):
+            topic, sensor = endpoint.name, endpoint.role == 'sensor'
+            handler = self.gated(self._sensor_handler(parts, endpoint) if sensor
+                                 else self._command_callback(parts, endpoint))
+            parts.handlers[topic] = handler
+            subscription = create_subscription(
+                self, endpoint, handler,
+                parts.loop_group if sensor or parts.sim_clock else None)
+            parts.subscriptions_by_topic[topic] = subscription
+            parts.takers[topic] = raw_taker(subscription)
 
-    def gated(self, handler: Callable[[bytes], None]) -> Callable[[bytes], None]:
+    def gated(self, handler: Callable[[bytes], object]) -> Callable[[bytes], object]:
         """The callback of an input topic around the session's ``handler``: ``handler``
         itself (the managed node lets it through only while active)."""
         return handler
 
-    def _gyro_handler(self, topic: str) -> Callable[[bytes], None]:
-        """The session's handler of a gyro ``topic`` (:func:`input_handler`) under the state
-        lock, behind the mount gate until it opens."""
-        handle, lock, gate = input_handler(self.session, topic), self.state_lock, self.mount_gate
-        assert gate is not None
+    def _sensor_handler(self, parts: NodeParts, endpoint: Endpoint) -> Callable[[bytes], None]:
+        """The session's handler of a sensor topic (:func:`input_handler`) under the state
+        lock; a gyro topic's behind the mount gate until it opens."""
+        gate, lock = parts.mount_gate, parts.state_lock
+        handle = input_handler(parts.session, endpoint.name)
+        if endpoint.quantity == ANGULAR_RATE and gate is not None:
+            handle = gate.gated(handle)
 
         def locked(data: bytes) -> None:
             with lock:
-                if gate.open:
-                    handle(data)
-                else:
-                    gate.sample(data, handle)
+                handle(data)
         return locked
 
-    def _command_callback(self, topic: str) -> Callable[[bytes], None]:
-        """The callback of a command ``topic``: it also takes every message queued behind the
+    def _command_callback(self, parts: NodeParts, endpoint: Endpoint
+                          ) -> Callable[[bytes], object]:
+        """The callback of a command topic: it also takes every message queued behind the
         one it was given and hands only the newest decodable one to the session (the others
-        are counted ``superseded``; malformed ones ``malformed``). On rclpy's stock path
-        nothing more is taken: each message comes to the callback."""
-        decode, handle = DECODERS[topic], input_handler(self.session, topic)
-        session, lock = self.session, self.state_lock
+        are counted ``superseded``; malformed ones ``malformed``), and returns
+        :data:`~.raw_take_loop.DRAINED`. On rclpy's stock path nothing more is taken: each
+        message comes to the callback."""
+        topic = endpoint.name
+        decode, handle = decoder(topic), input_handler(parts.session, topic)
+        session, lock, takers = parts.session, parts.state_lock, parts.takers
 
-        def coalesce(data: bytes) -> None:
-            take = self.takers[topic]
+        def coalesce(data: bytes) -> object:
+            take = takers[topic]
             newest: bytes | None = None
             superseded = 0
             taken: bytes | None = data
@@ -269,26 +262,28 @@ class PropagatorMixin(Node):
                     session.rejections['superseded'] += superseded
                 if newest is not None:
                     handle(newest)
+            return DRAINED
         return coalesce
 
     def tf_static_callback(self, data: bytes) -> None:
-        """Static transforms for the mount (:meth:`~.tf_lookup.MountGate.tf_static`)."""
-        gate = self.mount_gate
+        """Static transforms for the mount
+        (:meth:`~rigid_body_attitude.session.mount_gate.MountGate.tf_static`)."""
+        parts = self.built
+        gate = parts.mount_gate
         if gate is not None and not gate.open:
-            gate.tf_static(data, self.state_lock)
+            gate.tf_static(data, parts.state_lock)
 
-    def _create_timers(self) -> None:
+    def _create_timers(self, parts: NodeParts) -> None:
         """The output timer (node clock; dynamics scenes only) and the diagnostics timer
-        (steady clock), in the loop group, so :func:`~.serve.main`'s gyro loop serves them (an
+        (steady clock), in the loop group, so :func:`~.serve.main`'s raw-take loop serves them (an
         executor rebuilds its wait set of every entity per tick: about 2.8 % of a core at
         50 Hz)."""
-        self.output_timer = (self.create_timer(1.0 / self.publish_rate, self.tick_callback,
-                                               self.loop_group)
-                             if self.is_dynamics and self.sim_clock is None else None)
+        parts.output_timer = (
+            self.create_timer(1.0 / parts.publish_rate, self.tick_callback, parts.loop_group)
+            if parts.is_dynamics and parts.sim_clock is None else None)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self.diagnostics_timer = self.create_timer(
-            DIAGNOSTICS_PERIOD, self.diagnostics_callback, self.loop_group, clock=steady)
-        self._diagnostics_count = 0
+        parts.diagnostics_timer = self.create_timer(
+            DIAGNOSTICS_PERIOD, self.diagnostics_callback, parts.loop_group, clock=steady)
 
     # -- parameters -------------------------------------------------------------------------
 
@@ -302,41 +297,46 @@ class PropagatorMixin(Node):
         by_name = {p.name: p for p in PARAMETERS}
         values.update({p.name: ros_value(by_name[p.name], p.value) for p in parameters
                        if p.name in values})
-        reason = self.session.check(values) if self.configured else check_values(values)
+        parts = self.parts
+        reason = parts.session.check(values) if parts is not None else check_values(values)
         return SetParametersResult(successful=not reason, reason=reason)
 
     def parameters_set_callback(self, parameters: list[RosParameter]) -> None:
         """Apply accepted run-time changes (frames, stamps, max_dt, thresholds)."""
-        if not self.configured:  # taken by the next build
+        parts = self.parts
+        if parts is None:  # taken by the next build
             return
         values = self.get_parameters_values()
-        with self.state_lock:
-            self.session.apply(values)
-            self.outputs.set_frames(values['world_frame'], values['body_frame'])
+        with parts.state_lock:
+            parts.session.apply(values)
+            parts.outputs.set_frames(values['world_frame'], values['body_frame'])
 
     # -- services and timers ----------------------------------------------------------------
 
     def reset_callback(self, request: Trigger.Request,
                        response: Trigger.Response) -> Trigger.Response:
         """Back to the scene's initial state (gyro: the next sample is a new baseline)."""
-        with self.state_lock:
-            self.session.reset()
+        parts = self.built
+        with parts.state_lock:
+            parts.session.reset()
         response.success = True
-        response.message = f'reset to the initial state of scene {self.scene.name!r}'
-        self.outputs.log(LEVEL_INFO, response.message)
+        response.message = f'reset to the initial state of scene {parts.scene.name!r}'
+        parts.outputs.log(LEVEL_INFO, response.message)
         return response
 
     def tick_callback(self) -> None:
         """The output timer of a dynamics scene: integrate up to the node clock, publish."""
-        with self.state_lock:
-            session = self.session
+        parts = self.built
+        with parts.state_lock:
+            session = parts.session
             if isinstance(session, DynamicsSession):
-                session.tick(self.clock_ns())
+                session.tick(parts.clock_ns())
 
     def diagnostics_callback(self) -> None:
         """Publish ``/diagnostics``; every :data:`LOG_EVERY_PERIODS` periods log a summary."""
-        with self.state_lock:
-            self.session.publish_diagnostics()
-            self._diagnostics_count += 1
-            if self._diagnostics_count % LOG_EVERY_PERIODS == 0:
-                self.outputs.log(LEVEL_INFO, self.session.summary())
+        parts = self.built
+        with parts.state_lock:
+            parts.session.publish_diagnostics()
+            parts.diagnostics_count += 1
+            if parts.diagnostics_count % LOG_EVERY_PERIODS == 0:
+                parts.outputs.log(LEVEL_INFO, parts.session.summary())

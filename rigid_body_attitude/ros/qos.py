@@ -1,5 +1,10 @@
 """The node's default QoS profiles, and why (users override them with ``qos_overrides``).
 
+The profiles are declared by name, without rclpy, in
+:data:`rigid_body_attitude.session.interface.QOS_PROFILES` (each endpoint of the interface
+names its profile); :func:`qos_profile` makes the rclpy profile of a name. The constants below
+are those profiles under the names the package's modules and tests use.
+
 **Gyro inputs** (:data:`GYRO_QOS`: ``imu``, ``angular_velocity``): BEST_EFFORT, VOLATILE,
 KEEP_LAST :data:`INPUT_DEPTH` (5 000).
 
@@ -8,7 +13,7 @@ KEEP_LAST :data:`INPUT_DEPTH` (5 000).
   subscribe: a best-effort subscription matches best-effort and reliable publishers alike, so
   the node hears every driver out of the box. A reliable subscription would hear no
   best-effort driver at all.
-* *A deep queue*, because the gyro loop drains the queue at every wake-up and the depth only
+* *A deep queue*, because the raw-take loop drains the queue at every wake-up and the depth only
   has to cover the samples that arrive while the node cannot run (a scheduler delay on a
   loaded machine). 5 000 holds 5 s at 1 kHz. Measured (``test/ros/test_input_qos.py``): a
   sensor-data publisher paced at 1 kHz for 10 s beside two CPU-bound processes loses nothing.
@@ -46,57 +51,46 @@ from __future__ import annotations
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy)
 
+from rigid_body_attitude.session.interface import INPUT_DEPTH, OUTPUT_DEPTH, QOS_PROFILES
+
 __all__ = ['CLOCK_QOS', 'COMMAND_QOS', 'CONTROLLER_OUTPUT_QOS', 'GYRO_QOS', 'INPUT_DEPTH',
-           'OUTPUT_DEPTH', 'OUTPUT_QOS', 'TF_QOS', 'TF_STATIC_LISTENER_QOS', 'TF_STATIC_QOS']
+           'OUTPUT_DEPTH', 'OUTPUT_QOS', 'TF_QOS', 'TF_STATIC_LISTENER_QOS', 'TF_STATIC_QOS',
+           'qos_profile']
 
-#: Samples an input queue holds while the node cannot take them (5 s at 1 kHz).
-INPUT_DEPTH = 5000
+_RELIABILITY = {'reliable': ReliabilityPolicy.RELIABLE,
+                'best_effort': ReliabilityPolicy.BEST_EFFORT}
+_DURABILITY = {'volatile': DurabilityPolicy.VOLATILE,
+               'transient_local': DurabilityPolicy.TRANSIENT_LOCAL}
 
-#: Samples an output writer keeps for repairs: as many as an input queue holds.
-OUTPUT_DEPTH = INPUT_DEPTH
+
+def qos_profile(name: str) -> QoSProfile:
+    """The rclpy profile of the interface's QoS profile ``name`` (keep last)."""
+    profile = QOS_PROFILES[name]
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=profile.depth,
+                      reliability=_RELIABILITY[profile.reliability],
+                      durability=_DURABILITY[profile.durability])
+
 
 #: Gyro inputs: best effort (matches every publisher), keep last 5 000.
-GYRO_QOS = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=INPUT_DEPTH,
-    reliability=ReliabilityPolicy.BEST_EFFORT, durability=DurabilityPolicy.VOLATILE)
-
+GYRO_QOS = qos_profile('sensor_input')
 #: Commands (torque, rotor torque, set_pose): reliable, keep last 5 000.
-COMMAND_QOS = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=INPUT_DEPTH,
-    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-
+COMMAND_QOS = qos_profile('command')
 #: Outputs: reliable (reaches reliable and best-effort subscribers), keep last 5 000.
-OUTPUT_QOS = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
-    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-
+OUTPUT_QOS = qos_profile('output')
 #: A controller's commands (``attitude_controller``'s ``torque``): as :data:`OUTPUT_QOS` but
 #: transient local, so a recorder that matches the controller late (a transient-local
 #: subscription, as ``ros2 bag record`` makes for such a writer) still gets every command
 #: from the first tick on; volatile subscribers (the propagation node) are served as before.
-CONTROLLER_OUTPUT_QOS = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=OUTPUT_DEPTH,
-    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-
+CONTROLLER_OUTPUT_QOS = qos_profile('latched_output')
 #: ``/tf``: as tf2_ros's TransformBroadcaster (reliable, volatile, keep last 100).
-TF_QOS = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=100,
-    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-
+TF_QOS = qos_profile('tf')
 #: ``/tf_static``: as robot_state_publisher publishes it (reliable, transient local, keep
 #: last 1), so a transform published before the node started is delivered to it.
-TF_STATIC_QOS = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=1,
-    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-
+TF_STATIC_QOS = qos_profile('tf_static')
 #: Reading ``/tf_static``: as tf2_ros's StaticListenerQoS (reliable, transient local, keep
 #: last 100).
-TF_STATIC_LISTENER_QOS = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=100,
-    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+TF_STATIC_LISTENER_QOS = qos_profile('tf_static_listener')
 #: ``/clock``: reliable, volatile, keep last 1. rclpy's and rclcpp's time sources subscribe
 #: best effort with depth 1 (``rclcpp::ClockQoS``); a reliable writer serves them and reliable
 #: readers (a recorder) alike.
-CLOCK_QOS = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST, depth=1,
-    reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+CLOCK_QOS = qos_profile('clock')

@@ -2,7 +2,7 @@
 
 rclpy 7 (Jazzy) exposes no public wait set that can be reused across wake-ups, no public way
 to take a queued message or publish CDR bytes without a per-call wrapper, and not its
-``RCLError`` type. The node's fast path (:class:`~.gyro_loop.GyroLoop`, the raw outputs, the
+``RCLError`` type. The node's fast path (:class:`~.raw_take_loop.RawTakeLoop`, the raw outputs, the
 command coalescing, the clock read) uses them through the functions here, and only here:
 
 * the C binding ``rclpy.impl.implementation_singleton.rclpy_implementation``: its ``WaitSet``
@@ -44,10 +44,10 @@ _binding: Any = _singleton.rclpy_implementation
 #: Set to ``1``: serve with rclpy's stock executor even when the fast path is available.
 STOCK_EXECUTOR_VARIABLE = 'RIGID_BODY_ATTITUDE_STOCK_EXECUTOR'
 
-#: The methods of the binding's ``WaitSet`` that :class:`~.gyro_loop.GyroLoop` calls, itself
+#: The methods of the binding's ``WaitSet`` that :class:`~.raw_take_loop.RawTakeLoop` calls, itself
 #: or through rclpy's event handlers.
 WAIT_SET_METHODS = ('add_event', 'add_guard_condition', 'add_subscription', 'add_timer',
-                    'clear_entities', 'destroy_when_not_in_use', 'wait')
+                    'clear_entities', 'destroy_when_not_in_use', 'is_ready', 'wait')
 
 #: Binding attribute → the methods of it that the fast path calls.
 BINDING_METHODS: dict[str, tuple[str, ...]] = {

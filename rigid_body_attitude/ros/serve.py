@@ -1,6 +1,6 @@
 """Serving the node: :func:`main` (the ``propagation_node`` executable) and :func:`spin`.
 
-Every scene is served by a :class:`~rigid_body_attitude.ros.gyro_loop.GyroLoop` on the main
+Every scene is served by a :class:`~rigid_body_attitude.ros.raw_take_loop.RawTakeLoop` on the main
 thread (gyro messages, if any, and the two timers) and a ``SingleThreadedExecutor`` in a second
 thread for the rest (parameter services, ``~/reset``, ``set_pose``, commands), which then
 sleeps in ``rcl_wait`` (GIL released) nearly all the time;
@@ -29,7 +29,7 @@ from rclpy.signals import uninstall_signal_handlers
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import AttitudeError, InputError
 from rigid_body_attitude.ros.cli_help import node_parameter_rows, usage_text, wants_help
-from rigid_body_attitude.ros.gyro_loop import GyroLoop
+from rigid_body_attitude.ros.raw_take_loop import RawTakeLoop
 from rigid_body_attitude.ros.middleware import use_packaged_fastdds_profile
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
 from rigid_body_attitude.ros.rclpy_internals import fast_path_problem, RCLError
@@ -58,7 +58,7 @@ class _ExecutorThread:
     set that may still be waiting (rclpy issue #968).
     """
 
-    def __init__(self, executor: SingleThreadedExecutor, node: Node, loop: GyroLoop) -> None:
+    def __init__(self, executor: SingleThreadedExecutor, node: Node, loop: RawTakeLoop) -> None:
         """Serve ``node``'s remaining entities with ``executor``; stop ``loop`` on failure."""
         self.executor, self.node, self.loop = executor, node, loop
         self.failures: list[BaseException] = []
@@ -103,7 +103,7 @@ def _nothing() -> None:
 
 def spin(node: AttitudePropagatorNode) -> None:
     """Serve ``node`` until SIGINT or shutdown: gyro messages (gyro scenes) and timers in a
-    :class:`GyroLoop` on this thread, the rest (services, parameters, set_pose, commands) with
+    :class:`RawTakeLoop` on this thread, the rest (services, parameters, set_pose, commands) with
     a ``SingleThreadedExecutor`` in a daemon thread.
 
     An exception of a callback in either thread ends both and propagates. Before serving,
@@ -118,17 +118,17 @@ def spin(node: AttitudePropagatorNode) -> None:
     gc.freeze()
     problem = fast_path_problem()
     if problem is not None:
-        if node.sim_clock is not None:
+        if node.built.sim_clock is not None:
             raise InputError(f'publish_clock and lockstep need the node\'s own step loop, '
                              f'which rclpy\'s stock executor cannot serve ({problem}); run '
                              f'without them on this path')
         _spin_stock(node, problem)
         return
     # Claims the gyro subscriptions and the timers before any executor spins.
-    serve_beside_executor(node, node.gyro_loop())
+    serve_beside_executor(node, node.serving_loop())
 
 
-def serve_beside_executor(node: Node, loop: GyroLoop) -> None:
+def serve_beside_executor(node: Node, loop: RawTakeLoop) -> None:
     """Run ``loop`` on this thread and serve the rest of ``node`` (services, parameters) with
     a ``SingleThreadedExecutor`` in a daemon thread, until SIGINT or shutdown; logs
     :data:`SERVING_LINE` once both serve. An exception of a callback in either thread ends

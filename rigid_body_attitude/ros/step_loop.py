@@ -8,7 +8,7 @@ wait on one reused wait set (the command subscriptions, the diagnostics timer, a
 and SIGINT's guard; GIL released, no busy spinning) until they arrived or ``lockstep_timeout``
 of wall time passed. Between ticks it waits the same way for the wall-time schedule of
 ``real_time_factor``, serving commands and diagnostics meanwhile. The command subscriptions
-and timers belong to :class:`~.gyro_loop.DedicatedGroup` s, so no executor takes them.
+and timers belong to :class:`~.raw_take_loop.DedicatedGroup` s, so no executor takes them.
 """
 
 from __future__ import annotations
@@ -19,12 +19,11 @@ import time
 from typing import Any
 
 from rclpy.context import Context
-from rclpy.publisher import Publisher
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 
 from rigid_body_attitude.msgs.cdr import encode_clock
-from rigid_body_attitude.ros.gyro_loop import GyroLoop, Handler
+from rigid_body_attitude.ros.raw_take_loop import RawTakeLoop, Handler
 from rigid_body_attitude.ros.outputs import RawOutput, RosOutputs
 from rigid_body_attitude.ros.rclpy_internals import new_wait_set
 from rigid_body_attitude.session.base import LEVEL_INFO
@@ -39,7 +38,7 @@ __all__ = ['READY_POLL_S', 'StepLoop', 'step_loop']
 READY_POLL_S = 0.1
 
 
-class StepLoop(GyroLoop):
+class StepLoop(RawTakeLoop):
     """Makes the sim clock's ticks and serves commands and timers between them."""
 
     def __init__(self, context: Context, served: Sequence[tuple[Subscription, Handler]],
@@ -108,22 +107,22 @@ class StepLoop(GyroLoop):
         message to its handler and run the due timers. False once the loop is to end."""
         self._fill(wait_set, self.guard_handles(), False)
         wait_set.wait(int(timeout_s * 1e9))
-        self.handle_ready()
+        self.handle_ready(wait_set)
         return self.context.ok() and not self._stopping.is_set()
 
 
 def step_loop(context: Context, session: DynamicsSession, clock: SimClock,
               served: Sequence[tuple[Subscription, Handler]], timers: Sequence[Timer],
-              clock_publisher: Publisher | None, lock: threading.Lock,
+              clock_output: RawOutput | None, lock: threading.Lock,
               outputs: RosOutputs) -> StepLoop:
     """The :class:`StepLoop` of a node: its ticks publish ``/clock`` (raw bytes, when
-    ``clock_publisher`` has subscribers) and tick ``session`` under ``lock``; a lockstep timeout
+    ``clock_output`` has subscribers) and tick ``session`` under ``lock``; a lockstep timeout
     is counted and logged through ``outputs``."""
-    raw = RawOutput(clock_publisher) if clock_publisher is not None else None
+    raw = clock_output
     tick = session.lockstep_tick if clock.lockstep else session.tick
 
     def publish_clock(now_ns: int) -> None:
-        if raw is not None and raw.subscription_count():
+        if raw is not None and raw.matched():
             raw.publish(encode_clock(now_ns))
 
     def sim_tick() -> None:

@@ -29,7 +29,8 @@ from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, PeriodCounts, StrapdownState, diagnostic_report,
     stale_command_count, state_summary)
 
-__all__ = ['LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session', 'WARNING_INTERVAL']
+__all__ = ['AccelerationEstimate', 'LEVEL_INFO', 'OutputSink', 'POSITION_LIMIT', 'Session',
+           'WARNING_INTERVAL']
 
 #: Seconds between repeated warnings about the same reason.
 WARNING_INTERVAL = 5.0
@@ -44,6 +45,8 @@ POSITION_LIMIT = 1e15
 
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
+#: A sample's gravity-free acceleration and its covariance, computed when called.
+AccelerationEstimate = Callable[[], tuple[Vector, tuple[float, ...]]]
 
 
 class OutputSink(Protocol):
@@ -76,9 +79,24 @@ class OutputSink(Protocol):
         """A dynamics tick's kinetic energy [J] and world angular momentum [N m s], stamped
         like its attitude."""
 
-    def simulated_imu(self, topic: str, data: bytes) -> None:
-        """A simulated IMU's sample (dynamics scenes with ``sensors``): a serialized
-        ``sensor_msgs/msg/Imu`` for the output ``topic``."""
+    def acceleration(self, sec: int, nanosec: int, estimate: AccelerationEstimate) -> None:
+        """A filtered gyro sample's gravity-free acceleration (scenes with an ``estimation``
+        section), stamped like the attitude: ``estimate()`` gives it [m/s², body frame] with
+        its row-major 3×3 covariance [(m/s²)²], computed when called (an output that
+        publishes nothing need not)."""
+
+    def sensor_wanted(self, topic: str) -> bool:
+        """Whether a simulated sensor's sample on the output ``topic`` would reach anyone (a
+        matched subscription, a topic of the output bag): the session encodes it only then."""
+
+    def simulated_sensor(self, topic: str, data: bytes) -> None:
+        """A simulated sensor's sample (dynamics scenes with ``sensors``), serialized, for the
+        output ``topic``: its ``sensor_msgs/msg/Imu``, ``sensor_msgs/msg/MagneticField`` or
+        ``geometry_msgs/msg/PoseWithCovarianceStamped``."""
+
+    def wheel_state(self, data: bytes) -> None:
+        """A dynamics tick's reaction wheels (scenes with ``reaction_wheels``): a serialized
+        ``sensor_msgs/msg/JointState`` for ``wheels/state``, stamped like the attitude."""
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """One diagnostics report."""

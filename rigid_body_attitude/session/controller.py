@@ -1,9 +1,12 @@
-"""The attitude controller without ROS: pairing of stamped inputs, sample and hold, checks.
+"""The attitude controller without ROS: the plant's stamped state, sample and hold, checks.
 
-The plant publishes ``orientation`` (world_frame) and ``twist`` (body_frame, the body rate)
-for each tick ``k`` stamped ``t_k``. :class:`ControllerSession` answers each tick with one
-torque stamped ``t_k`` exactly, once it holds both inputs of that stamp; so its output depends
-on the stamped inputs only, never on when they arrive. With a ``control_period`` ``P > 0`` the
+The plant publishes its state for each tick ``k`` stamped ``t_k``: ``odom`` (pose in
+world_frame, twist in body_frame, one message: :meth:`ControllerSession.odometry`) or, with
+``state_input`` ``orientation_twist``, ``orientation`` (world_frame) and ``twist``
+(body_frame, the body rate). :class:`ControllerSession` answers each tick with one torque
+stamped ``t_k`` exactly, once it holds the tick's attitude and rate (an ``odom`` message, or
+both messages of that stamp, paired); so its output depends on the stamped inputs only, never
+on when they arrive. With a ``control_period`` ``P > 0`` the
 torque is recomputed only at the first tick of each interval ``[n P, (n+1) P)`` of stamps
 (integer nanoseconds, so the choice is exact) and otherwise the held torque is sent again,
 stamped ``t_k`` (sample and hold). The law is
@@ -34,7 +37,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.control import as_axis_gains, pd_torque_floats
 from rigid_body_attitude.session.base import LEVEL_INFO, WARNING_INTERVAL
 from rigid_body_attitude.session.controller_parameters import UNIT_TOLERANCE
-from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_OK, LEVEL_WARN
 from rigid_body_attitude.session.times import seconds_to_ns, stamp_problem, to_ns
 
@@ -63,14 +66,15 @@ class TorqueSink(Protocol):
 
 
 def target_from_values(values: Mapping[str, Any]) -> Quaternion:
-    """The target (w, x, y, z) of checked parameter values: ``target_quaternion``
+    """The target (w, x, y, z) of checked parameter values: ``target_quaternion_xyzw``
     (normalised), else ``target_rpy``, else the identity."""
-    if values['target_quaternion']:
-        x, y, z, w = values['target_quaternion']
+    if values['target_quaternion_xyzw']:
+        x, y, z, w = values['target_quaternion_xyzw']
         norm = math.sqrt(w * w + x * x + y * y + z * z)
         return w / norm, x / norm, y / norm, z / norm
     if values['target_rpy']:
-        return rpy_quaternion(*values['target_rpy'])
+        w, x, y, z = from_rpy(values['target_rpy']).tolist()
+        return w, x, y, z
     return _IDENTITY
 
 
@@ -93,6 +97,9 @@ class ControllerSession:
         self.held: tuple[int, Vector] | None = None  # (control interval, torque)
         self._last_sample: tuple[Sequence[float], Quaternion] | None = None
         self.apply(values)
+        #: What the diagnostics say the controller waits for (``state_input``).
+        self.waiting_for = ('odom' if values.get('state_input', 'odom') == 'odom'
+                            else 'orientation and twist of equal stamps')
 
     def apply(self, values: Mapping[str, Any]) -> None:
         """Take (run-time) parameters; a new target or gain acts from the next tick on (the
@@ -121,6 +128,23 @@ class ControllerSession:
         stamp_ns = self._checked('twist', sec, nanosec, frame_id, self.body_frame, angular)
         if stamp_ns is not None:
             self._pend('twist', stamp_ns, tuple(angular))
+
+    def odometry(self, sec: int, nanosec: int, frame_id: str, child_frame_id: str,
+                 attitude: Sequence[float], angular: Sequence[float]) -> None:
+        """The plant's state in one message (nav_msgs/Odometry): the attitude (w, x, y, z),
+        body → ``frame_id`` (world_frame), and the body rate [rad/s] in ``child_frame_id``
+        (body_frame), stamped ``(sec, nanosec)``; answered at once."""
+        stamp_ns = self._checked('odom', sec, nanosec, frame_id, self.world_frame, attitude)
+        if stamp_ns is None:
+            return
+        if child_frame_id != self.body_frame:
+            self._reject('wrong_frame', f'odom: child frame {child_frame_id[:100]!r}, '
+                                        f'expected {self.body_frame!r}')
+            return
+        if not all(math.isfinite(value) for value in angular):
+            self._reject('non_finite', 'odom: a non-finite value (NaN or Inf)')
+            return
+        self._answer(stamp_ns, tuple(attitude), tuple(angular))
 
     def target_message(self, sec: int, nanosec: int, frame_id: str,
                        attitude: Sequence[float]) -> None:
@@ -241,8 +265,7 @@ class ControllerSession:
         problems = [f'{count} {reason}' for reason, count in
                     sorted(self._period_rejections.items())]
         if not self._period_answered:
-            problems.insert(0, 'no tick answered: waiting for orientation and twist of equal '
-                               'stamps')
+            problems.insert(0, f'no tick answered: waiting for {self.waiting_for}')
         values = (
             ('ticks answered', str(self.answered)), ('torques computed', str(self.computed)),
             ('ticks answered again', str(self.repeated)),

@@ -14,23 +14,36 @@ from typing import Any
 
 from rigid_body_attitude.session.parameters import Parameter, PARAMETERS, values_problem
 
-__all__ = ['CONTROLLER_PARAMETERS', 'UNIT_TOLERANCE', 'check_controller_values',
-           'controller_defaults']
+__all__ = ['CONTROLLER_PARAMETERS', 'RENAMED_CONTROLLER_PARAMETERS', 'STATE_INPUTS',
+           'UNIT_TOLERANCE', 'check_controller_values', 'controller_defaults',
+           'renamed_problem']
 
 #: Largest ``| |q| − 1 |`` of a quaternion taken as an attitude (parameter or message).
 UNIT_TOLERANCE = 1e-3
 
 _NODE = {parameter.name: parameter for parameter in PARAMETERS}
 
+#: ``state_input`` → the quantities of the controller's interface
+#: (:data:`~rigid_body_attitude.session.interface.CONTROLLER_INTERFACE`) it subscribes to.
+STATE_INPUTS: dict[str, tuple[str, ...]] = {
+    'odom': ('odometry',),
+    'orientation_twist': ('attitude', 'twist'),
+}
+
 #: Every parameter of the controller, in the order ``--help`` and the README list them.
 CONTROLLER_PARAMETERS: tuple[Parameter, ...] = (
     _NODE['world_frame'],
     _NODE['body_frame'],
+    Parameter('state_input', str, 'odom',
+              "the plant's state: odom (nav_msgs/Odometry, pose and twist in one message) or "
+              'orientation_twist (QuaternionStamped and TwistStamped, paired by stamp)',
+              choices=tuple(STATE_INPUTS)),
     Parameter('target_rpy', tuple, (),
               'rad: [roll, pitch, yaw] of the target attitude of body_frame in world_frame, as '
-              'static_transform_publisher takes them ([] = target_quaternion, or the identity)',
+              'static_transform_publisher takes them ([] = target_quaternion_xyzw, or the '
+              'identity)',
               -10.0, 10.0, may_be_empty=True, read_only=False),
-    Parameter('target_quaternion', tuple, (),
+    Parameter('target_quaternion_xyzw', tuple, (),
               '[x, y, z, w] of the target attitude, of unit norm ([] = target_rpy, or the '
               'identity: body axes on world axes)', -2.0, 2.0, may_be_empty=True,
               read_only=False, length=4),
@@ -40,12 +53,29 @@ CONTROLLER_PARAMETERS: tuple[Parameter, ...] = (
     Parameter('torque_limit', float, 0.0,
               'N m: each torque component clipped to +-this (0 = no limit)', 0.0, 1e12,
               read_only=False),
+    Parameter('actuator', str, 'body',
+              'what the torque drives: body (torque, WrenchStamped) or reaction_wheels (the '
+              "scene's wheel array, wheels/command: JointState efforts)",
+              choices=('body', 'reaction_wheels')),
+    Parameter('scene', str, '',
+              "the plant's scene (built-in name or file) whose reaction_wheels the controller "
+              'drives (actuator reaction_wheels)', may_be_empty=True),
     Parameter('control_period', float, 0.0,
               's: the torque is recomputed when the input stamps reach a multiple of this and '
               'held in between (0 = at every tick)', 0.0, 3600.0, read_only=False),
 )
 
 _BY_NAME = {parameter.name: parameter for parameter in CONTROLLER_PARAMETERS}
+
+#: Retired parameter names → the names in use: a value given for a retired name is refused
+#: with a message naming its successor.
+RENAMED_CONTROLLER_PARAMETERS = {'target_quaternion': 'target_quaternion_xyzw'}
+
+
+def renamed_problem(name: str) -> str:
+    """Why the retired parameter ``name`` cannot be set."""
+    return (f'Parameter `{name}` is named `{RENAMED_CONTROLLER_PARAMETERS[name]}` '
+            f'(its components in the order of the name): set that one instead')
 
 
 def controller_defaults() -> dict[str, Any]:
@@ -56,19 +86,22 @@ def controller_defaults() -> dict[str, Any]:
 def check_controller_values(values: Mapping[str, Any]) -> str:
     """Why these parameter values are unusable, or ``''`` when they are fine.
 
-    Each value against its declaration, then: distinct frames, at most one of ``target_rpy``
-    and ``target_quaternion``, and a target quaternion of unit norm within
-    :data:`UNIT_TOLERANCE`.
+    Each value against its declaration, then: a ``scene`` with ``actuator``
+    ``reaction_wheels``, at most one of ``target_rpy`` and ``target_quaternion_xyzw``, and a
+    target quaternion of unit norm within :data:`UNIT_TOLERANCE`.
     """
     problem = values_problem(values, _BY_NAME)
     if problem:
         return problem
-    if values.get('target_rpy') and values.get('target_quaternion'):
-        return ('Expected at most one of `target_rpy` and `target_quaternion`, got both: '
-                f'{list(values["target_rpy"])} and {list(values["target_quaternion"])}')
-    xyzw = values.get('target_quaternion') or (0.0, 0.0, 0.0, 1.0)
+    if values.get('actuator') == 'reaction_wheels' and not values.get('scene'):
+        return ('Expected parameter `scene` (the plant\'s scene, with its reaction_wheels) '
+                'with `actuator` reaction_wheels, got none')
+    if values.get('target_rpy') and values.get('target_quaternion_xyzw'):
+        return ('Expected at most one of `target_rpy` and `target_quaternion_xyzw`, got both: '
+                f'{list(values["target_rpy"])} and {list(values["target_quaternion_xyzw"])}')
+    xyzw = values.get('target_quaternion_xyzw') or (0.0, 0.0, 0.0, 1.0)
     norm = math.sqrt(sum(value * value for value in xyzw))
     if abs(norm - 1.0) > UNIT_TOLERANCE:
-        return (f'Expected parameter `target_quaternion` to have norm 1 (within '
+        return (f'Expected parameter `target_quaternion_xyzw` to have norm 1 (within '
                 f'{UNIT_TOLERANCE:g}), got norm {norm:.6g} for {list(xyzw)}')
     return ''

@@ -2,20 +2,22 @@
 
 Shared by the node (:mod:`rigid_body_attitude.ros.node`) and the replay tool
 (:mod:`rigid_body_attitude.tools.replay`): :func:`input_handler` is the callback of one input
-topic (decode, then the session method of the topic) for both, so both accept and refuse exactly
-the same bytes and hand the same values to the session. Decoders by topic: :data:`DECODERS`;
-by gyro message type (the replay's gyro topic may carry any of them): :data:`RATE_DECODERS`.
-Built on the checked decoders of :mod:`rigid_body_attitude.msgs.decoders`; imports no rclpy
-and no bag library.
+topic of :data:`~rigid_body_attitude.session.interface.NODE_INTERFACE` (decode, then the
+session method of what the topic carries) for both, so both accept and refuse exactly the same
+bytes and hand the same values to the session. The decoder follows from the message type: a
+gyro topic's (``angular_rate``) from the one rate registry
+:data:`~rigid_body_attitude.msgs.decoders.RATE_DECODERS` (the replay's gyro topic may carry
+any of its types), any other input's from :data:`VALUE_DECODERS`. Built on the checked
+decoders of :mod:`rigid_body_attitude.msgs.decoders`; imports no rclpy and no bag library.
 
-Each decoder returns ``(sec, nanosec, frame_id, first, second)``: the header stamp as sent
-(not normalised: the session judges it) and frame, and the message's values (force and
+Each value decoder returns ``(sec, nanosec, frame_id, first, second)``: the header stamp as
+sent (not normalised: the session judges it) and frame, and the message's values (force and
 torque; a vector; attitude (w, x, y, z) and position, or attitude and (position,
-covariance)). The gyro decoders return
-``(sec, nanosec, frame_id, rate, imu, accel)`` (:data:`GyroDecoded`): the rate [rad/s], the
-Imu bytes (for ``imu/data``; ``None`` for other types) and the specific force [m/s²] (``None``
-unless an Imu provides it), sensor frame. Bytes that are not a valid message of the topic's
-type raise one of :data:`MALFORMED`; the handler hands them to
+covariance); a JointState's names and (position, velocity, effort)). A rate decoder returns
+``(sec, nanosec, frame_id, rate, accel)``
+(:data:`~rigid_body_attitude.msgs.decoders.RateSample`); the handler adds an Imu's own bytes
+(for ``imu/data``). Bytes that are not a valid message of the topic's type raise one of
+:data:`MALFORMED`; the handler hands them to
 :meth:`~rigid_body_attitude.session.base.Session.malformed` and goes on.
 """
 
@@ -25,22 +27,25 @@ from collections.abc import Callable
 from typing import Any
 
 from rigid_body_attitude.msgs.decoders import (
-    GYRO_DECODERS, Floats, GyroDecoder, decode_imu_motion, decode_pose_stamped,
+    RATE_DECODERS, RateDecoder, decode_magnetic_field, decode_pose_stamped,
     decode_pose_with_covariance_stamped, decode_vector3_stamped, decode_wrench_stamped)
 from rigid_body_attitude.msgs.errors import MalformedMessage
-from rigid_body_attitude.msgs.types import IMU
+from rigid_body_attitude.msgs.joint_state import decode_joint_state, JOINT_STATE
+from rigid_body_attitude.msgs.types import (
+    IMU, MAGNETIC_FIELD, POSE_STAMPED, POSE_WITH_COVARIANCE_STAMPED, VECTOR3_STAMPED,
+    WRENCH_STAMPED)
 from rigid_body_attitude.session.dynamics import DynamicsSession
+from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.imu_start import frame_refused
-from rigid_body_attitude.session.settings import GYRO_TOPICS, AnySession
+from rigid_body_attitude.session.interface import Endpoint, NODE_INTERFACE
+from rigid_body_attitude.session.settings import AnySession
 
-__all__ = ['DECODERS', 'Decoded', 'GyroDecoded', 'Handler', 'MALFORMED', 'RATE_DECODERS',
+__all__ = ['ANGULAR_RATE', 'Decoded', 'Handler', 'MALFORMED', 'VALUE_DECODERS', 'decoder',
            'input_handler']
 
-#: What a decoder returns: stamp sec, stamp nanosec, frame id, two values.
+#: What a value decoder returns: stamp sec, stamp nanosec, frame id, two values.
 Decoded = tuple[int, int, str, Any, Any]
-#: What a gyro decoder returns: stamp sec, nanosec, frame id, rate, Imu bytes, specific force.
-GyroDecoded = tuple[int, int, str, Floats, bytes | None, Floats | None]
 
 #: The callback of one input topic: takes the message's CDR bytes.
 Handler = Callable[[bytes], None]
@@ -48,23 +53,8 @@ Handler = Callable[[bytes], None]
 #: The exceptions of a message that cannot be decoded.
 MALFORMED: tuple[type[Exception], ...] = (MalformedMessage,)
 
-
-def _rate_decoder(decode_rate: GyroDecoder) -> Callable[[bytes], GyroDecoded]:
-    """A gyro decoder of a type without bytes to keep or acceleration: stamp, frame, rate."""
-    def decode(data: bytes) -> GyroDecoded:
-        sec, nanosec, frame_id, rate = decode_rate(data)
-        return sec, nanosec, frame_id, rate, None, None
-    return decode
-
-
-def imu(data: bytes) -> GyroDecoded:
-    """Imu: the rate [rad/s], the message bytes (for ``imu/data``), the specific force."""
-    sec, nanosec, frame_id, rate, accel = decode_imu_motion(data)
-    return sec, nanosec, frame_id, rate, data, accel
-
-
-#: Vector3Stamped: the body rate [rad/s].
-angular_velocity = _rate_decoder(decode_vector3_stamped)
+#: The quantity of the gyro inputs (decoded by the rate registry).
+ANGULAR_RATE = 'angular_rate'
 
 
 def vector(data: bytes) -> Decoded:
@@ -92,36 +82,50 @@ def pose_with_covariance(data: bytes) -> Decoded:
     return sec, nanosec, frame_id, attitude, (position, covariance)
 
 
-#: The node's input topics → decoder (the gyro topics': :data:`GyroDecoded`).
-DECODERS: dict[str, Callable[[bytes], tuple[Any, ...]]] = {
-    'imu': imu, 'angular_velocity': angular_velocity, 'torque': wrench,
-    'rotor_torque': vector, 'set_pose': pose,
-    'set_pose_with_covariance': pose_with_covariance,
-}
-#: Gyro message types → decoder (the replay tool's gyro topic may carry any of them:
-#: Imu, Vector3Stamped, TwistStamped's angular part).
-RATE_DECODERS: dict[str, Callable[[bytes], GyroDecoded]] = {
-    msgtype: imu if msgtype == IMU else _rate_decoder(decode_rate)
-    for msgtype, decode_rate in GYRO_DECODERS.items()
+def magnetic_field(data: bytes) -> Decoded:
+    """MagneticField: the field [T] and its 9 row-major covariance values."""
+    return decode_magnetic_field(data)
+
+
+def joint_state(data: bytes) -> Decoded:
+    """JointState: the names and the (position, velocity, effort) fields."""
+    values = decode_joint_state(data)
+    return (values.sec, values.nanosec, values.frame_id, values.names,
+            (values.position, values.velocity, values.effort))
+
+
+#: Decoders of the inputs other than the gyro topics, by message type.
+VALUE_DECODERS: dict[str, Callable[[bytes], Decoded]] = {
+    WRENCH_STAMPED: wrench, VECTOR3_STAMPED: vector, POSE_STAMPED: pose,
+    POSE_WITH_COVARIANCE_STAMPED: pose_with_covariance, MAGNETIC_FIELD: magnetic_field,
+    JOINT_STATE: joint_state,
 }
 
 
-def input_handler(session: AnySession, topic: str,
-                  decode: Callable[[bytes], tuple[Any, ...]] | None = None,
+def decoder(topic: str, msgtype: str = '') -> Callable[[bytes], tuple[Any, ...]]:
+    """The decoder of the node's input ``topic`` carrying ``msgtype`` (default: the topic's
+    type in the interface)."""
+    endpoint = NODE_INTERFACE.endpoint(topic)
+    msgtype = msgtype or endpoint.type
+    return (RATE_DECODERS if endpoint.quantity == ANGULAR_RATE else VALUE_DECODERS)[msgtype]
+
+
+def input_handler(session: AnySession, topic: str, msgtype: str = '',
                   reraise: tuple[type[Exception], ...] = ()) -> Handler:
     """The callback of the node's input ``topic``: decode the bytes and hand the values to
     the session; malformed bytes and a session's own failure are counted, never raised.
 
-    ``decode`` replaces the topic's decoder (:data:`DECODERS`) with another of the same values
-    (the replay's gyro topic may carry any type of :data:`RATE_DECODERS`); exceptions of
-    ``reraise`` (the adapter's own, raised by its sink) propagate instead of being counted.
+    ``msgtype`` replaces the topic's message type of the interface (the replay's gyro topic
+    may carry any type of :data:`~rigid_body_attitude.msgs.decoders.RATE_DECODERS`);
+    exceptions of ``reraise`` (the adapter's own, raised by its sink) propagate instead of
+    being counted.
     """
-    if decode is None:
-        decode = DECODERS[topic]
-    if isinstance(session, GyroSession) and topic in GYRO_TOPICS:
-        return _gyro_handler(session, topic, decode, reraise)
-    deliver = _delivery(session, topic)
-    decode_values = decode
+    endpoint = NODE_INTERFACE.endpoint(topic)
+    msgtype = msgtype or endpoint.type
+    if isinstance(session, GyroSession) and endpoint.quantity == ANGULAR_RATE:
+        return _gyro_handler(session, topic, RATE_DECODERS[msgtype], msgtype == IMU, reraise)
+    deliver = _delivery(session, endpoint)
+    decode_values = VALUE_DECODERS[msgtype]
 
     def handle(data: bytes) -> None:
         try:
@@ -138,25 +142,25 @@ def input_handler(session: AnySession, topic: str,
     return handle
 
 
-def _gyro_handler(session: GyroSession, topic: str, decode: Callable[[bytes], Any],
+def _gyro_handler(session: GyroSession, topic: str, decode: RateDecoder, keep_bytes: bool,
                   reraise: tuple[type[Exception], ...]) -> Handler:
     """:func:`input_handler` of a gyro topic (the hot path: one decoder call and
-    ``session.gyro`` with the Imu bytes, if any, for ``imu/data``, and the specific force).
-    Once the session knows its IMU's frame (``imu_frame``), samples in another frame are
-    refused (``foreign_frame``: :func:`~.imu_start.frame_refused`)."""
+    ``session.gyro`` with the Imu bytes (``keep_bytes``), for ``imu/data``, and the specific
+    force). Once the session knows its IMU's frame (``imu_frame``), samples in another frame
+    are refused (``foreign_frame``: :func:`~.imu_start.frame_refused`)."""
     gyro, malformed, internal_error = session.gyro, session.malformed, session.internal_error
     topic_frames = session.topic_frames
 
     def handle(data: bytes) -> None:
         try:
-            sec, nanosec, frame, rate, imu, accel = decode(data)
+            sec, nanosec, frame, rate, accel = decode(data)
         except MALFORMED as err:
             malformed(topic, str(err)[:200])
             return
         if topic_frames.get(topic) != frame and frame_refused(session, topic, frame):
             return
         try:
-            gyro(sec, nanosec, rate, imu, accel)
+            gyro(sec, nanosec, rate, data if keep_bytes else None, accel)
         except reraise:
             raise
         except Exception as err:  # a bug must not end the node (nor the replay): counted
@@ -164,13 +168,29 @@ def _gyro_handler(session: GyroSession, topic: str, decode: Callable[[bytes], An
     return handle
 
 
-def _delivery(session: AnySession, topic: str) -> Callable[[Decoded], object]:
-    """The session method of ``topic`` (other than the gyro topics) applied to the values."""
-    if topic == 'set_pose':
+def _delivery(session: AnySession, endpoint: Endpoint) -> Callable[[Decoded], object]:
+    """The session method of what ``endpoint`` carries (other than a gyro rate) applied to the
+    values."""
+    quantity = endpoint.quantity
+    if quantity == 'pose':
         return lambda values: session.set_pose(values[2], values[3], values[4])
-    if topic == 'set_pose_with_covariance':
+    if quantity == 'pose_with_covariance':
         return lambda values: session.set_pose(values[2], values[3], *values[4])
-    assert isinstance(session, DynamicsSession), topic  # commands: dynamics scenes only
-    if topic == 'torque':
+    if quantity == 'magnetic_field':
+        assert isinstance(session, FilteredGyroSession), endpoint.name
+        return lambda values: session.magnetic_field(*values[:4])
+    if quantity == 'attitude_measurement':
+        assert isinstance(session, FilteredGyroSession), endpoint.name
+        return lambda values: session.attitude_measurement(*values[:4], values[4][1])
+    assert isinstance(session, DynamicsSession), endpoint.name  # commands: dynamics scenes
+    if quantity == 'wrench':
         return lambda values: session.wrench(values[0], values[1], values[3], values[4])
-    return lambda values: session.rotor_torque(values[0], values[1], values[3])
+    if quantity == 'rotor_torque':
+        return lambda values: session.rotor_torque(values[0], values[1], values[3])
+    if quantity == 'dipole':
+        return lambda values: session.dipole(values[0], values[1], values[3])
+    if quantity == 'wheel_command':
+        return lambda values: session.wheel_command(values[0], values[1], values[3],
+                                                    *values[4])
+    raise ValueError(f'Expected an input the session takes, got {endpoint.name!r} '
+                     f'({quantity!r})')

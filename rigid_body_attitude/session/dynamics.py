@@ -6,9 +6,9 @@ works) the state is integrated up to the clock's time under the clock rules
 stamped with the propagated time. Commands (``wrench``: torque and force; ``rotor_torque``)
 are held from their stamp on (:class:`~rigid_body_attitude.session.stream.CommandStream`).
 The session times its own work (the monotonic clock) to report a scene that cannot keep up:
-its real-time factor and its lag behind the clock. A scene with a simulated IMU (its
-``sensors`` section) is integrated through an
-:class:`~rigid_body_attitude.session.sensors.ImuSampler`, which samples it on the way. On the
+its real-time factor and its lag behind the clock. A scene with simulated sensors (its
+``sensors`` section) is integrated through a
+:class:`~rigid_body_attitude.session.sensors.SensorSampler`, which samples them on the way. On the
 node's own sim clock (:mod:`~rigid_body_attitude.session.sim_clock`: ``publish_clock``,
 ``lockstep``) the ticks are its sim times and, in lockstep, a command counts only when stamped
 with the current tick.
@@ -24,11 +24,13 @@ from typing import Any
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.core.propagator import DynamicsPropagator, MAX_STEPS_PER_CALL
 from rigid_body_attitude.core.dynamics.scene import Scene
+from rigid_body_attitude.session.actuators import (
+    MagnetorquerReport, WHEEL_COMMAND_TOPIC, WHEEL_REASONS, WheelArray)
 from rigid_body_attitude.session.base import OutputSink, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.parameters import check_values
 from rigid_body_attitude.session.reports import LEVEL_WARN, PeriodCounts, body_frame_velocity
-from rigid_body_attitude.session.sensors import ImuSampler
+from rigid_body_attitude.session.sensors import SensorSampler, simulated_sensors
 from rigid_body_attitude.session.sim_clock import SimClock
 from rigid_body_attitude.session.stream import ClockDriver, CommandStream, Outcome
 from rigid_body_attitude.session.times import TimeBase, split_ns, stamp_problem, to_ns
@@ -61,27 +63,34 @@ class DynamicsSession(Session):
         inputs = self.propagator.input_names
         #: The WrenchStamped fields the scene takes (``torque``, ``force``).
         self.wrench_inputs = tuple(name for name in ('torque', 'force') if name in inputs)
-        #: The commanded inputs a lockstep tick waits for.
-        self.command_inputs = self.wrench_inputs + (
-            ('rotor_torque',) if 'rotor_torque' in inputs else ())
+        #: The reaction-wheel array (``wheels/command``, ``wheels/state``), or None.
+        self.wheels = WheelArray.of(self.propagator)
+        self.rods = MagnetorquerReport.of(self.propagator)
+        #: The commands a lockstep tick waits for (the inputs; one topic for the wheels).
+        self.command_inputs = self.wrench_inputs + tuple(
+            key for key, name in (('rotor_torque', 'rotor_torque'), ('dipole', 'dipole'),
+                                  (WHEEL_COMMAND_TOPIC, 'wheel_torque'))
+            if name in inputs)
         #: The node's own sim clock (``publish_clock``, ``lockstep``), or ``None``.
         self.sim_clock: SimClock | None = None
         self.tick_period = 1.0 / values['publish_rate']
         self._work = self._simulated = self._lag = 0.0
         #: Command messages used (a WrenchStamped is one, whatever fields the scene takes).
         self.commands_accepted = 0
-        #: The simulated IMU of the scene's ``sensors`` section, or None.
-        self.imu: ImuSampler | None = None
-        if scene.imu is not None:
-            self.imu = ImuSampler(scene.imu, self.propagator, self.time_base,
-                                  sink.simulated_imu)
-            self.clock.advance = self.imu.advance_to
+        #: The simulated sensors of the scene's ``sensors`` section, or None.
+        self.sensors: SensorSampler | None = None
+        sensors = simulated_sensors(scene, self.propagator, sink, scene.magnetic_field)
+        if sensors:
+            self.sensors = SensorSampler(sensors, self.propagator, self.time_base)
+            self.clock.advance = self.sensors.advance_to
         super().__init__(scene, values, sink, clock_ns, monotonic)
 
     def apply(self, values: Mapping[str, Any]) -> None:
         """Take the run-time parameters."""
         super().apply(values)
         self.clock.time_jump_threshold = values['time_jump_threshold']
+        if self.sensors is not None:
+            self.sensors.set_world_frame(values['world_frame'])
 
     def check(self, values: Mapping[str, Any]) -> str:
         """The parameters' own checks, and a clock jump within the steps of one tick."""
@@ -109,6 +118,28 @@ class DynamicsSession(Session):
         if stamp_ns is not None and self._command('rotor_torque', stamp_ns, torque):
             self.commands_accepted += 1
 
+    def dipole(self, sec: int, nanosec: int, dipole_body: Sequence[float]) -> None:
+        """The magnetorquers' commanded dipole [A m², body axes] stamped ``(sec, nanosec)``."""
+        stamp_ns = self._command_ns('dipole', sec, nanosec)
+        if stamp_ns is not None and self._command('dipole', stamp_ns, dipole_body):
+            self.commands_accepted += 1
+
+    def wheel_command(self, sec: int, nanosec: int, names: Sequence[str],
+                      position: Sequence[float], velocity: Sequence[float],
+                      effort: Sequence[float]) -> None:
+        """A JointState for the reaction wheels (:mod:`~.actuators`: motor torques in
+        ``effort`` or speeds in ``velocity``) stamped ``(sec, nanosec)``."""
+        wheels = self.wheels
+        stamp_ns = self._command_ns(WHEEL_COMMAND_TOPIC, sec, nanosec)
+        if stamp_ns is None or wheels is None:
+            return
+        input_name, reason, detail, values = wheels.command(names, position, velocity, effort)
+        if reason:
+            self.rejections[reason] += 1
+            self.warn(reason, f'{WHEEL_COMMAND_TOPIC}: {reason}: {detail}; message ignored')
+        elif self._command(input_name, stamp_ns, values, WHEEL_COMMAND_TOPIC):
+            self.commands_accepted += 1
+
     def _command_ns(self, topic: str, sec: int, nanosec: int) -> int | None:
         """The command's time: its stamp, or the receive time (no header stamps, zero
         stamp); None (counted) for an invalid stamp."""
@@ -123,8 +154,9 @@ class DynamicsSession(Session):
             return None
         return self.clock_ns()
 
-    def _command(self, name: str, stamp_ns: int, value: Sequence[float]) -> bool:
-        outcome = self.commands.add(name, stamp_ns, self.time_base.seconds(stamp_ns), value)
+    def _command(self, name: str, stamp_ns: int, value: Sequence[float], key: str = '') -> bool:
+        outcome = self.commands.add(name, stamp_ns, self.time_base.seconds(stamp_ns), value,
+                                    key)
         if outcome.reason:
             self.warn(outcome.reason, f'{name}: {_DETAIL[outcome.reason]}')
         return outcome.accepted
@@ -175,12 +207,18 @@ class DynamicsSession(Session):
         sec, nanosec = split_ns(self.time_base.nanoseconds(sample.stamp))
         self.sink.dynamics(sec, nanosec, sample, body_frame_velocity(self.propagator))
         self.sink.invariants(sec, nanosec, sample.energy, sample.world_momentum)
+        wheels = self.wheels
+        if wheels is not None:
+            self.sink.wheel_state(wheels.state(sec, nanosec))
+            news = wheels.speed_limit_news()
+            if news:
+                self.note('speed_limit', news, sum(wheels.effect.speed_limit_episodes))
 
     def _clock_rejected(self, outcome: Outcome) -> None:
         if outcome.reset:
             self.commands.reset()
-            if self.imu is not None:
-                self.imu.reset()
+            if self.sensors is not None:
+                self.sensors.reset()
             self.sink.log(LEVEL_WARN, f'clock: time jumped back by more than '
                                       f'time_jump_threshold ({self.clock.time_jump_threshold:g}'
                                       f' s; looping bag?); reset to the initial state of scene '
@@ -203,17 +241,18 @@ class DynamicsSession(Session):
         self.clock.reset()
         self.propagator.reset(self.propagator.state.time)
         self.commands.reset()
-        if self.imu is not None:
-            self.imu.reset()
+        if self.sensors is not None:
+            self.sensors.reset()
 
     def resume(self) -> None:
         """The state kept; the next tick is a new baseline (the scene paused meanwhile)."""
         self.clock.resume()
 
     def _pose_set(self, orientation_covariance: tuple[float, ...] | None) -> None:
-        """A pose was set: the simulated IMU's next sample instant is a new baseline."""
-        if self.imu is not None:
-            self.imu.restart()
+        """A pose was set: the simulated IMU's next sample instant is a new baseline (the
+        point samples go on from the next instant not yet sampled)."""
+        if self.sensors is not None:
+            self.sensors.restart()
 
     # -- counts -----------------------------------------------------------------------------
 
@@ -233,10 +272,19 @@ class DynamicsSession(Session):
         counts.lag, counts.tick_period = self._lag, self.tick_period
         if self.sim_clock is not None:
             self.sim_clock.report(counts)
+        if self.wheels is not None:
+            values, problems = self.wheels.report()
+            counts.actuator_values += tuple(values) + tuple(
+                (f'rejected {reason}', str(self.rejections[reason]))
+                for reason in WHEEL_REASONS)
+            counts.actuator_problems += tuple(problems)
+        if self.rods is not None:
+            counts.actuator_values += tuple(self.rods.values())
         self._work = self._simulated = self._lag = 0.0
 
 
 def _finite(sample: OutputSample) -> bool:
-    return all(math.isfinite(value) for value in (
-        *sample.attitude, *sample.position, *sample.omega_body, sample.energy,
-        *sample.world_momentum))
+    values = (*sample.attitude, *sample.position, *sample.omega_body, sample.energy,
+              *sample.world_momentum)
+    # a NaN or an infinity makes the sum non-finite; a finite sum settles it in one call
+    return math.isfinite(sum(values)) or all(math.isfinite(value) for value in values)

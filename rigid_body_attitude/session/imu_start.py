@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
 from rigid_body_attitude.core.estimation.calibration import (
     calibration_noise, calibration_summary, calibration_values, load_calibration)
 from rigid_body_attitude.core.propagator import GyroPropagator
@@ -24,7 +25,7 @@ from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.base import LEVEL_INFO, Session
 from rigid_body_attitude.session.levelling import (
-    FROM_SCENE, AlignmentResult, Levelling, SampleMap, heading, rpy_quaternion)
+    FROM_SCENE, AlignmentResult, Levelling, SampleMap, heading)
 from rigid_body_attitude.session.reports import (
     LEVEL_WARN, NOT_ALIGNED, StrapdownState, gyro_bias_text)
 from rigid_body_attitude.session.stream import GyroStream
@@ -75,6 +76,8 @@ class ImuStart(Session):
     imu_frame: str | None = None
     #: Gyro topic -> the IMU's frame, once a sample on it came in it (:func:`frame_refused`).
     topic_frames: dict[str, str]
+    #: The body specific force [m/s²] of the last sample on the general path (unchecked).
+    body_specific_force: tuple[float, float, float] | None = None
 
     def _start_imu(self, values: Mapping[str, Any]) -> None:
         """Read the calibration file and set up mount and levelling from ``values``."""
@@ -85,7 +88,7 @@ class ImuStart(Session):
         mount_rpy = values['mount_rpy']
         self._mount_given = bool(mount_rpy)
         self.topic_frames = {}
-        self.sample_map = SampleMap(calibration, rpy_quaternion(*mount_rpy) if mount_rpy
+        self.sample_map = SampleMap(calibration, from_rpy(mount_rpy).tolist() if mount_rpy
                                     else None)
         gyro_noise = calibration.noise.gyro_sigma() if calibration is not None else None
         self.levelling = (Levelling(values['align_seconds'], values['align_timeout'],
@@ -97,9 +100,7 @@ class ImuStart(Session):
         self._aligning = True  # until the first sample says how to start
         self._special = True  # aligning, or a sample map the inline path cannot do
         self._affine: tuple[float, ...] | None = None
-        self._told_no_accelerometer = False
-        self._align_samples = 0
-        self._refused_levelling = 0
+        self._told_no_accelerometer, self._align_samples, self._refused_levelling = False, 0, 0
 
     def tell_calibration(self) -> None:
         """The INFO line naming the calibration file, its kind, the IMU key and the terms
@@ -190,6 +191,7 @@ class ImuStart(Session):
             body_rate, body_accel = self.sample_map.body_sample(rate, accel)
         except (TypeError, ValueError):
             return rate  # not 3 numbers: the stream refuses it
+        self.body_specific_force = body_accel
         levelling = self.levelling
         if levelling is not None and levelling.refine_bias_at_rest and body_accel is not None:
             stream = self.stream

@@ -5,8 +5,9 @@ Per sample, in this order (:class:`~rigid_body_attitude.session.gyro.GyroSession
 1. **calibration** (:mod:`rigid_body_attitude.core.estimation.calibration`), in the sensor
    frame (the Imu's ``frame_id``): ``a_i = N (a − b_a)``, ``ω_i = K (ω − b_g − G a_i)``;
 2. **mount**: ``v_body = R v_sensor`` with ``R`` the rotation of the sensor frame in the
-   body frame (:func:`rpy_quaternion` of ``mount_rpy``, as ``static_transform_publisher``
-   takes roll, pitch and yaw; or the transform ``body_frame`` → sensor frame from TF);
+   body frame (:func:`~rigid_body_attitude.core.attitude.quaternion.from_rpy` of
+   ``mount_rpy``, as ``static_transform_publisher`` takes roll, pitch and yaw; or the
+   transform ``body_frame`` → sensor frame from TF);
 3. **levelling** at start (:class:`Levelling`, around
    :class:`~rigid_body_attitude.core.estimation.alignment.GravityAligner`): nothing is
    integrated until the body rested ``align_seconds`` (or ``align_timeout`` passed); the
@@ -30,13 +31,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.core.estimation.alignment import ALIGNED, GravityAligner
 from rigid_body_attitude.core.estimation.calibration import ImuCalibration
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.rest import RestBiasEstimator, RestDetector
 
-__all__ = ['AlignmentResult', 'Levelling', 'SampleMap', 'heading', 'rpy_quaternion']
+__all__ = ['AlignmentResult', 'Levelling', 'SampleMap', 'heading']
 
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]

@@ -1,6 +1,6 @@
 """The sensor's mount from static transforms: the rotation ``body_frame`` -> sensor frame.
 
-What the node (:mod:`rigid_body_attitude.ros.tf_lookup`, ``/tf_static`` received) and the
+What the node (:mod:`rigid_body_attitude.session.mount_gate`, ``/tf_static`` received) and the
 replay (:mod:`rigid_body_attitude.tools.replay.mount`, a bag's ``/tf_static``) share: the
 table of static transforms (:class:`StaticTransforms`, rotations only: the node reports an
 attitude), the composition of a chain between two frames (``base_link`` -> ``torso`` ->

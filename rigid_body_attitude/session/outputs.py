@@ -69,7 +69,7 @@ class OutputTracker:
             position=tuple(state.position.tolist()),
             omega_body=state.omega_tuple(),
             energy=propagator.energy(),
-            world_momentum=tuple(propagator.world_momentum().tolist()),
+            world_momentum=propagator.world_momentum_tuple(),
         )
 
 

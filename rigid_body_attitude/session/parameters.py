@@ -16,6 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from rigid_body_attitude.core.estimation.estimator_settings import EstimatorSettings
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.msgs.untrusted import QUOTED_CHARACTERS, quoted
 
@@ -148,6 +149,7 @@ def _plain(name: Any) -> bool:
 
 
 _GYRO_DEFAULTS = GyroErrorModel()
+_SETTINGS = EstimatorSettings()
 
 #: Every parameter, in the order the README and ``--help`` list them.
 PARAMETERS: tuple[Parameter, ...] = (
@@ -177,7 +179,8 @@ PARAMETERS: tuple[Parameter, ...] = (
               'rad/s: a gyro sample of a larger magnitude is rejected (out_of_range)', 0.0,
               1.0e6, low_open=True, read_only=False),
     Parameter('torque_timeout', float, 0.0,
-              's: commands (torque, force, rotor torque) are held this long, then zeroed '
+              's: commands (torque, force, rotor torque, wheels, dipole) are held this long, '
+              'then zeroed '
               '(0 = the scene\'s)', 0.0, 3600.0),
     Parameter('integrator', str, '',
               'integrator (dynamics) or strapdown method (gyro) overriding the scene\'s '
@@ -217,7 +220,8 @@ PARAMETERS: tuple[Parameter, ...] = (
               'after levelling, refine the gyro bias estimate whenever the body is at rest'),
     Parameter('calibration_file', str, '',
               'kalibr imu.yaml or imu-camera result, or a plain bias/scale/misalignment file, '
-              'applied to every sample ("" = none)', may_be_empty=True),
+              'applied to every sample; its noise and sensor figures override the parameters\' '
+              '("" = none)', may_be_empty=True),
     Parameter('calibration_imu_key', str, '',
               'the IMU of a kalibr result holding several (e.g. imu0; "" = the only one)',
               may_be_empty=True),
@@ -254,6 +258,20 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter('tilt_stddev_warn', float, 0.1745,
               'rad: /diagnostics warns while the 1-sigma tilt exceeds this (0 = never)',
               0.0, 10.0, read_only=False),
+    # -- the attitude filter (scenes with an estimation section; see docs/estimation.md) ----
+    Parameter('magnetic_declination', float, 0.0,
+              'rad: magnetic north east of true north at the site (the imu/mag heading is then '
+              'about true north)', -math.pi, math.pi),
+    Parameter('magnetometer_calibration_file', str, '',
+              'YAML file of the magnetometer\'s hard_iron [T], soft_iron (m = S b + h), '
+              'noise_density, delay, timing ("" = none)', may_be_empty=True),
+    Parameter('accelerometer_noise_density', float, _GYRO_DEFAULTS.accelerometer_noise_density,
+              'm/s^2/sqrt(Hz): accelerometer white noise (kalibr name; default BMI088 typical)',
+              0.0, 10.0),
+    Parameter('accelerometer_random_walk', float, _SETTINGS.accelerometer_random_walk,
+              'm/s^3/sqrt(Hz): accelerometer bias random walk (kalibr name)', 0.0, 10.0),
+    Parameter('magnetometer_noise_density', float, _SETTINGS.magnetometer_noise_density,
+              'T/sqrt(Hz): magnetometer white noise', 0.0, 1.0e-3),
 )
 
 _BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}

@@ -29,6 +29,7 @@ import math
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.effects.gyro_bias import GyroBias
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator
+from rigid_body_attitude.session.actuators import WHEEL_REASONS
 from rigid_body_attitude.session.stream import REASONS
 
 __all__ = [
@@ -73,7 +74,7 @@ REJECTION_KEYS = (*REASONS, 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid
 WARN_REASONS = ('non_finite', 'out_of_range', 'outlier_stamp', 'gap', 'time_jump',
                 'future_stamp', 'malformed', 'invalid_stamp', 'zero_stamp', 'invalid_pose',
                 'wrong_frame', 'no_mount', 'accel_out_of_range', 'invalid_covariance',
-                *TRANSFORM_KEYS)
+                *TRANSFORM_KEYS, *WHEEL_REASONS)
 ERROR_REASONS = ('integration_failed', 'non_finite_result', 'internal_error')
 
 #: The parameter a user changes about each problem (gyro scenes; dynamics in the second map).
@@ -115,6 +116,9 @@ class PeriodCounts:
         clock_values: dynamics on the node's own sim clock: its values (achieved real-time
             factor, lockstep timeouts) for the report.
         clock_problems: what about that clock makes the status WARN (a silent controller).
+        actuator_values: dynamics: the scene's actuators (wheels, torque rods) for the report.
+        actuator_problems: what about them makes the status WARN (a wheel at its speed
+            limit).
     """
 
     elapsed: float
@@ -134,6 +138,8 @@ class PeriodCounts:
     tick_period: float = 0.0
     clock_values: tuple[tuple[str, str], ...] = ()
     clock_problems: tuple[str, ...] = ()
+    actuator_values: tuple[tuple[str, str], ...] = ()
+    actuator_problems: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -360,8 +366,9 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
     for check in (_input_problems, _timing_problems):
         check_level, check_problems = check(counts, parameters)
         level, problems = max(level, check_level), problems + check_problems
-    if counts.clock_problems:
-        level, problems = max(level, LEVEL_WARN), problems + list(counts.clock_problems)
+    for extra in (counts.clock_problems, counts.actuator_problems):
+        if extra:
+            level, problems = max(level, LEVEL_WARN), problems + list(extra)
     scene = propagator.scene
     values = [
         ('scene', scene.name),
@@ -380,7 +387,8 @@ def diagnostic_report(propagator: DynamicsPropagator | GyroPropagator, counts: P
     ]
     if not counts.gyro_scene:
         values += [('real_time_factor', f'{counts.real_time_factor:.3g}'),
-                   ('lag [s]', f'{counts.lag:.6f}'), *counts.clock_values]
+                   ('lag [s]', f'{counts.lag:.6f}'), *counts.clock_values,
+                   *counts.actuator_values]
     values += [(f'rejected {key}', str(counts.rejections.get(key, 0)))
                for key in REJECTION_KEYS]
     values += [(f'malformed {topic}', str(count))

@@ -1,29 +1,61 @@
-"""The simulated IMU of a dynamics scene, sampled while the session integrates.
+"""The simulated sensors of a dynamics scene, sampled while the session integrates.
 
-:class:`ImuSampler` stands between the clock rules and the propagator
+:class:`SensorSampler` stands between the clock rules and the propagator
 (:attr:`~rigid_body_attitude.session.stream.ClockDriver.advance`): integrating up to a tick, it
-stops at every clock time that is a multiple of the sensor period (a whole number of the
-scene's steps), takes one sample of :class:`~rigid_body_attitude.core.sensors.ImuModel` from
-the attitude and velocity there and at the previous sample instant, and hands it to the sink as
-a ``sensor_msgs/msg/Imu`` stamped with the sample time, in the sensor frame, with REP-145
-covariances (white-noise variance per sample on the diagonals; orientation not provided). The
-first instant after a start, a reset, a ``set_pose`` or a clock gap is a baseline: the samples
-resume one period later. The node and the replay tool tick the same session, so a replayed
-bag gives the same samples for the same tick times.
+stops at every sample instant of every sensor of the scene's ``sensors`` section (the clock
+times that are whole multiples of each sensor's period: the union of the instants), and there
+each sensor due takes its sample from the state and hands it to the sink stamped with the
+sample time:
+
+* :class:`ImuOutput`: a ``sensor_msgs/msg/Imu`` of
+  :class:`~rigid_body_attitude.core.sensors.ImuModel` (mean rate and specific force over the
+  interval from the previous instant), in the sensor frame, with REP-145 covariances (white
+  noise variance per sample on the diagonals; orientation not provided). The first instant
+  after a start, a reset, a ``set_pose`` or a clock gap is a baseline: the samples resume one
+  period later.
+* :class:`MagnetometerOutput`: a ``sensor_msgs/msg/MagneticField`` of
+  :class:`~rigid_body_attitude.core.sensors.MagnetometerModel` [T] in the sensor frame, the
+  field of the scene's field model (its ``magnetic_field`` section) at the instant's scene
+  time, else the section's local field, with the white noise variance per sample on the
+  diagonal of ``magnetic_field_covariance``.
+* :class:`StarTrackerOutput`: a ``geometry_msgs/msg/PoseWithCovarianceStamped`` of
+  :class:`~rigid_body_attitude.core.sensors.StarTrackerModel`: the measured attitude of the
+  body in ``world_frame`` (the header's frame is ``world_frame``, as the node's
+  ``pose_with_covariance``: the pose of ``body_frame`` in it), the orientation block its
+  covariance about fixed world axes, the position marked unknown
+  (:data:`~rigid_body_attitude.session.uncertainty.UNKNOWN_POSITION_VARIANCE`). No message
+  while the Sun excludes the instant.
+
+The magnetometer and the star tracker take point samples: they need no baseline, and an
+instant is never sampled twice (a ``set_pose`` at an instant already sampled resumes at the
+next). Every sensor draws its noise at each of its instants whether the sink wants the sample
+or not, and a sample is encoded only when the sink wants it (:meth:`OutputSink.sensor_wanted
+<rigid_body_attitude.session.base.OutputSink.sensor_wanted>`: a matched subscription, a topic
+of the output bag). So the samples depend only on the scene, the seeds and the instants: not
+on how ticks group the instants, on which topics are matched, or on whether the node or the
+replay tool ticks the session.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
 
 from rigid_body_attitude.core.dynamics.effects.translation import Translation
+from rigid_body_attitude.core.dynamics.scene import GRAVITY_EFFECTS, Scene
+from rigid_body_attitude.core.environment.magnetic_field import MagneticFieldModel
 from rigid_body_attitude.core.propagator import DynamicsPropagator
-from rigid_body_attitude.core.dynamics.scene import GRAVITY_EFFECTS
 from rigid_body_attitude.core.sensors.imu import ImuModel, ImuSpec
-from rigid_body_attitude.msgs.cdr import simulated_imu_encoder
+from rigid_body_attitude.core.sensors.magnetometer import MagnetometerModel, MagnetometerSpec
+from rigid_body_attitude.core.sensors.star_tracker import StarTrackerModel, StarTrackerSpec
+from rigid_body_attitude.msgs.sensor_encoders import (
+    attitude_with_covariance_encoder, magnetic_field_encoder, simulated_imu_encoder)
+from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.times import TimeBase, split_ns
+from rigid_body_attitude.session.uncertainty import UNKNOWN_POSITION_VARIANCE
 
-__all__ = ['ImuSampler', 'scene_gravity']
+__all__ = ['ImuOutput', 'MagnetometerOutput', 'SensorSampler', 'SimulatedSensor',
+           'StarTrackerOutput', 'mount_transforms', 'scene_gravity', 'simulated_sensors']
 
 Vector = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
@@ -40,63 +72,80 @@ def scene_gravity(propagator: DynamicsPropagator, spec: ImuSpec) -> Vector:
     return spec.gravity if spec.gravity is not None else _ZERO
 
 
-class ImuSampler:
-    """Advances a propagator through the sample instants of a simulated IMU."""
+class SimulatedSensor(ABC):
+    """One sensor of the suite: its topic and period, its sample at an instant."""
 
-    def __init__(self, spec: ImuSpec, propagator: DynamicsPropagator, time_base: TimeBase,
-                 emit: Callable[[str, bytes], None]) -> None:
-        """Samples of ``spec`` on ``propagator``'s motion; ``emit(topic, data)`` gets each
-        serialized Imu (the sink's :meth:`simulated_imu`)."""
-        self.spec = spec
+    def __init__(self, topic: str, period_ns: int, propagator: DynamicsPropagator,
+                 sink: OutputSink) -> None:
+        """A sensor publishing on ``topic`` every ``period_ns``, measuring ``propagator``'s
+        state, its samples handed to ``sink``."""
+        self.topic = topic
+        self.period_ns = period_ns
         self.propagator = propagator
-        self.time_base = time_base
-        self.emit = emit
+        self.sink = sink
+        #: Samples taken so far (handed to the sink when it wanted them).
+        self.count = 0
+        #: The last instant sampled [ns] (``None``: none since the last reset).
+        self.last_ns: int | None = None
+
+    def next_instant(self, start_ns: int) -> int:
+        """The first instant to sample from ``start_ns`` [ns] on: a multiple of the period,
+        after the last instant sampled."""
+        instant = -(-start_ns // self.period_ns) * self.period_ns
+        if self.last_ns is not None and instant <= self.last_ns:
+            return self.last_ns + self.period_ns
+        return instant
+
+    def restart(self) -> None:
+        """The motion was broken (a ``set_pose``, a clock gap): nothing to forget for a point
+        sample."""
+
+    def reset(self) -> None:
+        """The scene starts again: the sensor too (its constants and noise from its seed)."""
+        self.last_ns = None
+        self.restart()
+
+    def sample(self, instant_ns: int, t: float) -> None:
+        """Take the sample of the instant ``instant_ns`` (scene time ``t`` [s])."""
+        self.last_ns = instant_ns
+        self._sample(instant_ns, t)
+
+    @abstractmethod
+    def _sample(self, instant_ns: int, t: float) -> None:
+        """The sensor's own sample: measured, then handed to the sink if it wants it."""
+
+    def set_world_frame(self, world_frame: str) -> None:
+        """The frame of world-frame samples (a star tracker's); others ignore it."""
+
+
+class ImuOutput(SimulatedSensor):
+    """The simulated IMU: a mean over the interval from the previous instant (a baseline)."""
+
+    def __init__(self, spec: ImuSpec, propagator: DynamicsPropagator,
+                 sink: OutputSink) -> None:
+        """Samples of ``spec`` on ``propagator``'s motion."""
+        super().__init__(spec.topic, spec.period_ns, propagator, sink)
         self.model = ImuModel(spec, scene_gravity(propagator, spec))
         self.encode = simulated_imu_encoder(spec.frame_id, *spec.sample_variances())
         self.translation = next((e for e in propagator.stateful if isinstance(e, Translation)),
                                 None)
-        #: Samples handed to the sink so far.
-        self.count = 0
-        self._restart()
-
-    def _restart(self) -> None:
-        """The next instant reached is a baseline."""
         self._previous: tuple[Quat, Vector] | None = None
-        self._next_ns: int | None = None
-        self._time = float('nan')
+
+    def next_instant(self, start_ns: int) -> int:
+        """The first multiple of the period from ``start_ns`` on: a baseline, which may be
+        an instant already sampled (it publishes nothing)."""
+        return -(-start_ns // self.period_ns) * self.period_ns
 
     def restart(self) -> None:
-        """The motion was broken (``set_pose``): the next instant is a new baseline."""
-        self._restart()
+        """The next instant reached is a baseline."""
+        self._previous = None
 
     def reset(self) -> None:
-        """The scene starts again: the sensor too (its constants and noise from the seed)."""
+        """The model again from its seed; the next instant a baseline."""
         self.model.reset()
-        self._restart()
+        super().reset()
 
-    def advance_to(self, t_end: float) -> int:
-        """:meth:`DynamicsPropagator.advance_to` with a stop and a sample at every sample
-        instant on the way; returns the steps taken."""
-        propagator, period_ns = self.propagator, self.spec.period_ns
-        if propagator.state.time != self._time:  # a (re)start, a reset or a gap
-            self._restart()
-        if self._next_ns is None:
-            start_ns = self.time_base.nanoseconds(propagator.state.time)
-            self._next_ns = -(-start_ns // period_ns) * period_ns
-        steps = 0
-        while True:
-            instant_ns = self._next_ns
-            t = self.time_base.seconds(instant_ns)
-            if t > t_end:
-                break
-            steps += propagator.advance_to(t)
-            self._sample(instant_ns)
-            self._next_ns = instant_ns + period_ns
-        steps += propagator.advance_to(t_end)
-        self._time = propagator.state.time
-        return steps
-
-    def _sample(self, instant_ns: int) -> None:
+    def _sample(self, instant_ns: int, t: float) -> None:
         state = self.propagator.state
         attitude = state.attitude_tuple()
         velocity = self.translation.velocity_floats if self.translation is not None else _ZERO
@@ -107,6 +156,157 @@ class ImuSampler:
         (q0, v0) = previous
         gyro, acc = self.model.sample(q0, attitude, (velocity[0] - v0[0], velocity[1] - v0[1],
                                                      velocity[2] - v0[2]))
-        sec, nanosec = split_ns(instant_ns)
         self.count += 1
-        self.emit(self.spec.topic, self.encode(sec, nanosec, gyro, acc))
+        if self.sink.sensor_wanted(self.topic):
+            sec, nanosec = split_ns(instant_ns)
+            self.sink.simulated_sensor(self.topic, self.encode(sec, nanosec, gyro, acc))
+
+
+class MagnetometerOutput(SimulatedSensor):
+    """The simulated magnetometer: the field at the instant, in the sensor frame."""
+
+    def __init__(self, spec: MagnetometerSpec, propagator: DynamicsPropagator,
+                 sink: OutputSink, field: MagneticFieldModel | None = None) -> None:
+        """Samples of ``spec`` in ``field`` (``None``: the section's local field)."""
+        super().__init__(spec.topic, spec.period_ns, propagator, sink)
+        self.model = MagnetometerModel(spec, field)
+        self.encode = magnetic_field_encoder(spec.frame_id, spec.magnetic_field_covariance())
+
+    def reset(self) -> None:
+        """The model again from its seed (the bias walk at zero)."""
+        self.model.reset()
+        super().reset()
+
+    def _sample(self, instant_ns: int, t: float) -> None:
+        measured = self.model.sample(t, self.propagator.state.attitude_tuple())
+        self.count += 1
+        if self.sink.sensor_wanted(self.topic):
+            sec, nanosec = split_ns(instant_ns)
+            self.sink.simulated_sensor(self.topic, self.encode(sec, nanosec, measured))
+
+
+class StarTrackerOutput(SimulatedSensor):
+    """The simulated star tracker: the body's attitude in ``world_frame`` with its
+    covariance, none while the Sun excludes the instant."""
+
+    def __init__(self, spec: StarTrackerSpec, propagator: DynamicsPropagator,
+                 sink: OutputSink) -> None:
+        """Samples of ``spec`` (the Sun of the scene's ``sun`` section, if any)."""
+        super().__init__(spec.topic, spec.period_ns, propagator, sink)
+        self.model = StarTrackerModel(spec, propagator.scene.sun)
+        #: Instants the Sun excluded (no message).
+        self.excluded = 0
+        self.world_frame = ''
+        self.set_world_frame('world')
+
+    def set_world_frame(self, world_frame: str) -> None:
+        """The header's frame of the following samples."""
+        if world_frame != self.world_frame:
+            self.world_frame = world_frame
+            self.encode = attitude_with_covariance_encoder(world_frame,
+                                                           UNKNOWN_POSITION_VARIANCE)
+
+    def reset(self) -> None:
+        """The model again from its seed (its misalignment drawn again, the same)."""
+        self.model.reset()
+        super().reset()
+
+    def _sample(self, instant_ns: int, t: float) -> None:
+        measured = self.model.sample(t, self.propagator.state.attitude_tuple())
+        if measured is None:
+            self.excluded += 1
+            return
+        self.count += 1
+        if self.sink.sensor_wanted(self.topic):
+            sec, nanosec = split_ns(instant_ns)
+            attitude, covariance = measured
+            self.sink.simulated_sensor(self.topic, self.encode(sec, nanosec, attitude,
+                                                               covariance))
+
+
+class SensorSampler:
+    """Advances a propagator through the sample instants of the scene's simulated sensors."""
+
+    def __init__(self, sensors: Sequence[SimulatedSensor], propagator: DynamicsPropagator,
+                 time_base: TimeBase) -> None:
+        """``sensors`` sampled on ``propagator``'s motion at the instants of ``time_base``'s
+        clock."""
+        self.sensors = tuple(sensors)
+        self.propagator = propagator
+        self.time_base = time_base
+        self._restart()
+
+    def _restart(self) -> None:
+        """The instants are found again from the state's time; the IMU's next is a
+        baseline."""
+        self._next_ns: list[int] | None = None
+        self._time = float('nan')
+        for sensor in self.sensors:
+            sensor.restart()
+
+    def restart(self) -> None:
+        """The motion was broken (``set_pose``): the IMU's next instant is a new baseline."""
+        self._restart()
+
+    def reset(self) -> None:
+        """The scene starts again: every sensor from its seed."""
+        for sensor in self.sensors:
+            sensor.reset()
+        self._restart()
+
+    def set_world_frame(self, world_frame: str) -> None:
+        """The frame of the world-frame samples (``world_frame``)."""
+        for sensor in self.sensors:
+            sensor.set_world_frame(world_frame)
+
+    def advance_to(self, t_end: float) -> int:
+        """:meth:`DynamicsPropagator.advance_to` with a stop at every sample instant on the
+        way and a sample of each sensor due there; returns the steps taken."""
+        propagator, sensors = self.propagator, self.sensors
+        if propagator.state.time != self._time:  # a (re)start, a reset or a gap
+            self._restart()
+        next_ns = self._next_ns
+        if next_ns is None:
+            start_ns = self.time_base.nanoseconds(propagator.state.time)
+            next_ns = self._next_ns = [sensor.next_instant(start_ns) for sensor in sensors]
+        steps = 0
+        while True:
+            instant_ns = min(next_ns)
+            t = self.time_base.seconds(instant_ns)
+            if t > t_end:
+                break
+            steps += propagator.advance_to(t)
+            for index, sensor in enumerate(sensors):
+                if next_ns[index] == instant_ns:
+                    sensor.sample(instant_ns, t)
+                    next_ns[index] = instant_ns + sensor.period_ns
+        steps += propagator.advance_to(t_end)
+        self._time = propagator.state.time
+        return steps
+
+
+def simulated_sensors(scene: Scene, propagator: DynamicsPropagator, sink: OutputSink,
+                      field: MagneticFieldModel | None = None) -> list[SimulatedSensor]:
+    """The sensors of ``scene``'s ``sensors`` section in section order, their samples handed
+    to ``sink``; the magnetometer in ``field`` (the scene's field model), else in its
+    section's local field."""
+    sensors: list[SimulatedSensor] = []
+    suite = scene.sensors
+    if suite.imu is not None:
+        sensors.append(ImuOutput(suite.imu, propagator, sink))
+    if suite.magnetometer is not None:
+        sensors.append(MagnetometerOutput(suite.magnetometer, propagator, sink, field))
+    if suite.star_tracker is not None:
+        sensors.append(StarTrackerOutput(suite.star_tracker, propagator, sink))
+    return sensors
+
+
+def mount_transforms(scene: Scene, body_frame: str) -> list[tuple[str, str, Quat]]:
+    """The static transforms of the sensors' mounts: ``(body_frame, frame_id, rotation (w,
+    x, y, z))`` for each frame of the ``sensors`` section other than ``body_frame``, once
+    per frame (a frame has one mount), in section order."""
+    transforms: dict[str, Quat] = {}
+    for _, spec in scene.sensors.items():
+        if spec.frame_id != body_frame:
+            transforms.setdefault(spec.frame_id, spec.mount())
+    return [(body_frame, frame, mount) for frame, mount in transforms.items()]

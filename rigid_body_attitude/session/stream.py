@@ -20,27 +20,11 @@ Gyro samples (:class:`GyroStream`)
       state resets to the scene's initial state), and the confirming samples are integrated
       from it. A sample that continues the old time line instead ends the wait: the pending
       samples count as ``outlier_stamp`` and the stream goes on undisturbed.
-    * **missed samples** (:class:`PeriodLearner`), with header stamps only: the integrated
-      steps are taken in batches of :data:`PERIOD_BATCH`. Each batch's median step is the
-      coarse period (robust to drops: fewer than half the steps are gaps); the period is the
-      mean of the steps below 1.9 medians (stamp jitter telescopes out of a mean). A step of
-      ``s`` periods counts ``floor(s − m)`` missed samples, with the margin ``m`` the largest
-      stamp jitter seen since the period was learnt (the period less the second-shortest step
-      of a batch, in periods) plus :data:`JITTER_CUSHION`, at least 0.5 (exact stamps: drops
-      are counted by rounding) and at least :data:`EARLY_MARGIN` over the first
-      :data:`EARLY_BATCHES` batches. A stamp displaced by the jitter makes one step as much
-      shorter as it makes the other longer, so a lossless stream stays below the margin;
-      with a jitter above a quarter of the period a single drop may also stay below it and
-      goes uncounted (never the other way round). Samples the node received and
-      refused (any rejection of a sample with a stamp) are subtracted: they were not lost. A
-      full batch's count is confirmed by the next batch's period; a batch whose halves
-      disagree on the median by more than 25 %, or whose period differs from the last by as
-      much (the driver restarted at another rate), re-learns the period and drops its own and
-      the last batch's counts: the period always comes from the latest steps, so it can never
-      stay locked on a wrong value. A confirmed forward gap counts at once.
-      :meth:`GyroStream.settle` counts a partial batch (at each diagnostics report) when its
-      median agrees with the period.
-      They are counted in :attr:`GyroStream.missed_samples`.
+    * **missed samples**, with header stamps only: every integrated sample's stamp and step go
+      to a :class:`~rigid_body_attitude.session.period.PeriodLearner`, which learns the
+      sample period and counts the samples missed upstream against the expected sample index
+      (its module says how); :meth:`GyroStream.settle` counts a partial batch (at each
+      diagnostics report). They are counted in :attr:`GyroStream.missed_samples`.
 
 Commanded inputs (:class:`CommandStream`): not 3 finite numbers → ``non_finite``; a
 magnitude above :data:`COMMAND_LIMIT` → ``out_of_range``; older than the last command of the
@@ -64,9 +48,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from rigid_body_attitude.core.propagator import DynamicsPropagator, GyroPropagator, _Propagator
+from rigid_body_attitude.session.period import PERIOD_BATCH, PeriodLearner
 
 __all__ = ['COMMAND_LIMIT', 'ClockDriver', 'CommandStream', 'GyroStream', 'INTEGRATED',
-           'JUMP_CONFIRMATIONS', 'Outcome', 'PERIOD_BATCH', 'PeriodLearner', 'REASONS']
+           'JUMP_CONFIRMATIONS', 'Outcome', 'REASONS']
 
 #: Rejection reasons of the streams, in the order the diagnostics list them.
 REASONS = ('non_finite', 'out_of_range', 'stale_stamp', 'outlier_stamp', 'gap', 'time_jump',
@@ -74,21 +59,6 @@ REASONS = ('non_finite', 'out_of_range', 'stale_stamp', 'outlier_stamp', 'gap', 
 
 #: Samples after a jump that must confirm it (each within ``max_dt`` of the one before).
 JUMP_CONFIRMATIONS = 2
-
-#: Integrated steps per batch of :class:`PeriodLearner` (the period and the missed samples
-#: are settled once per batch: a sort of 64 integers every 64 samples).
-PERIOD_BATCH = 64
-#: Relative difference of two medians taken for a change of the sample rate.
-RATE_CHANGE = 0.25
-#: The margin [periods] beyond the largest jitter seen, and the margin of the first
-#: :data:`EARLY_BATCHES` batches after the period was learnt (the jitter is not known yet).
-JITTER_CUSHION = 0.2
-#: Factor by which the largest jitter seen fades per batch.
-JITTER_MEMORY = 0.98
-EARLY_MARGIN = 0.9
-EARLY_BATCHES = 4
-#: Gaps of at least this many samples are reported as bursts (a queue or a driver stall).
-BURST_SAMPLES = 4
 
 #: Largest magnitude of a commanded torque [N m] or force [N]: far above any actuator (the
 #: largest control moment gyros give ~1e4 N m, a launcher's engines ~1e7 N), far below
@@ -158,137 +128,6 @@ def _vector(values: Sequence[float]) -> Vector | None:
     if math.isfinite(x) and math.isfinite(y) and math.isfinite(z):
         return float(x), float(y), float(z)
     return None
-
-
-class PeriodLearner:
-    """The sample period of a stream, learnt in batches of steps; counts the samples missed
-    upstream (module docstring). :meth:`gaps_text` says what the gaps look like."""
-
-    def __init__(self) -> None:
-        self.period_ns = 0.0
-        #: Steps of at least ``(1 + margin)`` periods count as missed samples.
-        self.margin = 0.5
-        self.missed = 0
-        #: The largest stamp jitter seen in the last batch, as a fraction of the period.
-        self.jitter = 0.0
-        self.steps = [0] * PERIOD_BATCH
-        self.count = 0
-        #: Full batches since the period was learnt.
-        self.batches = 0
-        self._refused_mark = 0
-        self._held = [0, 0, 0]  # a full batch's missed samples, gaps, largest gap: unconfirmed
-        self._gaps = 0
-        self._largest_gap = 0
-
-    def settle(self, refused: int, partial: bool = False) -> None:
-        """Count the batch's missed samples (``refused``: samples refused so far by the stream
-        and the session); ``partial``: a batch not full yet, counted only when its median
-        agrees with the period. A full batch's count is held until the next batch agrees
-        with its period (a driver that slowed down late in a batch is not loss)."""
-        count, self.count = self.count, 0
-        if not count:
-            return
-        raw = self.steps[:count]
-        median = sorted(raw)[count // 2]
-        credit, self._refused_mark = refused - self._refused_mark, refused
-        if partial:
-            if not (self.period_ns and _close(median, self.period_ns)):
-                self.count = count  # not settled: wait for the full batch
-                self._refused_mark -= credit
-                return
-            self._commit()
-            self._count(raw, credit)
-            self._commit()
-            return
-        half = count // 2
-        recent = sorted(raw[half:])[(count - half) // 2]
-        previous = self.period_ns
-        if _close(sorted(raw[:half])[half // 2], recent):
-            self._learn(raw, median)
-            if not previous or _close(self.period_ns, previous):
-                self._commit()
-                self._count(raw, credit)
-                return
-        else:  # the rate changed within the batch: learn from its second half
-            self.period_ns, self.jitter, self.batches = float(recent), 0.0, 0
-            self.margin = EARLY_MARGIN
-        self._held = [0, 0, 0]  # a change of rate: neither this batch nor the last is loss
-
-    def _count(self, raw: list[int], credit: int) -> None:
-        """Hold the missed samples of the steps ``raw`` less ``credit`` refused samples."""
-        for step_ns in raw:
-            credit = self._gap(step_ns, credit, self._held)
-
-    def _commit(self) -> None:
-        """The held missed samples are confirmed."""
-        missed, gaps, largest = self._held
-        self.missed += missed
-        self._gaps += gaps
-        self._largest_gap = max(self._largest_gap, largest)
-        self._held = [0, 0, 0]
-
-    def _learn(self, raw: list[int], median: int) -> None:
-        """The period [ns]: the mean of the steps below 1.9 medians; the jitter from the
-        second-shortest step (the largest seen, fading by :data:`JITTER_MEMORY` per batch);
-        the margin from it."""
-        limit = 1.9 * median
-        kept = sorted(step for step in raw if step < limit)
-        period = sum(kept) / len(kept)
-        if not (self.period_ns and _close(period, self.period_ns)):
-            self.jitter, self.batches = 0.0, 0  # a new rate: learn the jitter again
-        self.period_ns = period
-        self.batches += 1
-        self.jitter = max(JITTER_MEMORY * self.jitter,
-                          (period - kept[min(1, len(kept) - 1)]) / period)
-        floor = EARLY_MARGIN if self.batches <= EARLY_BATCHES else 0.5
-        self.margin = max(floor, JITTER_CUSHION + self.jitter)
-
-    def gap(self, step_ns: float) -> None:
-        """A confirmed forward gap of ``step_ns`` [ns]: its missed samples count at once."""
-        self._commit()
-        held, self._held = self._held, [0, 0, 0]
-        self._gap(step_ns, 0, self._held)
-        self._commit()
-        self._held = held
-
-    def _gap(self, step_ns: float, credit: int, held: list[int]) -> int:
-        """Add a step's missed samples, less ``credit`` refused samples, to ``held``
-        (missed, gaps, largest gap); returns the credit left."""
-        period = self.period_ns
-        if not period or step_ns < (1.0 + self.margin) * period:
-            return credit
-        lost = math.floor(step_ns / period - self.margin)
-        used = min(lost, credit)
-        lost -= used
-        if lost > 0:
-            held[0] += lost
-            held[1] += 1
-            held[2] = max(held[2], lost)
-        return credit - used
-
-    def gaps_text(self) -> str:
-        """The gaps counted since the last call in words, with their likely cause."""
-        gaps, largest = self._gaps, self._largest_gap
-        self._gaps = self._largest_gap = 0
-        if not gaps:
-            return ''
-        if largest >= BURST_SAMPLES:
-            cause = (f'{gaps} gaps in the header stamps, the largest {largest} samples: bursts '
-                     f'lost before the node, as a full input queue drops them while the node '
-                     f'is busy (parameter `qos_overrides./imu.subscription.depth`) or a '
-                     f'driver stalls')
-        else:
-            cause = (f'{gaps} gaps of at most {largest} samples in the header stamps: lost by '
-                     f'the driver or the transport (a deeper input queue would not help)')
-        if self.jitter >= 0.2:
-            cause += (f'; the stamps jitter by up to {100.0 * self.jitter:.0f} % of the period, '
-                      f'so only steps longer than {1.0 + self.margin:.2f} periods count')
-        return cause
-
-
-def _close(a: float, b: float) -> bool:
-    """Whether two periods agree within :data:`RATE_CHANGE`."""
-    return abs(a - b) <= RATE_CHANGE * max(a, b)
 
 
 class GyroStream(_Counting):
@@ -406,6 +245,7 @@ class GyroStream(_Counting):
             period = self.period
             count = period.count
             period.steps[count] = step_ns
+            period.stamps[count] = stamp_ns
             period.count = count + 1
             if count + 1 == PERIOD_BATCH:
                 period.settle(self.refused_samples)
@@ -418,8 +258,11 @@ class GyroStream(_Counting):
         return INTEGRATED
 
     def _start(self, stamp_ns: int, sample: Vector) -> None:
-        """A new baseline at ``stamp_ns``. The propagator's time is seconds since
-        :attr:`epoch_ns`, the stamp of the first sample since the last reset."""
+        """A new baseline at ``stamp_ns`` (the stamps' time line breaks: the period learner
+        counts what it has and finds the lattice again). The propagator's time is seconds
+        since :attr:`epoch_ns`, the stamp of the first sample since the last reset."""
+        if self.count_missed:
+            self.period.break_line(self.refused_samples)
         self.last_ns = stamp_ns
         self.propagator.start((stamp_ns - self.epoch_ns) * 1e-9, sample)
 
@@ -470,31 +313,43 @@ class CommandStream(_Counting):
         self.tick_ns: int | None = None
 
     def check(self, value: Sequence[float]) -> str:
-        """The rejection reason of a command value, or ``''``."""
-        vector = _vector(value)
-        if vector is None:
-            return 'non_finite'
-        x, y, z = vector
-        if x * x + y * y + z * z > COMMAND_LIMIT * COMMAND_LIMIT:
+        """The rejection reason of a command value (3 numbers, or one per wheel), or ``''``."""
+        if len(value) == 3:
+            vector = _vector(value)
+            if vector is None:
+                return 'non_finite'
+            x, y, z = vector
+            square = x * x + y * y + z * z
+        else:
+            try:
+                values = [float(item) for item in value]
+            except (TypeError, ValueError):
+                return 'non_finite'
+            if not all(math.isfinite(item) for item in values):
+                return 'non_finite'
+            square = sum(item * item for item in values)
+        if square > COMMAND_LIMIT * COMMAND_LIMIT:
             return 'out_of_range'
         return ''
 
     def add(self, input_name: str, stamp_ns: int, time_s: float,
-            value: Sequence[float]) -> Outcome:
+            value: Sequence[float], key: str = '') -> Outcome:
         """Process one command ``value`` for ``input_name`` stamped ``stamp_ns`` (``time_s``
-        on the propagator's time axis)."""
+        on the propagator's time axis); ``key``: the topic whose stamps are kept, when one
+        topic carries several inputs (a wheel array's torques or speeds)."""
         reason = self.check(value)
         if reason:
             return self._reject(reason)
-        if stamp_ns < self.last_ns.get(input_name, stamp_ns):
+        key = key or input_name
+        if stamp_ns < self.last_ns.get(key, stamp_ns):
             return self._reject('stale_stamp')
         tick_ns = self.tick_ns
         if tick_ns is not None and stamp_ns != tick_ns:
             return self._reject('future_stamp' if stamp_ns > tick_ns else 'stale_stamp')
-        if tick_ns is not None and self.last_ns.get(input_name) == tick_ns:
+        if tick_ns is not None and self.last_ns.get(key) == tick_ns:
             return self._reject('stale_stamp')  # a second answer to the same tick
         self.propagator.command(input_name, time_s, value)
-        self.last_ns[input_name] = stamp_ns
+        self.last_ns[key] = stamp_ns
         return self._accept(_BASELINE)
 
     def reset(self) -> None:
@@ -518,7 +373,7 @@ class ClockDriver(_Counting):
         self.started = False
         self.resuming = False
         #: Integrates up to a time [s]: the propagator's ``advance_to``, or a simulated
-        #: sensor's (:class:`~rigid_body_attitude.session.sensors.ImuSampler`) that samples
+        #: sensors' (:class:`~rigid_body_attitude.session.sensors.SensorSampler`) that samples
         #: on the way.
         self.advance: Callable[[float], int] = propagator.advance_to
 

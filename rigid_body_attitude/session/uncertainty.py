@@ -37,7 +37,8 @@ from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel,
 from rigid_body_attitude.session.levelling import AlignmentResult
 
 __all__ = ['BATCH_SIZE', 'FOLD_SECONDS', 'MODEL_PARAMETERS', 'UNKNOWN_POSITION_VARIANCE',
-           'Uncertainty', 'error_model_from', 'orientation_block', 'pose_covariance']
+           'Uncertainty', 'attitude_stddev_deg', 'error_model_from', 'orientation_block',
+           'pose_covariance']
 
 #: Variance [m²] on the diagonal of the position block of ``pose_with_covariance``: the
 #: position is not estimated. Large and finite, so the 6×6 stays symmetric positive definite
@@ -55,21 +56,27 @@ _FOLD_AFTER = FOLD_SECONDS - 1e-9  # steps sum stamp differences: 50 × 1 ms may
 #: Node parameters that are fields of :class:`GyroErrorModel` (same names).
 MODEL_PARAMETERS = ('gyroscope_noise_density', 'gyroscope_random_walk',
                     'gyroscope_turn_on_bias', 'gyroscope_scale_stddev',
-                    'gyroscope_misalignment_stddev', 'initial_yaw_stddev')
-#: Keys of a kalibr ``imu.yaml`` that override the parameters of the same name.
-CALIBRATION_KEYS = ('gyroscope_noise_density', 'gyroscope_random_walk')
+                    'gyroscope_misalignment_stddev', 'initial_yaw_stddev',
+                    'accelerometer_noise_density')
+#: Keys of a calibration file (a kalibr ``imu.yaml``'s noise, the IMU's further figures) that
+#: override the parameters of the same name.
+CALIBRATION_KEYS = ('gyroscope_noise_density', 'gyroscope_random_walk',
+                    'gyroscope_turn_on_bias', 'gyroscope_scale_stddev',
+                    'gyroscope_misalignment_stddev')
 
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
 
 
 def error_model_from(values: Mapping[str, Any],
-                     calibration: Mapping[str, Any] | None = None) -> GyroErrorModel:
-    """The gyro error model of the parameters ``values``; the gyro noise of a kalibr
-    ``calibration`` (an ``imu.yaml`` mapping: ``gyroscope_noise_density``,
-    ``gyroscope_random_walk``) overrides the parameters. Raises InputError naming the key."""
+                     calibration: Mapping[str, Any] | None = None,
+                     keys: Sequence[str] = CALIBRATION_KEYS) -> GyroErrorModel:
+    """The gyro error model of the parameters ``values``; the noise of a kalibr
+    ``calibration`` (an ``imu.yaml`` mapping: by default ``gyroscope_noise_density``,
+    ``gyroscope_random_walk``; ``keys``) overrides the parameters. Raises InputError naming
+    the key."""
     fields = {name: values[name] for name in MODEL_PARAMETERS if name in values}
-    for key in CALIBRATION_KEYS:
+    for key in keys:
         if calibration is not None and key in calibration:
             value = calibration[key]
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
@@ -92,6 +99,14 @@ def orientation_block(covariance: Sequence[float]) -> tuple[float, ...]:
     block = np.array(values, dtype=np.float64).reshape(6, 6)[3:, 3:]
     checked = checked_attitude_covariance(block, 'orientation covariance')
     return tuple(checked.reshape(9).tolist())
+
+
+def attitude_stddev_deg(published: Sequence[float]) -> tuple[float, float]:
+    """1σ tilt (worst horizontal axis) and yaw [deg] of a row-major 3×3 attitude covariance
+    about world axes [rad²]."""
+    xx, xy, _, _, yy, _, _, _, zz = published
+    half_trace, half_gap = 0.5 * (xx + yy), math.hypot(0.5 * (xx - yy), xy)
+    return math.degrees(math.sqrt(half_trace + half_gap)), math.degrees(math.sqrt(zz))
 
 
 def pose_covariance(attitude: Sequence[float]) -> tuple[float, ...]:
@@ -188,9 +203,7 @@ class Uncertainty:
     def stddev_deg(self) -> tuple[float, float]:
         """1σ tilt (worst horizontal axis) and yaw [deg] of :attr:`published` (read without
         folding, so reading never changes when the folds happen)."""
-        xx, xy, _, _, yy, _, _, _, zz = self.published
-        half_trace, half_gap = 0.5 * (xx + yy), math.hypot(0.5 * (xx - yy), xy)
-        return math.degrees(math.sqrt(half_trace + half_gap)), math.degrees(math.sqrt(zz))
+        return attitude_stddev_deg(self.published)
 
     def diagnostic(self) -> tuple[str, list[tuple[str, str]]]:
         """The WARN problem (``''`` when none) and the values of ``/diagnostics``."""

@@ -191,17 +191,20 @@ def trial_to_bag(trial: BroadTrial, path: str | Path, *, storage: str = 'sqlite3
                  frame_id: str = 'base_link', world_frame: str = 'world') -> dict[str, int]:
     """Write ``trial`` as a bag; returns the message count per topic.
 
-    ``sensor_msgs/msg/Imu`` (raw gyro and accelerometer, bias *not* removed) on ``imu_topic``
-    and ``geometry_msgs/msg/QuaternionStamped`` on ``ground_truth_topic`` (lost samples
-    skipped), with header stamps and bag times ``i / sampling_rate``. The Imu's ``frame_id``
-    defaults to ``base_link``, the node's ``body_frame``: the optical truth is the attitude of
-    the IMU itself, so the IMU is the body and no mount is needed. The citation, licence and
-    the rest-phase bias estimate go into the bag's ``custom_data`` (:func:`attribution`).
+    ``sensor_msgs/msg/Imu`` (raw gyro and accelerometer, bias *not* removed) on ``imu_topic``,
+    ``geometry_msgs/msg/QuaternionStamped`` on ``ground_truth_topic`` (lost samples skipped)
+    and, when the trial has a magnetometer, ``sensor_msgs/msg/MagneticField`` [T] on
+    ``imu/mag`` (each before the Imu of its sample), with header stamps and bag times
+    ``i / sampling_rate``. The ``frame_id`` defaults to ``base_link``, the node's
+    ``body_frame``: the optical truth is the attitude of the IMU itself, so the IMU is the body
+    and no mount is needed. The citation, licence and the rest-phase bias estimate go into the
+    bag's ``custom_data`` (:func:`attribution`).
     """
     return write_bag(path, stamps=trial.stamps, rates=trial.gyro, accelerations=trial.acc,
                      ground_truth=trial.ground_truth, imu_topic=imu_topic,
                      ground_truth_topic=ground_truth_topic, frame_id=frame_id,
-                     world_frame=world_frame, storage=storage, custom_data=attribution(trial))
+                     world_frame=world_frame, storage=storage, custom_data=attribution(trial),
+                     magnetic_fields=trial.field)
 
 
 def _parser() -> argparse.ArgumentParser:

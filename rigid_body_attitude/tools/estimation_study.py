@@ -1,14 +1,15 @@
 """The attitude filter on BROAD trials beside VQF: accuracy and covariance, one table.
 
-Per trial (a BROAD archive, :mod:`rigid_body_attitude.tools.broad`), with one set of settings
-for all trials and nothing taken from the trial's truth:
+Per trial (a BROAD archive, :mod:`rigid_body_attitude.tools.broad`), with one set of
+parameters for all trials and nothing taken from the trial's truth:
 
-* **the filter** (:class:`~rigid_body_attitude.core.estimation.filtered_strapdown.
-  FilteredStrapdown`), fed sample by sample as a gyro session feeds it: levelling at the
-  start's rest over ``align_seconds`` (the node's default), then the strapdown step, the
-  filter's per-sample calls and its updates; the magnetometer when the trial has one;
-* **VQF** (``vqf.offlineVQF`` with its defaults, D. Laidig, T. Seel, Information Fusion 91,
-  2023) on the same samples: its 9D quaternion with a magnetometer, else its 6D one.
+* **the node** on the trial: the shipped ``imu_filter`` scene (levelling at the start's rest
+  over ``align_seconds``, the strapdown step, the filter's updates, the magnetometer on
+  ``imu/mag``), either through the replay tool (:func:`run_replay`: the trial as a bag, the
+  bag through ``replay``, the output bag read back) or the same session fed in this process
+  (:func:`run_session`: what the replay does, without the bag; the two agree exactly);
+* the reference estimator of the study script (``studies/broad_estimation.py``: VQF) as a
+  :class:`Run` without covariance, scored by :func:`figures` alike.
 
 The benchmark's metric (BROAD: D. Laidig, M. Caruso, A. Cereatti, T. Seel, "BROAD — A
 Benchmark for Robust Inertial Orientation Estimation", Data 6(7):72, 2021, section 4): with
@@ -19,39 +20,51 @@ Benchmark for Robust Inertial Orientation Estimation", Data 6(7):72, 2021, secti
 heading: 1 dof), as the share of motion samples; and the median 1σ (total ``√tr P``, tilt
 ``√(P_xx + P_yy)``, heading ``√P_zz``) against the RMSE of the same error.
 
-Sensor figures: the gyro's, accelerometer's and magnetometer's noise densities from
-``imu_noise``'s Allan fit on one trial's initial rest and the magnetometer's delay from the
-same trial, as a user calibrates an IMU once (:func:`dataset_model`); every other figure the
-documented default.
+The IMU's figures, measured once on one trial as a user measures an IMU
+(:func:`dataset_calibration`): a kalibr ``imu.yaml`` written by ``imu_noise`` (Allan
+deviation of the gyro and accelerometer on the initial rest), given as ``calibration_file``;
+and the magnetometer's calibration file with its figures only (white-noise density by the
+same Allan fit, its delay behind the gyro by
+:func:`~rigid_body_attitude.core.estimation.magnetometer_timing.magnetometer_delay` on the
+whole trial, the 1σ of its sample instants ``P/√12`` from its own output period ``P``: a
+sample repeated while the magnetometer has none newer), given as
+``magnetometer_calibration_file``. Every other parameter is the shipped default.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from rigid_body_attitude.bag import BagReader
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.estimation.alignment import GravityAligner
-from rigid_body_attitude.core.estimation.estimator import AttitudeEstimator
-from rigid_body_attitude.core.estimation.estimator_settings import EstimatorSettings
-from rigid_body_attitude.core.estimation.filtered_strapdown import FilteredStrapdown
-from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.core.estimation.magnetometer_timing import magnetometer_delay
-from rigid_body_attitude.core.estimation.rest import RestDetector
-from rigid_body_attitude.tools.allan import allan_curve, fit_noise
-from rigid_body_attitude.tools.broad import BroadTrial
+from rigid_body_attitude.msgs.cdr import stamp_to_ns
+from rigid_body_attitude.msgs.decoders import (
+    decode_pose_with_covariance_stamped, decode_quaternion_stamped)
+from rigid_body_attitude.session.parameters import defaults
+from rigid_body_attitude.session.reports import DiagnosticReport
+from rigid_body_attitude.session.settings import load_node_scene, open_session
+from rigid_body_attitude.session.times import split_ns
+from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
+from rigid_body_attitude.tools.allan import Recording, allan_curve, fit_noise, kalibr_yaml
+from rigid_body_attitude.tools.broad import BroadTrial, trial_to_bag
+from rigid_body_attitude.tools.replay.options import ReplayOptions
+from rigid_body_attitude.tools.replay.run import replay_bag
 
-__all__ = ['ALIGN_SECONDS', 'CHI2_99', 'MagnetometerFigures', 'Run', 'TrialFigures',
-           'broad_errors', 'dataset_model', 'figures', 'run_filter', 'run_vqf', 'settings_for']
+__all__ = ['CHI2_99', 'Run', 'SCENE', 'TrialFigures', 'broad_errors', 'dataset_calibration',
+           'figures', 'run_replay', 'run_session', 'study_values']
 
 FloatArray = NDArray[np.float64]
 
-#: The node's default ``align_seconds`` [s].
-ALIGN_SECONDS = 1.0
+#: The node's scene of the study: the shipped attitude filter.
+SCENE = 'imu_filter'
 #: Chi-square 99 % quantiles for 1, 2 and 3 degrees of freedom.
 CHI2_99 = {1: 6.635, 2: 9.210, 3: 11.345}
 
@@ -75,75 +88,145 @@ class TrialFigures:
     median_sigma: tuple[float, float, float] = (math.nan, math.nan, math.nan)
 
 
-@dataclass(frozen=True)
-class MagnetometerFigures:
-    """A magnetometer's figures measured on one recording: white-noise density [T/√Hz],
-    delay behind the gyro [s] and the 1σ of its sample instants [s] (NaN: no magnetometer)."""
-
-    noise_density: float = math.nan
-    delay: float = math.nan
-    timing: float = math.nan
-
-
-def dataset_model(trial: BroadTrial) -> tuple[GyroErrorModel, MagnetometerFigures]:
-    """The IMU's figures from one trial, as a user measures an IMU once: the white-noise
-    densities of gyro, accelerometer and magnetometer by ``imu_noise``'s Allan fit on the
-    initial rest; the magnetometer's delay behind the gyro by
-    :func:`~rigid_body_attitude.core.estimation.magnetometer_timing.magnetometer_delay` on the
-    whole trial; the 1σ of its sample instants from its own output rate (a sample repeated
-    while the magnetometer has none newer: its age spreads uniformly over the magnetometer's
-    period ``P``, ``P/√12``). Other figures: the documented defaults."""
+def dataset_calibration(trial: BroadTrial, folder: Path) -> dict[str, str]:
+    """Write the trial's ``imu.yaml`` and ``magnetometer.yaml`` (module docstring) into
+    ``folder``; the node's parameters naming them."""
     rest = trial.first_motion_index
     rate = trial.sampling_rate
     duration = rest / rate
-    gyro = fit_noise(allan_curve(np.asarray(trial.gyro[:rest]), rate), duration)
-    accel = fit_noise(allan_curve(np.asarray(trial.acc[:rest]), rate), duration)
-    model = GyroErrorModel(gyroscope_noise_density=gyro.white,
-                           accelerometer_noise_density=accel.white)
+    recording = Recording(rate=rate, gyro=np.asarray(trial.gyro[:rest]),
+                          acc=np.asarray(trial.acc[:rest]), topic='/imu')
+    gyro = fit_noise(allan_curve(recording.gyro, rate), duration)
+    acc = fit_noise(allan_curve(np.asarray(recording.acc), rate), duration)
+    imu = folder / 'imu.yaml'
+    imu.write_text(kalibr_yaml(recording, gyro, acc, '/imu'), encoding='utf-8')
+    parameters = {'calibration_file': str(imu)}
     field = trial.field
-    if field is None:
-        return model, MagnetometerFigures()
-    noise = fit_noise(allan_curve(np.asarray(field[:rest]), rate), duration).white
-    delay = magnetometer_delay(np.asarray(trial.gyro), np.asarray(field), rate).delay
-    repeated = float(np.mean(np.all(np.diff(np.asarray(field), axis=0) == 0.0, axis=1)))
-    period = 1.0 / (rate * max(1.0 - repeated, 1e-3))
-    return model, MagnetometerFigures(noise, delay, period / math.sqrt(12.0))
+    if field is not None:
+        noise = fit_noise(allan_curve(np.asarray(field[:rest]), rate), duration).white
+        delay = magnetometer_delay(np.asarray(trial.gyro), np.asarray(field), rate).delay
+        repeated = float(np.mean(np.all(np.diff(np.asarray(field), axis=0) == 0.0, axis=1)))
+        period = 1.0 / (rate * max(1.0 - repeated, 1e-3))
+        magnetometer = folder / 'magnetometer.yaml'
+        magnetometer.write_text(f'noise_density: {noise:.6e}\ndelay: {max(delay, 0.0):.6e}\n'
+                                f'timing: {period / math.sqrt(12.0):.6e}\n', encoding='utf-8')
+        parameters['magnetometer_calibration_file'] = str(magnetometer)
+    return parameters
 
 
-def run_filter(trial: BroadTrial, model: GyroErrorModel, settings: EstimatorSettings,
-               use_magnetometer: bool = True) -> Run:
-    """The filter over the trial (module docstring)."""
-    rate = trial.sampling_rate
-    estimator = AttitudeEstimator(model, settings, 'enu', sample_rate=rate)
-    gyro_noise = model.gyroscope_noise_density * math.sqrt(rate)
-    aligner = GravityAligner(ALIGN_SECONDS, detector=RestDetector(gyro_noise=gyro_noise))
-    strapdown = FilteredStrapdown(estimator, aligner, use_magnetometer)
+def study_values(**parameters: Any) -> dict[str, Any]:
+    """The node's parameters of the study: the defaults, the scene :data:`SCENE`, and
+    ``parameters`` (e.g. ``calibration_file``)."""
+    return {**defaults(), 'scene': SCENE, **parameters}
+
+
+def _index(stamps_ns: FloatArray, rate: float) -> NDArray[np.int64]:
+    """The sample index of each stamp ``i / rate``."""
+    return np.rint(stamps_ns * (rate * 1e-9)).astype(np.int64)
+
+
+class _SeriesSink:
+    """A session's sink keeping each attitude and the covariance it was published with."""
+
+    use_header_stamps = True
+
+    def __init__(self) -> None:
+        self.stamps: list[int] = []
+        self.attitudes: list[tuple[float, ...]] = []
+        self.covariances: list[tuple[float, ...]] = []
+        self.covariance: tuple[float, ...] = (math.nan,) * 9
+
+    def attitude(self, sec: int, nanosec: int, attitude: tuple[float, ...],
+                 imu: bytes | None) -> None:
+        self.stamps.append(sec * 1_000_000_000 + nanosec)
+        self.attitudes.append(attitude)
+        self.covariances.append(self.covariance)
+
+    def attitude_covariance(self, covariance: tuple[float, ...]) -> None:
+        self.covariance = covariance
+
+    def sensor_mount(self, q_body_sensor: Any) -> None:
+        """Nothing: ``imu/data`` is not kept."""
+
+    def acceleration(self, sec: int, nanosec: int, estimate: Any) -> None:
+        """Nothing: ``accel/filtered`` is not kept."""
+
+    def dynamics(self, *args: Any) -> None:
+        """Nothing: a gyro scene."""
+
+    def invariants(self, *args: Any) -> None:
+        """Nothing: a gyro scene."""
+
+    def sensor_wanted(self, topic: str) -> bool:
+        """No simulated sensor: a gyro scene."""
+        return False
+
+    def simulated_sensor(self, topic: str, data: bytes) -> None:
+        """Nothing: a gyro scene."""
+
+    def wheel_state(self, data: bytes) -> None:
+        """Nothing: a gyro scene."""
+
+    def diagnostics(self, report: DiagnosticReport) -> None:
+        """Nothing: no diagnostics kept."""
+
+    def log(self, level: int, text: str) -> None:
+        """Nothing: no log kept."""
+
+
+def _run(trial: BroadTrial, stamps_ns: FloatArray, attitudes: FloatArray,
+         covariances: FloatArray) -> Run:
+    """Per-sample arrays of the outputs at ``stamps_ns``."""
     count = trial.sample_count
     attitude = np.full((count, 4), np.nan)
     covariance = np.full((count, 3, 3), np.nan)
-    gyro, acc = trial.gyro.tolist(), trial.acc.tolist()
-    fields = trial.field.tolist() if trial.field is not None and use_magnetometer else None
-    dt = 1.0 / rate
-    for k in range(count):
-        field = fields[k] if fields is not None else None
-        if strapdown.add(gyro[k], acc[k], field, dt):
-            attitude[k] = strapdown.attitude
-            covariance[k] = estimator.published_covariance(strapdown.attitude, strapdown.rate)
+    index = _index(stamps_ns, trial.sampling_rate)
+    attitude[index] = attitudes
+    covariance[index] = covariances.reshape(-1, 3, 3)
     return Run(attitude, covariance)
 
 
-def run_vqf(trial: BroadTrial, use_magnetometer: bool = True) -> Run:
-    """VQF (offline, defaults) over the trial's samples: 9D with a magnetometer, else 6D."""
-    from vqf import offlineVQF  # type: ignore[import-untyped]  # test requirements' VQF
+def run_session(trial: BroadTrial, values: Mapping[str, Any]) -> Run:
+    """The node's session over the trial's samples, fed in this process as the replay feeds
+    it (the bag's stamps ``stamp_to_ns(i / rate)``, the field before the Imu of its sample;
+    no diagnostics)."""
+    sink = _SeriesSink()
+    scene = load_node_scene(values['scene'])
+    session = open_session(scene, values, sink, lambda: 0, lambda: 0.0)
+    assert isinstance(session, FilteredGyroSession)
+    gyro, acc = trial.gyro.tolist(), trial.acc.tolist()
+    fields = trial.field.tolist() if trial.field is not None else None
+    frame = values['body_frame']
+    for k, stamp in enumerate(trial.stamps.tolist()):
+        sec, nanosec = split_ns(stamp_to_ns(stamp))
+        if fields is not None:
+            session.magnetic_field(sec, nanosec, frame, fields[k])
+        session.gyro(sec, nanosec, gyro[k], None, acc[k])
+    return _run(trial, np.array(sink.stamps, dtype=np.float64), np.array(sink.attitudes),
+                np.array(sink.covariances))
 
-    gyro = np.ascontiguousarray(trial.gyro, dtype=np.float64)
-    acc = np.ascontiguousarray(trial.acc, dtype=np.float64)
-    if use_magnetometer and trial.field is not None:
-        field = np.ascontiguousarray(trial.field * 1e6, dtype=np.float64)
-        out: dict[str, Any] = offlineVQF(gyro, acc, field, 1.0 / trial.sampling_rate, None)
-        return Run(np.asarray(out['quat9D']), None)
-    out = offlineVQF(gyro, acc, None, 1.0 / trial.sampling_rate, None)
-    return Run(np.asarray(out['quat6D']), None)
+
+def run_replay(trial: BroadTrial, values: Mapping[str, Any], folder: Path) -> Run:
+    """The trial as a bag (``folder/<trial>``) through the replay tool with ``values``
+    (``folder/<trial>_out``), the outputs read back from the output bag."""
+    bag, out = folder / trial.name, folder / f'{trial.name}_out'
+    trial_to_bag(trial, bag)
+    options = ReplayOptions(**{key: value for key, value in values.items()
+                               if key in ReplayOptions.__dataclass_fields__},
+                            outputs=('orientation', 'pose_with_covariance'))
+    replay_bag(bag, out, options, keep_series=False)
+    with BagReader(out) as reader:
+        stamps, attitudes, covariances = [], [], []
+        for topic, _, _, data in reader.messages(['orientation', 'pose_with_covariance']):
+            if topic == 'orientation':
+                sec, nanosec, _, q = decode_quaternion_stamped(data)
+                stamps.append(sec * 1_000_000_000 + nanosec)
+                attitudes.append(q)
+            else:
+                block = np.array(decode_pose_with_covariance_stamped(data)[5]).reshape(6, 6)
+                covariances.append(block[3:, 3:].reshape(9))
+    return _run(trial, np.array(stamps, dtype=np.float64), np.array(attitudes),
+                np.array(covariances))
 
 
 def _evaluated(trial: BroadTrial, run: Run) -> NDArray[np.bool_]:
@@ -180,14 +263,3 @@ def figures(trial: BroadTrial, run: Run) -> TrialFigures:
     sigma = np.degrees(np.median(np.sqrt(np.stack(
         [np.trace(p, axis1=1, axis2=2), p[:, 0, 0] + p[:, 1, 1], p[:, 2, 2]], axis=1)), axis=0))
     return TrialFigures(rmse_tuple, inside, (float(sigma[0]), float(sigma[1]), float(sigma[2])))
-
-
-def settings_for(magnetometer: MagnetometerFigures,
-                 settings: EstimatorSettings | None = None) -> EstimatorSettings:
-    """``settings`` (default: the defaults) with the measured magnetometer figures."""
-    base = settings or EstimatorSettings()
-    if math.isfinite(magnetometer.noise_density):
-        base = replace(base, magnetometer_noise_density=magnetometer.noise_density,
-                       magnetometer_delay=magnetometer.delay,
-                       magnetometer_timing=magnetometer.timing)
-    return base

@@ -269,7 +269,8 @@ def test_reader_error_unusable_message_type(tmp_path):
                                            "'geometry_msgs/msg/WrenchStamped'; expected one of"):
         bag.read_messages(path, {'imu': msgs.RATE_DECODERS, 'torque': msgs.RATE_DECODERS})
     with bag.BagReader(path) as reader:
-        assert reader.decoder('imu', msgs.RATE_DECODERS) is cdr.imu_rates
+        assert reader.decoder('imu', msgs.RATE_DECODERS) is msgs.decode_imu_motion
+        assert reader.decoder('imu', bag.SERIES_DECODERS) is cdr.imu_rates
         assert reader.decoder('torque', msgs.TORQUE_DECODERS) is cdr.wrench_torque
         with pytest.raises(bag.BagError, match="has type 'sensor_msgs/msg/Imu'"):
             reader.decoder('imu', msgs.ATTITUDE_DECODERS)

@@ -14,7 +14,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from rigid_body_attitude.core.attitude import quaternion as quat
-from rigid_body_attitude.core.dynamics.effects import BodyProperties, EFFECTS, TorqueEffect
+from rigid_body_attitude.core.dynamics.effects import (
+    BodyProperties, EFFECTS, Environment, TorqueEffect)
+from rigid_body_attitude.core.environment.orbit import CircularOrbit
+from rigid_body_attitude.core.environment.tilted_dipole import TiltedDipoleField
 from rigid_body_attitude.core.errors import IntegratorError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.dynamics.euler import RigidBodyModel
@@ -31,7 +34,14 @@ TORQUE_EFFECT_PARAMETERS = {
     'gravity_about_pivot': {'centre_of_mass': [0.01, -0.02, 0.1]},
     'gravity_gradient': {'orbit_radius': 7.0e6},
     'viscous_damping': {'coefficient': [0.1, 0.2, 0.3]},
+    'magnetorquers': {'max_dipole': 1.0},
+    'residual_dipole': {'dipole': [0.1, 0.0, -0.2]},
+    'bdot': {'gain': 1.0e4, 'control_period': 0.1},
 }
+#: The torque effects acting through the scene's magnetic field, on this orbit.
+ORBIT = CircularOrbit(7.0e6, 1.7)
+MAGNETIC_BODY = BodyProperties(Inertia([0.5, 0.7, 0.9]), 2.0,
+                               Environment(ORBIT, TiltedDipoleField(ORBIT)))
 
 
 GRAVITY = {'gravity_about_pivot': {'centre_of_mass': [0.0, 0.0, 0.1]}}
@@ -52,13 +62,21 @@ def test_effects_declare_whether_their_torque_uses_the_rate():
     assert torque_effects == sorted(TORQUE_EFFECT_PARAMETERS)  # a new torque effect: add it
     attitude = quat.normalize([0.8, 0.1, -0.3, 0.5])
     for name, params in TORQUE_EFFECT_PARAMETERS.items():
-        effect = EFFECTS[name](params, BODY)
+        magnetic = name in ('magnetorquers', 'residual_dipole', 'bdot')
+        effect = EFFECTS[name](params, MAGNETIC_BODY if magnetic else BODY)
         if name == 'commanded_torque':
             effect.accept_input('torque', 0.0, np.array([0.3, 0.1, -0.2]))
         if name == 'attitude_pd':  # the torque sampled at 0 and held: not of the rate at 1
             effect.sample(0.0, tuple(attitude.tolist()), (0.1, 0.2, 0.3))
+        if name == 'magnetorquers':  # a dipole held over the step from 0
+            effect.accept_input('dipole', 0.0, np.array([0.3, 0.1, -0.2]))
+            effect.hold(0.0, 2.0, tuple(attitude.tolist()), (0.1, 0.2, 0.3))
         slow = effect.torque_body(1.0, attitude, np.array([0.1, 0.2, 0.3]))
         fast = effect.torque_body(1.0, attitude, np.array([-5.0, 3.0, 40.0]))
+        if name == 'bdot':  # a dipole for the magnetorquers: no torque of its own
+            assert not effect.applies_torque and not np.any(slow) and not np.any(fast)
+            assert effect.torque_depends_on_rate is False
+            continue
         assert np.any(slow != 0.0), name
         assert effect.torque_depends_on_rate == (not np.array_equal(slow, fast)), name
 

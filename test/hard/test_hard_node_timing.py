@@ -125,14 +125,14 @@ def test_a_hundred_thousand_faulty_gyro_messages(ros, request):
         stop = min(start + BATCH, MESSAGES)
         for k in range(start, stop):
             publisher.publish(rate_message(stamps[k], rates[k]))
-        assert harness.spin_until(lambda: node.session.received_count() >= stop, 60.0), (
-            f'the node took {node.session.received_count()} of {stop} messages')
+        assert harness.spin_until(lambda: node.built.session.received_count() >= stop, 60.0), (
+            f'the node took {node.built.session.received_count()} of {stop} messages')
     assert harness.spin_until(lambda: len(orientations) >= len(expected), 30.0)
     harness.spin_for(0.1)
 
     # Every message is accounted for exactly once, in the node and in its diagnostics.
-    assert node.session.received_count() == MESSAGES
-    stream = node.session.stream
+    assert node.built.session.received_count() == MESSAGES
+    stream = node.built.session.stream
     rejected = stream.rejected
     assert stream.accepted + sum(rejected.values()) + len(stream.pending) == MESSAGES
     assert dict(rejected) == dict(core.rejected) and stream.accepted == core.accepted

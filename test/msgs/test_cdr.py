@@ -126,19 +126,25 @@ def test_decoders_read_rosbags_serialized_messages(frame_id, little_endian):
 
 @pytest.mark.parametrize('little_endian', [True, False])
 @pytest.mark.parametrize('frame_id', FRAME_IDS)
-def test_gyro_decoders_read_the_integer_stamp_and_the_rate(frame_id, little_endian):
+def test_rate_decoders_read_the_integer_stamp_and_the_rate(frame_id, little_endian):
     sec, nanosec = divmod(STAMP_NS, 1_000_000_000)
+    float_stamped = {msgs.IMU: cdr.imu_rates, msgs.VECTOR3_STAMPED: cdr.vector3_stamped,
+                     msgs.TWIST_STAMPED: cdr.twist_angular}
+    assert set(msgs.RATE_DECODERS) == set(float_stamped)
     for msgtype, message, _ in _reference_messages(frame_id):
-        if msgtype not in msgs.GYRO_DECODERS:
+        if msgtype not in msgs.RATE_DECODERS:
             continue
         data = bytes(bag.typestore().serialize_cdr(message, msgtype, little_endian=little_endian))
-        _, rate = msgs.RATE_DECODERS[msgtype](data)
-        assert msgs.GYRO_DECODERS[msgtype](data) == (sec, nanosec, frame_id, rate), msgtype
+        _, rate = float_stamped[msgtype](data)
+        decoded = msgs.RATE_DECODERS[msgtype](data)
+        assert decoded[:4] == (sec, nanosec, frame_id, rate), msgtype
+        if msgtype != msgs.IMU:
+            assert decoded[4] is None, msgtype  # no specific force
 
 
-def test_gyro_decoders_reject_what_the_rate_decoders_reject():
+def test_the_imu_rate_decoder_rejects_what_the_float_stamp_decoder_rejects():
     imu = cdr.encode_imu(0, 'base_link', [1.0, 2.0, 3.0])
-    decode = msgs.GYRO_DECODERS[msgs.IMU]
+    decode = msgs.RATE_DECODERS[msgs.IMU]
     for data, message in [(cdr.encode_vector3_stamped(0, 'base_link', [1.0, 2.0, 3.0]),
                            'malformed sensor_msgs/msg/Imu: truncated: 52 of 324 bytes'),
                           (imu[:100], 'truncated: 100 of 324 bytes'),

@@ -45,7 +45,8 @@ def test_every_type_is_a_jazzy_type_and_diagnostics_are_not_fixed():
     known = bag.typestore().fielddefs
     assert all(msgtype in known for msgtype in msgs.MESSAGE_TYPES)
     assert flattened(msgs.DIAGNOSTIC_ARRAY) is None
-    assert set(msgs.MESSAGE_TYPES) == {*msgs.FIXED_LAYOUTS, msgs.DIAGNOSTIC_ARRAY}
+    assert set(msgs.MESSAGE_TYPES) == {
+        *msgs.FIXED_LAYOUTS, msgs.ODOMETRY, msgs.DIAGNOSTIC_ARRAY}
 
 
 def test_the_comparison_sees_a_difference():
@@ -55,3 +56,14 @@ def test_the_comparison_sees_a_difference():
     assert flattened(msgs.IMU) == (True, imu.fields) != (True, swapped.fields)
     assert imu.count == 37 and imu.at('angular_velocity.x') == 13
     assert imu.at('linear_acceleration.x') == 25
+
+
+def test_odometry_body_is_the_jazzy_definition_after_its_two_strings():
+    _, fields = bag.typestore().fielddefs[msgs.ODOMETRY]
+    assert [name for name, _ in fields[:2]] == ['header', 'child_frame_id']
+    names = []
+    for name, (_, details) in fields[2:]:
+        nested = flattened(details)
+        assert nested is not None and not nested[0]
+        names += [f'{name}.{field}' for field in nested[1]]
+    assert tuple(names) == msgs.ODOMETRY_BODY.fields and msgs.ODOMETRY_BODY.count == 85

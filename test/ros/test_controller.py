@@ -9,8 +9,9 @@
   several ticks: runs beside a load average of 16 settled after 3.56 s and after more than
   5.6 s. The bound is therefore 3.63 s plus two seconds; the free-running loop is not
   reproducible (lockstep is what makes it so).
-* The controller alone: a pair of inputs is answered with one torque of the same stamp, equal
-  to the law; hostile inputs are rejected and counted in ``/diagnostics``.
+* The controller alone: an ``odom`` message (and, with ``state_input`` ``orientation_twist``,
+  a pair of inputs) is answered with one torque of the same stamp, equal to the law; hostile
+  inputs are rejected and counted in ``/diagnostics``.
 """
 
 from __future__ import annotations
@@ -24,15 +25,20 @@ import subprocess
 from ament_index_python.packages import get_package_prefix
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import QuaternionStamped, TwistStamped, WrenchStamped
+from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from ros_helpers import Harness, unique_namespace
 import yaml
 
 from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.control import pd_torque_floats
+from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.msgs.cdr import encode_quaternion_stamped
+from rigid_body_attitude.msgs.odometry import encode_odometry
+from rigid_body_attitude.ros.controller import AttitudeControllerNode
 
 PACKAGE = 'rigid_body_attitude'
 #: A reader of the controller's transient-local torque writer that gets its whole history.
@@ -116,7 +122,8 @@ def test_closed_loop_with_the_propagation_node_settles(ros, request, processes, 
 def test_controller_answers_a_pair_and_counts_hostile_inputs(ros, request, processes):
     namespace = unique_namespace(request)
     controller = start('attitude_controller', '--ros-args', '-p', 'kp:=0.5', '-p',
-                       'torque_limit:=1.0', '-r', f'__ns:={namespace}')
+                       'torque_limit:=1.0', '-p', 'state_input:=orientation_twist',
+                       '-r', f'__ns:={namespace}')
     processes.append(controller)
     harness = Harness(ros, namespace)
     orientation = harness.publisher(QuaternionStamped, 'orientation')
@@ -167,13 +174,69 @@ def test_controller_answers_a_pair_and_counts_hostile_inputs(ros, request, proce
     assert code == 0 and 'Traceback' not in stderr, stderr
 
 
+def counted_values(diagnostics) -> dict[str, str]:
+    """The controller's last ``/diagnostics`` values."""
+    for message in reversed(diagnostics):
+        for status in message.status:
+            if status.name.endswith('attitude_controller'):
+                return {value.key: value.value for value in status.values}
+    return {}
+
+
+def test_controller_answers_odom_and_counts_hostile_odom(ros, request, processes):
+    namespace = unique_namespace(request)
+    controller = start('attitude_controller', '--ros-args', '-p', 'kp:=0.5', '-p',
+                       'torque_limit:=1.0', '-r', f'__ns:={namespace}')
+    processes.append(controller)
+    harness = Harness(ros, namespace)
+    odom = harness.publisher(Odometry, 'odom')
+    torques = harness.record(WrenchStamped, 'torque')
+    diagnostics = harness.record(DiagnosticArray, '/diagnostics')
+    harness.wait_for_connections(START_TIMEOUT)
+    attitude = quat.exp([0.2, -0.4, 0.3]).tolist()
+    rate = (0.5, -0.2, 0.1)
+    good = Odometry()
+    good.header.stamp.sec, good.header.stamp.nanosec = 12, 340_000_000
+    good.header.frame_id, good.child_frame_id = 'world', 'base_link'
+    q = good.pose.pose.orientation
+    q.w, q.x, q.y, q.z = attitude
+    angular = good.twist.twist.angular
+    angular.x, angular.y, angular.z = rate
+    zero = (0.0, 0.0, 0.0)
+    hostile = [encode_odometry(1, 'map', 'base_link', zero, attitude, zero, rate),
+               encode_odometry(2, 'world', 'imu_link', zero, attitude, zero, rate),
+               encode_odometry(3, 'world', 'base_link', zero, [1.1, 0.0, 0.0, 0.0], zero, rate),
+               encode_odometry(4, 'world', 'base_link', zero, attitude, zero,
+                               (math.nan, 0.0, 0.0)),
+               encode_odometry(5, 'world', 'base_link', zero, attitude, zero, rate)[:60]]
+    for data in hostile:
+        odom.publish(data)
+    odom.publish(good)
+    assert harness.spin_until(lambda: len(torques) == 1, 10.0)
+    torque = torques[0]
+    assert stamp_ns(torque) == 12_340_000_000 and torque.header.frame_id == 'base_link'
+    expected = pd_torque_floats(attitude, rate, (1.0, 0.0, 0.0, 0.0), (0.5,) * 3, (0.04,) * 3,
+                                (1.0,) * 3)
+    assert (torque.wrench.torque.x, torque.wrench.torque.y, torque.wrench.torque.z) == expected
+    expected_counts = {'rejected wrong_frame': '2', 'rejected non_unit': '1',
+                       'rejected non_finite': '1', 'rejected malformed': '1'}
+    assert harness.spin_until(lambda: all(
+        counted_values(diagnostics).get(key) == value
+        for key, value in expected_counts.items()), 10.0), counted_values(diagnostics)
+    assert counted_values(diagnostics)['ticks answered'] == '1'
+    code, stderr = stop(controller)
+    assert code == 0 and 'Traceback' not in stderr, stderr
+
+
 @pytest.mark.parametrize('arguments, expected', [
     (('-p', 'kd:=-1.0'), 'error: Bad parameter `kd`'),
     (('-p', 'kp:=1'), 'error: Expected parameter `kp` to be a double'),
-    (('-p', 'target_quaternion:=[0.0, 0.0, 0.0, 2.0]'),
-     'error: Expected parameter `target_quaternion` to have norm 1'),
-    (('-p', 'target_rpy:=[0.1, 0.0, 0.0]', '-p', 'target_quaternion:=[0.0, 0.0, 0.0, 1.0]'),
-     'error: Expected at most one of `target_rpy` and `target_quaternion`'),
+    (('-p', 'target_quaternion_xyzw:=[0.0, 0.0, 0.0, 2.0]'),
+     'error: Expected parameter `target_quaternion_xyzw` to have norm 1'),
+    (('-p', 'target_rpy:=[0.1, 0.0, 0.0]', '-p', 'target_quaternion_xyzw:=[0.0, 0.0, 0.0, 1.0]'),
+     'error: Expected at most one of `target_rpy` and `target_quaternion_xyzw`'),
+    (('-p', 'target_quaternion:=[0.0, 0.0, 0.0, 1.0]'),
+     'error: Parameter `target_quaternion` is named `target_quaternion_xyzw`'),
 ])
 def test_bad_parameters_exit_2_with_one_error_line(arguments, expected, processes):
     process = start('attitude_controller', '--ros-args', *arguments)
@@ -182,3 +245,22 @@ def test_bad_parameters_exit_2_with_one_error_line(arguments, expected, processe
     assert process.returncode == 2
     assert stderr.startswith(expected) and stderr.count('\n') == 1, stderr
     assert 'Traceback' not in stderr
+
+
+def test_a_former_parameter_name_is_refused_naming_the_present_one(ros, request):
+    """``target_quaternion`` (renamed ``target_quaternion_xyzw``): refused at start and at run
+    time with a message naming the present name."""
+    namespace = unique_namespace(request)
+    with pytest.raises(InputError, match='`target_quaternion` is named `target_quaternion_xyzw`'):
+        AttitudeControllerNode(context=ros.context, namespace=namespace, parameter_overrides=[
+            Parameter('target_quaternion', value=[0.0, 0.0, 0.0, 1.0])])
+    node = AttitudeControllerNode(context=ros.context, namespace=namespace)
+    try:
+        result = node.set_parameters([Parameter('target_quaternion',
+                                                value=[0.0, 0.0, 0.0, 1.0])])[0]
+        assert not result.successful and 'target_quaternion_xyzw' in result.reason
+        good = node.set_parameters([Parameter('target_quaternion_xyzw',
+                                              value=[0.0, 0.0, 1.0, 0.0])])[0]
+        assert good.successful and node.session.target == (0.0, 0.0, 0.0, 1.0)
+    finally:
+        node.destroy_node()

@@ -223,7 +223,7 @@ def test_reliable_is_one_qos_override_away(ros, request, processes):
 def test_an_incompatible_publisher_is_reported_on_gyro_and_typed_inputs(
         ros, request, processes):
     """Best-effort (sensor-data) publishers on reliable inputs: ``imu`` made reliable with
-    ``qos_overrides`` (a raw subscription, served by the gyro loop) and ``set_pose`` (reliable
+    ``qos_overrides`` (a raw subscription, served by the raw-take loop) and ``set_pose`` (reliable
     by default: a command must arrive) are each reported by rclpy's warning (it names the topic
     as the node created it: relative)."""
     namespace = unique_namespace(request)

@@ -98,9 +98,9 @@ def deep_qos(namespace: str, topics: dict[str, str]) -> dict[str, Any]:
 def publish_and_wait(harness: Harness, node: AttitudePropagatorNode, topic: str,
                      message: Any) -> None:
     """Publish one input and spin until the node has taken it (outputs get 50 ms to arrive)."""
-    expected = node.session.received_count() + 1
+    expected = node.built.session.received_count() + 1
     harness.publishers[topic].publish(message)
-    assert harness.spin_until(lambda: node.session.received_count() >= expected, 5.0)
+    assert harness.spin_until(lambda: node.built.session.received_count() >= expected, 5.0)
     harness.spin_for(0.05)
 
 
@@ -162,18 +162,18 @@ def test_runtime_parameter_changes_are_checked_and_applied(ros, request):
     harness = Harness(ros, unique_namespace(request))
     node = start_node(harness, scene='strapdown')
     assert node.set_parameters([Parameter('max_dt', value=0.5)])[0].successful
-    assert node.session.stream.max_dt == 0.5
+    assert node.built.session.stream.max_dt == 0.5
     assert node.set_parameters([Parameter('constant_dt', value=0.002)])[0].successful
-    assert node.session.stream.constant_dt == 0.002
+    assert node.built.session.stream.constant_dt == 0.002
     refused = node.set_parameters([Parameter('max_dt', value=0.0)])[0]
     assert not refused.successful
     assert '`max_dt` to be a finite number in (0, 3600]' in refused.reason
-    assert node.session.stream.max_dt == 0.5
+    assert node.built.session.stream.max_dt == 0.5
     assert not node.set_parameters([Parameter('body_frame', value='world')])[0].successful
     assert not node.set_parameters([Parameter('scene', value='dzhanibekov')])[0].successful
     assert node.set_parameters([Parameter('world_frame', value='map')])[0].successful
-    assert node.outputs.world_frame == 'map'
-    pose = node.outputs.encode_pose(1, 2, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+    assert node.built.outputs.world_frame == 'map'
+    pose = node.built.outputs.encode_pose(1, 2, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
     assert decode_pose_stamped(pose)[2] == 'map'
 
 
@@ -182,17 +182,17 @@ SET_POSE = ('set_pose', 'set_pose_with_covariance')
 
 @pytest.mark.parametrize('scene, inputs, outputs', [
     ('strapdown', {'imu', 'angular_velocity', *SET_POSE}, {'imu/data', 'pose_with_covariance'}),
-    ('torque_free_box', {*SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
-    ('commanded_torque', {'torque', *SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
-    ('free_flyer', {'torque', *SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
-    ('gyrostat', {'rotor_torque', *SET_POSE}, {'twist', 'energy', 'angular_momentum'}),
+    ('torque_free_box', {*SET_POSE}, {'twist', 'odom', 'energy', 'angular_momentum'}),
+    ('commanded_torque', {'torque', *SET_POSE}, {'twist', 'odom', 'energy', 'angular_momentum'}),
+    ('free_flyer', {'torque', *SET_POSE}, {'twist', 'odom', 'energy', 'angular_momentum'}),
+    ('gyrostat', {'rotor_torque', *SET_POSE}, {'twist', 'odom', 'energy', 'angular_momentum'}),
 ])
 def test_subscriptions_exist_only_for_the_inputs_the_scene_uses(ros, request, scene, inputs,
                                                                 outputs):
     namespace = unique_namespace(request)
     node = AttitudePropagatorNode(context=ros.context, namespace=namespace,
                                   parameter_overrides=[Parameter('scene', value=scene)])
-    assert set(node.subscriptions_by_topic) == inputs
+    assert set(node.built.subscriptions_by_topic) == inputs
     published = {name.removeprefix(namespace + '/')
                  for name, _ in node.get_publisher_names_and_types_by_node(
                      node.get_name(), namespace)}
@@ -209,7 +209,7 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
     node = start_node(harness, scene='strapdown', world_frame='map', **deep_qos(
         namespace, {'imu': 'subscription', 'orientation': 'publisher', 'pose': 'publisher',
                     'imu/data': 'publisher'}))
-    assert node.subscriptions_by_topic['imu'].qos_profile.reliability == \
+    assert node.built.subscriptions_by_topic['imu'].qos_profile.reliability == \
         ReliabilityPolicy.RELIABLE
     imu_publisher = harness.publisher(Imu, 'imu')
     orientations = harness.record(QuaternionStamped, 'orientation')
@@ -252,14 +252,14 @@ def test_constant_rate_at_1khz_matches_closed_form_and_core(ros, request):
     assert (last.angular_velocity.x, last.angular_velocity.y, last.angular_velocity.z) == OMEGA
     # The attitude covariance about world axes (REP-145), as the session holds it after the
     # last fold (1000 steps: 3 folds of 256, 232 steps pending).
-    assert tuple(last.orientation_covariance) == node.session.uncertainty.published
+    assert tuple(last.orientation_covariance) == node.built.session.uncertainty.published
     covariance = np.reshape(last.orientation_covariance, (3, 3))
     assert np.array_equal(covariance, covariance.T) and np.linalg.eigvalsh(covariance)[0] > 0.0
-    assert node.session.stream.accepted == count and not node.session.stream.rejected
+    assert node.built.session.stream.accepted == count and not node.built.session.stream.rejected
 
 
-def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request):
-    """main()'s structure in-process: the node's GyroLoop in a thread of its own takes every
+def test_the_raw_take_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request):
+    """main()'s structure in-process: the node's RawTakeLoop in a thread of its own takes every
     queued gyro message and runs the timers; the harness executor serves the rest (set_pose,
     the reset service) and never the claimed gyro subscriptions."""
     namespace = unique_namespace(request)
@@ -275,7 +275,7 @@ def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request
     imu_outputs = harness.record(Imu, 'imu/data')
     diagnostics = harness.record(DiagnosticArray, '/diagnostics')
     harness.wait_for_connections()
-    loop = node.gyro_loop()
+    loop = node.serving_loop()
     thread = threading.Thread(target=loop.run, daemon=True)
     thread.start()
     try:
@@ -292,8 +292,8 @@ def test_gyro_loop_serves_gyro_topics_and_timers_beside_an_executor(ros, request
         assert [nanoseconds(m.header.stamp) for m in imu_outputs] == stamps_ns
         assert loop.handled == count
         # The diagnostics timer runs in the loop (a gyro scene has no output timer).
-        assert node.output_timer is None and loop.timers == [
-            (node.diagnostics_timer.handle, node.diagnostics_callback)]
+        assert node.built.output_timer is None and loop.timers == [
+            (node.built.diagnostics_timer.handle, node.diagnostics_callback)]
         assert harness.spin_until(lambda: any(
             status_values(m)['accepted'] == str(count) for m in own_statuses(diagnostics,
                                                                              node)), 5.0)
@@ -355,7 +355,7 @@ def test_receive_time_replaces_header_stamps_when_asked(ros, request):
         publish_and_wait(harness, node, 'imu', imu_message(0, OMEGA))
     after_ns = node.get_clock().now().nanoseconds
     stamps_ns = [nanoseconds(m.header.stamp) for m in orientations]
-    assert len(stamps_ns) == 3 and not node.session.stream.rejected
+    assert len(stamps_ns) == 3 and not node.built.session.stream.rejected
     assert before_ns <= stamps_ns[0] < stamps_ns[1] < stamps_ns[2] <= after_ns
     # Integrated over the receive-time differences (exact for a constant rate; the float
     # seconds of the time base carry ~1e-16 s relative error): 1e-12.
@@ -404,7 +404,7 @@ def test_timing_faults_are_rejected_counted_and_reported(ros, request, capfd):
         # At most two exp steps computed in another operation order than the reference
         # (scalar_exp_step with renormalisation): ~10 roundings of 1.1e-16 each, so 1e-14.
         assert np.max(np.abs(scalar_first(orientations[-1:])[0] - attitude)) <= 1e-14
-        assert dict(node.session.stream.rejected) == rejected, offset_ms
+        assert dict(node.built.session.stream.rejected) == rejected, offset_ms
     assert harness.spin_until(lambda: any(
         status_values(m)['rejected time_jump'] == '1' for m in own_statuses(diagnostics, node)),
         3.0)
@@ -520,8 +520,8 @@ def test_non_finite_inputs_are_rejected_and_outputs_stay_finite(ros, request):
     zero_pose.pose.orientation.w = 0.0  # (0, 0, 0, 0): not a rotation
     publish_and_wait(harness, node, 'set_pose', zero_pose)
     assert len(orientations) == 1
-    assert dict(node.session.stream.rejected) == {'non_finite': 2}
-    assert dict(node.session.rejections) == {'non_finite': 1, 'invalid_pose': 1}
+    assert dict(node.built.session.stream.rejected) == {'non_finite': 2}
+    assert dict(node.built.session.rejections) == {'non_finite': 1, 'invalid_pose': 1}
     pose = PoseStamped()
     pose.header.frame_id = 'world'
     pose.pose.orientation.x, pose.pose.orientation.w = 1.0, 0.0  # 180° about x
@@ -573,8 +573,8 @@ def test_commanded_torque_on_sim_time_gives_the_core_rates_and_energy(ros, reque
     publish_and_wait(harness, node, 'torque', wrench)
     wrench.wrench.torque.x, wrench.wrench.torque.y, wrench.wrench.torque.z = torque_body
     publish_and_wait(harness, node, 'torque', wrench)
-    assert node.session.commands_accepted == 1
-    assert dict(node.session.commands.rejected) == {'non_finite': 1}
+    assert node.built.session.commands_accepted == 1
+    assert dict(node.built.session.commands.rejected) == {'non_finite': 1}
     ticks = 50  # 1 s of sim time; the scene holds a command 0.5 s
     for k in range(1, ticks + 1):
         advance_clock(harness, first_ns + k * 20 * MS, twists, k + 1)
@@ -648,7 +648,7 @@ def test_commanded_force_moves_the_pose_as_the_core_predicts(ros, request):
     wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z = force_body
     wrench.wrench.torque.x, wrench.wrench.torque.y, wrench.wrench.torque.z = torque_body
     publish_and_wait(harness, node, 'torque', wrench)
-    assert node.session.commands_accepted == 1  # torque and force from one WrenchStamped
+    assert node.built.session.commands_accepted == 1  # torque and force from one WrenchStamped
     for k in range(1, 11):
         advance_clock(harness, first_ns + k * 20 * MS, twists, k + 1)
     assert harness.spin_until(lambda: len(poses) >= 11, 2.0)
@@ -699,7 +699,8 @@ def test_a_refused_integration_resets_instead_of_crashing(ros, request):
     clock.clock = stamp(first_ns + 20 * MS)
     harness.publishers['/clock'].publish(clock)
     # RK4 would need > 1e6 substeps (h|ω| ≤ 2 rad each): refused, counted, scene reset.
-    assert harness.spin_until(lambda: node.session.rejections['integration_failed'] == 1, 5.0)
+    session = node.built.session
+    assert harness.spin_until(lambda: session.rejections['integration_failed'] == 1, 5.0)
     assert len(twists) == 1
     advance_clock(harness, first_ns + 40 * MS, twists, 2)
     last = twists[-1]

@@ -12,6 +12,9 @@ while the attitude ends where the good stream alone takes it. A new input gets t
 treatment by adding one entry. The issue-sized cases (a 200 Hz stream behind a foreign frame
 or thousands of junk transforms, 4 MB frame ids) run against the installed node in a process
 of its own, whose log and resident memory are measured.
+
+A scene's ``sensors`` sections are given at start: each hostile one in
+:data:`SENSOR_SECTIONS` must stop the node with one short error line that names the key.
 """
 
 from __future__ import annotations
@@ -37,17 +40,27 @@ from rclpy.qos import (
 from rclpy.serialization import serialize_message
 from ros_helpers import Harness, stamp, unique_namespace
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, JointState, MagneticField
 from tf2_msgs.msg import TFMessage
 from test_input_qos import connect, missing_stamps, receive_all, RECORD_QOS
 from test_input_qos import start_node as start_node_process
-from test_node_subprocess import stop_with_sigint
+from test_node_subprocess import start as start_installed, stop_with_sigint
+import yaml
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
+from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
+from rigid_body_attitude.msgs.joint_state import joint_state_encoder
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
+from rigid_body_attitude.ros.serve import error_text
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
+
+
+def rpy(*angles):
+    """``from_rpy`` of roll, pitch, yaw as a (w, x, y, z) tuple."""
+    return tuple(from_rpy(angles).tolist())
+
 
 BASE_NS = 1_700_000_000 * 10**9 + 123_456_789
 MS = 1_000_000
@@ -80,9 +93,9 @@ def start_node(harness: Harness, **parameters: Any) -> AttitudePropagatorNode:
 
 def send(harness: Harness, node: AttitudePropagatorNode, topic: str, payload: Any) -> None:
     """Publish one message (a message or raw bytes); spin until the node has taken it."""
-    expected = node.session.received_count() + 1
+    expected = node.built.session.received_count() + 1
     harness.publishers[topic].publish(payload)
-    assert harness.spin_until(lambda: node.session.received_count() >= expected, 5.0), topic
+    assert harness.spin_until(lambda: node.built.session.received_count() >= expected, 5.0), topic
 
 
 def gyro_message(topic: str, at_ns: int, frame: str = 'base_link') -> Any:
@@ -127,7 +140,7 @@ def test_malformed_gyro_bytes_change_nothing(ros, request, topic, message_type):
     expected = _exp((good_count - 1) * 1e-3 * np.array(OMEGA))
     last = orientations[-1].quaternion
     assert np.max(np.abs(np.array([last.w, last.x, last.y, last.z]) - expected)) <= 1e-14
-    session = node.session
+    session = node.built.session
     assert session.malformed_by_topic == {topic: len(bad), 'set_pose': len(bad)}
     assert session.accepted_count() == good_count
     assert harness.spin_until(
@@ -146,6 +159,8 @@ def _exp(rotation_vector: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize('scene, topic, message_type', [
     ('commanded_torque', 'torque', WrenchStamped),
     ('gyrostat', 'rotor_torque', Vector3Stamped),
+    ('wheel_slew_commanded', 'wheels/command', JointState),
+    ('wheel_slew_commanded', 'dipole', Vector3Stamped),
 ])
 def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, message_type):
     """On sim time: a node fed only malformed commands ticks exactly like one fed nothing."""
@@ -160,9 +175,13 @@ def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, mess
         if role == 'hostile':
             good = message_type()
             good.header.stamp = stamp(BASE_NS)
-            for payload in malformed_variants(serialize_message(good)):
+            good_bytes = serialize_message(good)
+            if message_type is JointState:  # exactly the message (rclpy pads after it)
+                good_bytes = joint_state_encoder('', ['wheel_a'])(
+                    good.header.stamp.sec, good.header.stamp.nanosec, (), (), (0.01,))
+            for payload in malformed_variants(good_bytes):
                 send(harness, node, topic, payload)
-            assert node.session.malformed_by_topic == {topic: 10}
+            assert node.built.session.malformed_by_topic == {topic: 10}
         for k in range(1, 6):
             clock = Clock()
             clock.clock = stamp(1000 * 10**9 + k * 20 * MS)
@@ -170,6 +189,93 @@ def test_malformed_command_bytes_change_nothing(ros, request, scene, topic, mess
             assert harness.spin_until(lambda: len(poses) >= k, 5.0)
         outputs[role] = [(m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z)
                          for m in poses[:5]]
+        ros.executor.remove_node(node)
+        node.destroy_node()
+    assert outputs['hostile'] == outputs['quiet']
+
+
+WHEELS = ['wheel_a', 'wheel_b', 'wheel_c', 'wheel_d']
+
+
+SIM_NS = 1000 * 10**9  # the sim clock's ticks: 1000 s + k 50 ms
+
+
+def joint_state(names, position=(), velocity=(), effort=()) -> JointState:
+    message = JointState()
+    message.header.stamp = stamp(SIM_NS)
+    message.name = list(names)
+    message.position, message.velocity, message.effort = (
+        list(position), list(velocity), list(effort))
+    return message
+
+
+def dipole(vector) -> Vector3Stamped:
+    message = Vector3Stamped()
+    message.header.stamp = stamp(SIM_NS)
+    message.header.frame_id = 'base_link'
+    message.vector.x, message.vector.y, message.vector.z = vector
+    return message
+
+
+#: (topic, message, the reason it is counted under): decodable commands the node refuses.
+HOSTILE_ACTUATOR_COMMANDS = [
+    ('wheels/command', joint_state(WHEELS[:3] + ['wheel_x'], effort=[0.01] * 4),
+     'unknown_wheel'),
+    ('wheels/command', joint_state(WHEELS[:2] + WHEELS[:2], effort=[0.01] * 4),
+     'unknown_wheel'),
+    ('wheels/command', joint_state(['x' * 200] * 1000, effort=[0.01] * 1000), 'unknown_wheel'),
+    ('wheels/command', joint_state(WHEELS[:3], effort=[0.01] * 3), 'missing_wheel'),
+    ('wheels/command', joint_state([], effort=[]), 'missing_wheel'),
+    ('wheels/command', joint_state(WHEELS, velocity=[1.0] * 4, effort=[0.01] * 4),
+     'wheel_fields'),
+    ('wheels/command', joint_state(WHEELS), 'wheel_fields'),
+    ('wheels/command', joint_state(WHEELS, position=[0.0] * 4, effort=[0.01] * 4),
+     'wheel_fields'),
+    ('wheels/command', joint_state(WHEELS, effort=[0.01] * 3), 'wheel_lengths'),
+    ('wheels/command', joint_state(WHEELS, velocity=[1.0] * 1000), 'wheel_lengths'),
+    ('wheels/command', joint_state(WHEELS, effort=[math.nan, 0.0, 0.0, 0.0]), 'non_finite'),
+    ('wheels/command', joint_state(WHEELS, velocity=[math.inf, 0.0, 0.0, 0.0]), 'non_finite'),
+    ('wheels/command', joint_state(WHEELS, effort=[1e13, 0.0, 0.0, 0.0]), 'out_of_range'),
+    ('wheels/command', joint_state(WHEELS, velocity=[-1e300] * 4), 'out_of_range'),
+    ('dipole', dipole((math.nan, 0.0, 0.0)), 'non_finite'),
+    ('dipole', dipole((0.0, 1e13, 0.0)), 'out_of_range'),
+    ('dipole', dipole((-1e308, 1e308, 1e308)), 'out_of_range'),
+]
+
+
+def test_hostile_wheel_and_dipole_commands_are_counted_and_change_nothing(ros, request):
+    """On sim time: a node sent every refused command ticks exactly like one sent nothing,
+    its attitude and its wheels alike, and counts each by its reason."""
+    outputs = {}
+    for role in ('hostile', 'quiet'):
+        harness = Harness(ros, unique_namespace(request) + '_' + role)
+        node = start_node(harness, scene='wheel_slew_commanded', use_sim_time=True)
+        harness.publisher(Clock, '/clock')
+        harness.publisher(JointState, 'wheels/command')
+        harness.publisher(Vector3Stamped, 'dipole')
+        poses = harness.record(QuaternionStamped, 'orientation')
+        wheels = harness.record(JointState, 'wheels/state')
+        harness.wait_for_connections()
+        if role == 'hostile':
+            for topic, payload, _ in HOSTILE_ACTUATOR_COMMANDS:
+                send(harness, node, topic, payload)
+            counts = node.built.session.rejection_counts()
+            expected: dict[str, int] = {}
+            for _, _, reason in HOSTILE_ACTUATOR_COMMANDS:
+                expected[reason] = expected.get(reason, 0) + 1
+            assert {reason: counts[reason] for reason in expected} == expected
+            assert node.built.session.commands_accepted == 0
+        for k in range(1, 6):
+            clock = Clock()
+            clock.clock = stamp(SIM_NS + k * 50 * MS)
+            harness.publishers['/clock'].publish(clock)
+            assert harness.spin_until(lambda: len(poses) >= k and len(wheels) >= k, 5.0)
+        outputs[role] = ([(m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z)
+                          for m in poses[:5]],
+                         [(tuple(m.velocity), tuple(m.effort)) for m in wheels[:5]])
+        if role == 'hostile':
+            report = node.built.session.report()
+            assert 'unknown_wheel' in report.message and 'wheel_fields' in report.message
         ros.executor.remove_node(node)
         node.destroy_node()
     assert outputs['hostile'] == outputs['quiet']
@@ -303,7 +409,7 @@ def foreign_frames() -> list[Imu]:
 
 
 #: The tilt of the body at rest (levelling surfaces), roll and pitch [rad].
-TILT = rpy_quaternion(0.3, -0.2, 0.0)
+TILT = rpy(0.3, -0.2, 0.0)
 #: Samples of the body at rest: 0.6 s at 1 kHz, past ``align_seconds`` 0.3 s of rest.
 GOOD_AT_REST = 600
 
@@ -335,6 +441,70 @@ def non_finite_specific_forces() -> list[Imu]:
     return at_rest_cases([(math.nan, 0.0, 9.8), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf)])
 
 
+def _field(at_ns: int, field: tuple[float, float, float], frame: str = 'base_link',
+           sec_nanosec: tuple[int, int] | None = None) -> MagneticField:
+    message = MagneticField()
+    message.header.stamp = stamp(at_ns)
+    if sec_nanosec is not None:
+        message.header.stamp.sec, message.header.stamp.nanosec = sec_nanosec
+    message.header.frame_id = frame
+    f = message.magnetic_field
+    f.x, f.y, f.z = field
+    return message
+
+
+def hostile_fields() -> list[MagneticField]:
+    """Fields NaN, Inf, zero or beyond any magnetometer; frames without a mount (1 MiB and an
+    escape sequence included); zero and invalid stamps: none may reach the filter."""
+    earth = (2e-5, 0.0, -4e-5)
+    at = [BASE_NS + k * MS + MS // 2 for k in range(12)]
+    return [_field(at[0], (math.nan, 0.0, 0.0)), _field(at[1], (0.0, math.inf, 0.0)),
+            _field(at[2], (0.0, 0.0, 0.0)), _field(at[3], (1.0, 0.0, 0.0)),
+            _field(at[4], (1e308, 1e308, 1e308)), _field(at[5], earth, 'elsewhere'),
+            _field(at[6], earth, 'x' * 2**20), _field(at[7], earth, '\x1b[2J\x07'),
+            _field(at[8], earth, sec_nanosec=(0, 0)),
+            _field(at[9], earth, sec_nanosec=(BASE_NS // 10**9, 10**9))]
+
+
+def malformed_fields() -> list[bytes]:
+    return malformed_variants(serialize_message(_field(BASE_NS, (2e-5, 0.0, -4e-5))))
+
+
+def _measurement(at_ns: int, q: tuple[float, ...], frame: str = 'world',
+                 block: list[float] | None = None) -> PoseWithCovarianceStamped:
+    message = PoseWithCovarianceStamped()
+    message.header.stamp, message.header.frame_id = stamp(at_ns), frame
+    o = message.pose.pose.orientation
+    o.w, o.x, o.y, o.z = q
+    covariance = [0.0] * 36
+    block = block or [1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 1e-4]
+    for row in range(3):
+        covariance[7 * row] = 1e9
+        covariance[21 + 6 * row:24 + 6 * row] = [float(v) for v in block[3 * row:3 * row + 3]]
+    message.pose.covariance = covariance
+    return message
+
+
+def hostile_measurements() -> list[PoseWithCovarianceStamped]:
+    """Attitude measurements in another frame, zero or NaN quaternions, covariance blocks
+    huge, unphysical or not PSD, stamps far from the gyro's: none may correct the attitude."""
+    at = BASE_NS + MS // 2
+    blocks = [[1e308, 0, 0, 0, 1e308, 0, 0, 0, 1e308], [1, 0, 0, 0, -1, 0, 0, 0, 1],
+              [1, 0.5, 0, 0, 1, 0, 0, 0, 1], [math.nan, 0, 0, 0, 1, 0, 0, 0, 1],
+              [1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 10.0]]
+    return ([_measurement(at, UNIT, frame) for frame in ('map', '', 'x' * 2**20)]
+            + [_measurement(at, (0.0, 0.0, 0.0, 0.0)), _measurement(at, (math.nan, 0, 0, 1))]
+            + [_measurement(at, UNIT, block=block) for block in blocks]
+            + [_measurement(at + 10**10, UNIT), _measurement(at - 10**10, UNIT)])
+
+
+def malformed_measurements() -> list[bytes]:
+    return malformed_variants(serialize_message(_measurement(BASE_NS, UNIT)))
+
+
+_FILTER = dict(parameters=dict(scene='imu_filter'))
+_MEASUREMENT_REASONS = tuple(f'attitude_measurement_{reason}' for reason in (
+    'wrong_frame', 'invalid_pose', 'non_finite', 'invalid_covariance', 'stale_measurement'))
 _TF = dict(imu_frame='imu_link', latched=True, before_last=send_mount)
 #: Every surface and hostile class the in-process node is fed. Add an entry to cover a new
 #: input (its topic, message type, cases and the reasons they must be counted under).
@@ -351,6 +521,15 @@ SURFACES = [
     Surface('imu: specific force NaN or Inf while levelling', 'imu', Imu,
             non_finite_specific_forces, ('non_finite',), at_rest=True,
             parameters=dict(align_seconds=0.3)),
+    Surface('imu/mag: hostile fields', 'imu/mag', MagneticField, hostile_fields,
+            ('magnetometer_non_finite', 'magnetometer_out_of_range', 'magnetometer_no_mount',
+             'magnetometer_invalid_stamp'), **_FILTER),
+    Surface('imu/mag: malformed bytes', 'imu/mag', MagneticField, malformed_fields,
+            ('malformed',), **_FILTER),
+    Surface('attitude_measurement: hostile measurements', 'attitude_measurement',
+            PoseWithCovarianceStamped, hostile_measurements, _MEASUREMENT_REASONS, **_FILTER),
+    Surface('attitude_measurement: malformed bytes', 'attitude_measurement',
+            PoseWithCovarianceStamped, malformed_measurements, ('malformed',), **_FILTER),
 ]
 
 
@@ -359,14 +538,14 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
     """Each case after a good sample: all counted under the surface's reasons, every log line
     short, and the attitude exactly the good stream's."""
     harness = Harness(ros, unique_namespace(request))
-    node = start_node(harness, scene='strapdown', **surface.parameters)
+    node = start_node(harness, **{'scene': 'strapdown', **surface.parameters})
     lines: list[str] = []
-    log = node.outputs.log
+    log = node.built.outputs.log
 
     def logged(level: int, text: str) -> None:  # every line the node logs, also kept here
         lines.append(text)
         log(level, text)
-    node.outputs.log = logged  # type: ignore[method-assign]
+    node.built.outputs.log = logged  # type: ignore[method-assign]
     harness.publisher(Imu, 'imu')
     harness.publisher(surface.message_type, surface.topic,
                       LATCHED_QOS if surface.latched else DEEP_QOS)
@@ -383,10 +562,10 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
         if k < len(cases):
             harness.publishers[surface.topic].publish(cases[k])
         harness.spin_for(0.01 if k < len(cases) + 1 or k % 50 == 0 else 0.0)
-    counts = node.session.rejection_counts
+    counts = node.built.session.rejection_counts
     expected = len(cases) if surface.counted is None else surface.counted
     # Levelling: the samples of the rest window are accepted, not integrated (no output).
-    session = node.session
+    session = node.built.session
     assert harness.spin_until(
         lambda: sum(counts()[reason] for reason in surface.reasons) >= expected
         and session.accepted_count() >= good
@@ -401,12 +580,110 @@ def test_hostile_cases_are_counted_and_change_nothing(ros, request, surface):
     last = orientations[-1].quaternion
     q = np.array([last.w, last.x, last.y, last.z])
     if surface.at_rest:  # levelled from the clean samples: the true tilt, up to round-off
-        assert node.session.alignment.at_rest
+        assert node.built.session.alignment.at_rest
         assert math.degrees(tilt_angle(tuple(q.tolist()), TILT)) < 0.05
     else:
         assert np.max(np.abs(q - _exp((good - 1) * 1e-3 * np.array(OMEGA)))) <= 1e-14
     assert lines and max(len(line) for line in lines) < 600
     assert not any('\x1b' in line or '\n' in line for line in lines)
+
+
+# -- the scene's sensors sections: refused at start ----------------------------------------------
+
+_MAGNETOMETER = {'rate': 100.0, 'noise_density': 1e-8, 'intensity': 5e-5}
+
+
+def _magnetometer(**keys: Any) -> dict[str, Any]:
+    return {'sensors': {'magnetometer': {**_MAGNETOMETER, **keys}}}
+
+
+def _star_tracker(**keys: Any) -> dict[str, Any]:
+    return {'sensors': {'star_tracker': {'rate': 10.0, **keys}}}
+
+
+#: Hostile ``sensors`` (and ``sun``) sections of a dynamics scene, one key each (the cases of
+#: studies/hostile_inputs.py's ``sensors sections``) → what the one error line must name.
+SENSOR_SECTIONS: dict[str, tuple[dict[str, Any], str]] = {
+    'magnetometer rate 1e308': (_magnetometer(rate=1e308), 'sensors.magnetometer.rate'),
+    'magnetometer noise density NaN': (_magnetometer(noise_density=math.nan),
+                                       'sensors.magnetometer.noise_density'),
+    'magnetometer without a field': ({'sensors': {'magnetometer': {
+        'rate': 100.0, 'noise_density': 1e-8}}}, 'sensors.magnetometer needs the local field'),
+    'magnetometer soft iron singular': (_magnetometer(soft_iron=[[1, 0, 0], [0, 1, 0],
+                                                                 [0, 0, 0]]),
+                                        'sensors.magnetometer.soft_iron'),
+    'magnetometer soft iron mirrored': (_magnetometer(soft_iron=[[-1, 0, 0], [0, 1, 0],
+                                                                 [0, 0, 1]]),
+                                        'sensors.magnetometer.soft_iron'),
+    'magnetometer hard iron 1e308': (_magnetometer(hard_iron=[1e308, 0, 0]),
+                                     'sensors.magnetometer.hard_iron'),
+    "magnetometer on the node's own topic": (_magnetometer(topic='pose'),
+                                             'sensors.magnetometer.topic'),
+    'magnetometer topic of 5000 characters': (_magnetometer(topic='x' * 5000),
+                                              'sensors.magnetometer.topic'),
+    'magnetometer frame with escape sequences': (_magnetometer(frame_id='\x1b[2J\x07'),
+                                                 'sensors.magnetometer.frame_id'),
+    'magnetometer unknown key': (_magnetometer(noise=1.0), "'noise' in sensors.magnetometer"),
+    'magnetometer seed 2^63': (_magnetometer(seed=2**63), 'sensors.magnetometer.seed'),
+    'star tracker rate 1e4': (_star_tracker(rate=1e4), 'sensors.star_tracker.rate'),
+    'star tracker period off the step': (_star_tracker(rate=300.0),
+                                         'sensors.star_tracker.rate'),
+    'star tracker zero boresight': (_star_tracker(boresight=[0, 0, 0]),
+                                    'sensors.star_tracker.boresight'),
+    'star tracker boresight and mount': (_star_tracker(boresight=[1, 0, 0], mount_rpy=[0, 0, 1]),
+                                         'sensors.star_tracker takes mount_rpy or boresight'),
+    'star tracker zero noise': (_star_tracker(cross_boresight_noise=0.0),
+                                'sensors.star_tracker.cross_boresight_noise'),
+    'star tracker Sun exclusion without a Sun': (_star_tracker(sun_exclusion_angle=0.5),
+                                                 'sensors.star_tracker.sun_exclusion_angle'),
+    'star tracker section a list': ({'sensors': {'star_tracker': [1, 2, 3]}},
+                                    'sensors.star_tracker to be a mapping'),
+    'two sensors on one topic': ({'sensors': {'magnetometer': {**_MAGNETOMETER, 'topic': 'att'},
+                                              'star_tracker': {'rate': 10.0, 'topic': 'att'}}},
+                                 'sensors.star_tracker.topic'),
+    'one frame, two mounts': ({'sensors': {
+        'magnetometer': {**_MAGNETOMETER, 'frame_id': 'f'},
+        'star_tracker': {'rate': 10.0, 'frame_id': 'f', 'boresight': [1, 0, 0]}}},
+        "name the same frame_id 'f'"),
+    'zero Sun direction': ({**_star_tracker(sun_exclusion_angle=0.5),
+                            'sun': {'direction': [0, 0, 0]}}, 'sun.direction'),
+    'sensors in a gyro scene': ({'rate_source': 'gyro', **_magnetometer()},
+                                'simulated sensors need a dynamics scene'),
+}
+
+
+def sensed_scene(path: Path, section: dict[str, Any]) -> str:
+    path.write_text(yaml.safe_dump({'rate_source': 'dynamics', 'step': 0.001,
+                                    'body': {'inertia': {'moments': [1, 2, 3]}}, **section}))
+    return str(path)
+
+
+@pytest.mark.parametrize('name', SENSOR_SECTIONS)
+def test_a_hostile_sensors_section_is_refused_in_one_line_naming_the_key(
+        ros, request, name, tmp_path):
+    """The node in this process refuses the scene: one SceneError, its first line all there
+    is, at most 600 characters, without control characters, naming the key."""
+    section, key = SENSOR_SECTIONS[name]
+    path = sensed_scene(tmp_path / 'sensed.yaml', section)
+    harness = Harness(ros, unique_namespace(request))
+    with pytest.raises(SceneError) as refused:
+        start_node(harness, scene=path)
+    text = str(refused.value)
+    assert error_text(refused.value) == text and len(text) <= 600, text
+    assert text.startswith(f'Scene file {path!r}: ') and key in text, text
+    assert not any(ord(character) < 32 for character in text), text
+
+
+def test_the_installed_node_gives_one_error_line_for_a_hostile_sensors_section(processes,
+                                                                               tmp_path):
+    section, key = SENSOR_SECTIONS['magnetometer frame with escape sequences']
+    process = start_installed('--ros-args', '-p',
+                              f'scene:={sensed_scene(tmp_path / "sensed.yaml", section)}')
+    processes.append(process)
+    _, stderr = process.communicate(timeout=30.0)
+    assert process.returncode == 2
+    assert stderr.startswith('error: Scene file ') and key in stderr
+    assert stderr.count('\n') == 1 and '\x1b' not in stderr and 'Traceback' not in stderr
 
 
 # -- the installed node in a process of its own -------------------------------------------------

@@ -54,7 +54,7 @@ def executable() -> Path:
 
 @pytest.fixture(params=['fast', 'stock'])
 def serving_path(request) -> str:
-    """The node's serving path: its own gyro loop, or rclpy's stock executor."""
+    """The node's serving path: its own raw-take loop, or rclpy's stock executor."""
     return request.param
 
 
@@ -141,9 +141,9 @@ def test_strapdown_over_topics_then_sigint_exits_0(ros, request, processes, serv
         assert np.max(np.abs(np.array([q.w, q.x, q.y, q.z]) - expected)) <= 1e-12
 
 
-def test_services_set_pose_and_timers_work_beside_the_gyro_loop(
+def test_services_set_pose_and_timers_work_beside_the_raw_take_loop(
         ros, request, processes, serving_path):
-    """The executable serves gyro topics and timers in its gyro loop and the rest with an
+    """The executable serves gyro topics and timers in its raw-take loop and the rest with an
     executor thread (or all with the stock executor): reset, set_pose and /diagnostics all
     answer while it runs."""
     namespace = unique_namespace(request)

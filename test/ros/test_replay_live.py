@@ -169,7 +169,7 @@ class LiveRun:
         def publish() -> None:
             self.input.publish(data)
         publish()
-        self._until(lambda: self.node.session.received_count() >= expected, publish,
+        self._until(lambda: self.node.built.session.received_count() >= expected, publish,
                     f'input {expected}')
 
     def tick(self, clock_ns: int) -> None:
@@ -185,7 +185,7 @@ class LiveRun:
             return
         self.ticks_done += 1
         count = self.ticks_done
-        clock = self.node.session.clock
+        clock = self.node.built.session.clock
         self._until(lambda: clock.accepted >= count, publish, f'the tick at {clock_ns}')
 
     def wait_for_outputs(self, counts: dict[str, int]) -> None:
@@ -421,7 +421,7 @@ def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_
     if mounted:
         run.harness.node.create_publisher(TFMessage, '/tf_static', TF_STATIC_QOS).publish(
             tf_static)
-        gate = run.node.mount_gate
+        gate = run.node.built.mount_gate
         assert run.harness.spin_until(lambda: gate.transforms.count == 2, 10.0)
     play(run, bag_path)
     run.wait_for_outputs({name: len(offline[name]) for name in run.received})
@@ -440,7 +440,7 @@ def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_
             sensor = quaternion.multiply(body, mount)
             assert quaternion.attitude_error(offline['imu/data'][stamp][:4], sensor) < 1e-12
     if levelled:
-        alignment = run.node.session.alignment
+        alignment = run.node.built.session.alignment
         assert alignment.at_rest and alignment.gyro_bias == (0.0, 0.0, 0.0)
         stamps = sorted(offline['orientation'])
         # Nothing before the rest window was averaged; every moving sample published.
@@ -452,9 +452,9 @@ def test_replay_offline_and_live_agree_and_match_the_closed_form(name, ros, tmp_
         case.stamps.size - len(FAULTS) * faulty if case.rate_source == 'gyro'
         else _tick_count(case.stamps))
     if faulty:  # rejected alike: 3 malformed, 1 out of range
-        rejected = run.node.session.rejection_counts()
+        rejected = run.node.built.session.rejection_counts()
         assert (rejected['malformed'], rejected['out_of_range']) == (3, 1)
-        assert run.node.session.malformed_by_topic == {'imu': 3}
+        assert run.node.built.session.malformed_by_topic == {'imu': 3}
     print(f'{name}: offline vs live max difference {worst:.3g} over {differences}; '
           f'closed-form error {np.max(closed_form_errors(case, offline["orientation"])):.3g} '
           f'rad (bound {case.tolerance:.3g})')

@@ -85,10 +85,15 @@ def drive_clock(harness, truths, seconds):
     clock = harness.publisher(Clock, '/clock')
     for k in range(int(seconds * 1e9 / PERIOD_NS) + 1):
         now = START_NS + k * PERIOD_NS
-        clock.publish(Clock(clock=stamp(now)))
-        assert harness.spin_until(lambda: all(
-            truth and stamp_ns(truth[-1]) >= now for truth in truths), 10.0), (
-            f'no truth at {now} ns from every dynamics node')
+        # /clock is volatile: a tick a node's reader missed (matched late on a loaded
+        # machine) is sent again, up to 10 s in all.
+        for _ in range(5):
+            clock.publish(Clock(clock=stamp(now)))
+            if harness.spin_until(lambda: all(
+                    truth and stamp_ns(truth[-1]) >= now for truth in truths), 2.0):
+                break
+        else:
+            raise AssertionError(f'no truth at {now} ns from every dynamics node')
 
 
 def nees_at_checks(truth, estimates, covariances):
@@ -120,8 +125,10 @@ def test_strapdown_error_over_ros_is_consistent_with_its_covariance(ros, request
                  for run in range(RUNS)]
     covariances = [harness.record(PoseWithCovarianceStamped,
                                   f'/r{run}/est/pose_with_covariance') for run in range(RUNS)]
-    harness.publisher(Clock, '/clock')
+    clock = harness.publisher(Clock, '/clock')
     harness.wait_for_connections(60.0)
+    assert harness.spin_until(lambda: clock.get_subscription_count() >= RUNS, 60.0), (
+        f'/clock read by {clock.get_subscription_count()} of the {RUNS} dynamics nodes')
     duration = max(CHECKS_S) + 0.1
     drive_clock(harness, truths, duration)
     last = START_NS + round(max(CHECKS_S) * 1e9)

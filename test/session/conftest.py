@@ -30,6 +30,12 @@ class RecordingSink:
     covariances: list[tuple[float, ...]] = field(default_factory=list)
     mounts: list[tuple[float, ...] | None] = field(default_factory=list)
     simulated: list[tuple[str, bytes]] = field(default_factory=list)
+    wheel_states: list[bytes] = field(default_factory=list)
+    accelerations: list[tuple[int, int, tuple[float, ...], tuple[float, ...]]] = field(
+        default_factory=list)
+
+    def acceleration(self, sec, nanosec, estimate):
+        self.accelerations.append((sec, nanosec, *estimate()))
 
     def sensor_mount(self, q_body_sensor):
         self.mounts.append(q_body_sensor)
@@ -47,8 +53,14 @@ class RecordingSink:
     def invariants(self, sec, nanosec, energy, world_momentum):
         self.invariant_samples.append((sec, nanosec, energy, world_momentum))
 
-    def simulated_imu(self, topic, data):
+    def sensor_wanted(self, topic):
+        return True
+
+    def simulated_sensor(self, topic, data):
         self.simulated.append((topic, data))
+
+    def wheel_state(self, data):
+        self.wheel_states.append(data)
 
     def diagnostics(self, report):
         self.reports.append(report)

@@ -133,7 +133,7 @@ def test_saturation_and_target_parameters():
     assert sink.torques[0][1] == pytest.approx(expected, abs=1e-17)
     assert max(abs(value) for value in sink.torques[0][1]) == 0.001
     x, y, z, w = 0.0, 0.0, math.sin(0.5), math.cos(0.5)
-    by_quaternion, sink_q = session(target_quaternion=(x, y, z, w), torque_limit=0.001)
+    by_quaternion, sink_q = session(target_quaternion_xyzw=(x, y, z, w), torque_limit=0.001)
     tick(by_quaternion, SECOND)
     assert sink_q.torques[0][1] == pytest.approx(sink.torques[0][1], abs=1e-17)
 
@@ -198,16 +198,47 @@ def test_diagnostics_warn_while_no_tick_is_answered():
     assert ('rejected wrong_frame', '1') in sink.reports[-1].values
 
 
+def test_odom_answers_its_tick_at_once_with_the_law_as_the_pair_does():
+    by_odom, odom_sink = session()
+    by_pair, pair_sink = session(state_input='orientation_twist')
+    for stamp_ns in (0, 10 * MS, 20 * MS):
+        sec, nanosec = divmod(stamp_ns, SECOND)
+        by_odom.odometry(sec, nanosec, 'world', 'base_link', attitude_at(stamp_ns),
+                         rate_at(stamp_ns))
+        assert len(odom_sink.torques) == stamp_ns // (10 * MS) + 1  # answered at once
+        tick(by_pair, stamp_ns)
+    assert odom_sink.torques == pair_sink.torques
+    assert odom_sink.torques[0][1] == pd_torque_floats(
+        attitude_at(0), rate_at(0), (1.0, 0.0, 0.0, 0.0), (0.1,) * 3, (0.04,) * 3,
+        (0.0,) * 3)
+
+
+@pytest.mark.parametrize('frame, child, attitude, rate, reason', [
+    ('map', 'base_link', (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 'wrong_frame'),
+    ('world', 'imu', (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 'wrong_frame'),
+    ('world', 'base_link', (1.1, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 'non_unit'),
+    ('world', 'base_link', (math.nan, 0.0, 0.0, 1.0), (0.0, 0.0, 0.0), 'non_finite'),
+    ('world', 'base_link', (1.0, 0.0, 0.0, 0.0), (0.0, math.inf, 0.0), 'non_finite'),
+])
+def test_bad_odom_is_rejected_and_counted(frame, child, attitude, rate, reason):
+    controller, sink = session()
+    controller.odometry(1, 0, frame, child, attitude, rate)
+    controller.malformed('odom', 'truncated')
+    assert sink.torques == [] and controller.rejections == {reason: 1, 'malformed': 1}
+    controller.publish_diagnostics()
+    assert 'no tick answered: waiting for odom' in sink.reports[-1].message
+
+
 @pytest.mark.parametrize('overrides, message', [
     ({'kp': -1.0}, 'Expected parameter `kp` to be a finite number in [0, 1e6], got -1.0'),
     ({'kd': 1}, 'Expected parameter `kd` to be a double'),
     ({'control_period': math.nan}, 'Expected parameter `control_period` to be a finite number'),
     ({'torque_limit': math.inf}, 'Expected parameter `torque_limit` to be a finite number'),
     ({'target_rpy': (0.0, 1.0)}, 'Expected parameter `target_rpy` to be a double array of 3'),
-    ({'target_rpy': (0.0, 0.0, 1.0), 'target_quaternion': (0.0, 0.0, 0.0, 1.0)},
-     'Expected at most one of `target_rpy` and `target_quaternion`, got both'),
-    ({'target_quaternion': (0.0, 0.0, 0.0, 0.5)},
-     'Expected parameter `target_quaternion` to have norm 1 (within 0.001), got norm 0.5'),
+    ({'target_rpy': (0.0, 0.0, 1.0), 'target_quaternion_xyzw': (0.0, 0.0, 0.0, 1.0)},
+     'Expected at most one of `target_rpy` and `target_quaternion_xyzw`, got both'),
+    ({'target_quaternion_xyzw': (0.0, 0.0, 0.0, 0.5)},
+     'Expected parameter `target_quaternion_xyzw` to have norm 1 (within 0.001), got norm 0.5'),
     ({'body_frame': 'world'}, 'Expected `world_frame` and `body_frame` to differ'),
     ({'gain': 1.0}, 'Unknown parameter `gain`'),
 ])

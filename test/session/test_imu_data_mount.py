@@ -11,7 +11,13 @@ from conftest import BASE_NS, MS
 from rigid_body_attitude.bag import deserialize
 from rigid_body_attitude.msgs import IMU, encode_imu, imu_with_orientation
 from rigid_body_attitude.session.decoding import input_handler
-from rigid_body_attitude.session.levelling import rpy_quaternion
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
+
+
+def rpy(*angles):
+    """``from_rpy`` of roll, pitch, yaw as a (w, x, y, z) tuple."""
+    return tuple(from_rpy(angles).tolist())
+
 
 MOUNT_RPY = (0.4, -0.7, 2.0)
 RATE_SENSOR = (0.3, -0.1, 0.8)
@@ -23,7 +29,7 @@ def test_the_session_tells_its_sink_the_mount_given_or_found(open_scene):
     as ``None`` (nothing composed per sample); no mount: nothing told."""
     session, sink = open_scene('strapdown', mount_rpy=MOUNT_RPY)
     assert len(sink.mounts) == 1  # normalised: equal to the last bit or so
-    assert np.max(np.abs(np.subtract(sink.mounts[0], rpy_quaternion(*MOUNT_RPY)))) < 1e-15
+    assert np.max(np.abs(np.subtract(sink.mounts[0], rpy(*MOUNT_RPY)))) < 1e-15
     plain, plain_sink = open_scene('strapdown')
     assert plain_sink.mounts == []
     plain.set_mount((0.0, 2.0, 0.0, 0.0))  # normalised

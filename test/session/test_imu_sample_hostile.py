@@ -18,12 +18,18 @@ from rigid_body_attitude.core.estimation.alignment import tilt_angle, world_up
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs import encode_imu
 from rigid_body_attitude.session.decoding import input_handler
-from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
 from rigid_body_attitude.session.reports import LEVEL_OK
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
+
+
+def rpy(*angles):
+    """``from_rpy`` of roll, pitch, yaw as a (w, x, y, z) tuple."""
+    return tuple(from_rpy(angles).tolist())
+
 
 G = 9.80665
 PERIOD_NS = 5 * MS  # 200 Hz
-TRUTH = rpy_quaternion(0.3, -0.2, 0.0)
+TRUTH = rpy(0.3, -0.2, 0.0)
 
 
 def rest_accel():

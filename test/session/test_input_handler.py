@@ -6,7 +6,7 @@ from conftest import BASE_NS, MS
 
 from rigid_body_attitude.msgs import (
     TWIST_STAMPED, encode_imu, encode_twist_stamped, encode_vector3_stamped)
-from rigid_body_attitude.session.decoding import RATE_DECODERS, input_handler
+from rigid_body_attitude.session.decoding import input_handler
 
 RATE = (0.0, 0.0, 2.0)
 
@@ -29,9 +29,9 @@ def test_vector3_input_has_no_imu_bytes(open_scene):
     assert len(sink.attitudes) == 3 and sink.imus == [None, None, None]
 
 
-def test_another_decoder_feeds_the_topic_of_the_node(open_scene):
+def test_another_rate_type_feeds_the_topic_of_the_node(open_scene):
     session, sink = open_scene('strapdown')
-    handle = input_handler(session, 'angular_velocity', RATE_DECODERS[TWIST_STAMPED])
+    handle = input_handler(session, 'angular_velocity', TWIST_STAMPED)
     for k in range(3):
         handle(encode_twist_stamped(BASE_NS + k * MS, 'imu_link', (9.0, 9.0, 9.0), RATE))
     handle(b'\x00\x01\x00\x00')

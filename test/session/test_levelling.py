@@ -21,10 +21,16 @@ from rigid_body_attitude.core.errors import CalibrationError
 from rigid_body_attitude.msgs import encode_imu, encode_vector3_stamped
 from rigid_body_attitude.session.base import LEVEL_INFO
 from rigid_body_attitude.session.decoding import input_handler
-from rigid_body_attitude.session.levelling import rpy_quaternion
 from rigid_body_attitude.session.parameters import check_values, defaults
 from rigid_body_attitude.session.reports import LEVEL_OK, LEVEL_WARN
 from rigid_body_attitude.tools.broad import load_trial
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
+
+
+def rpy(*angles):
+    """``from_rpy`` of roll, pitch, yaw as a (w, x, y, z) tuple."""
+    return tuple(from_rpy(angles).tolist())
+
 
 G = 9.80665
 PERIOD_NS = 5 * MS  # 200 Hz
@@ -53,7 +59,7 @@ def feed(handle, samples, frame='imu_link'):
 def test_levels_to_the_tilt_of_the_gravity_it_measures(open_scene):
     """ENU, NED and NWU: the levelled roll and pitch are those of the attitude at rest."""
     for world_axes in ('enu', 'ned', 'nwu'):
-        truth = rpy_quaternion(0.3, -0.2, 0.0)
+        truth = rpy(0.3, -0.2, 0.0)
         session, sink = open_scene('strapdown', world_axes=world_axes)
         handle = input_handler(session, 'imu')
         feed(handle, rest_samples(400, specific_force(truth, world_axes), random.Random(1)))
@@ -103,7 +109,7 @@ def test_a_rotation_after_levelling_is_integrated_less_the_levelled_bias(open_sc
         handle(encode_imu(BASE_NS + k * PERIOD_NS, 'imu_link', rate, accel))
     last = sink.attitudes[-1][2]
     turned = quaternion.multiply(quaternion.conjugate(start), last)
-    expected = rpy_quaternion(0.0, 0.0, 0.5)
+    expected = rpy(0.0, 0.0, 0.5)
     # The bias estimate's error (noise 0.003 rad/s over 1 s: ~2e-4 rad/s) stays within 1e-3 rad.
     assert float(quaternion.attitude_error(turned, expected)) < 1e-3
 
@@ -115,9 +121,9 @@ def test_mount_rpy_turns_sensor_rates_into_body_rates(open_scene):
     handle = input_handler(session, 'imu')
     # Level body, sensor yawed 90°: gravity along z in both frames; tilt the body by 0.2 rad
     # about its y axis = the sensor's x axis.
-    body_truth = rpy_quaternion(0.0, 0.2, 0.0)
+    body_truth = rpy(0.0, 0.2, 0.0)
     accel_body = specific_force(body_truth)
-    mount = rpy_quaternion(0.0, 0.0, math.pi / 2)
+    mount = rpy(0.0, 0.0, math.pi / 2)
     accel_sensor = tuple(quaternion.rotate_inverse(mount, accel_body).tolist())
     feed(handle, rest_samples(400, accel_sensor, random.Random(5), bias=(0.0, 0.0, 0.0)))
     assert math.degrees(tilt_angle(session.alignment.attitude, body_truth)) < 0.05
@@ -125,18 +131,18 @@ def test_mount_rpy_turns_sensor_rates_into_body_rates(open_scene):
     for k in range(400, 500):  # 0.5 s at 1 rad/s about the sensor x axis
         handle(encode_imu(BASE_NS + k * PERIOD_NS, 'imu_link', (1.0, 0.0, 0.0), accel_sensor))
     turned = quaternion.multiply(quaternion.conjugate(start), sink.attitudes[-1][2])
-    assert float(quaternion.attitude_error(turned, rpy_quaternion(0.0, 0.5, 0.0))) < 2e-3
+    assert float(quaternion.attitude_error(turned, rpy(0.0, 0.5, 0.0))) < 2e-3
 
 
 def test_set_mount_and_mount_needed(open_scene):
     session, sink = open_scene('strapdown', align_seconds=0.0)
     assert session.mount_needed('imu_link') and not session.mount_needed('base_link')
-    session.set_mount(rpy_quaternion(math.pi / 2, 0.0, 0.0))  # sensor y = body z
+    session.set_mount(rpy(math.pi / 2, 0.0, 0.0))  # sensor y = body z
     handle = input_handler(session, 'angular_velocity')
     for k in range(101):  # 0.5 s at 1 rad/s about the sensor y axis
         handle(encode_vector3_stamped(BASE_NS + k * PERIOD_NS, 'imu_link', (0.0, 1.0, 0.0)))
     assert float(quaternion.attitude_error(sink.attitudes[-1][2],
-                                           rpy_quaternion(0.0, 0.0, 0.5))) < 1e-9
+                                           rpy(0.0, 0.0, 0.5))) < 1e-9
     given, _ = open_scene('strapdown', mount_rpy=(0.0, 0.0, 0.0))
     assert not given.mount_needed('imu_link')
 
@@ -151,7 +157,7 @@ def test_a_calibration_file_corrects_every_sample(open_scene, tmp_path):
     for k in range(201):
         handle(encode_vector3_stamped(BASE_NS + k * PERIOD_NS, 'imu_link', (0.35, 0.0, 0.0)))
     assert float(quaternion.attitude_error(sink.attitudes[-1][2],
-                                           rpy_quaternion(0.5, 0.0, 0.0))) < 1e-9
+                                           rpy(0.5, 0.0, 0.0))) < 1e-9
 
 
 def test_a_kalibr_file_with_g_sensitivity_takes_the_accelerometer(open_scene, tmp_path):
@@ -192,13 +198,13 @@ def test_without_accelerometer_data_it_starts_from_the_scene_and_says_so_once(
 def test_reset_levels_again(open_scene):
     session, sink = open_scene('strapdown')
     handle = input_handler(session, 'imu')
-    first = rpy_quaternion(0.1, 0.0, 0.0)
+    first = rpy(0.1, 0.0, 0.0)
     feed(handle, rest_samples(400, specific_force(first), random.Random(6)))
     assert math.degrees(tilt_angle(session.alignment.attitude, first)) < 0.05
     published = len(sink.attitudes)
     session.reset()
     assert not session.alignment_done
-    second = rpy_quaternion(-0.2, 0.1, 0.0)
+    second = rpy(-0.2, 0.1, 0.0)
     feed(handle, rest_samples(100, specific_force(second), random.Random(7), start=400))
     assert len(sink.attitudes) == published  # levelling again: nothing published
     feed(handle, rest_samples(400, specific_force(second), random.Random(8), start=500))
@@ -211,7 +217,7 @@ def test_a_body_that_never_rests_is_levelled_after_the_timeout(open_scene):
     warns, and says so in the diagnostics."""
     session, sink = open_scene('strapdown', align_timeout=2.0)
     handle = input_handler(session, 'imu')
-    truth = rpy_quaternion(0.2, 0.0, 0.0)
+    truth = rpy(0.2, 0.0, 0.0)
     accel = specific_force(truth)
     rng = random.Random(9)
     for k in range(600):  # 3 s of shaking: rates of ±1 rad/s
@@ -237,16 +243,16 @@ def test_a_body_that_never_rests_is_levelled_after_the_timeout(open_scene):
 def test_set_pose_while_levelling_gives_the_yaw(open_scene):
     session, sink = open_scene('strapdown', initial_yaw=0.3)
     handle = input_handler(session, 'imu')
-    truth = rpy_quaternion(0.1, 0.05, 1.2)
+    truth = rpy(0.1, 0.05, 1.2)
     accel = specific_force(truth)
     feed(handle, rest_samples(100, accel, random.Random(10)))
-    session.set_pose('world', rpy_quaternion(0.0, 0.0, 1.2), (0.0, 0.0, 0.0))
+    session.set_pose('world', rpy(0.0, 0.0, 1.2), (0.0, 0.0, 0.0))
     feed(handle, rest_samples(300, accel, random.Random(11), start=100))
     assert float(quaternion.attitude_error(session.alignment.attitude, truth)) < 1e-3
     other, _ = open_scene('strapdown', initial_yaw=0.3)
     feed(input_handler(other, 'imu'), rest_samples(400, accel, random.Random(12)))
     assert float(quaternion.attitude_error(other.alignment.attitude,
-                                           rpy_quaternion(0.1, 0.05, 0.3))) < 1e-3
+                                           rpy(0.1, 0.05, 0.3))) < 1e-3
 
 
 def test_bad_samples_while_levelling_are_counted(open_scene):

@@ -16,9 +16,9 @@ from conftest import BASE_NS, MS
 from rigid_body_attitude.msgs import encode_imu, encode_vector3_stamped
 from rigid_body_attitude.msgs.tf_message import Transform
 from rigid_body_attitude.msgs.untrusted import QUOTED_CHARACTERS, quoted
-from rigid_body_attitude.ros.tf_lookup import HELD_SAMPLES, MountGate, PENDING_FRAMES
 from rigid_body_attitude.session.decoding import input_handler
 from rigid_body_attitude.session.mount import MAX_TRANSFORMS, StaticTransforms
+from rigid_body_attitude.session.mount_gate import HELD_SAMPLES, MountGate, PENDING_FRAMES
 
 RATE = (0.3, -0.2, 1.1)
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -33,14 +33,7 @@ def gated(open_scene, clocks, **parameters):
     """A strapdown session (no levelling), its sink, gate and gated gyro handler."""
     session, sink = open_scene('strapdown', align_seconds=0.0, **parameters)
     gate = MountGate(session, 5.0, lambda: clocks.monotonic)
-    handle = input_handler(session, 'imu')
-
-    def sample(data: bytes) -> None:
-        if gate.open:
-            handle(data)
-        else:
-            gate.sample(data, handle)
-    return session, sink, gate, sample
+    return session, sink, gate, gate.gated(input_handler(session, 'imu'))
 
 
 def add(gate: MountGate, *transforms: Transform) -> None:
@@ -190,3 +183,20 @@ def test_a_4mb_frame_id_reaches_the_log_as_a_short_escaped_prefix(open_scene, cl
         assert len(text) < 600 and '\x1b' not in text and '\n' not in text
     assert quoted(huge).startswith(repr(huge[:QUOTED_CHARACTERS]))
     assert quoted('imu_link') == "'imu_link'"
+
+
+def test_held_samples_of_both_gyro_topics_go_back_to_their_own_handlers(open_scene, clocks):
+    """Imu samples on ``imu`` and Vector3Stamped samples on ``angular_velocity`` held
+    together until the mount arrives: each goes back to its own topic's handler (none
+    decoded as the other type, so none counted malformed), all integrated in order."""
+    session, sink, gate, imu = gated(open_scene, clocks)
+    rates = gate.gated(input_handler(session, 'angular_velocity'))
+    for k in range(100):
+        imu(encode_imu(BASE_NS + 2 * k * MS, 'imu_link', RATE))
+        rates(encode_vector3_stamped(BASE_NS + (2 * k + 1) * MS, 'imu_link', RATE))
+    assert sink.attitudes == [] and not gate.open
+    add(gate, transform('base_link', 'imu_link', YAW_90))
+    assert gate.open
+    assert session.rejection_counts()['malformed'] == 0
+    assert session.accepted_count() == 200 and len(sink.attitudes) == 200
+    assert [imu_bytes is not None for imu_bytes in sink.imus] == [True, False] * 100

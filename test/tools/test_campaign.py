@@ -469,7 +469,15 @@ def test_closed_loop_spec_and_scene_mistakes_are_one_line(tmp_path, capsys):
                                          'steps of 0.01 s'):
         scene_from_mapping({**base, 'effects': [{'attitude_pd': {
             'kp': 1.0, 'kd': 1.0, 'control_period': 0.015}}]})
+    with pytest.raises(SceneError, match="parameter 'target_attitude' is named "
+                                         "'target_attitude_wxyz': rename it"):
+        scene_from_mapping({**base, 'effects': [{'attitude_pd': {
+            'kp': 1.0, 'kd': 1.0, 'control_period': 0.01, 'target_attitude': [1, 0, 0, 0]}}]})
     for change, key in [
+            ({'dispersions': {'effects': {'attitude_pd': {
+                'target_attitude': {'sigma': 0.01}}}}},
+             "dispersions.effects.attitude_pd.target_attitude: the parameter is named "
+             "'target_attitude_wxyz'"),
             ({'dispersions': {'effects': {'attitude_pd': {
                 'control_period': {'sigma': 0.01}}}}},
              'dispersions.effects.attitude_pd.control_period: every run shares'),

@@ -23,7 +23,8 @@ from rigid_body_attitude.tools.replay import (
     ReplayOptions, attitude_errors, main, replay_bag, summary)
 from rigid_body_attitude.session.parameters import PARAMETERS
 from rigid_body_attitude.tools.replay.options import TF_PARAMETERS, WALL_PARAMETERS
-from rigid_body_attitude.session.settings import OUTPUT_TOPICS, timer_period_ns
+from rigid_body_attitude.session.interface import NODE_INTERFACE
+from rigid_body_attitude.session.settings import timer_period_ns
 
 RATE = 1000.0
 OMEGA = np.array([0.4, -1.1, 2.3])
@@ -74,7 +75,7 @@ def test_main_writes_the_node_outputs_and_a_summary(tmp_path, capsys, storage):
     assert code == 0
     with BagReader(out) as reader:
         topics, counts = reader.topics, reader.message_counts
-    assert topics == {name: OUTPUT_TOPICS[name] for name in
+    assert topics == {name: NODE_INTERFACE.endpoint(name, 'out').type for name in
                       ('orientation', 'pose', 'pose_with_covariance', 'imu/data',
                        '/diagnostics')}
     assert counts['orientation'] == counts['pose'] == counts['imu/data'] == 200

@@ -14,8 +14,8 @@ from collections.abc import Sequence
 from rigid_body_attitude.core.attitude import quaternion as quat
 from rigid_body_attitude.core.errors import IntegratorError
 
-__all__ = ['Quat', 'SERIES_THRESHOLD', 'Vec', 'q_exp', 'q_multiply', 'q_normalize',
-           'q_rotate_step', 'rpy_quaternion']
+__all__ = ['Quat', 'SERIES_THRESHOLD', 'Vec', 'finite_vec3', 'q_exp', 'q_multiply',
+           'q_normalize', 'q_rotate_step']
 
 Quat = tuple[float, float, float, float]
 Vec = tuple[float, float, float]
@@ -61,11 +61,12 @@ def q_rotate_step(q: Sequence[float], vx: float, vy: float, vz: float) -> Quat:
     return q_normalize(q_multiply(q, q_exp(vx, vy, vz)))
 
 
-def rpy_quaternion(roll: float, pitch: float, yaw: float) -> Quat:
-    """``Rz(yaw) Ry(pitch) Rx(roll)`` as ``(w, x, y, z)`` [rad]: REP-103's roll, pitch and yaw
-    (intrinsic z-y'-x'', tf2's ``setRPY``), the product of the three axis quaternions."""
-    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
-    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
-    cy, sy = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
-    return (cy * cp * cr + sy * sp * sr, cy * cp * sr - sy * sp * cr,
-            cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr)
+def finite_vec3(value: object) -> Vec | None:
+    """``value`` when it is a tuple of 3 finite floats, else ``None`` (for the caller's
+    general check): a command's vector checked without NumPy."""
+    if type(value) is tuple and len(value) == 3:
+        x, y, z = value
+        if (type(x) is float and type(y) is float and type(z) is float
+                and math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+            return x, y, z
+    return None

@@ -54,6 +54,7 @@ __all__ = [
     'exp',
     'from_bryant_xyz',
     'from_euler_zxz',
+    'from_rpy',
     'from_matrix',
     'from_ros',
     'identity',
@@ -369,6 +370,19 @@ def from_bryant_xyz(angles: ArrayLike) -> FloatArray:
     a = _three_angles(angles, 'angles')
     return multiply(multiply(_axis_quaternion(a[..., 0], 0), _axis_quaternion(a[..., 1], 1)),
                     _axis_quaternion(a[..., 2], 2))
+
+
+def from_rpy(angles: ArrayLike) -> FloatArray:
+    """Quaternion of roll, pitch and yaw ``(..., 3)`` [rad] as REP-103 and tf2's ``setRPY``
+    take them (``static_transform_publisher``'s angles): ``Rz(yaw) Ry(pitch) Rx(roll)``,
+    intrinsic z-y'-x'', the product of the three axis quaternions; ``(..., 4)``.
+
+    The one conversion of the package: scene parameters (``target_rpy``, ``mount_rpy``), the
+    node's and the controller's parameters and the levelled attitude all go through it.
+    """
+    a = _three_angles(angles, 'angles')
+    return multiply(multiply(_axis_quaternion(a[..., 2], 2), _axis_quaternion(a[..., 1], 1)),
+                    _axis_quaternion(a[..., 0], 0))
 
 
 def as_bryant_xyz(q: ArrayLike) -> FloatArray:

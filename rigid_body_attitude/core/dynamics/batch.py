@@ -30,9 +30,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.dynamics.batch_rows import cross_rows, matrix_rows_product
+from rigid_body_attitude.core.dynamics.batch_chunk import SceneChunk
+from rigid_body_attitude.core.dynamics import wheel_batch
 from rigid_body_attitude.core.dynamics.effects import (
-    BatchChunk, CommandedEffect, Effect, ForceEffect, RotorEffect, SampledTorque, TorqueEffect)
+    CommandedEffect, Effect, HeldOverStep, RotorState, SampledTorque)
 from rigid_body_attitude.core.dynamics.effects.sampled import segment_end
 from rigid_body_attitude.core.dynamics.effects.translation import Translation
 from rigid_body_attitude.core.errors import InputError
@@ -224,7 +225,8 @@ class SceneBatch:
     with the ``rk4`` integrator (the scene's step, the last one shorter, ends at the commanded
     inputs' switch times) and the same arithmetic per body, vectorised over bodies in the body
     frame (structure of arrays, chunks of :data:`SCENE_CHUNK` bodies, work arrays allocated
-    once per chunk, the body-frame angular momentum as the state: :class:`_Chunk`); each
+    once per chunk, the body-frame angular momentum as the state:
+    :class:`~.batch_chunk.SceneChunk`); each
     effect adds its own batch torque or force (:meth:`.TorqueEffect.add_batch_torque`). So
     each body matches the single-body result up to round-off (``test/core/dynamics/test_batch.py``:
     1e−12). Order 4; no substeps: every body must keep ``h·|ω|`` within RK4's limit (checked
@@ -257,6 +259,9 @@ class SceneBatch:
         self.effects = scene.build_effects()
         self._parameters = [_effect_parameters(effect, (effect_parameters or {}).get(
             effect.name, {}), self.count) for effect in self.effects]
+        self._tensor, self._inverse = _without_wheels(self._tensor, self._inverse,
+                                                      self.effects, self._parameters,
+                                                      self.count)
         self._state = np.ascontiguousarray(np.concatenate([attitude.T, omega.T]))
         self.translation = next((e for e in self.effects if isinstance(e, Translation)), None)
         if self.translation is not None:
@@ -264,11 +269,23 @@ class SceneBatch:
             self.velocity = np.repeat(self.translation.velocity[:, None], self.count, axis=1)
         self.switching = [e for e in self.effects if isinstance(e, CommandedEffect)]
         self.sampled = [e for e in self.effects if isinstance(e, SampledTorque)]
-        #: Each effect's own per-body state rows (a controller's held torque), or None.
-        self.effect_states = [np.zeros((e.STATE_ROWS, self.count))
-                              if isinstance(e, SampledTorque) else None for e in self.effects]
+        #: Each effect's own per-body state rows (a controller's held torque, wheel momenta),
+        #: or None.
+        self.effect_states = [np.zeros((_state_rows(e), self.count)) if _state_rows(e) else None
+                              for e in self.effects]
         self.input_routes = {name: [e for e in self.effects if name in e.input_names]
                              for e in self.effects for name in e.input_names}
+        self._start_held(omega)
+
+    def _start_held(self, omega: FloatArray) -> None:
+        """The effects held over each step start from the initial rates (wheel momenta)."""
+        if not any(isinstance(e, HeldOverStep) for e in self.effects):
+            return
+        for start in range(0, self.count, self.chunk):
+            bodies = slice(start, min(start + self.chunk, self.count))
+            chunk = SceneChunk(self, bodies)
+            for effect, view in chunk.held:
+                effect.batch_start(np.ascontiguousarray(omega[bodies].T), view)
 
     @property
     def attitude(self) -> FloatArray:
@@ -335,7 +352,7 @@ class SceneBatch:
         """The controllers ``due`` sample every body's state at the current time."""
         for start in range(0, self.count, self.chunk):
             bodies = slice(start, min(start + self.chunk, self.count))
-            chunk = _Chunk(self, bodies)
+            chunk = SceneChunk(self, bodies)
             for controller, view in chunk.sampled:
                 if controller in due:
                     controller.sample_batch(self.time, self._state[:4, bodies],
@@ -374,7 +391,7 @@ class SceneBatch:
     def _advance_chunk(self, bodies: slice, t_start: float, t_end: float) -> int:
         """Every step from ``t_start`` to ``t_end`` on one cache-sized chunk of bodies, in
         place (the steps are generated one by one, never listed); returns their number."""
-        chunk = _Chunk(self, bodies)
+        chunk = SceneChunk(self, bodies)
         y = np.empty((7, chunk.mass.shape[0]))  # (q, h = J ω)
         y[:4] = self._state[:4, bodies]
         chunk.momentum(self._state[4:, bodies], y[4:])
@@ -385,7 +402,11 @@ class SceneBatch:
             force_start = chunk.force(t_start, y[:4])
         taken = 0
         for t, h in _Steps(t_start, t_end, self.scene.step):
+            if chunk.held:
+                chunk.hold(t, h, y)
             chunk.rk4(t, y, h)
+            if chunk.wheels:
+                chunk.commit(t, h, y)
             taken += 1
             if translation:
                 force_end = chunk.force(t + h, y[:4])
@@ -400,11 +421,43 @@ class SceneBatch:
         return taken
 
     def kinetic_energy(self) -> FloatArray:
-        """(N,) rotational kinetic energies ``½ ωᵀ J ω`` [J]."""
+        """(N,) rotational kinetic energies ``½ ωᵀ J' ω`` [J] (``J' = J`` without wheels),
+        plus the wheels' ``Σ Hᵢ²/(2 Jₛᵢ)``."""
         omega = self._state[4:]
         tensor = np.broadcast_to(self._tensor, (3, 3, self.count))
         energy: FloatArray = 0.5 * np.einsum('in,ijn,jn->n', omega, tensor, omega)
+        for effect, state, parameters in self._wheel_states():
+            energy += wheel_batch.energies(effect, parameters, state)
         return energy
+
+    def momentum_body(self) -> FloatArray:
+        """(N, 3) body-frame angular momenta ``J' ω + Σ Hᵢ âᵢ`` [N m s] (wheels included)."""
+        omega = self._state[4:]
+        tensor = np.broadcast_to(self._tensor, (3, 3, self.count))
+        momentum: FloatArray = np.einsum('ijn,jn->in', tensor, omega)
+        for effect, state, parameters in self._wheel_states():
+            momentum += wheel_batch.momenta(effect, parameters, state)
+        return np.ascontiguousarray(momentum.T)
+
+    def _wheel_states(self) -> list[tuple[RotorState, FloatArray, dict[str, Any]]]:
+        """Each wheel array with its state rows and batch parameters."""
+        return [(effect, state, parameters) for effect, state, (parameters, _) in zip(
+            self.effects, self.effect_states, self._parameters)
+            if isinstance(effect, RotorState) and state is not None]
+
+    def effect_totals(self, name: str) -> dict[str, FloatArray]:
+        """Per-body totals (N,) of the effect ``name``: a wheel array's ``peak_speed``
+        [rad/s], ``time_saturated`` [s], ``motor_work`` and ``friction_loss`` [J]; the
+        magnetorquers' ``torque_impulse`` [N m s]."""
+        for effect, state in zip(self.effects, self.effect_states):
+            if effect.name != name or state is None:
+                continue
+            if isinstance(effect, RotorState):
+                return wheel_batch.totals(effect, state)
+            if effect.name == 'magnetorquers':
+                return {'torque_impulse': state[3].copy()}
+        raise InputError(f'Scene {self.scene.name!r} has no wheel array or magnetorquers '
+                         f'{name!r}')
 
 
 class _Steps:
@@ -449,6 +502,30 @@ def _tensors(scene: Scene, inertia: ArrayLike | None,
             np.ascontiguousarray(inverse.transpose(1, 2, 0)))
 
 
+def _state_rows(effect: Effect) -> int:
+    """Rows of per-body state an effect keeps in a batch."""
+    if isinstance(effect, SampledTorque):
+        return effect.STATE_ROWS
+    if isinstance(effect, HeldOverStep):
+        return effect.batch_state_rows()
+    return 0
+
+
+def _without_wheels(tensor: FloatArray, inverse: FloatArray, effects: list[Effect],
+                    parameters: list[tuple[dict[str, Any], frozenset[str]]],
+                    count: int) -> tuple[FloatArray, FloatArray]:
+    """``J' = J − Σ Jₛ â âᵀ`` per body (3, 3, N or 1) and its inverse (``J`` and its
+    ``inverse`` as they are without wheels)."""
+    spins = [effect.batch_spin_inertia(params, count)
+             for effect, (params, _) in zip(effects, parameters)
+             if isinstance(effect, RotorState)]
+    if not spins:
+        return tensor, inverse
+    reduced = tensor - sum(spins)
+    reduced_inverse = np.linalg.inv(reduced.transpose(2, 0, 1)).transpose(1, 2, 0)
+    return np.ascontiguousarray(reduced), np.ascontiguousarray(reduced_inverse)
+
+
 def _effect_parameters(effect: Effect, dispersed: Mapping[str, ArrayLike],
                        count: int) -> tuple[dict[str, Any], frozenset[str]]:
     """An effect's numeric parameters as batch arrays: shared ones as floats or (3, 1),
@@ -473,114 +550,3 @@ def _effect_parameters(effect: Effect, dispersed: Mapping[str, ArrayLike],
         else:
             result[name] = value
     return result, frozenset(dispersed)
-
-
-class _Chunk:
-    """One chunk of a :class:`SceneBatch`: its bodies' inertia, masses, effect parameters, and
-    the RK4 step on them: the single-body kernel's arithmetic, vectorised into work arrays
-    allocated once per chunk, with the body-frame angular momentum ``h = J ω`` in place of
-    ``ω`` as the state (:meth:`momentum`, :meth:`rate`): ``ḣ = M − ω × h`` then needs one
-    product with ``J⁻¹`` per evaluation instead of ``J ω`` and ``J⁻¹ (M − ω × J ω)``. RK4
-    commutes with a constant linear change of variables, so the step equals the one in
-    ``(q, ω)`` up to round-off."""
-
-    def __init__(self, batch: SceneBatch, bodies: slice) -> None:
-        shared = batch._tensor.shape[2] == 1 and batch.count > 1
-        self.tensor = batch._tensor if shared else batch._tensor[:, :, bodies]
-        self.inverse = batch._inverse if shared else batch._inverse[:, :, bodies]
-        self.mass = batch._mass[bodies]
-        off_diagonal = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]
-        self.diagonal = not any(np.any(self.tensor[i, j]) or np.any(self.inverse[i, j])
-                                for i, j in off_diagonal)
-        n = self.mass.shape[0]
-        self.out, self.total, self.stage = np.empty((3, 7, n))
-        self.omega, self.half_omega, self.total_momentum = np.empty((3, 3, n))
-        self.work, self.norm = np.empty((2, n))
-        self.torques: list[tuple[TorqueEffect, BatchChunk]] = []
-        self.rotors: list[tuple[RotorEffect, BatchChunk]] = []
-        self.forces: list[tuple[ForceEffect, BatchChunk]] = []
-        self.sampled: list[tuple[SampledTorque, BatchChunk]] = []
-        states = batch.effect_states
-        for effect, (parameters, dispersed), state in zip(batch.effects, batch._parameters,
-                                                          states):
-            sliced = {name: value[..., bodies] if name in dispersed else value
-                      for name, value in parameters.items()}
-            view = BatchChunk(self.tensor, self.mass, sliced, self.diagonal,
-                              state=np.empty((0, 0)) if state is None else state[:, bodies])
-            if isinstance(effect, SampledTorque):
-                self.sampled.append((effect, view))
-            if isinstance(effect, TorqueEffect):
-                self.torques.append((effect, view))
-            if isinstance(effect, RotorEffect):
-                self.rotors.append((effect, view))
-            if isinstance(effect, ForceEffect):
-                self.forces.append((effect, view))
-
-    def momentum(self, omega: FloatArray, out: FloatArray) -> FloatArray:
-        """``out = J ω`` (3, n)."""
-        return matrix_rows_product(self.tensor, omega, out, self.work, self.diagonal)
-
-    def rate(self, momentum: FloatArray, out: FloatArray) -> FloatArray:
-        """``out = J⁻¹ h`` (3, n)."""
-        return matrix_rows_product(self.inverse, momentum, out, self.work, self.diagonal)
-
-    def force(self, t: float, q: FloatArray) -> FloatArray:
-        """Sum of the forces [N, world] on every body, (3, n)."""
-        total = np.zeros((3, q.shape[1]))
-        for effect, view in self.forces:
-            effect.add_batch_force(t, q, view, total)
-        return total
-
-    def derivative(self, t: float, y: FloatArray, out: FloatArray) -> FloatArray:
-        """``(q̇, ḣ)`` of every body (``y`` holds ``(q, h)``) into ``out`` (7, n): Euler's
-        equations with the effects."""
-        q, work = y[:4], self.work
-        omega = self.rate(y[4:], self.omega)
-        momentum = y[4:]
-        if self.rotors:
-            momentum = self.total_momentum
-            momentum[:] = y[4:]
-            out[4:] = 0.0
-        for rotor_effect, view in self.rotors:
-            rotor_momentum, rotor_rate = rotor_effect.batch_rotor(t, view)
-            momentum += rotor_momentum
-            for row in range(3):
-                out[4 + row] -= rotor_rate[row]
-        cross_rows(momentum, omega, out[4:], work, accumulate=bool(self.rotors))
-        for torque_effect, view in self.torques:
-            torque_effect.add_batch_torque(t, q, omega, view, out[4:])
-        # q̇ = q ⊗ (0, ω/2) = (−q_v·ω/2, w ω/2 + q_v × ω/2)
-        half = self.half_omega
-        np.multiply(omega, 0.5, out=half)
-        np.multiply(q[1], half[0], out=out[0])
-        for row in (2, 3):
-            np.multiply(q[row], half[row - 1], out=work)
-            out[0] += work
-        np.negative(out[0], out=out[0])
-        for row in range(3):
-            np.multiply(q[0], half[row], out=out[1 + row])
-        cross_rows(q[1:], half, out[1:4], work, accumulate=True)
-        return out
-
-    def rk4(self, t: float, y: FloatArray, h: float) -> None:
-        """One RK4 step of every body in place, ``q`` renormalised."""
-        half, total, stage = 0.5 * h, self.total, self.stage
-        np.multiply(self.derivative(t, y, total), half, out=stage)
-        stage += y
-        for step in (half, h):
-            k = self.derivative(t + half, stage, self.out)
-            np.multiply(k, step, out=stage)
-            stage += y
-            k *= 2.0
-            total += k
-        total += self.derivative(t + h, stage, self.out)
-        total *= h / 6.0
-        y += total
-        norm, work = self.norm, self.work
-        np.multiply(y[0], y[0], out=norm)
-        for row in (1, 2, 3):
-            np.multiply(y[row], y[row], out=work)
-            norm += work
-        np.sqrt(norm, out=norm)
-        np.divide(1.0, norm, out=norm)
-        y[:4] *= norm

@@ -38,6 +38,8 @@ class BatchChunk:
         workspace: the kernel's work arrays kept between calls (:meth:`scratch`).
         state: the effect's own per-body state rows (rows, n), kept by the batch across
             calls (a sampled controller's held torque); empty for effects without.
+        peers: the views of every effect of the chunk by effect name (an actuator reads the
+            state rows of the controller that drives it).
     """
 
     tensor: FloatArray
@@ -47,6 +49,7 @@ class BatchChunk:
     workspace: dict[str, FloatArray] = field(default_factory=dict, compare=False, repr=False)
     state: FloatArray = field(default_factory=lambda: np.empty((0, 0)), compare=False,
                               repr=False)
+    peers: dict[str, BatchChunk] = field(default_factory=dict, compare=False, repr=False)
 
     def scratch(self, name: str, rows: int) -> FloatArray:
         """A work array ``name`` of shape (rows, n), allocated on first use and then reused

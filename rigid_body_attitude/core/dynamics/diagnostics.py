@@ -1,11 +1,14 @@
 """Energy and angular-momentum diagnostics (Landau & Lifshitz, *Mechanics*, 3rd ed., 1976, §36).
 
-* rotational kinetic energy ``T = ½ ωᵀ J ω`` (+ ``½ m v²`` with translation) [J];
-* body angular momentum ``m = J ω + h_rotor`` [N m s] and its world-frame image
-  ``H = R(q) m``, constant for a torque-free body;
+* rotational kinetic energy ``T = ½ ωᵀ J ω`` (+ ``½ m v²`` with translation) [J]; with
+  reaction wheels ``½ ωᵀ J' ω + Σ Hᵢ²/(2 Jₛᵢ)`` (``J'`` without the wheels' spin inertia,
+  ``Hᵢ`` their absolute axial momenta: :mod:`.effects.reaction_wheels`);
+* body angular momentum ``m = J ω + h_rotor`` [N m s] (with wheels ``J' ω + Σ Hᵢ âᵢ``) and
+  its world-frame image ``H = R(q) m``, constant for a torque-free body;
 * the energy-balance residual ``T − T₀ − W``, where ``W = ∫ (ω·(M − ḣ) + v·F) dt`` is the work
-  of the external torques and forces (power theorem ``dT/dt = ω·M``); zero up to the
-  integrator's error;
+  of the external torques and forces (power theorem ``dT/dt = ω·M``), plus with wheels the
+  change of their own energy, so that ``W`` holds the motors' work minus the friction loss;
+  zero up to the integrator's error;
 * the quaternion norm error ``| |q| − 1 |``.
 """
 

@@ -18,13 +18,14 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rigid_body_attitude.core.dynamics.effects import Effect, RotorEffect, TorqueEffect
+from rigid_body_attitude.core.dynamics.effects import (
+    Effect, RotorEffect, RotorState, TorqueEffect)
 from rigid_body_attitude.core.errors import InputError, IntegratorError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
 from rigid_body_attitude.core.dynamics.integrators.base import body_derivative
 from rigid_body_attitude.core.dynamics.integrators.rk4_kernel import rk4_state_step
 
-__all__ = ['RigidBodyModel', 'euler_rate', 'rk4_step']
+__all__ = ['RigidBodyModel', 'euler_rate', 'inertia_without_rotors', 'rk4_step']
 
 FloatArray = NDArray[np.float64]
 Quat = tuple[float, float, float, float]
@@ -119,9 +120,12 @@ class RigidBodyModel:
 
     @classmethod
     def from_effects(cls, inertia: Inertia, effects: Sequence[Effect]) -> RigidBodyModel:
-        """The model of a scene's effects: their torques and rotors (other kinds ignored)."""
-        torques = [e for e in effects if isinstance(e, TorqueEffect)]
-        return cls(inertia, float_torques=[e.torque for e in torques],
+        """The model of a scene's effects: their torques and rotors (other kinds ignored;
+        a controller driving an actuator applies no torque itself), with the rotors' spin
+        inertia taken out of ``inertia`` (:func:`inertia_without_rotors`)."""
+        torques = [e for e in effects if isinstance(e, TorqueEffect) and e.applies_torque]
+        return cls(inertia_without_rotors(inertia, effects),
+                   float_torques=[e.torque for e in torques],
                    float_rotors=[e.rotor for e in effects if isinstance(e, RotorEffect)],
                    torque_depends_on_rate=any(e.torque_depends_on_rate for e in torques))
 
@@ -182,6 +186,18 @@ class RigidBodyModel:
         """Angular acceleration from Euler's equations with every effect included."""
         state = _floats(attitude) + _floats(omega_body)
         return np.array(body_derivative(self, t, state)[4:])
+
+
+def inertia_without_rotors(inertia: Inertia, effects: Sequence[Effect]) -> Inertia:
+    """``J' = J − Σ Jₛ â âᵀ``: the inertia Euler's equations take when rotors with a state of
+    their own (:class:`.RotorState`) carry their axial momentum (``inertia`` itself when the
+    scene has none). ``J'`` is no rigid body's inertia (the triangle inequalities need not
+    hold) but must stay symmetric positive definite and non-singular: :class:`InertiaError`
+    otherwise."""
+    spinning = [e.spin_inertia_body() for e in effects if isinstance(e, RotorState)]
+    if not spinning:
+        return inertia
+    return Inertia(inertia.tensor - sum(spinning), triangle=False)
 
 
 def _all_finite(h: float, values: tuple[float, ...]) -> bool:

@@ -55,7 +55,8 @@ def _validated_tensor(value: ArrayLike) -> FloatArray:
     return tensor + 0.5 * (tensor.T - tensor)
 
 
-def _validated_moments(tensor: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _validated_moments(tensor: FloatArray,
+                       triangle: bool = True) -> tuple[FloatArray, FloatArray]:
     moments, axes = np.linalg.eigh(tensor)
     if not np.all(np.isfinite(moments)):
         raise InertiaError(f'Expected `inertia` with finite principal moments, got '
@@ -68,7 +69,7 @@ def _validated_moments(tensor: FloatArray) -> tuple[FloatArray, FloatArray]:
                            f'principal moment > {_SINGULARITY_RATIO:.3g}), got '
                            f'{tensor.tolist()!r} with principal moments {moments.tolist()!r}')
     slack = moments[0] + moments[1] - moments[2]
-    if slack < -_TRIANGLE_TOLERANCE * moments[2]:
+    if triangle and slack < -_TRIANGLE_TOLERANCE * moments[2]:
         raise InertiaError(f'Expected principal moments with J1 + J2 >= J3 (a real mass '
                            f'distribution), got {moments.tolist()!r}')
     if np.linalg.det(axes) < 0.0:
@@ -93,10 +94,14 @@ class Inertia:
     principal_axes: FloatArray = field(init=False, repr=False)
     inverse: FloatArray = field(init=False, repr=False)
 
-    def __init__(self, tensor: ArrayLike) -> None:
-        """Validate ``tensor`` (3×3, or 3 principal moments) and precompute its decomposition."""
+    def __init__(self, tensor: ArrayLike, triangle: bool = True) -> None:
+        """Validate ``tensor`` (3×3, or 3 principal moments) and precompute its decomposition.
+
+        ``triangle=False`` drops the triangle inequalities: for the inertia a body keeps
+        around spinning rotors (``J − Σ Jₛ â âᵀ``), which is no rigid body's.
+        """
         checked = _validated_tensor(tensor)
-        moments, axes = _validated_moments(checked)
+        moments, axes = _validated_moments(checked, triangle)
         object.__setattr__(self, 'tensor', checked)
         object.__setattr__(self, 'principal_moments', moments)
         object.__setattr__(self, 'principal_axes', axes)

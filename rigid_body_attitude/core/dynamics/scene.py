@@ -20,6 +20,13 @@ the effects; only the effects it names are constructed. Format::
       - viscous_damping: {coefficient: 0.01}
     sensors:                       # dynamics scenes: simulated sensors (core/sensors)
       imu: {rate: 200.0, frame_id: imu_link, seed: 1}
+      magnetometer: {rate: 100.0, noise_density: 1.0e-8, intensity: 5.0e-5, inclination: 1.2}
+      star_tracker: {rate: 5.0, boresight: [0, 0, 1], sun_exclusion_angle: 0.5}
+    sun: {direction: [1, 0, 0]}    # world axes, towards the Sun (core/environment/sun.py)
+    orbit: {altitude: 500000.0, inclination_deg: 97.4}   # spacecraft scenes (world: inertial)
+    magnetic_field: {model: tilted_dipole}               # or igrf, local (core/environment)
+    estimation: {magnetometer: true}  # gyro scenes: the filter's updates
+                                   # (core/estimation/estimation_section.py)
 
 Built-in scenes live in ``config/scenes/`` and are found by name (see :func:`scene_path`).
 
@@ -54,11 +61,22 @@ from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.effects import (
-    EFFECTS, BodyProperties, Effect, SampledTorque)
-from rigid_body_attitude.core.errors import AttitudeError, SceneError
+    EFFECTS, BodyProperties, Effect, Environment, SampledTorque)
+from rigid_body_attitude.core.environment.magnetic_field import MagneticFieldModel
+from rigid_body_attitude.core.environment.orbit import CircularOrbit
+from rigid_body_attitude.core.environment.sections import (
+    magnetic_field_section, orbit_section)
+from rigid_body_attitude.core.errors import AttitudeError, InertiaError, SceneError
+from rigid_body_attitude.core.dynamics.euler import inertia_without_rotors
 from rigid_body_attitude.core.dynamics.inertia import Inertia
+from rigid_body_attitude.core.environment.sun import ConstantSunDirection, sun_section
+from rigid_body_attitude.core.estimation.estimation_section import (
+    EstimationSpec, estimation_section)
 from rigid_body_attitude.core.paths import config_folders
-from rigid_body_attitude.core.sensors.imu import ImuSpec, sensors_spec
+from rigid_body_attitude.core.sensors.imu import ImuSpec
+from rigid_body_attitude.core.sensors.magnetometer import MagnetometerSpec
+from rigid_body_attitude.core.sensors.star_tracker import StarTrackerSpec
+from rigid_body_attitude.core.sensors.suite import SensorSuite, sensors_section
 from rigid_body_attitude.core.yaml_files import (
     bounded as _bounded, Fields, MAGNITUDE_LIMIT, quote, read_yaml, real)
 
@@ -69,7 +87,8 @@ FloatArray = NDArray[np.float64]
 
 RATE_SOURCES = ('dynamics', 'gyro')
 _TOP_KEYS = {'name', 'description', 'rate_source', 'integrator', 'step', 'body',
-             'initial_state', 'effects', 'sensors'}
+             'initial_state', 'effects', 'sensors', 'sun', 'orbit', 'magnetic_field',
+             'estimation'}
 _REQUIRED_TOP_KEYS = ('rate_source', 'body')
 _BODY_KEYS = {'mass', 'inertia'}
 _STATE_KEYS = {'attitude', 'omega_body'}
@@ -101,7 +120,13 @@ class Scene:
         initial_omega_body: [rad/s].
         effects: ``(name, parameters)`` pairs in scene order.
         source: the file it came from, if any.
-        imu: the simulated IMU of the ``sensors`` section, or None.
+        sensors: the simulated sensors of the ``sensors`` section (:attr:`imu`,
+            :attr:`magnetometer`, :attr:`star_tracker`: each None when not named).
+        sun: the Sun's direction of the ``sun`` section, or None.
+        orbit: the ``orbit`` section (world: Earth-centred inertial), or None.
+        magnetic_field: the ``magnetic_field`` section's model, or None.
+        estimation: the measurement updates of the ``estimation`` section (gyro scenes), or
+            None (pure propagation).
     """
 
     name: str
@@ -115,12 +140,36 @@ class Scene:
     initial_omega_body: FloatArray
     effects: tuple[tuple[str, Mapping[str, Any]], ...] = field(default_factory=tuple)
     source: str = ''
-    imu: ImuSpec | None = None
+    sensors: SensorSuite = field(default_factory=SensorSuite)
+    sun: ConstantSunDirection | None = None
+    orbit: CircularOrbit | None = None
+    magnetic_field: MagneticFieldModel | None = None
+    estimation: EstimationSpec | None = None
+
+    @property
+    def imu(self) -> ImuSpec | None:
+        """The simulated IMU, or None."""
+        return self.sensors.imu
+
+    @property
+    def magnetometer(self) -> MagnetometerSpec | None:
+        """The simulated magnetometer, or None."""
+        return self.sensors.magnetometer
+
+    @property
+    def star_tracker(self) -> StarTrackerSpec | None:
+        """The simulated star tracker, or None."""
+        return self.sensors.star_tracker
 
     def build_effects(self) -> list[Effect]:
-        """Construct the scene's effects, in order; nothing else is built."""
-        body = BodyProperties(self.inertia, self.mass)
-        return [EFFECTS[name](params, body) for name, params in self.effects]
+        """Construct the scene's effects, in order, and link them (:meth:`Effect.bind`);
+        nothing else is built."""
+        body = BodyProperties(self.inertia, self.mass,
+                              Environment(self.orbit, self.magnetic_field))
+        effects = [EFFECTS[name](params, body) for name, params in self.effects]
+        for effect in effects:
+            effect.bind(effects)
+        return effects
 
     def with_overrides(self, integrator: str = '', step: float = 0.0,
                        effect_parameters: Mapping[str, Mapping[str, Any]] | None = None
@@ -198,6 +247,7 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
     with np.errstate(all='ignore'):  # overflow is refused below, not warned about
         inertia, mass = _body(data['body'])
         attitude, omega = _initial_state(data.get('initial_state', {}), inertia)
+    orbit = orbit_section(data.get('orbit'))
     scene = Scene(
         name=_label('name', data.get('name', default_name), MAX_NAME_CHARS),
         description=_label('description', data.get('description', ''), MAX_DESCRIPTION_CHARS),
@@ -210,8 +260,15 @@ def scene_from_mapping(data: Any, default_name: str = 'scene', source: str = '')
         initial_omega_body=omega,
         effects=_effect_list(data.get('effects') or []),
         source=source,
-        imu=sensors_spec(data.get('sensors')),
+        sensors=sensors_section(data.get('sensors')),
+        sun=sun_section(data.get('sun')),
+        orbit=orbit,
+        magnetic_field=magnetic_field_section(data.get('magnetic_field'), orbit),
+        estimation=estimation_section(data.get('estimation')),
     )
+    if scene.estimation is not None and rate_source != 'gyro':
+        raise SceneError('estimation: the measurement updates need a gyro scene (rate_source: '
+                         'gyro)')
     _check_effects(scene)
     _check_sensors(scene)
     return scene
@@ -375,7 +432,14 @@ def _check_effects(scene: Scene) -> None:
         raise SceneError(_bounded(str(err))) from err
     except (AttitudeError, TypeError, OverflowError) as err:
         raise SceneError(_bounded(f'effects: {err}')) from err
+    try:
+        inertia_without_rotors(scene.inertia, built)
+    except InertiaError as err:
+        raise SceneError(_bounded(f'body.inertia minus the wheels\' spin inertia (the inertia '
+                                  f'the body keeps around spinning wheels) is not an inertia: '
+                                  f'{err}')) from err
     for effect in built:
+        effect.check_step(scene.step)
         if isinstance(effect, SampledTorque):
             steps = effect.period / scene.step
             if not (round(steps) >= 1 and abs(steps - round(steps)) <= 1e-9 * steps):
@@ -388,22 +452,38 @@ GRAVITY_EFFECTS = ('uniform_gravity', 'gravity_about_pivot')
 
 
 def _check_sensors(scene: Scene) -> None:
-    """A simulated IMU: dynamics scenes only, its period a whole number of steps, ``gravity``
-    only where no effect gives it (and the body does not translate)."""
-    imu = scene.imu
-    if imu is None:
+    """Simulated sensors: dynamics scenes only, each period a whole number of steps; the
+    IMU's ``gravity`` only where no effect gives it (and the body does not translate); the
+    magnetometer's field given once (the scene's field model or the section's local field);
+    a Sun for the star tracker's exclusion angle."""
+    sensors = list(scene.sensors.items())
+    if not sensors:
         return
     if scene.rate_source != 'dynamics':
         raise SceneError('sensors: simulated sensors need a dynamics scene (rate_source: '
                          'dynamics)')
-    ratio = imu.period / scene.step
-    if round(ratio) < 1 or abs(ratio - round(ratio)) > 1e-9 * ratio:
-        raise SceneError(f'Expected the period of sensors.imu.rate ({imu.period:.9g} s) to be '
-                         f'a whole multiple of the step ({scene.step:g} s), got {ratio:.6g} '
-                         f'steps')
+    for key, spec in sensors:
+        ratio = spec.period / scene.step
+        if round(ratio) < 1 or abs(ratio - round(ratio)) > 1e-9 * ratio:
+            raise SceneError(f'Expected the period of sensors.{key}.rate ({spec.period:.9g} s) '
+                             f'to be a whole multiple of the step ({scene.step:g} s), got '
+                             f'{ratio:.6g} steps')
+    imu, magnetometer, star_tracker = scene.imu, scene.magnetometer, scene.star_tracker
     names = [name for name, _ in scene.effects]
     given_by = [name for name in names if name in GRAVITY_EFFECTS + ('translation',)]
-    if imu.gravity is not None and given_by:
+    if imu is not None and imu.gravity is not None and given_by:
         raise SceneError(f'sensors.imu.gravity is for a body held in place without gravity '
                          f'effects; scene {quote(scene.name)} has {given_by[0]!r} (the '
                          f'accelerometer takes the gravity of its effects)')
+    if magnetometer is not None and magnetometer.intensity is None and (
+            scene.magnetic_field is None):
+        raise SceneError('sensors.magnetometer needs the local field: intensity [T], '
+                         'inclination and declination [rad], or the scene\'s magnetic_field '
+                         'section')
+    if magnetometer is not None and magnetometer.intensity is not None and (
+            scene.magnetic_field is not None):
+        raise SceneError('sensors.magnetometer.intensity gives a local field in a scene whose '
+                         'magnetic_field section gives the field; give one of them')
+    if star_tracker is not None and star_tracker.sun_exclusion_angle > 0.0 and scene.sun is None:
+        raise SceneError('sensors.star_tracker.sun_exclusion_angle needs the Sun\'s direction: '
+                         'a sun section (sun: {direction: [x, y, z]})')

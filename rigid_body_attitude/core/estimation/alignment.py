@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 
-from rigid_body_attitude.core.attitude.float_quaternion import rpy_quaternion
+from rigid_body_attitude.core.attitude.quaternion import from_rpy
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.rest import RestDetector
 
@@ -66,7 +66,8 @@ def levelled_attitude(specific_force_body: Vec, yaw: float = 0.0,
     s = world_up(world_axes)[2]
     roll = math.atan2(s * fy, s * fz)
     pitch = math.atan2(-s * fx, math.hypot(fy, fz))
-    return rpy_quaternion(roll, pitch, yaw)
+    w, x, y, z = from_rpy([roll, pitch, yaw]).tolist()
+    return w, x, y, z
 
 
 def _up_in_body(q: Quat, up: Vec) -> Vec:

@@ -309,13 +309,15 @@ def calibration_values(calibration: ImuCalibration | None) -> list[tuple[str, st
 
 
 def calibration_noise(calibration: ImuCalibration | None) -> dict[str, float]:
-    """The gyro noise figures a calibration gives (kalibr names) and its further figures
+    """The noise figures a calibration gives (kalibr names) and its further figures
     (:data:`FIGURE_BOUNDS`); empty without a file or without any."""
     if calibration is None:
         return {}
     noise = calibration.noise
     given = {'gyroscope_noise_density': noise.gyroscope_noise_density,
-             'gyroscope_random_walk': noise.gyroscope_random_walk}
+             'gyroscope_random_walk': noise.gyroscope_random_walk,
+             'accelerometer_noise_density': noise.accelerometer_noise_density,
+             'accelerometer_random_walk': noise.accelerometer_random_walk}
     return {**{key: value for key, value in given.items() if value is not None},
             **dict(noise.figures)}
 

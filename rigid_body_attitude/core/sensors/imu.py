@@ -41,7 +41,6 @@ the same samples, however the samples are grouped in time.
 from __future__ import annotations
 
 import math
-import re
 import struct
 from dataclasses import dataclass, fields, replace
 from typing import Any
@@ -50,25 +49,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.errors import InputError, SceneError
+from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
-from rigid_body_attitude.core.yaml_files import Fields, quote
+from rigid_body_attitude.core.sensors.section import (
+    MAX_RATE, NOISE_BLOCK, Quat, SampledSensorSpec, SensorSection, Vector,
+    limited)
 
-__all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'NODE_TOPICS', 'imu_spec', 'sensors_spec']
+__all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'imu_spec']
 
 FloatArray = NDArray[np.float64]
-Vector = tuple[float, float, float]
-Quat = tuple[float, float, float, float]
 
-#: Highest sample rate [Hz] (real IMUs: 100 Hz to a few kHz).
-MAX_RATE = 10_000.0
-#: Unit normals drawn at a time (12 per sample).
-NOISE_BLOCK = 1024
 #: One sample's error terms in a block (native doubles).
 _ERROR_ROW = struct.Struct('=12d')
 _DEFAULTS = GyroErrorModel()
-_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
-_FRAME = re.compile(r'[A-Za-z0-9_./-]{1,256}')
 #: Numeric keys: (default, lowest, highest) in SI units; ``rate`` excludes its lowest.
 _BOUNDS: dict[str, tuple[float, float, float]] = {
     'rate': (math.nan, 0.0, MAX_RATE),
@@ -86,20 +79,13 @@ _BOUNDS: dict[str, tuple[float, float, float]] = {
     'accelerometer_resolution': (0.0, 0.0, 100.0),
 }
 _OTHER_KEYS = {'frame_id', 'topic', 'mount_rpy', 'seed', 'gravity'}
-_FIELDS = Fields(SceneError)
-
-#: The node's own topics in a dynamics scene (relative names; ``diagnostics``, ``clock`` and
-#: ``tf_static`` are what ``/diagnostics``, ``/clock`` and ``/tf_static`` are in the root
-#: namespace): the IMU may not publish on any of them.
-NODE_TOPICS = ('orientation', 'pose', 'twist', 'energy', 'angular_momentum', 'diagnostics',
-               'clock', 'tf_static', 'torque', 'rotor_torque', 'set_pose',
-               'set_pose_with_covariance')
-#: Largest |mount angle| [rad] and |gravity component| [m/s²].
-_ANGLE_LIMIT, _GRAVITY_LIMIT = 10.0, 1000.0
+_SECTION = SensorSection('imu')
+#: Largest |gravity component| [m/s²].
+_GRAVITY_LIMIT = 1000.0
 
 
 @dataclass(frozen=True)
-class ImuSpec:
+class ImuSpec(SampledSensorSpec):
     """A validated ``sensors.imu`` section (SI units; see the module docstring).
 
     ``gravity``: the world gravity [m/s²] a body held in place feels (only for scenes without
@@ -126,26 +112,6 @@ class ImuSpec:
     accelerometer_range: float = 0.0
     accelerometer_resolution: float = 0.0
 
-    @property
-    def period_ns(self) -> int:
-        """Sample period [ns]: samples are taken at the clock times that are its multiples."""
-        return round(1e9 / self.rate)
-
-    @property
-    def period(self) -> float:
-        """Sample period Δt [s]."""
-        return self.period_ns * 1e-9
-
-    def mount(self) -> Quat:
-        """Rotation (w, x, y, z) of the sensor frame in the body frame: ``Rz(yaw) Ry(pitch)
-        Rx(roll)`` (tf2's ``setRPY``, static_transform_publisher's angles)."""
-        roll, pitch, yaw = self.mount_rpy
-        q = quaternion.multiply(quaternion.exp([0.0, 0.0, yaw]),
-                                quaternion.multiply(quaternion.exp([0.0, pitch, 0.0]),
-                                                    quaternion.exp([roll, 0.0, 0.0])))
-        w, x, y, z = q.tolist()
-        return w, x, y, z
-
     def error_model(self) -> GyroErrorModel:
         """The gyro's figures as the attitude covariance takes them."""
         return GyroErrorModel(
@@ -167,57 +133,15 @@ class ImuSpec:
                 + self.accelerometer_resolution ** 2 / 12.0)
 
 
-def sensors_spec(data: Any) -> ImuSpec | None:
-    """The scene's ``sensors`` section (``None`` or a mapping with the key ``imu``)."""
-    if data is None:
-        return None
-    data = _FIELDS.mapping(data, 'sensors', {'imu'})
-    return imu_spec(data['imu']) if 'imu' in data else None
-
-
 def imu_spec(data: Any) -> ImuSpec:
     """Validate a ``sensors.imu`` mapping; one :class:`SceneError` naming the key otherwise."""
-    data = _FIELDS.mapping(data, 'sensors.imu', set(_BOUNDS) | _OTHER_KEYS, ('rate',))
-    numbers: dict[str, Any] = {key: _bounded_number(key, data[key]) for key in _BOUNDS
-                               if key in data}
-    spec = replace(ImuSpec(rate=numbers.pop('rate')), **numbers)
-    if 'frame_id' in data:
-        spec = replace(spec, frame_id=_matching('frame_id', data['frame_id'], _FRAME))
-    if 'topic' in data:
-        spec = replace(spec, topic=_matching('topic', data['topic'], _NAME))
-        if spec.topic in NODE_TOPICS:
-            raise SceneError(f'Expected sensors.imu.topic to be none of the node\'s own topics '
-                             f'({", ".join(NODE_TOPICS)}), got {quote(spec.topic)}')
-    if 'mount_rpy' in data:
-        spec = replace(spec, mount_rpy=_triple('mount_rpy', data['mount_rpy'], _ANGLE_LIMIT))
+    data = _SECTION.mapping(data, set(_BOUNDS) | _OTHER_KEYS, ('rate',))
+    numbers: dict[str, Any] = _SECTION.numbers(data, _BOUNDS)
+    spec = replace(ImuSpec(rate=numbers.pop('rate')), **numbers, **_SECTION.placement(data))
     if 'gravity' in data:
-        spec = replace(spec, gravity=_triple('gravity', data['gravity'], _GRAVITY_LIMIT))
-    if 'seed' in data:
-        seed = data['seed']
-        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
-            raise SceneError(f'Expected sensors.imu.seed to be an integer in [0, 2^63), got '
-                             f'{quote(seed)}')
-        spec = replace(spec, seed=seed)
+        spec = replace(spec, gravity=_SECTION.triple('gravity', data['gravity'],
+                                                     _GRAVITY_LIMIT))
     return spec
-
-
-def _bounded_number(key: str, value: Any) -> float:
-    """A number in the key's bounds (``rate``: above 0)."""
-    _, low, high = _BOUNDS[key]
-    return _FIELDS.number(value, f'sensors.imu.{key}', low, high, low_open=key == 'rate')
-
-
-def _matching(key: str, value: Any, pattern: re.Pattern[str]) -> str:
-    if not isinstance(value, str) or len(value) > 256 or not pattern.fullmatch(value):
-        raise SceneError(f'Expected sensors.imu.{key} to be a ROS name (letters, digits, '
-                         f'underscores{", dots, dashes" if key == "frame_id" else ""} and '
-                         f'slashes, at most 256 characters), got {quote(value)}')
-    return value
-
-
-def _triple(key: str, value: Any, limit: float) -> Vector:
-    a, b, c = _FIELDS.vector(value, f'sensors.imu.{key}', 3, limit)
-    return a, b, c
 
 
 class ImuModel:
@@ -359,22 +283,8 @@ class ImuModel:
         acc = (m00 * fx + m01 * fy + m02 * fz + c0 + a0, m10 * fx + m11 * fy + m12 * fz + c1 + a1,
                m20 * fx + m21 * fy + m22 * fz + c2 + a2)
         if self._limits:
-            return _limited(*gyro, *self._gyro_limits), _limited(*acc, *self._acc_limits)
+            return limited(*gyro, *self._gyro_limits), limited(*acc, *self._acc_limits)
         return gyro, acc
-
-
-def _limited(x: float, y: float, z: float, full_scale: float,
-             resolution: float) -> Vector:
-    """Clipped to ``±full_scale`` and rounded to a multiple of ``resolution`` (0: not)."""
-    if full_scale > 0.0:
-        low = -full_scale
-        x = full_scale if x > full_scale else low if x < low else x
-        y = full_scale if y > full_scale else low if y < low else y
-        z = full_scale if z > full_scale else low if z < low else z
-    if resolution > 0.0:
-        x, y, z = (resolution * round(x / resolution), resolution * round(y / resolution),
-                   resolution * round(z / resolution))
-    return x, y, z
 
 
 def _field_names() -> set[str]:

@@ -38,6 +38,10 @@ class _Step(Protocol):
     def step(self) -> float:
         """The integration step [s]."""
 
+    @property
+    def effects(self) -> tuple[tuple[str, Any], ...]:
+        """The scene's ``(effect name, parameters)``."""
+
 
 class CampaignSpec(Protocol):
     """What the estimate reads of a :class:`~.spec.CampaignSpec` (which checks itself with
@@ -123,9 +127,11 @@ def _row_bytes(spec: CampaignSpec) -> int:
         row += 9 * 8
     row += 24 * len(spec.commands)
     for parameters in spec.effects.values():
-        row += 24 * len(parameters)
+        row += sum(8 * max(spread.sigma.size, spread.low.size) for spread in parameters.values())
     if spec.closed_loop:
         row += 8 * _CLOSED_LOOP_COLUMNS
+    names = {name for name, _ in spec.scene.effects}
+    row += 8 * (2 * ('reaction_wheels' in names) + ('magnetorquers' in names))
     return row
 
 

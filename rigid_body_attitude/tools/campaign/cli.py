@@ -14,6 +14,8 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
+import numpy as np
+
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.tools.campaign.engine import CampaignResult, run_campaign
@@ -79,8 +81,12 @@ def _summary(result: CampaignResult) -> str:
              f'{result.total_seconds:.1f} s']
     last = result.times[-1]
     for name in METRICS:
-        values = ', '.join(f'{value:.4g}' for value in result.statistics[name][:, -1])
-        lines.append(f'{name} at {last:g} s (percentiles) [{UNITS[name]}]: {values}')
+        column = result.statistics[name][:, -1]
+        text = ', '.join(f'{value:.4g}' for value in column)
+        if np.all(np.isnan(column)):
+            text = 'none: every run turns slower than statistics.nutation_min_rate' if (
+                name == 'nutation_deg') else 'none'
+        lines.append(f'{name} at {last:g} s (percentiles) [{UNITS[name]}]: {text}')
     if result.closed_loop:
         loop = result.closed_loop
         lines.append(f'closed loop: {loop["settled"]} of {result.runs - result.failed} runs '
@@ -88,6 +94,9 @@ def _summary(result: CampaignResult) -> str:
         for name, values in loop['percentiles'].items():
             shown = ', '.join(f'{value:.4g}' for value in values)
             lines.append(f'{name} (percentiles) [{UNITS[name]}]: {shown}')
+    for name, values in result.actuators.items():
+        shown = ', '.join(f'{value:.4g}' for value in values)
+        lines.append(f'{name} (percentiles) [{UNITS[name]}]: {shown}')
     lines.append(f'wrote {result.folder}/statistics.csv, summary.json, summary.png, chunks/')
     return '\n'.join(lines)
 

@@ -36,7 +36,7 @@ from rigid_body_attitude.tools.campaign.plot import write_envelopes
 from rigid_body_attitude.tools.campaign.runner import FAILURE_REASONS, run_chunk
 from rigid_body_attitude.tools.campaign.spec import CampaignSpec
 from rigid_body_attitude.tools.campaign.statistics import (
-    CLOSED_LOOP, METRICS, percentile_table)
+    ACTUATORS, CLOSED_LOOP, METRICS, percentile_table)
 from rigid_body_attitude.tools.campaign.storage import ChunkStore, spec_digest
 
 __all__ = ['CampaignError', 'CampaignResult', 'LOCAL_CLUSTER_CONFIG', 'chunk_runs',
@@ -62,6 +62,8 @@ class CampaignResult:
         times: ``0`` and the output times [s]; statistics: percentiles (P, T) per metric.
         failures: failed runs by reason.
         closed_loop: with a controller, :func:`closed_loop_summary` (else empty).
+        actuators: with wheels or magnetorquers, the percentiles of their per-run results
+            (:data:`.statistics.ACTUATORS`) (else empty).
     """
 
     folder: Path
@@ -75,6 +77,7 @@ class CampaignResult:
     statistics: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     failures: dict[str, int] = field(default_factory=dict)
     closed_loop: dict[str, Any] = field(default_factory=dict)
+    actuators: dict[str, list[float]] = field(default_factory=dict)
 
 
 def chunk_runs(spec: CampaignSpec) -> list[range]:
@@ -205,6 +208,10 @@ def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
         'failed_runs': _failed_runs(arrays, failed)}
     if spec.closed_loop:
         summary['closed_loop'] = closed_loop_summary(spec, arrays, failed)
+    actuators = {name: _percentiles(arrays[name][~failed], spec.percentiles)
+                 for name in ACTUATORS if name in arrays}
+    if actuators:
+        summary['actuators'] = actuators
     (store.folder / 'summary.json').write_text(json.dumps(summary, indent=1, allow_nan=True))
     if plot:
         write_envelopes(store.folder / 'summary.png', times, spec.percentiles, table,
@@ -212,7 +219,8 @@ def summarise(spec: CampaignSpec, store: ChunkStore, chunk_count: int,
     return CampaignResult(folder=store.folder, runs=spec.runs, failed=int(np.sum(failed)),
                           chunks_run=0, chunks_resumed=chunk_count, compute_seconds=0.0,
                           total_seconds=0.0, times=times, statistics=table,
-                          failures=failures, closed_loop=summary.get('closed_loop', {}))
+                          failures=failures, closed_loop=summary.get('closed_loop', {}),
+                          actuators=actuators)
 
 
 def closed_loop_summary(spec: CampaignSpec, arrays: dict[str, NDArray[Any]],

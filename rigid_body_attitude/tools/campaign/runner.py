@@ -21,7 +21,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rigid_body_attitude.core.dynamics.batch import SceneBatch
-from rigid_body_attitude.core.dynamics.effects import BodyProperties, EFFECTS, SampledTorque
+from rigid_body_attitude.core.dynamics.effects import (
+    BodyProperties, EFFECTS, RotorState, SampledTorque)
 from rigid_body_attitude.tools.campaign.sampling import RunParameters, sample_runs
 from rigid_body_attitude.tools.campaign.spec import (
     CampaignSpec, COMMAND_EFFECT, CONTROLLER_EFFECT)
@@ -62,20 +63,20 @@ def _check_effect_parameters(spec: CampaignSpec, parameters: RunParameters,
         specs = EFFECTS[name].parameters
         for parameter, values in dispersed.items():
             convert = specs[parameter].convert
-            rows = values if values.ndim == 2 else values[:, None]
             bad = np.zeros(values.shape[0], dtype=bool)
-            if not _accepts(convert, rows.min(axis=0), values.ndim) or \
-                    not _accepts(convert, rows.max(axis=0), values.ndim):
-                bad = np.array([not _accepts(convert, row, values.ndim) for row in rows])
+            if not _accepts(convert, values.min(axis=0)) or \
+                    not _accepts(convert, values.max(axis=0)):
+                bad = np.array([not _accepts(convert, row) for row in values])
             if np.any(bad):
                 failures.mark(bad, 0, 0.0)
                 body = BodyProperties(spec.scene.inertia, spec.scene.mass)
                 values[bad] = EFFECTS[name](nominal[name], body).params[parameter]
 
 
-def _accepts(convert: Any, row: FloatArray, ndim: int) -> bool:
+def _accepts(convert: Any, row: FloatArray) -> bool:
+    """Whether the effect's converter takes one run's value (a number or nested lists)."""
     try:
-        convert(row.tolist() if ndim == 2 else float(row[0]))
+        convert(row.tolist() if row.ndim else float(row))
     except (TypeError, ValueError):
         return False
     return True
@@ -124,7 +125,8 @@ def run_chunk(spec: CampaignSpec, runs: ArrayLike) -> dict[str, NDArray[Any]]:
         result['inertia'] = parameters.inertia.reshape(-1, 9)
     for name, dispersed in parameters.effects.items():
         for parameter, array in dispersed.items():
-            result[f'effect.{name}.{parameter}'] = array
+            result[f'effect.{name}.{parameter}'] = (array if array.ndim < 3 else
+                                                    array.reshape(array.shape[0], -1))
     if spec.commands:
         result['commands'] = parameters.commands.transpose(1, 0, 2).reshape(padded.shape[0], -1)
     result.update(values)
@@ -138,7 +140,7 @@ def _simulate(spec: CampaignSpec, parameters: RunParameters,
     batch = SceneBatch(spec.scene, parameters.attitude, parameters.omega_body,
                        inertia=parameters.inertia, effect_parameters=parameters.effects)
     inertia = spec.scene.inertia.tensor if parameters.inertia is None else parameters.inertia
-    initial = BodyState(batch.attitude, batch.omega_body, inertia)
+    initial = _body_state(batch, inertia)
     series = {name: np.full((n, 1 + len(spec.output_times)), np.nan) for name in METRICS}
     _record(series, 0, initial, initial, spec, failures)
     _check_dynamics(batch, failures, 0.0)
@@ -154,10 +156,10 @@ def _simulate(spec: CampaignSpec, parameters: RunParameters,
             batch.set_effect_parameters({COMMAND_EFFECT: {
                 'torque': parameters.commands[command]}})
         if output >= 0:
-            state = BodyState(batch.attitude, batch.omega_body, inertia)
+            state = _body_state(batch, inertia)
             _record(series, output + 1, state, initial, spec, failures)
     closed = {} if settling is None else settling.columns(batch, spec, failures)
-    return {**series, **closed,
+    return {**series, **closed, **_actuator_columns(batch, failures),
             'attitude': np.where(failures.failed[:, None], np.nan, batch.attitude),
             'omega_body': np.where(failures.failed[:, None], np.nan, batch.omega_body)}
 
@@ -206,5 +208,29 @@ class _Settling:
 
 def _record(series: dict[str, FloatArray], column: int, state: BodyState, initial: BodyState,
             spec: CampaignSpec, failures: _Failures) -> None:
-    for name, value in metrics(state, initial, spec.boresight, spec.target).items():
+    for name, value in metrics(state, initial, spec.boresight, spec.target,
+                               spec.nutation_min_rate).items():
         series[name][:, column] = np.where(failures.failed, np.nan, value)
+
+
+def _body_state(batch: SceneBatch, inertia: FloatArray) -> BodyState:
+    """The runs' state; with wheels, their momentum and energy included."""
+    if not any(isinstance(effect, RotorState) for effect in batch.effects):
+        return BodyState(batch.attitude, batch.omega_body, inertia)
+    return BodyState(batch.attitude, batch.omega_body, inertia, batch.momentum_body(),
+                     batch.kinetic_energy())
+
+
+def _actuator_columns(batch: SceneBatch, failures: _Failures) -> dict[str, FloatArray]:
+    """Per run (NaN for failed runs): peak wheel speed [rad/s] and time saturated [s] of
+    the scene's wheel array, momentum dumped [N m s] by its magnetorquers
+    (:data:`.statistics.ACTUATORS`); only those the scene has."""
+    columns: dict[str, FloatArray] = {}
+    names = {effect.name for effect in batch.effects}
+    if 'reaction_wheels' in names:
+        totals = batch.effect_totals('reaction_wheels')
+        columns['wheel_speed_peak'] = totals['peak_speed']
+        columns['wheel_time_saturated_s'] = totals['time_saturated']
+    if 'magnetorquers' in names:
+        columns['momentum_dumped'] = batch.effect_totals('magnetorquers')['torque_impulse']
+    return {name: np.where(failures.failed, np.nan, value) for name, value in columns.items()}

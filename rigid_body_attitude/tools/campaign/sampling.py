@@ -50,7 +50,7 @@ class RunParameters:
 def _spread(streams: RunStreams, category: int, spread: Spread, nominal: ArrayLike,
             size: int) -> FloatArray:
     """Draws (n, size) of ``spread`` about ``nominal``."""
-    base = np.broadcast_to(np.asarray(nominal, dtype=np.float64), (size,))
+    base = np.broadcast_to(np.asarray(nominal, dtype=np.float64).ravel(), (size,))
     if spread.kind == 'uniform':
         u = streams.uniform(category, size)
         result: FloatArray = spread.low + u * (spread.high - spread.low)
@@ -99,7 +99,8 @@ def _effects(spec: CampaignSpec, streams: RunStreams) -> dict[str, dict[str, Flo
             value = nominal[name][parameter]
             size = int(np.size(value))
             draws = _spread(streams, category, spec.effects[name][parameter], value, size)
-            result.setdefault(name, {})[parameter] = draws if np.ndim(value) else draws[:, 0]
+            shaped = draws.reshape((draws.shape[0],) + np.shape(value))
+            result.setdefault(name, {})[parameter] = shaped
             category += 1
     return result
 

@@ -27,6 +27,7 @@ Format (``config/campaigns/`` ships examples)::
       target: [0, 0, 1]              # world direction (default: boresight at the start, or
                                      # at the attitude_pd controller's target)
       settling_deg: 1.0              # closed loop: settled once the pointing error stays below
+      nutation_min_rate: 1.0e-4      # [rad/s] slower runs have no nutation (statistics.py)
 
 Errors are one :class:`SpecError` naming the file and the key path
 (``dispersions.attitude.cone_deg``), as for scene files
@@ -52,6 +53,7 @@ from rigid_body_attitude.core.errors import AttitudeError, SceneError
 from rigid_body_attitude.core.dynamics.scene import load_scene, Scene, scene_from_mapping
 from rigid_body_attitude.core.yaml_files import Fields, quote, read_yaml
 from rigid_body_attitude.tools.campaign.budget import budget_problem
+from rigid_body_attitude.tools.campaign.statistics import NUTATION_MIN_RATE
 
 __all__ = ['CampaignSpec', 'CommandDispersion', 'InertiaDispersion', 'MAX_OUTPUT_TIMES',
            'MAX_RUNS', 'Spread', 'SpecError', 'load_spec', 'spec_from_mapping']
@@ -68,7 +70,7 @@ CONTROLLER_EFFECT = AttitudePD.name
 _TOP_KEYS = {'name', 'description', 'scene', 'runs', 'seed', 'duration', 'output_times',
              'chunk', 'dispersions', 'commands', 'statistics'}
 _DISPERSION_KEYS = {'inertia', 'attitude', 'omega_body', 'effects', 'commands'}
-_STATISTICS_KEYS = {'percentiles', 'boresight', 'target', 'settling_deg'}
+_STATISTICS_KEYS = {'percentiles', 'boresight', 'target', 'settling_deg', 'nutation_min_rate'}
 
 
 class SpecError(SceneError):
@@ -131,6 +133,7 @@ class CampaignSpec:
     target: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     source: str = ''
     settling_deg: float = 1.0
+    nutation_min_rate: float = NUTATION_MIN_RATE
 
     @property
     def closed_loop(self) -> bool:
@@ -189,7 +192,9 @@ def spec_from_mapping(data: Any, default_name: str = 'campaign', base: Path | No
         boresight=boresight,
         target=_direction('statistics.target', statistics.get('target',
                                                               default_target.tolist())),
-        source=source, settling_deg=_settling(statistics, scene))
+        source=source, settling_deg=_settling(statistics, scene),
+        nutation_min_rate=_nonnegative('statistics.nutation_min_rate', statistics.get(
+            'nutation_min_rate', NUTATION_MIN_RATE)))
     problem = budget_problem(spec)
     if problem:
         raise SpecError(problem)
@@ -411,6 +416,9 @@ def _effects(value: Any, scene: Scene, commands: bool) -> dict[str, dict[str, Sp
         result[name] = {}
         for parameter, spread in parameters.items():
             key = f'dispersions.effects.{name}.{parameter}'
+            if parameter in effects[name].renamed_parameters:
+                raise SpecError(f'{key}: the parameter is named '
+                                f'{effects[name].renamed_parameters[parameter]!r}: rename it')
             if parameter in effects[name].shared_parameters:
                 raise SpecError(f'{key}: every run shares {parameter} (it cannot be '
                                 f'dispersed)')

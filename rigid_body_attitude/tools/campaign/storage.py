@@ -21,6 +21,7 @@ campaign refused or failed before that leaves the folder as it was.
 from __future__ import annotations
 
 import dataclasses
+from datetime import datetime
 import hashlib
 import json
 import os
@@ -58,6 +59,8 @@ def _canonical(value: Any) -> Any:
         return _canonical(value.item())
     if isinstance(value, float):
         return value.hex()
+    if isinstance(value, datetime):
+        return value.isoformat()
     if value is None or isinstance(value, (bool, int, str)):
         return value
     if isinstance(value, Mapping):

@@ -26,8 +26,6 @@ from rigid_body_attitude.bag import STORAGES
 from rigid_body_attitude.core.errors import AttitudeError
 from rigid_body_attitude.session.parameters import Parameter
 from rigid_body_attitude.session.reports import LEVEL_ERROR, LEVEL_WARN
-from rigid_body_attitude.session.settings import (
-    ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC)
 from rigid_body_attitude.tools.replay.options import NODE_PARAMETERS, ReplayOptions
 from rigid_body_attitude.tools.replay.report import (
     summary, write_csv, write_error_csv, write_plot)
@@ -112,11 +110,11 @@ def parser() -> argparse.ArgumentParser:
     topics.add_argument('--gyro-topic', default='',
                         help='Imu, Vector3Stamped or TwistStamped rates (default: imu, else '
                              'angular_velocity)')
-    topics.add_argument('--torque-topic', default=TORQUE_TOPIC,
+    topics.add_argument('--torque-topic', default=ReplayOptions.torque_topic,
                         help='WrenchStamped commands (default: %(default)s)')
-    topics.add_argument('--rotor-torque-topic', default=ROTOR_TORQUE_TOPIC,
+    topics.add_argument('--rotor-torque-topic', default=ReplayOptions.rotor_torque_topic,
                         help='Vector3Stamped rotor torque commands (default: %(default)s)')
-    topics.add_argument('--set-pose-topic', default=SET_POSE_TOPIC,
+    topics.add_argument('--set-pose-topic', default=ReplayOptions.set_pose_topic,
                         help='PoseStamped attitude re-initialisations (default: %(default)s)')
     topics.add_argument('--outputs', default='',
                         help='comma-separated output topics to write (default: all)')

@@ -33,6 +33,7 @@ from typing import Protocol
 from rigid_body_attitude.bag import BagMessage
 from rigid_body_attitude.msgs.cdr import header_stamp_ns
 from rigid_body_attitude.session.decoding import Handler, input_handler, MALFORMED
+from rigid_body_attitude.session.interface import NODE_INTERFACE
 from rigid_body_attitude.session.dynamics import DynamicsSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.settings import AnySession, DIAGNOSTICS_PERIOD
@@ -80,8 +81,9 @@ class EventLoop:
         #: Lockstep: the sim time of the next tick (``None``: ticks on bag time).
         self.lockstep_next_ns: int | None = (
             0 if lockstep and isinstance(session, DynamicsSession) else None)
+        commands = NODE_INTERFACE.names('in', ('command',))
         self.command_topics = frozenset(topic for topic, node_topic in plan.inputs.items()
-                                        if node_topic in ('torque', 'rotor_torque'))
+                                        if node_topic in commands)
         self.next_diagnostics_ns = first_ns + _DIAGNOSTICS_NS
         #: Messages read per bag topic (the gyro topic's added at the end of the gyro loop).
         self.read: Counter[str] = Counter()
@@ -91,9 +93,9 @@ class EventLoop:
                          for topic, node_topic in plan.inputs.items()}
         #: The gyro topic's handler (gyro scenes): the node's, with the bag's message type.
         self.gyro_handler: Handler | None = None
-        if plan.gyro_decoder is not None:
+        if plan.gyro_type:
             self.gyro_handler = input_handler(
-                session, 'imu' if plan.gyro_is_imu else 'angular_velocity', plan.gyro_decoder,
+                session, 'imu' if plan.gyro_is_imu else 'angular_velocity', plan.gyro_type,
                 reraise=(AlignmentError,))
         sink.now_ns = first_ns
 

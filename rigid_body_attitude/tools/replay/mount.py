@@ -1,6 +1,6 @@
 """The sensor's mount in a replay: from ``mount_rpy``, or from the bag's ``/tf_static``.
 
-As the node does (:mod:`rigid_body_attitude.ros.tf_lookup`): the IMU's frame (the sensor
+As the node does (:mod:`rigid_body_attitude.session.mount_gate`): the IMU's frame (the sensor
 frame, REP-145) is the first decodable gyro record's frame with a known mount: any frame when
 ``mount_rpy`` is given, else ``body_frame`` itself, an empty frame, or a frame the static
 transforms connect to ``body_frame`` (a chain composed if need be:
@@ -25,13 +25,16 @@ from rigid_body_attitude.msgs.errors import MalformedMessage
 from rigid_body_attitude.msgs.tf_message import TF_MESSAGE, decode_tf_message
 from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.decoding import Handler
+from rigid_body_attitude.session.interface import NODE_INTERFACE
+from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.mount import StaticTransforms, drop_no_mount, set_found_mount
 
 __all__ = ['BagMount', 'NoMountGate', 'TF_STATIC', 'read_bag_mount']
 
 #: The topic of static transforms (REP-105; robot_state_publisher, static_transform_publisher).
-TF_STATIC = '/tf_static'
+#: The node's ``/tf_static`` input (the interface's).
+TF_STATIC = NODE_INTERFACE.endpoint('/tf_static').name
 _WHERE = "in the bag's /tf_static"
 _REMEDY = 'give --mount-rpy, or record /tf_static with the bag'
 
@@ -57,7 +60,11 @@ class BagMount:
 
     def apply(self, session: GyroSession) -> None:
         """Set ``session``'s mount from the transforms when the node would wait for it, and
-        its IMU frame (``imu_frame``: records in another frame are refused)."""
+        its IMU frame (``imu_frame``: records in another frame are refused); the other
+        sensors' mounts (``imu/mag``) from the same transforms."""
+        if isinstance(session, FilteredGyroSession):
+            transforms, body_frame = self.transforms, session.body_frame
+            session.frame_mount = lambda frame: transforms.rotation(body_frame, frame)
         frame = self.sensor_frame
         if not session.mount_needed(frame):
             if frame:  # records in other frames are refused, as the node refuses them

@@ -21,11 +21,10 @@ from typing import Any
 from rigid_body_attitude.bag import STORAGES
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.parameters import PARAMETERS, Parameter, check_values
-from rigid_body_attitude.session.settings import (
-    OUTPUT_TOPICS, ROTOR_TORQUE_TOPIC, SET_POSE_TOPIC, TORQUE_TOPIC)
+from rigid_body_attitude.session.interface import NODE_INTERFACE
 
-__all__ = ['NODE_PARAMETERS', 'ReplayOptions', 'TF_PARAMETERS', 'WALL_PARAMETERS',
-           'check_options']
+__all__ = ['NODE_PARAMETERS', 'REPLAYED_OUTPUTS', 'ReplayOptions', 'TF_PARAMETERS',
+           'WALL_PARAMETERS', 'check_options']
 
 #: Node parameters about TF only (a bag has no ``/tf_static`` to wait for, the replay writes
 #: no ``/tf``): the replay does not take them.
@@ -38,6 +37,11 @@ WALL_PARAMETERS = ('publish_clock', 'real_time_factor', 'lockstep_timeout')
 NODE_PARAMETERS: tuple[Parameter, ...] = tuple(
     p for p in PARAMETERS if p.name not in TF_PARAMETERS + WALL_PARAMETERS)
 _DEFAULT = {p.name: p.default for p in NODE_PARAMETERS}
+#: The node's outputs a replay can write (besides the topics a scene names for its simulated
+#: sensors).
+REPLAYED_OUTPUTS = tuple(dict.fromkeys(
+    endpoint.name for endpoint in NODE_INTERFACE
+    if endpoint.direction == 'out' and endpoint.replayed and not endpoint.named_by))
 
 
 @dataclass(frozen=True)
@@ -91,10 +95,15 @@ class ReplayOptions:
     initial_yaw_stddev: float = _DEFAULT['initial_yaw_stddev']
     set_pose_stddev: float = _DEFAULT['set_pose_stddev']
     tilt_stddev_warn: float = _DEFAULT['tilt_stddev_warn']
+    magnetic_declination: float = _DEFAULT['magnetic_declination']
+    magnetometer_calibration_file: str = _DEFAULT['magnetometer_calibration_file']
+    accelerometer_noise_density: float = _DEFAULT['accelerometer_noise_density']
+    accelerometer_random_walk: float = _DEFAULT['accelerometer_random_walk']
+    magnetometer_noise_density: float = _DEFAULT['magnetometer_noise_density']
     gyro_topic: str = ''
-    torque_topic: str = TORQUE_TOPIC
-    rotor_torque_topic: str = ROTOR_TORQUE_TOPIC
-    set_pose_topic: str = SET_POSE_TOPIC
+    torque_topic: str = NODE_INTERFACE.endpoint('torque').name
+    rotor_torque_topic: str = NODE_INTERFACE.endpoint('rotor_torque').name
+    set_pose_topic: str = NODE_INTERFACE.endpoint('set_pose').name
     ground_truth_topic: str = ''
     start_from_ground_truth: float | None = None
     outputs: tuple[str, ...] = ()
@@ -134,10 +143,6 @@ def check_options(options: ReplayOptions) -> dict[str, Any]:
                              f'got {start!r}')
         # The ground truth gives the initial attitude: no levelling (module docstring).
         values['align_seconds'] = 0.0
-    unknown = sorted(set(options.outputs) - set(OUTPUT_TOPICS))
-    if unknown:
-        raise InputError(f'Unknown output topic {unknown[0]!r}; valid choices: '
-                         f'{", ".join(OUTPUT_TOPICS)}')
     return values
 
 

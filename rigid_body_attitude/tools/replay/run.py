@@ -23,10 +23,12 @@ from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.session.gyro import GyroSession
+from rigid_body_attitude.msgs.sensor_encoders import encode_tf_message
 from rigid_body_attitude.session.reports import state_summary
+from rigid_body_attitude.session.sensors import mount_transforms
 from rigid_body_attitude.session.settings import (
     AnySession, load_node_scene, open_session, timer_period_ns)
-from rigid_body_attitude.session.times import seconds_to_ns, to_ns
+from rigid_body_attitude.session.times import seconds_to_ns, split_ns, to_ns
 from rigid_body_attitude.tools.replay.loop import EventLoop, Progress
 from rigid_body_attitude.tools.replay.mount import read_bag_mount
 from rigid_body_attitude.tools.replay.options import ReplayOptions, check_options
@@ -207,6 +209,8 @@ def _replay(reader: BagReader, sink: BagSink, scene: Scene, values: dict[str, An
     if problem:
         raise InputError(problem)
     sink.set_frames(values['world_frame'], values['body_frame'])
+    if first is not None:
+        _write_mounts(sink, scene, values['body_frame'])
     if truth is not None and options.start_from_ground_truth is not None:
         sink.start_from(GroundTruthStart(truth, seconds_to_ns(options.start_from_ground_truth)),
                         session)
@@ -226,6 +230,14 @@ def _replay(reader: BagReader, sink: BagSink, scene: Scene, values: dict[str, An
         bar.close()
     return _Run(session, sink, loop, count, time.perf_counter() - begin,
                 values['publish_rate'], mount.notes)
+
+
+def _write_mounts(sink: BagSink, scene: Scene, body_frame: str) -> None:
+    """The simulated sensors' mounts on ``/tf_static`` at the first message's time, as the
+    node publishes them when it starts (when the outputs hold ``/tf_static``)."""
+    transforms = mount_transforms(scene, body_frame)
+    if transforms:
+        sink.static_transforms(encode_tf_message(*split_ns(sink.now_ns), transforms))
 
 
 def _final_stamp_ns(run: _Run) -> int | None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import array
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,12 +25,14 @@ from rigid_body_attitude.msgs import (
     encode_quaternion_stamped, encode_twist_stamped, encode_vector3_stamped,
     imu_with_orientation, pose_stamped_encoder, pose_with_covariance_stamped_encoder,
     quaternion_stamped_encoder)
-from rigid_body_attitude.msgs.types import IMU
-from rigid_body_attitude.session.base import Session
+from rigid_body_attitude.msgs.cdr import accel_with_covariance_stamped_encoder
+from rigid_body_attitude.msgs.odometry import odometry_encoder
+from rigid_body_attitude.session.base import AccelerationEstimate, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import (
     DiagnosticReport, LEVEL_ERROR, LEVEL_WARN, body_frame_velocity)
-from rigid_body_attitude.session.settings import DIAGNOSTICS_TOPIC, NODE_NAME, OUTPUT_TOPICS
+from rigid_body_attitude.session.interface import NODE_INTERFACE
+from rigid_body_attitude.session.settings import NODE_NAME
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND
 from rigid_body_attitude.session.uncertainty import pose_covariance
 from rigid_body_attitude.tools.replay.truth import GroundTruthStart
@@ -44,6 +46,8 @@ FloatArray = NDArray[np.float64]
 LogHandler = Callable[[int, int, str], None]
 
 _ZERO = (0.0, 0.0, 0.0)
+_DIAGNOSTICS_TOPIC = NODE_INTERFACE.endpoint('/diagnostics', 'out').name
+_TF_STATIC_TOPIC = NODE_INTERFACE.endpoint('/tf_static', 'out').name
 _LEVEL_NAMES = {LEVEL_WARN: 'warning', LEVEL_ERROR: 'error'}
 
 
@@ -86,12 +90,14 @@ class OutputSeries:
 class BagSink:
     """Writes a session's outputs to the output bag (only the ``outputs`` selected)."""
 
-    def __init__(self, writer: BagWriter, outputs: Sequence[str], keep_series: bool,
+    def __init__(self, writer: BagWriter, outputs: Mapping[str, str], keep_series: bool,
                  hardware_id: str, log: LogHandler | None = None) -> None:
-        """Topics ``outputs`` on ``writer``; ``keep_series``: keep the values in memory;
-        ``hardware_id``: the diagnostics' (the scene's name); ``log``: gets each log line."""
+        """Topics ``outputs`` (name → message type) on ``writer``; ``keep_series``: keep the
+        values in memory; ``hardware_id``: the diagnostics' (the scene's name); ``log``: gets
+        each log line."""
         self.writer = writer
-        self.ids = {name: writer.add_topic(name, OUTPUT_TOPICS[name]).id for name in outputs}
+        self.ids = {name: writer.add_topic(name, msgtype).id
+                    for name, msgtype in outputs.items()}
         self.records: list[Record] = []
         #: Bag time of the input or tick being handled [ns]: the records' time.
         self.now_ns = 0
@@ -112,6 +118,7 @@ class BagSink:
         self._pose = self.ids.get('pose')
         self._imu = self.ids.get('imu/data')
         self._pose_covariance = self.ids.get('pose_with_covariance')
+        self._acceleration = self.ids.get('accel/filtered')
         #: Rotation (w, x, y, z) of the IMU's frame in the body frame for ``imu/data``
         #: (:meth:`sensor_mount`; ``None``: identity).
         self.imu_mount: Quaternion | None = None
@@ -125,6 +132,8 @@ class BagSink:
         self.encode_orientation = quaternion_stamped_encoder(world_frame)
         self.encode_pose = pose_stamped_encoder(world_frame)
         self.encode_pose_covariance = pose_with_covariance_stamped_encoder(world_frame)
+        self.encode_odom = odometry_encoder(world_frame, body_frame)
+        self.encode_acceleration = accel_with_covariance_stamped_encoder(body_frame)
 
     def start_from(self, start: GroundTruthStart, session: Session) -> None:
         """Set ``session``'s attitude from the ground truth at the first output due."""
@@ -178,6 +187,13 @@ class BagSink:
             series.attitudes.extend(attitude)
             series.positions.extend(_ZERO)
 
+    def acceleration(self, sec: int, nanosec: int, estimate: AccelerationEstimate) -> None:
+        """``accel/filtered`` of one filtered gyro sample (computed when written)."""
+        if self._acceleration is not None:
+            self.records.append((self._acceleration, self.now_ns, self.encode_acceleration(
+                sec, nanosec, *estimate())))
+            self.counts['accel/filtered'] += 1
+
     def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
         """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``
         and the others the body's (``None``: identity, nothing composed per sample)."""
@@ -200,7 +216,7 @@ class BagSink:
 
     def dynamics(self, sec: int, nanosec: int, sample: OutputSample,
                  velocity_body: Vector) -> None:
-        """``orientation``, ``pose`` and ``twist`` of one dynamics tick."""
+        """``orientation``, ``pose``, ``twist`` and ``odom`` of one dynamics tick."""
         stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
         session = self.session
         if self._aligning and session is not None and self.start is not None and (
@@ -214,6 +230,9 @@ class BagSink:
                                                 sample.attitude))
         self._write('twist', encode_twist_stamped(stamp_ns, self.body_frame, velocity_body,
                                                   sample.omega_body))
+        if 'odom' in self.ids:
+            self._write('odom', self.encode_odom(sec, nanosec, sample.position, sample.attitude,
+                                                 velocity_body, sample.omega_body))
         self.last_attitude, self.last_stamp_ns = sample.attitude, stamp_ns
         if self.series is not None:
             self.series.attitude_stamps_ns.append(stamp_ns)
@@ -233,19 +252,29 @@ class BagSink:
             self.series.energies.append(energy)
             self.series.momenta.extend(world_momentum)
 
-    def simulated_imu(self, topic: str, data: bytes) -> None:
-        """A simulated IMU's sample on ``topic`` (added to the bag at its first sample)."""
-        if topic not in self.ids:
-            self.ids[topic] = self.writer.add_topic(topic, IMU).id
-            self.counts[topic] = 0
+    def sensor_wanted(self, topic: str) -> bool:
+        """Whether ``topic``, a simulated sensor's, is written to the bag."""
+        return topic in self.ids
+
+    def simulated_sensor(self, topic: str, data: bytes) -> None:
+        """A simulated sensor's serialized sample on ``topic``."""
         self._write(topic, data)
+
+    def static_transforms(self, data: bytes) -> None:
+        """The simulated sensors' mounts: a serialized ``tf2_msgs/msg/TFMessage`` for
+        ``/tf_static``, written when the outputs hold it (once, as the node publishes it)."""
+        self._write(_TF_STATIC_TOPIC, data)
+
+    def wheel_state(self, data: bytes) -> None:
+        """``wheels/state`` of a dynamics tick (a serialized JointState)."""
+        self._write('wheels/state', data)
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """``/diagnostics``, stamped with the bag time (the node's sim-time clock)."""
         status = DiagnosticStatus(level=report.level, name='/' + NODE_NAME,
                                   message=report.message, hardware_id=self.hardware_id,
                                   values=dict(report.values))
-        self._write(DIAGNOSTICS_TOPIC, encode_diagnostic_array(self.now_ns, '', [status]))
+        self._write(_DIAGNOSTICS_TOPIC, encode_diagnostic_array(self.now_ns, '', [status]))
 
     def log(self, level: int, text: str) -> None:
         """Count the line by level; hand it to the log handler, if any."""

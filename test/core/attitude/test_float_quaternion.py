@@ -3,16 +3,7 @@
 import numpy as np
 
 from rigid_body_attitude.core.attitude import quaternion
-from rigid_body_attitude.core.attitude.float_quaternion import (
-    q_exp, q_multiply, q_rotate_step, rpy_quaternion)
-
-
-def test_rpy_quaternion_turns_about_z_then_y_then_x():
-    roll, pitch, yaw = 0.3, -0.2, 1.1
-    expected = quaternion.multiply(quaternion.multiply(
-        quaternion.exp([0.0, 0.0, yaw]), quaternion.exp([0.0, pitch, 0.0])),
-        quaternion.exp([roll, 0.0, 0.0]))
-    assert np.max(np.abs(np.subtract(rpy_quaternion(roll, pitch, yaw), expected))) < 1e-15
+from rigid_body_attitude.core.attitude.float_quaternion import q_exp, q_multiply, q_rotate_step
 
 
 def test_float_helpers_agree_with_the_array_algebra():

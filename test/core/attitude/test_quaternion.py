@@ -455,3 +455,27 @@ def test_scalar_exp_step_matches_array_version():
         expected = quat.multiply(q, quat.exp(0.01 * np.array(omega)))
         np.testing.assert_allclose(quat.scalar_exp_step(q, omega, 0.01), expected,
                                    atol=ROUND_OFF)
+
+
+def test_from_rpy_turns_about_z_then_y_then_x():
+    """REP-103 / tf2's setRPY: Rz(yaw) Ry(pitch) Rx(roll); the closed form of the product, the
+    inverse Bryant rotation by -rpy, and a batch give the same quaternions."""
+    roll, pitch, yaw = 0.3, -0.2, 1.1
+    q = quat.from_rpy([roll, pitch, yaw])
+    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
+    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
+    cy, sy = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
+    closed_form = [cy * cp * cr + sy * sp * sr, cy * cp * sr - sy * sp * cr,
+                   cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr]
+    np.testing.assert_allclose(q, closed_form, rtol=0, atol=ROUND_OFF)
+    np.testing.assert_allclose(q, quat.conjugate(quat.from_bryant_xyz([-roll, -pitch, -yaw])),
+                               rtol=0, atol=ROUND_OFF)
+    x_turned = quat.rotate(q, [1.0, 0.0, 0.0])  # x turned by roll (nothing), pitch, then yaw
+    np.testing.assert_allclose(x_turned, [math.cos(yaw) * math.cos(pitch),
+                                          math.sin(yaw) * math.cos(pitch), -math.sin(pitch)],
+                               atol=ROUND_OFF)
+    batch = quat.from_rpy([[roll, pitch, yaw], [0.0, 0.0, 0.5]])
+    assert batch.shape == (2, 4)
+    np.testing.assert_array_equal(batch[0], q)
+    with pytest.raises(InputError, match='`angles`'):
+        quat.from_rpy([0.1, 0.2])

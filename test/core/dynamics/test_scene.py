@@ -39,7 +39,8 @@ def run_one_second(scene):
         assert propagator.state.time == pytest.approx(1.0, abs=1e-12)
     else:
         for input_name in sorted(propagator.input_names):
-            propagator.command(input_name, 0.0, [0.01, -0.02, 0.03])
+            size = propagator.input_routes[input_name][0].input_size(input_name)
+            propagator.command(input_name, 0.0, np.resize([0.01, -0.02, 0.03], size))
         propagator.advance_to(1.0)
         assert propagator.state.time == pytest.approx(1.0, abs=1e-12)
     return propagator
@@ -198,7 +199,8 @@ def effects_list():
 BAD_SCENES = [
     ('unknown top-level key', f'rate_source: dynamics\nbody: {BODY}\nintegrater: rk4',
      r"Unknown key 'integrater' in scene; valid keys: body, description, effects, "
-     r'initial_state, integrator, name, rate_source, sensors, step'),
+     r'estimation, initial_state, integrator, magnetic_field, name, orbit, rate_source, '
+     r'sensors, step, sun'),
     ('missing rate_source', f'body: {BODY}', r"Missing key 'rate_source' in scene; valid keys"),
     ('missing body', 'rate_source: dynamics', r"Missing key 'body' in scene; valid keys"),
     ('bad rate_source', f'rate_source: imu\nbody: {BODY}',
@@ -221,8 +223,8 @@ BAD_SCENES = [
      r"Effect 'constant_torque': parameter 'frame' must be 'body' or 'world', got 'inertial'"),
     ('missing required parameter',
      f'rate_source: dynamics\nbody: {BODY}\neffects: [gravity_gradient]',
-     r"Effect 'gravity_gradient': missing parameter 'orbit_radius' \(orbit radius \[m\]\); "
-     r'valid parameters: initial_anomaly, mu, orbit_normal, orbit_radius'),
+     r"Effect 'gravity_gradient': missing parameter 'orbit_radius' \(orbit radius \[m\]\) "
+     r"or the scene's orbit: section"),
     ('gyro effect in a dynamics scene',
      f'rate_source: dynamics\nbody: {BODY}\neffects: [gyro_bias]',
      r"Effect 'gyro_bias' applies to gyro scenes, not to rate_source 'dynamics'"),

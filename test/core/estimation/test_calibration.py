@@ -290,6 +290,7 @@ def test_a_calibration_file_carries_the_filters_further_figures(tmp_path):
     calibration = load_calibration(_write(tmp_path, KALIBR_IMU_YAML + FIGURES_YAML))
     noise = calibration_noise(calibration)
     assert noise == {'gyroscope_noise_density': 1.6968e-04, 'gyroscope_random_walk': 1.9393e-05,
+                     'accelerometer_noise_density': 2e-3, 'accelerometer_random_walk': 3e-3,
                      'accelerometer_bias_stddev': 0.196, 'gyroscope_turn_on_bias': 0.0175,
                      'gyroscope_scale_stddev': 0.01, 'gyroscope_misalignment_stddev': 0.005,
                      'accelerometer_range': 156.9, 'sample_timing': 0.0015}
@@ -299,7 +300,8 @@ def test_a_calibration_file_carries_the_filters_further_figures(tmp_path):
     plain = load_calibration(_write(tmp_path, 'bias: [0.0, 0.0, 0.0]\nsample_timing: 0.001\n'))
     assert calibration_noise(plain) == {'sample_timing': 0.001}
     assert calibration_noise(load_calibration(_write(tmp_path, KALIBR_IMU_YAML))) == {
-        'gyroscope_noise_density': 1.6968e-04, 'gyroscope_random_walk': 1.9393e-05}
+        'gyroscope_noise_density': 1.6968e-04, 'gyroscope_random_walk': 1.9393e-05,
+        'accelerometer_noise_density': 2e-3, 'accelerometer_random_walk': 3e-3}
 
 
 @pytest.mark.parametrize('line, pattern', [

@@ -16,7 +16,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.attitude.integrators import strapdown_method
 from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
-from rigid_body_attitude.core.sensors import ImuModel, ImuSpec, imu_spec, sensors_spec
+from rigid_body_attitude.core.sensors import ImuModel, ImuSpec, imu_spec, sensors_section
 from rigid_body_attitude.tools import allan
 
 QUIET = dict(gyroscope_noise_density=0.0, gyroscope_random_walk=0.0,
@@ -61,10 +61,10 @@ def test_a_bad_section_is_one_error_naming_the_key(section, words):
     assert words in str(raised.value) and '\n' not in str(raised.value)
 
 
-def test_the_sensors_section_takes_only_imu():
+def test_the_sensors_section_takes_only_known_sensors():
     with pytest.raises(SceneError, match="Unknown key 'camera' in sensors"):
-        sensors_spec({'camera': {}})
-    assert sensors_spec(None) is None
+        sensors_section({'camera': {}})
+    assert list(sensors_section(None).items()) == []
 
 
 def test_the_scene_refuses_a_period_that_is_not_a_whole_number_of_steps():

@@ -15,7 +15,9 @@ Parameters: ``kp`` [N m] and ``kd`` [N m s] (one number or one per body axis, �
 ``torque_limit`` [N m] (one or three, ≥ 0; 0: none), ``control_period`` [s],
 ``target_rpy`` [rad] (roll, pitch, yaw of the target attitude: ``Rz(yaw) Ry(pitch)
 Rx(roll)``, as tf2's ``setRPY``; default the identity, body axes on world axes) or
-``target_attitude`` (w, x, y, z; normalised; replaces ``target_rpy``).
+``target_attitude_wxyz`` (w, x, y, z; normalised; replaces ``target_rpy``), ``actuator``:
+``body`` (default: the torque acts on the body as given) or ``reaction_wheels`` (the torque is
+allocated over the scene's ``reaction_wheels``, which apply it within their limits).
 """
 
 from __future__ import annotations
@@ -56,10 +58,11 @@ def _attitude(value: Any) -> FloatArray | None:
     return result
 
 
-def target_quaternion(rpy: FloatArray) -> FloatArray:
-    """``Rz(yaw) Ry(pitch) Rx(roll)`` of ``rpy`` (..., 3) [rad] as (..., 4) (w, x, y, z):
-    the inverse of the Bryant rotation by ``−rpy``."""
-    return quaternion.conjugate(quaternion.from_bryant_xyz(-np.asarray(rpy)))
+def _actuator(value: Any) -> str:
+    """``body`` or ``reaction_wheels``."""
+    if value not in ('body', 'reaction_wheels'):
+        raise ValueError('body or reaction_wheels')
+    return str(value)
 
 
 def _per_body(value: Any) -> float | FloatArray:
@@ -88,11 +91,15 @@ class AttitudePD(SampledTorque):
                                     'sample period [s], a whole number of steps'),
         'target_rpy': Parameter(vector3, [0.0, 0.0, 0.0],
                                 'target roll, pitch, yaw [rad] (Rz Ry Rx)'),
-        'target_attitude': Parameter(_attitude, [],
-                                     'target (w, x, y, z); replaces target_rpy'),
+        'target_attitude_wxyz': Parameter(_attitude, [],
+                                          'target (w, x, y, z); replaces target_rpy'),
+        'actuator': Parameter(_actuator, 'body',
+                              'body (the torque itself) or reaction_wheels (allocated)'),
     }
     shared_parameters: ClassVar[frozenset[str]] = frozenset({'control_period',
-                                                             'target_attitude'})
+                                                             'target_attitude_wxyz',
+                                                             'actuator'})
+    renamed_parameters: ClassVar[dict[str, str]] = {'target_attitude': 'target_attitude_wxyz'}
 
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
         """Keep gains, limit and target as plain floats for the single-body path."""
@@ -100,9 +107,11 @@ class AttitudePD(SampledTorque):
         self.gains = (as_vec(np.broadcast_to(self.params['kp'], (3,))),
                       as_vec(np.broadcast_to(self.params['kd'], (3,))),
                       as_vec(np.broadcast_to(self.params['torque_limit'], (3,))))
-        given = self.params['target_attitude']
+        given = self.params['target_attitude_wxyz']
         self.target: Quat = as_quat(given if given is not None else
-                                    target_quaternion(self.params['target_rpy']))
+                                    quaternion.from_rpy(self.params['target_rpy']))
+        self.actuator = self.params['actuator']
+        self.applies_torque = self.actuator == 'body'
 
     @property
     def period(self) -> float:
@@ -119,10 +128,10 @@ class AttitudePD(SampledTorque):
         """The law on every body of the chunk (its own gains, limit and target if
         dispersed)."""
         parameters = chunk.parameters
-        if self.params['target_attitude'] is not None:
+        if self.params['target_attitude_wxyz'] is not None:
             target = np.array(self.target)
         else:
-            target = target_quaternion(np.asarray(parameters['target_rpy']).T)
+            target = quaternion.from_rpy(np.asarray(parameters['target_rpy']).T)
         torque = pd_torque_body(q.T, omega.T, target, _per_body(parameters['kp']),
                                 _per_body(parameters['kd']),
                                 _per_body(parameters['torque_limit']))

@@ -12,6 +12,11 @@ dynamic effectors and effectors with state of their own):
 * :class:`RateCorrection` — ``corrected_rate(t, attitude, ω_measured)`` [rad/s, body] for
   measured gyro rates (strapdown scenes);
 * :class:`StatefulEffect` — an integrated state of its own (centre-of-mass motion);
+* :class:`~.held.HeldOverStep` — an output held over each integration step, evaluated from
+  the state at the step's start (a drive's or a coil's zero-order hold at the scene's step);
+* :class:`~.held.RotorState` — rotors whose speeds are an integrated state of their own
+  (reaction wheels): a :class:`RotorEffect` held over each step, its spin inertia taken out of
+  the body's;
 * :class:`CommandedEffect` — driven by a held commanded input whose switch times end steps;
 * :class:`~.sampled.SampledTorque` — a digital controller's torque: computed from the state
   at sample instants a whole number of steps apart, held in between (zero-order hold).
@@ -38,6 +43,8 @@ from numpy.typing import NDArray
 from rigid_body_attitude.core.dynamics.batch_rows import BatchChunk
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.dynamics.inertia import Inertia
+from rigid_body_attitude.core.environment.magnetic_field import MagneticFieldModel
+from rigid_body_attitude.core.environment.orbit import CircularOrbit
 from rigid_body_attitude.core.registry import Registry
 from rigid_body_attitude.core.yaml_files import real
 
@@ -49,6 +56,7 @@ __all__ = [
     'Effect',
     'EFFECTS',
     'ForceEffect',
+    'Environment',
     'HeldInput',
     'Parameter',
     'Quat',
@@ -80,11 +88,33 @@ EFFECTS: Registry[type[Effect]] = Registry('effect', SceneError)
 
 
 @dataclass(frozen=True)
+class Environment:
+    """What a scene says about the world the body moves in, for the effects that act through
+    it: the orbit and the magnetic field model (``core/environment``), each None when the
+    scene has no such section."""
+
+    orbit: CircularOrbit | None = None
+    magnetic_field: MagneticFieldModel | None = None
+
+    def required_field(self, effect: str) -> MagneticFieldModel:
+        """The magnetic field model, for an effect that acts through it; SceneError naming
+        ``effect`` when the scene has no ``magnetic_field:`` section."""
+        if self.magnetic_field is None:
+            raise SceneError(f"Effect {effect!r} needs the scene's magnetic_field: section")
+        return self.magnetic_field
+
+
+_NO_ENVIRONMENT = Environment()
+
+
+@dataclass(frozen=True)
 class BodyProperties:
-    """What an effect may know about the body: inertia [kg m²] and mass [kg]."""
+    """What an effect may know about the body, inertia [kg m²] (the whole body, rotors
+    locked) and mass [kg], and about the scene's :class:`Environment`."""
 
     inertia: Inertia
     mass: float
+    environment: Environment = _NO_ENVIRONMENT
 
 
 @dataclass(frozen=True)
@@ -147,6 +177,8 @@ def as_quat(attitude: Sequence[float] | FloatArray) -> Quat:
 
 def as_vec(vector: Sequence[float] | FloatArray) -> Vec:
     """A 3-vector as a plain-float tuple."""
+    if type(vector) is tuple and len(vector) == 3 and all(type(v) is float for v in vector):
+        return vector  # already one (the propagator's commands)
     x, y, z = np.asarray(vector, dtype=np.float64).tolist()
     return x, y, z
 
@@ -168,11 +200,15 @@ class Effect:
     requires: ClassVar[tuple[str, ...]] = ()
     #: Parameters every body of a batch shares (not dispersed per body).
     shared_parameters: ClassVar[frozenset[str]] = frozenset()
+    #: Retired parameter names → the names in use (a retired name is an error naming its
+    #: successor).
+    renamed_parameters: ClassVar[Mapping[str, str]] = {}
 
     def __init__(self, params: Mapping[str, Any], body: BodyProperties) -> None:
         """Validate ``params`` against :attr:`parameters`; keep ``body``."""
         self.body = body
-        self.params = validate_parameters(self.name, self.parameters, params)
+        self.params = validate_parameters(self.name, self.parameters, params,
+                                          self.renamed_parameters)
         self.counters: dict[str, int] = {}
 
     def reset(self) -> None:
@@ -187,9 +223,21 @@ class Effect:
         """Add one to the counter ``reason`` (reported in the diagnostics)."""
         self.counters[reason] = self.counters.get(reason, 0) + 1
 
-    def accept_input(self, input_name: str, t: float, value: FloatArray) -> None:
+    def accept_input(self, input_name: str, t: float, value: Vec | FloatArray) -> None:
         """Take a commanded input (only called for names in :attr:`inputs`)."""
         raise SceneError(f'Effect {self.name!r} takes no input {input_name!r}')
+
+    def input_size(self, input_name: str) -> int:
+        """How many numbers a command of ``input_name`` holds (3: a body vector)."""
+        return 3
+
+    def bind(self, effects: Sequence[Effect]) -> None:
+        """Link to the other effects of the scene (all built), e.g. a controller to the
+        actuator it drives; :class:`SceneError` when a link the parameters ask for is missing.
+        """
+
+    def check_step(self, step: float) -> None:
+        """Refuse (:class:`SceneError`) a scene step [s] this effect cannot be held over."""
 
 
 class TorqueEffect(Effect, ABC):
@@ -201,6 +249,8 @@ class TorqueEffect(Effect, ABC):
     """
 
     torque_depends_on_rate: ClassVar[bool] = False
+    #: False for a controller whose output drives an actuator effect instead of the body.
+    applies_torque: bool = True
 
     @abstractmethod
     def torque(self, t: float, q: Quat, omega: Vec) -> Vec:
@@ -311,8 +361,10 @@ class StatefulEffect(Effect, ABC):
 
 
 def validate_parameters(effect_name: str, spec: Mapping[str, Parameter],
-                        params: Mapping[str, Any]) -> dict[str, Any]:
-    """Check ``params`` against ``spec``: unknown names, missing keys and bad values.
+                        params: Mapping[str, Any],
+                        renamed: Mapping[str, str] | None = None) -> dict[str, Any]:
+    """Check ``params`` against ``spec``: unknown names (a retired name of ``renamed`` names
+    its successor), missing keys and bad values.
 
     Raises :class:`SceneError` naming the effect, the parameter, the value and the valid
     choices.
@@ -322,6 +374,10 @@ def validate_parameters(effect_name: str, spec: Mapping[str, Parameter],
                          f'got {params!r}')
     valid = ', '.join(sorted(spec)) or '(none)'
     unknown = sorted(set(params) - set(spec))
+    retired = [name for name in unknown if renamed and name in renamed]
+    if retired and renamed:
+        raise SceneError(f'Effect {effect_name!r}: parameter {retired[0]!r} is named '
+                         f'{renamed[retired[0]]!r}: rename it')
     if unknown:
         raise SceneError(f'Effect {effect_name!r}: unknown parameter {unknown[0]!r}; '
                          f'valid parameters: {valid}')
@@ -358,24 +414,27 @@ class HeldInput:
     #: Commands kept; older ones can no longer be in force once this many newer ones exist.
     KEPT = 8
 
-    def __init__(self, owner: Effect, timeout: float) -> None:
-        """Hold commands for ``timeout`` [s]; count expiries on ``owner``."""
+    def __init__(self, owner: Effect, timeout: float, size: int = 3) -> None:
+        """Hold commands of ``size`` numbers (3: a body vector) for ``timeout`` [s]; count
+        expiries on ``owner``. The integrals (:meth:`integral_at`) are of 3-vectors only."""
         self.owner = owner
         self.timeout = timeout
+        self.size = size
+        self.zero: Any = (0.0,) * size
         self.reset()
 
     def reset(self) -> None:
         """Forget every command."""
-        self.segments: list[tuple[float, float, Vec]] = []
+        self.segments: list[tuple[float, float, Any]] = []
         self.folded: Vec = _ZERO
         self.window: float | None = None
-        self.pinned: tuple[float, Vec, Vec] = (0.0, _ZERO, _ZERO)
+        self.pinned: tuple[float, Vec, Any] = (0.0, _ZERO, self.zero)
         self.expiry_counted = True
 
     @property
     def value(self) -> FloatArray:
         """The latest command (zero before any)."""
-        return np.array(self.segments[-1][2] if self.segments else _ZERO)
+        return np.array(self.segments[-1][2] if self.segments else self.zero)
 
     @property
     def stamp(self) -> float:
@@ -390,11 +449,14 @@ class HeldInput:
         if self.segments and self.segments[-1][1] > t:
             start, _, previous = self.segments[-1]
             self.segments[-1] = (start, t, previous)
-        self.segments.append((t, t + self.timeout, as_vec(value)))
-        for start, end, old in self.segments[:-self.KEPT]:
-            span = end - start
-            self.folded = (self.folded[0] + old[0] * span, self.folded[1] + old[1] * span,
-                           self.folded[2] + old[2] * span)
+        held = as_vec(value) if self.size == 3 else tuple(
+            np.asarray(value, dtype=np.float64).tolist())
+        self.segments.append((t, t + self.timeout, held))
+        if self.size == 3:
+            for start, end, old in self.segments[:-self.KEPT]:
+                span = end - start
+                self.folded = (self.folded[0] + old[0] * span, self.folded[1] + old[1] * span,
+                               self.folded[2] + old[2] * span)
         del self.segments[:-self.KEPT]
         self.expiry_counted = False
 
@@ -412,7 +474,9 @@ class HeldInput:
         self.window = None
         middle = 0.5 * (t_start + t_end)
         segment = self.segment_at(middle)
-        if segment is None:
+        if self.size != 3:
+            self.pinned = (middle, _ZERO, self.zero if segment is None else segment[2])
+        elif segment is None:
             self.pinned = (middle, self.integral_at(middle), _ZERO)
         else:
             self.pinned = (segment[0], self.integral_at(segment[0]), segment[2])
@@ -422,25 +486,26 @@ class HeldInput:
         """Evaluate at the times asked again."""
         self.window = None
 
-    def segment_at(self, t: float) -> tuple[float, float, Vec] | None:
+    def segment_at(self, t: float) -> tuple[float, float, Any] | None:
         """The command in force at ``t`` (the step's midpoint during a step), or None."""
         probe = t if self.window is None else self.window
         for segment in reversed(self.segments):
             if segment[0] <= probe:
                 if probe <= segment[1]:
-                    return segment
+                    found: tuple[float, float, Any] = segment
+                    return found
                 break
         if self.segments and probe > self.segments[-1][1] and not self.expiry_counted:
             self.expiry_counted = True
             self.owner.count('stale')
         return None
 
-    def vector_at(self, t: float) -> Vec:
-        """The command in force at ``t``, or zero (plain floats)."""
+    def vector_at(self, t: float) -> Any:
+        """The command in force at ``t``, or zero (a tuple of plain floats)."""
         if self.window is not None:
             return self.pinned[2]
         segment = self.segment_at(t)
-        return _ZERO if segment is None else segment[2]
+        return self.zero if segment is None else segment[2]
 
     def integral_at(self, t: float) -> Vec:
         """``∫ command dt`` from the first command to ``t`` (exact for the piecewise constant)."""
@@ -478,7 +543,7 @@ class CommandedEffect(Effect):
         """Drop every held command."""
         self.command.reset()
 
-    def accept_input(self, input_name: str, t: float, value: FloatArray) -> None:
+    def accept_input(self, input_name: str, t: float, value: Vec | FloatArray) -> None:
         """Hold ``value`` from ``t``."""
         self.command.set(t, value)
 

@@ -27,7 +27,8 @@ class CommandedTorque(CommandedEffect, TorqueEffect):
 
     def torque(self, t: float, q: Quat, omega: Vec) -> Vec:
         """The torque in force at ``t``, or zero once it is older than ``timeout``."""
-        return self.command.vector_at(t)
+        torque: Vec = self.command.vector_at(t)
+        return torque
 
     def add_batch_torque(self, t: float, q: FloatArray, omega: FloatArray, chunk: BatchChunk,
                          out: FloatArray) -> None:

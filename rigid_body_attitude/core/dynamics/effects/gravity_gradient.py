@@ -4,7 +4,9 @@
 centre to the satellite in body axes (Source: Hughes, *Spacecraft Attitude Dynamics*, §8.1;
 Basilisk GravityGradientEffector). The world frame is inertial with the planet at its origin; the
 orbit is circular with radius ``orbit_radius`` in the plane normal to ``orbit_normal``, mean
-motion ``n = √(μ/r³)``, anomaly ``u = initial_anomaly + n t``. Assumptions: point-mass planet,
+motion ``n = √(μ/r³)``, anomaly ``u = initial_anomaly + n t``; in a scene with an ``orbit:``
+section the orbit is that one (its radius, ``μ``, plane and argument of latitude; the effect's
+own orbit parameters are then refused). Assumptions: point-mass planet,
 body small against ``r``, the orbit unaffected by the attitude. In a batch every body is on
 the same orbit (its own inertia and attitude).
 """
@@ -20,10 +22,15 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.batch_rows import cross_rows
 from rigid_body_attitude.core.dynamics.effects.base import (
     as_vec, BatchChunk, BodyProperties, FloatArray, Parameter, positive, Quat, real, register,
-    REQUIRED, TorqueEffect, Vec, vector3)
+    TorqueEffect, Vec, vector3)
 from rigid_body_attitude.core.errors import SceneError
 
 EARTH_MU = 3.986004418e14
+
+
+def _radius(value: Any) -> float | None:
+    """A radius > 0, or none (the scene's orbit)."""
+    return None if value is None else positive(value)
 
 
 @register
@@ -33,15 +40,32 @@ class GravityGradient(TorqueEffect):
     name = 'gravity_gradient'
     description = 'gravity-gradient torque 3μ/r³ r̂ × J r̂ on a circular orbit'
     parameters = {
-        'orbit_radius': Parameter(positive, REQUIRED, 'orbit radius [m]'),
+        'orbit_radius': Parameter(_radius, None, 'orbit radius [m]'),
         'mu': Parameter(positive, EARTH_MU, 'gravitational parameter [m³/s²]'),
         'initial_anomaly': Parameter(real, 0.0, 'argument of latitude at t = 0 [rad]'),
         'orbit_normal': Parameter(vector3, [0.0, 0.0, 1.0], 'orbit normal, world frame'),
     }
 
     def __init__(self, params: dict[str, Any], body: BodyProperties) -> None:
-        """Build an orthonormal orbit-plane basis from ``orbit_normal``."""
+        """Build an orthonormal orbit-plane basis from ``orbit_normal`` (or take the scene's
+        orbit)."""
         super().__init__(params, body)
+        self.tensor = tuple(body.inertia.tensor.ravel().tolist())
+        orbit = body.environment.orbit
+        if orbit is not None:
+            given = sorted(set(params) & {'orbit_radius', 'mu', 'initial_anomaly',
+                                          'orbit_normal'})
+            if given:
+                raise SceneError(f"Effect 'gravity_gradient': parameter {given[0]!r} is given "
+                                 f"by the scene's orbit: section; remove it")
+            self.first_axis, self.second_axis = orbit.axes[0], orbit.axes[1]
+            self.initial_anomaly = orbit.argument_of_latitude
+            self._set_orbit(orbit.radius, orbit.mu)
+            return
+        if self.params['orbit_radius'] is None:
+            raise SceneError("Effect 'gravity_gradient': missing parameter 'orbit_radius' "
+                             "(orbit radius [m]) or the scene's orbit: section")
+        self.initial_anomaly = self.params['initial_anomaly']
         normal = self.params['orbit_normal']
         norm = float(np.linalg.norm(normal))
         if norm == 0.0:
@@ -53,14 +77,16 @@ class GravityGradient(TorqueEffect):
         first_axis /= np.linalg.norm(first_axis)
         self.first_axis = as_vec(first_axis)
         self.second_axis = as_vec(np.cross(normal, first_axis))
-        radius = self.params['orbit_radius']
-        self.mean_motion = math.sqrt(self.params['mu'] / radius ** 3)
-        self.gain = 3.0 * self.params['mu'] / radius ** 3
-        self.tensor = tuple(body.inertia.tensor.ravel().tolist())
+        self._set_orbit(self.params['orbit_radius'], self.params['mu'])
+
+    def _set_orbit(self, radius: float, mu: float) -> None:
+        """Mean motion and torque gain of the circular orbit."""
+        self.mean_motion = math.sqrt(mu / radius ** 3)
+        self.gain = 3.0 * mu / radius ** 3
 
     def radial(self, t: float) -> Vec:
         """Unit vector from the planet to the body at ``t``, world frame (plain floats)."""
-        anomaly = self.params['initial_anomaly'] + self.mean_motion * t
+        anomaly = self.initial_anomaly + self.mean_motion * t
         c, s = math.cos(anomaly), math.sin(anomaly)
         a, b = self.first_axis, self.second_axis
         return c * a[0] + s * b[0], c * a[1] + s * b[1], c * a[2] + s * b[2]

@@ -16,7 +16,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rigid_body_attitude.core.dynamics.effects.base import (
-    _ZERO, BatchChunk, BodyProperties, CommandedEffect, FloatArray, Quat, TorqueEffect, Vec)
+    _ZERO, BatchChunk, BodyProperties, CommandedEffect, Effect, FloatArray, Quat, TorqueEffect,
+    Vec)
+from rigid_body_attitude.core.errors import SceneError
 
 __all__ = ['SampledTorque', 'segment_end']
 
@@ -43,7 +45,15 @@ class SampledTorque(TorqueEffect, ABC):
     def __init__(self, params: Mapping[str, Any], body: BodyProperties) -> None:
         """Validate the parameters; nothing is held before the first sample."""
         super().__init__(params, body)
+        #: The effect that turns the held output into a torque (``body``: applied directly).
+        self.actuator = 'body'
         self.reset()
+
+    def bind(self, effects: Sequence[Effect]) -> None:
+        """A controller driving an actuator effect needs that effect in the scene."""
+        if self.actuator != 'body' and not any(e.name == self.actuator for e in effects):
+            raise SceneError(f'Effect {self.name!r}: actuator {self.actuator!r} needs effect '
+                             f'{self.actuator!r} in the same scene')
 
     @property
     @abstractmethod
@@ -124,13 +134,14 @@ class SampledTorque(TorqueEffect, ABC):
         return state[3] + norm * (t - self.last_sample), state[4].copy()
 
     def torque(self, t: float, q: Quat, omega: Vec) -> Vec:
-        """The held torque."""
-        return self.held
+        """The held torque (zero when an actuator effect applies it)."""
+        return self.held if self.applies_torque else _ZERO
 
     def add_batch_torque(self, t: float, q: FloatArray, omega: FloatArray, chunk: BatchChunk,
                          out: FloatArray) -> None:
-        """Each body's held torque."""
-        out += chunk.state[:3]
+        """Each body's held torque (none when an actuator effect applies it)."""
+        if self.applies_torque:
+            out += chunk.state[:3]
 
 
 def segment_end(t: float, t_end: float, switching: Sequence[CommandedEffect],

@@ -1,12 +1,14 @@
-"""The gyro loop: raw gyro subscriptions and the node's timers served on one reused wait set.
+"""The raw-take loop: raw subscriptions and a node's timers served on one reused wait set.
 
 rclpy's executors handle one message per wake-up and rebuild their wait set each time (about
 100 µs of Python per message with a ``SingleThreadedExecutor`` on this project's machine); at
-kHz gyro rates that is the whole budget. A :class:`GyroLoop` holds one reused ``rcl`` wait set
-with the gyro subscriptions and the node's timers; after each wake-up it takes *every* queued
-message of each subscription and hands the CDR bytes to its handler, then runs the timers that
-are due. The entities it serves belong to a :class:`DedicatedGroup`: executors run them like
-any mutually exclusive group until a loop claims the group; the loop then also serves the
+kHz gyro rates that is the whole budget. A :class:`RawTakeLoop` holds one reused ``rcl`` wait
+set with raw subscriptions (the propagation node's gyro topics, the controller's inputs) and
+the node's timers; after each wake-up it takes *every* queued message of each subscription and
+hands the CDR bytes to its handler, then runs the timers that are due (the dynamics scenes'
+ticks among them; :class:`~.step_loop.StepLoop` builds the sim clock's loop on it). The
+entities it serves belong to a :class:`DedicatedGroup`: executors run them like any mutually
+exclusive group until a loop claims the group; the loop then also serves the
 subscriptions' QoS events (rclpy's warning about an incompatible publisher). rclpy's private
 wait-set binding is reached through :mod:`rigid_body_attitude.ros.rclpy_internals` only.
 """
@@ -30,7 +32,8 @@ from rclpy.timer import Timer
 from rigid_body_attitude.ros.rclpy_internals import (
     entity_handle, new_wait_set, raw_taker, timer_runner)
 
-__all__ = ['DedicatedGroup', 'EVENT_CHECK_PERIOD', 'GyroLoop', 'Handler', 'WAIT_TIMEOUT_NS']
+__all__ = ['DRAINED', 'DedicatedGroup', 'EVENT_CHECK_PERIOD', 'RawTakeLoop', 'Handler',
+           'WAIT_TIMEOUT_NS']
 
 #: Nanoseconds one wait may last before the loop re-checks its context (guards wake it first).
 WAIT_TIMEOUT_NS = 1_000_000_000
@@ -42,9 +45,13 @@ EVENT_CHECK_PERIOD = 1.0
 #: A handler gets one message's serialized (CDR) bytes.
 Handler = Callable[[bytes], Any]
 
+#: What a handler returns when it took every message queued behind the one it was given
+#: (a command topic's coalescing handler): the loop then asks that subscription for no more.
+DRAINED = 'drained'
+
 
 class DedicatedGroup(MutuallyExclusiveCallbackGroup):
-    """A mutually exclusive callback group whose entities a :class:`GyroLoop` can claim.
+    """A mutually exclusive callback group whose entities a :class:`RawTakeLoop` can claim.
 
     Until :attr:`claimed` is set, executors run the entities as usual; afterwards they leave
     them out of their wait sets and never begin executing them.
@@ -77,7 +84,7 @@ def _run_event(handler: EventHandler) -> None:
         pass
 
 
-class GyroLoop:
+class RawTakeLoop:
     """Waits on raw subscriptions and timers; hands every queued message to its handler and
     runs the timers that are due.
 
@@ -144,7 +151,7 @@ class GyroLoop:
                 with_events = monotonic() >= next_event_check
                 self._fill(wait_set, guards, with_events)
                 wait_set.wait(WAIT_TIMEOUT_NS)
-                self.handle_ready()
+                self.handle_ready(wait_set)
                 if with_events:
                     next_event_check = monotonic() + EVENT_CHECK_PERIOD
                     for event in events:
@@ -153,13 +160,19 @@ class GyroLoop:
         finally:
             wait_set.destroy_when_not_in_use()
 
-    def handle_ready(self) -> None:
-        """Hand every queued message to its handler; run the timers that are due."""
-        for _, take, handler in self.served:
+    def handle_ready(self, wait_set: Any) -> None:
+        """Hand every queued message of the subscriptions ``wait_set`` found ready to its
+        handler (one that returns :data:`DRAINED` took the rest of its queue itself); run
+        the timers that are due. A subscription the wait did not find ready is not asked: an
+        empty take costs as much as a message's."""
+        for index, (_, take, handler) in enumerate(self.served):
+            if not wait_set.is_ready('subscription', index):
+                continue
             data = take()
             while data is not None:
-                handler(data)
                 self.handled += 1
+                if handler(data) is DRAINED:
+                    break
                 data = take()
         for run_if_due in self._run_if_due:
             run_if_due()
