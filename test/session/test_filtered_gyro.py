@@ -10,6 +10,7 @@ magnetometer samples and attitude measurements by reason, never tilts for a magn
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,12 +20,17 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.attitude.float_quaternion import q_exp, q_multiply, q_normalize
 from rigid_body_attitude.core.errors import CalibrationError, SceneError
 from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
+from rigid_body_attitude.core.estimation.calibration import calibration_noise, load_calibration
 from rigid_body_attitude.core.estimation.magnetometer_file import load_magnetometer_calibration
 from rigid_body_attitude.msgs.cdr import encode_magnetic_field, encode_pose_with_covariance_stamped
 from rigid_body_attitude.session.decoding import input_handler
 from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
 
+REPO_ROOT = Path(__file__).resolve().parents[2]
+#: The calibration files the BROAD study ships for the dataset's IMU.
+BROAD_IMU = REPO_ROOT / 'studies' / 'broad_imu.yaml'
+BROAD_MAGNETOMETER = REPO_ROOT / 'studies' / 'broad_magnetometer.yaml'
 G = 9.80665
 RATE = 200.0
 PERIOD_NS = 5 * MS
@@ -361,3 +367,21 @@ def test_the_published_covariance_carries_the_sample_instant_of_a_turning_body(o
     expected = timing ** 2 * np.outer(rate, rate)
     assert np.abs(extra - expected).max() < 0.1 * np.abs(expected).max()
     assert sink.covariances[-1] == session.estimation.published
+
+
+def test_the_shipped_calibration_files_reach_the_filter(open_scene):
+    noise = calibration_noise(load_calibration(BROAD_IMU))
+    assert set(noise) == {'gyroscope_noise_density', 'gyroscope_random_walk',
+                          'accelerometer_noise_density', 'accelerometer_random_walk',
+                          'gyroscope_turn_on_bias', 'gyroscope_scale_stddev',
+                          'gyroscope_misalignment_stddev', 'accelerometer_bias_stddev',
+                          'accelerometer_range', 'sample_timing'}
+    magnetometer = load_magnetometer_calibration(BROAD_MAGNETOMETER)
+    session, _ = open_scene('imu_filter', calibration_file=str(BROAD_IMU),
+                            magnetometer_calibration_file=str(BROAD_MAGNETOMETER))
+    assert isinstance(session, FilteredGyroSession)
+    estimator = session.estimation.estimator
+    assert estimator.model.gyroscope_noise_density == noise['gyroscope_noise_density']
+    assert estimator.model.accelerometer_bias_stddev == noise['accelerometer_bias_stddev']
+    assert estimator.settings.accelerometer_range == noise['accelerometer_range']
+    assert estimator.settings.magnetometer_delay == magnetometer.settings['magnetometer_delay']

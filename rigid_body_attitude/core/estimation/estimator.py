@@ -167,7 +167,8 @@ class AttitudeEstimator:
                                  f'{SPECIFIC_FORCE_LIMIT:g} m/s^2, got {tuple(specific_force)!r}')
             b = self.accel_bias
             self.interval.add(q_after, rate, (fx - b[0], fy - b[1], fz - b[2]), dt)
-            if max(abs(fx), abs(fy), abs(fz)) >= self._clip:
+            c = self._clip
+            if not (-c < fx < c and -c < fy < c and -c < fz < c):  # NaN was refused above
                 self.interval.clipped += dt
         else:
             self.interval.duration += dt

@@ -29,9 +29,9 @@ The gyro's figures (and the accelerometer's noise density and bias prior) are th
 * ``motion_model`` ``'velocity'``: gravity through a bounded velocity
   (:mod:`.velocity_update`); ``'acceleration'``: through the interval's mean specific force
   with the acceleration as noise (:mod:`.gravity_update`).
-* ``velocity_time`` 0.3 s: ``τ_v``, the time a hand-held or arm-borne body takes to reverse
-  its motion (a hand swings at 1-2 Hz: half a period is 0.25-0.5 s), the correlation time of
-  its velocity (:mod:`.velocity_update`; the velocity's power is measured, not set).
+* ``velocity_time`` 0.5 s: ``τ_v``, the time a hand-held or arm-borne body takes to reverse
+  its motion, the correlation time of its velocity (:mod:`.velocity_update`; the velocity's
+  power is measured, not set).
 * ``sample_timing`` 2 ms: 1σ of the instant an IMU sample represents behind its stamp (a
   MEMS gyro's digital low-pass delays its rate by about ``1/(2π f_c)``, 1.4 ms for the
   BMI088's 116 Hz bandwidth); it widens the published covariance of a turning body
@@ -109,7 +109,7 @@ class EstimatorSettings:
     learn_hard_iron: bool = True
     hard_iron_time: float = 10.0
     motion_model: str = 'velocity'
-    velocity_time: float = 0.3
+    velocity_time: float = 0.5
     zero_velocity_stddev: float = 0.01
     accelerometer_range: float = 16.0 * 9.80665
     sample_timing: float = 0.002
