@@ -37,7 +37,8 @@ import numpy as np
 
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.estimation_section import EstimationSpec
-from rigid_body_attitude.core.estimation.estimator import MAX_FIELD_AGE, AttitudeEstimator
+from rigid_body_attitude.core.estimation.estimator import (
+    MAX_FIELD_AGE, AttitudeEstimator, published_covariance)
 from rigid_body_attitude.core.estimation.estimator_start import (
     magnetic_start, start_estimator)
 from rigid_body_attitude.core.estimation.gravity_free import gravity_free_acceleration
@@ -235,13 +236,13 @@ class Estimation:
     def _publish(self, q: Quat | None = None, rate: Vec | None = None) -> None:
         """The filter's attitude block as published; after an update at ``q`` with the body
         rate ``rate``, widened by the uncertainty of the sample's instant
-        (:meth:`~rigid_body_attitude.core.estimation.estimator.AttitudeEstimator.
-        published_covariance`)."""
+        (:func:`~rigid_body_attitude.core.estimation.estimator.published_covariance`)."""
         state = self.estimator.covariance
         if state is None:
             return
-        block = (state.attitude if q is None or rate is None
-                 else self.estimator.published_covariance(q, rate))
+        block = state.attitude
+        if q is not None and rate is not None:
+            block = published_covariance(block, q, rate, self.estimator.settings.sample_timing)
         self.published = tuple(block.reshape(9).tolist())
         self._p = state.p
 

@@ -68,7 +68,8 @@ from rigid_body_attitude.core.estimation.velocity_update import BoundedVelocity
 from rigid_body_attitude.core.estimation.zero_rate_update import (
     RestIntervals, zero_rate_measurement)
 
-__all__ = ['AttitudeEstimator', 'FIELD_LIMIT', 'MAX_FIELD_AGE', 'SPECIFIC_FORCE_LIMIT']
+__all__ = ['AttitudeEstimator', 'FIELD_LIMIT', 'MAX_FIELD_AGE', 'SPECIFIC_FORCE_LIMIT',
+           'published_covariance']
 
 FloatArray = NDArray[np.float64]
 Quat = tuple[float, float, float, float]
@@ -316,21 +317,22 @@ class AttitudeEstimator:
             rotation = turn @ rotation
         return q, rotation
 
-    def published_covariance(self, q: Quat, rate: Vec) -> FloatArray:
-        """The 3×3 world-frame attitude covariance [rad²] to publish with the attitude ``q``
-        at the body rate ``rate`` [rad/s]: the filter's, plus the uncertainty of the instant
-        the samples represent (``sample_timing`` ``σ_t``: an IMU's own filter delays its
-        samples by a millisecond or two; a turn at ``ω`` moves the attitude by ``ω σ_t`` in
-        that time, ``σ_t² ω_w ω_wᵀ`` with ``ω_w`` the world-frame rate)."""
-        p = self._state().p[:3, :3].copy()
-        w, x, y, z = q
-        rx, ry, rz = rate
-        tx, ty, tz = 2.0 * (y * rz - z * ry), 2.0 * (z * rx - x * rz), 2.0 * (x * ry - y * rx)
-        world = np.array([rx + w * tx + (y * tz - z * ty), ry + w * ty + (z * tx - x * tz),
-                          rz + w * tz + (x * ty - y * tx)]) * self.settings.sample_timing
-        return p + np.outer(world, world)
-
     @property
     def state_size(self) -> int:
         """:data:`~rigid_body_attitude.core.estimation.filter_covariance.FILTER_STATE_SIZE`."""
         return FILTER_STATE_SIZE
+
+
+def published_covariance(attitude_covariance: FloatArray, q: Quat, rate: Vec,
+                         sample_timing: float) -> FloatArray:
+    """The 3×3 world-frame attitude covariance [rad²] to publish with the attitude ``q`` at
+    the body rate ``rate`` [rad/s]: the filter's ``attitude_covariance``, plus the uncertainty
+    of the instant the samples represent (``sample_timing`` ``σ_t`` [s]: an IMU's own filter
+    delays its samples by a millisecond or two; a turn at ``ω`` moves the attitude by
+    ``ω σ_t`` in that time, ``σ_t² ω_w ω_wᵀ`` with ``ω_w`` the world-frame rate)."""
+    w, x, y, z = q
+    rx, ry, rz = rate
+    tx, ty, tz = 2.0 * (y * rz - z * ry), 2.0 * (z * rx - x * rz), 2.0 * (x * ry - y * rx)
+    world = np.array([rx + w * tx + (y * tz - z * ty), ry + w * ty + (z * tx - x * tz),
+                      rz + w * tz + (x * ty - y * tx)]) * sample_timing
+    return attitude_covariance + np.outer(world, world)

@@ -35,7 +35,7 @@ The gyro's figures (and the accelerometer's noise density and bias prior) are th
 * ``sample_timing`` 2 ms: 1σ of the instant an IMU sample represents behind its stamp (a
   MEMS gyro's digital low-pass delays its rate by about ``1/(2π f_c)``, 1.4 ms for the
   BMI088's 116 Hz bandwidth); it widens the published covariance of a turning body
-  (:meth:`~.estimator.AttitudeEstimator.published_covariance`), not the filter's.
+  (:func:`~.estimator.published_covariance`), not the filter's.
 * ``accelerometer_range`` 16 g: the accelerometer's full scale (±16 g, the widest range of
   the BMI088 and ICM-42688-P); an axis at 98 % of it is clipped.
 * ``zero_velocity_stddev`` 0.01 m/s: the velocity's 1σ while the rest test holds (a body
