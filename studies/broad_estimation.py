@@ -3,19 +3,21 @@
 Each trial of the given folders (default: ``shared/data/broad_mag`` beside or above the
 checkout) is written as a bag (Imu, MagneticField, ground truth) and replayed through the
 replay tool with the shipped ``imu_filter`` scene and the node's default parameters, one set
-for all trials, plus the IMU's calibration files measured once on the first trial: the kalibr
-``imu.yaml`` that ``imu_noise`` writes from its initial rest, and the magnetometer's figures
-(noise density, delay, timing) in its calibration file
-(:mod:`rigid_body_attitude.tools.estimation_study`). The
-same session fed in this process must give the same outputs (the largest difference is
-printed). Prints per trial the total, heading and inclination RMSE [deg] of the node and of
-VQF (``offlineVQF``, defaults) on the same samples, the ratio of the totals, the share of
-motion samples whose NEES lies inside the chi-square 99 % bound (3 dof, tilt 2 dof, heading
-1 dof) and the median 1σ over the RMSE (total, tilt over inclination, heading); then the
-means per group (undisturbed, disturbed) and over all trials.
+for all trials, plus the IMU's two calibration files, made once for the dataset's IMU as a
+user makes them and shipped beside this script (each figure's source in its comments):
+``studies/broad_imu.yaml`` (``calibration_file``: the noise ``imu_noise`` measures on a rest,
+the data-sheet figures) and ``studies/broad_magnetometer.yaml``
+(``magnetometer_calibration_file``: noise density, delay, timing). The same session fed in
+this process must give the same outputs (the largest difference is printed). Prints per trial
+the total, heading and inclination RMSE [deg] of the node and of VQF (``offlineVQF``,
+defaults) on the same samples, the ratio of the totals, the share of motion samples whose NEES
+lies inside the chi-square 99 % bound (3 dof, tilt 2 dof, heading 1 dof) and the median 1σ
+over the RMSE (total, tilt over inclination, heading); then the means per group (undisturbed,
+disturbed) and over all trials. Trials without a magnetometer (``shared/data/broad``) run the
+same way: VQF 6D, the node's heading propagated (only the inclination is comparable).
 
-Usage: ``python studies/broad_estimation.py [DATA_DIR ...]``. Needs ``vqf``
-(requirements-test.txt).
+Usage: ``python studies/broad_estimation.py [DATA_DIR ...] [--calibration-file FILE]
+[--magnetometer-calibration-file FILE]``. Needs ``vqf`` (requirements-test.txt).
 Data: D. Laidig, M. Caruso, A. Cereatti, T. Seel. "BROAD — A Benchmark for Robust Inertial
 Orientation Estimation". Data 6(7):72, 2021. doi:10.3390/data6070072 (CC BY 4.0).
 """
@@ -33,9 +35,12 @@ from typing import Any
 
 from rigid_body_attitude.tools.broad import BroadTrial, load_trial
 from rigid_body_attitude.tools.estimation_study import (
-    Run, TrialFigures, dataset_calibration, figures, run_replay, run_session, study_values)
+    Run, TrialFigures, figures, run_replay, run_session, study_values)
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
+#: The calibration files of BROAD's IMU, shipped beside this script.
+IMU_FILE = REPO_ROOT / 'studies' / 'broad_imu.yaml'
+MAGNETOMETER_FILE = REPO_ROOT / 'studies' / 'broad_magnetometer.yaml'
 
 
 def default_folders() -> list[Path]:
@@ -69,46 +74,56 @@ def main(argv: list[str] | None = None) -> int:
     """Print the table of the module docstring."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n', 1)[0])
     parser.add_argument('folders', nargs='*', type=Path)
+    parser.add_argument('--calibration-file', type=Path, default=IMU_FILE)
+    parser.add_argument('--magnetometer-calibration-file', type=Path, default=MAGNETOMETER_FILE)
     args = parser.parse_args(argv)
     paths = sorted(path for folder in (args.folders or default_folders())
                    for path in folder.glob('*.npz'))
     if not paths:
         print('error: no BROAD trial (.npz) found', file=sys.stderr)
         return 1
+    files = {'calibration_file': str(args.calibration_file),
+             'magnetometer_calibration_file': str(args.magnetometer_calibration_file)}
+    for name, path in files.items():
+        print(f'{name}: {path}')
+    values = study_values(**files)
+    _header()
+    groups: dict[str, list[tuple[float, ...]]] = {}
+    largest = 0.0
     with tempfile.TemporaryDirectory() as temporary:
-        folder = Path(temporary)
-        files = dataset_calibration(load_trial(paths[0]), folder)
-        for name, path in files.items():
-            print(f'{name} (measured on {paths[0].stem}):')
-            print(Path(path).read_text(encoding='utf-8'))
-        values = study_values(**files)
-        _header()
-        groups: dict[str, list[tuple[float, ...]]] = {}
-        largest = 0.0
         for path in paths:
             trial = load_trial(path)
-            replayed = run_replay(trial, values, folder)
+            replayed = run_replay(trial, values, Path(temporary))
             largest = max(largest, float(np.nanmax(np.abs(
                 replayed.attitude - run_session(trial, values).attitude))))
             ours, vqf = figures(trial, replayed), figures(trial, run_vqf(trial))
             _row(trial.name, ours, vqf)
             group = 'disturbed' if 'disturbed' in trial.name.replace('undisturbed', '') else (
                 'undisturbed')
-            groups.setdefault(group, []).append((*ours.rmse, *vqf.rmse))
+            groups.setdefault(group, []).append((*ours.rmse, *vqf.rmse, *ours.inside,
+                                                 *_sigma_ratios(ours)))
     groups['all'] = [row for rows in list(groups.values()) for row in rows]
     for name, rows in groups.items():
-        mean = np.mean(np.array(rows), axis=0)
-        print(f'| mean, {name} ({len(rows)}) | {mean[0]:.2f} / {mean[1]:.2f} / {mean[2]:.2f} | '
-              f'{mean[3]:.2f} / {mean[4]:.2f} / {mean[5]:.2f} | {mean[0] / mean[3]:.2f} | | |')
+        m = np.mean(np.array(rows), axis=0)
+        print(f'| mean, {name} ({len(rows)}) | {m[0]:.2f} / {m[1]:.2f} / {m[2]:.2f} | '
+              f'{m[3]:.2f} / {m[4]:.2f} / {m[5]:.2f} | {m[0] / m[3]:.2f} | '
+              + ' / '.join(f'{100 * share:.1f} %' for share in m[6:9]) + ' | '
+              + ' / '.join(f'{ratio:.1f}' for ratio in m[9:12]) + ' |')
     print(f'replay against the session fed in this process: largest quaternion component '
           f'difference {largest:.3g}')
     return 0
 
 
+def _sigma_ratios(ours: TrialFigures) -> tuple[float, float, float]:
+    """Median 1σ over the RMSE: total, tilt over inclination, heading."""
+    t, h, i = ours.rmse
+    return ours.median_sigma[0] / t, ours.median_sigma[1] / i, ours.median_sigma[2] / h
+
+
 def _row(name: str, ours: TrialFigures, vqf: TrialFigures) -> None:
     """One trial's row."""
     t, h, i = ours.rmse
-    useful = (ours.median_sigma[0] / t, ours.median_sigma[1] / i, ours.median_sigma[2] / h)
+    useful = _sigma_ratios(ours)
     print(f'| {name} | {t:.2f} / {h:.2f} / {i:.2f} | {vqf.rmse[0]:.2f} / '
           f'{vqf.rmse[1]:.2f} / {vqf.rmse[2]:.2f} | {t / vqf.rmse[0]:.2f} | '
           + ' / '.join(f'{100 * share:.1f} %' for share in ours.inside) + ' | '

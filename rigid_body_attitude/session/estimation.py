@@ -22,7 +22,8 @@ node, the replay and the studies). :class:`Estimation` is what the session holds
 * **external attitude** (:meth:`Estimation.attitude_measurement`): an update at once.
 
 The covariance the session publishes is the filter's attitude block (about fixed world axes,
-REP-145), refreshed at every update (every ``update_interval`` of steps).
+REP-145), refreshed at every update (every ``update_interval`` of steps), with the
+uncertainty of the instant the samples represent while the body turns (``sample_timing``).
 """
 
 from __future__ import annotations
@@ -36,7 +37,8 @@ import numpy as np
 
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.estimation_section import EstimationSpec
-from rigid_body_attitude.core.estimation.estimator import MAX_FIELD_AGE, AttitudeEstimator
+from rigid_body_attitude.core.estimation.estimator import (
+    MAX_FIELD_AGE, AttitudeEstimator, published_covariance)
 from rigid_body_attitude.core.estimation.estimator_start import (
     magnetic_start, start_estimator)
 from rigid_body_attitude.core.estimation.gravity_free import gravity_free_acceleration
@@ -138,7 +140,7 @@ class Estimation:
         if interval.count and interval.duration > 0.0:
             estimator.sample_rate = interval.count / interval.duration
         q = estimator.update(turned or q_after)
-        self._publish()
+        self._publish(q, rate)
         return q
 
     def _field_at(self, q: Quat, stamp_ns: int, field_body: Vec, step_ns: int
@@ -231,11 +233,17 @@ class Estimation:
 
     # -- outputs -----------------------------------------------------------------------------
 
-    def _publish(self) -> None:
+    def _publish(self, q: Quat | None = None, rate: Vec | None = None) -> None:
+        """The filter's attitude block as published; after an update at ``q`` with the body
+        rate ``rate``, widened by the uncertainty of the sample's instant
+        (:func:`~rigid_body_attitude.core.estimation.estimator.published_covariance`)."""
         state = self.estimator.covariance
         if state is None:
             return
-        self.published = tuple(state.attitude.reshape(9).tolist())
+        block = state.attitude
+        if q is not None and rate is not None:
+            block = published_covariance(block, q, rate, self.estimator.settings.sample_timing)
+        self.published = tuple(block.reshape(9).tolist())
         self._p = state.p
 
     def acceleration_estimate(self, q: Quat, specific_force: Vec
@@ -320,14 +328,16 @@ def _matrix(q: Sequence[float]) -> Any:
 
 
 def build_estimation(spec: EstimationSpec, values: Mapping[str, Any], model: Any,
-                     magnetometer: MagnetometerFile) -> Estimation:
+                     magnetometer: MagnetometerFile,
+                     imu_figures: Mapping[str, float] | None = None) -> Estimation:
     """The :class:`Estimation` of a session: the filter with the scene section's settings,
-    then the parameters', then the magnetometer file's figures."""
+    then the parameters', then the IMU calibration file's figures (``imu_figures``: settings
+    field → value), then the magnetometer file's."""
     settings = spec.estimator_settings(**{
         'declination': values['magnetic_declination'],
         'magnetometer_noise_density': values['magnetometer_noise_density'],
         'accelerometer_random_walk': values['accelerometer_random_walk'],
-        **magnetometer.settings})
+        **(imu_figures or {}), **magnetometer.settings})
     estimator = AttitudeEstimator(model, settings, values['world_axes'])
     return Estimation(spec, estimator, magnetometer.calibration,
                       max(values['align_seconds'], 0.5))

@@ -47,12 +47,18 @@ from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns
 from rigid_body_attitude.session.uncertainty import (
     CALIBRATION_KEYS, attitude_stddev_deg, error_model_from, orientation_block)
 
-__all__ = ['FILTER_REJECTION_KEYS', 'FilteredGyroSession', 'mapped_force',
-           'specific_force_map']
+__all__ = ['CALIBRATION_SETTINGS', 'FILTER_CALIBRATION_KEYS', 'FILTER_REJECTION_KEYS',
+           'FilteredGyroSession', 'mapped_force', 'specific_force_map']
 
 Quat = tuple[float, float, float, float]
 Vec = tuple[float, float, float]
 _FORCE_LIMIT_SQUARED = SPECIFIC_FORCE_LIMIT * SPECIFIC_FORCE_LIMIT
+#: Figures of the calibration file that go into the filter's error budget beside
+#: :data:`~rigid_body_attitude.session.uncertainty.CALIBRATION_KEYS` (the accelerometer's)...
+FILTER_CALIBRATION_KEYS = ('accelerometer_noise_density', 'accelerometer_bias_stddev')
+#: ... and those that go into its settings (the accelerometer's full scale, the 1σ of the
+#: instant a sample represents).
+CALIBRATION_SETTINGS = ('accelerometer_range', 'sample_timing')
 _DETAIL = {
     'magnetometer_no_mount': 'a field in a frame without a known mount (publish the '
                              'transform body_frame -> its frame on /tf_static)',
@@ -94,11 +100,11 @@ class FilteredGyroSession(GyroSession):
             MagnetometerCalibration(), {})
         super().__init__(scene, values, sink, clock_ns, monotonic)
         noise = self.calibration_noise()
-        model = error_model_from(values, noise,
-                                 CALIBRATION_KEYS + ('accelerometer_noise_density',))
+        model = error_model_from(values, noise, CALIBRATION_KEYS + FILTER_CALIBRATION_KEYS)
         walk = noise.get('accelerometer_random_walk', values['accelerometer_random_walk'])
         self.estimation = build_estimation(
-            spec, {**values, 'accelerometer_random_walk': walk}, model, magnetometer)
+            spec, {**values, 'accelerometer_random_walk': walk}, model, magnetometer,
+            {key: noise[key] for key in CALIBRATION_SETTINGS if key in noise})
         self.uncertainty = None
         self.wants_steps = True
         self.on_aligned = self._filter_aligned

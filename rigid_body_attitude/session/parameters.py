@@ -220,7 +220,8 @@ PARAMETERS: tuple[Parameter, ...] = (
               'after levelling, refine the gyro bias estimate whenever the body is at rest'),
     Parameter('calibration_file', str, '',
               'kalibr imu.yaml or imu-camera result, or a plain bias/scale/misalignment file, '
-              'applied to every sample ("" = none)', may_be_empty=True),
+              'applied to every sample; its noise and sensor figures override the parameters\' '
+              '("" = none)', may_be_empty=True),
     Parameter('calibration_imu_key', str, '',
               'the IMU of a kalibr result holding several (e.g. imu0; "" = the only one)',
               may_be_empty=True),

@@ -58,8 +58,11 @@ MODEL_PARAMETERS = ('gyroscope_noise_density', 'gyroscope_random_walk',
                     'gyroscope_turn_on_bias', 'gyroscope_scale_stddev',
                     'gyroscope_misalignment_stddev', 'initial_yaw_stddev',
                     'accelerometer_noise_density')
-#: Keys of a kalibr ``imu.yaml`` that override the parameters of the same name.
-CALIBRATION_KEYS = ('gyroscope_noise_density', 'gyroscope_random_walk')
+#: Keys of a calibration file (a kalibr ``imu.yaml``'s noise, the IMU's further figures) that
+#: override the parameters of the same name.
+CALIBRATION_KEYS = ('gyroscope_noise_density', 'gyroscope_random_walk',
+                    'gyroscope_turn_on_bias', 'gyroscope_scale_stddev',
+                    'gyroscope_misalignment_stddev')
 
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]

@@ -20,15 +20,17 @@ Benchmark for Robust Inertial Orientation Estimation", Data 6(7):72, 2021, secti
 heading: 1 dof), as the share of motion samples; and the median 1σ (total ``√tr P``, tilt
 ``√(P_xx + P_yy)``, heading ``√P_zz``) against the RMSE of the same error.
 
-The IMU's figures, measured once on one trial as a user measures an IMU
-(:func:`dataset_calibration`): a kalibr ``imu.yaml`` written by ``imu_noise`` (Allan
-deviation of the gyro and accelerometer on the initial rest), given as ``calibration_file``;
-and the magnetometer's calibration file with its figures only (white-noise density by the
-same Allan fit, its delay behind the gyro by
+The IMU's figures are the node's calibration files, made once for an IMU as a user makes
+them; :func:`dataset_calibration` measures the figures a recording gives, on one trial: a
+kalibr ``imu.yaml`` written by ``imu_noise`` (Allan deviation of the gyro and accelerometer on
+the initial rest), given as ``calibration_file``; and the magnetometer's calibration file with
+its figures only (white-noise density by the same Allan fit, its delay behind the gyro by
 :func:`~rigid_body_attitude.core.estimation.magnetometer_timing.magnetometer_delay` on the
 whole trial, the 1σ of its sample instants ``P/√12`` from its own output period ``P``: a
 sample repeated while the magnetometer has none newer), given as
-``magnetometer_calibration_file``. Every other parameter is the shipped default.
+``magnetometer_calibration_file``. The study script ships the files it uses, with the
+data-sheet figures beside the measured ones (``studies/broad_imu.yaml``,
+``studies/broad_magnetometer.yaml``). Every other parameter is the shipped default.
 """
 
 from __future__ import annotations

@@ -12,6 +12,7 @@ magnetometer samples and attitude measurements by reason, never tilts for a magn
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,12 +23,17 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.attitude.float_quaternion import q_exp, q_multiply, q_normalize
 from rigid_body_attitude.core.errors import CalibrationError, SceneError
 from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
+from rigid_body_attitude.core.estimation.calibration import calibration_noise, load_calibration
 from rigid_body_attitude.core.estimation.magnetometer_file import load_magnetometer_calibration
 from rigid_body_attitude.msgs.cdr import encode_magnetic_field, encode_pose_with_covariance_stamped
 from rigid_body_attitude.session.decoding import input_handler
 from rigid_body_attitude.session.filtered_gyro import FilteredGyroSession
 from rigid_body_attitude.session.gyro import GyroSession
 
+REPO_ROOT = Path(__file__).resolve().parents[2]
+#: The calibration files the BROAD study ships for the dataset's IMU.
+BROAD_IMU = REPO_ROOT / 'studies' / 'broad_imu.yaml'
+BROAD_MAGNETOMETER = REPO_ROOT / 'studies' / 'broad_magnetometer.yaml'
 G = 9.80665
 RATE = 200.0
 PERIOD_NS = 5 * MS
@@ -352,3 +358,68 @@ def test_reset_levels_again_and_restarts_the_filter(open_scene):
     errors = run(session, later)
     assert session.estimation.started and session.alignment.at_rest
     assert np.degrees(np.linalg.norm(errors, axis=1)).max() < 1.0
+
+
+IMU_FIGURES = ('update_rate: 200.0\ngyroscope_noise_density: 2.0e-4\n'
+               'gyroscope_random_walk: 3.0e-5\naccelerometer_noise_density: 2.0e-3\n'
+               'accelerometer_random_walk: 4.0e-4\naccelerometer_bias_stddev: 0.05\n'
+               'gyroscope_turn_on_bias: 0.005\ngyroscope_scale_stddev: 0.003\n'
+               'gyroscope_misalignment_stddev: 0.002\naccelerometer_range: 78.45\n'
+               'sample_timing: 0.001\n')
+
+
+def test_the_imu_calibration_files_figures_reach_the_filter(open_scene, tmp_path):
+    path = tmp_path / 'imu.yaml'
+    path.write_text(IMU_FIGURES)
+    session, _ = open_scene('imu_filter', calibration_file=str(path),
+                            gyroscope_scale_stddev=0.02, accelerometer_random_walk=1e-2)
+    model, settings = session.estimation.estimator.model, session.estimation.estimator.settings
+    assert (model.gyroscope_noise_density, model.gyroscope_random_walk,
+            model.accelerometer_noise_density, model.accelerometer_bias_stddev,
+            model.gyroscope_turn_on_bias, model.gyroscope_scale_stddev,
+            model.gyroscope_misalignment_stddev) == (2.0e-4, 3.0e-5, 2.0e-3, 0.05, 0.005,
+                                                     0.003, 0.002)
+    assert (settings.accelerometer_random_walk, settings.accelerometer_range,
+            settings.sample_timing) == (4.0e-4, 78.45, 0.001)
+    strapdown, _ = open_scene('strapdown', calibration_file=str(path))
+    assert strapdown.uncertainty.model.gyroscope_scale_stddev == 0.003
+
+
+def test_the_published_covariance_carries_the_sample_instant_of_a_turning_body(open_scene):
+    session, sink = open_scene('imu_filter', **PARAMETERS)
+    samples = simulate(10.0)
+    run(session, samples[:-40])
+    before = session.estimation.published
+    for stamp, gyro, accel, field, q_true in samples[-40:]:  # up to the next update
+        sec, nanosec = divmod(stamp, 10**9)
+        session.magnetic_field(sec, nanosec, 'base_link', field)
+        session.gyro(sec, nanosec, gyro, None, accel)
+        if session.estimation.published != before:
+            break
+    assert session.estimation.published != before
+    estimator = session.estimation.estimator
+    extra = covariance(session) - estimator.covariance.attitude  # the filter's, at the update
+    rate = quaternion.rotate(q_true, body_rate((stamp - BASE_NS) / 1e9 - 2.0))  # world frame
+    timing = estimator.settings.sample_timing
+    assert timing == 0.002
+    expected = timing ** 2 * np.outer(rate, rate)
+    assert np.abs(extra - expected).max() < 0.1 * np.abs(expected).max()
+    assert sink.covariances[-1] == session.estimation.published
+
+
+def test_the_shipped_calibration_files_reach_the_filter(open_scene):
+    noise = calibration_noise(load_calibration(BROAD_IMU))
+    assert set(noise) == {'gyroscope_noise_density', 'gyroscope_random_walk',
+                          'accelerometer_noise_density', 'accelerometer_random_walk',
+                          'gyroscope_turn_on_bias', 'gyroscope_scale_stddev',
+                          'gyroscope_misalignment_stddev', 'accelerometer_bias_stddev',
+                          'accelerometer_range', 'sample_timing'}
+    magnetometer = load_magnetometer_calibration(BROAD_MAGNETOMETER)
+    session, _ = open_scene('imu_filter', calibration_file=str(BROAD_IMU),
+                            magnetometer_calibration_file=str(BROAD_MAGNETOMETER))
+    assert isinstance(session, FilteredGyroSession)
+    estimator = session.estimation.estimator
+    assert estimator.model.gyroscope_noise_density == noise['gyroscope_noise_density']
+    assert estimator.model.accelerometer_bias_stddev == noise['accelerometer_bias_stddev']
+    assert estimator.settings.accelerometer_range == noise['accelerometer_range']
+    assert estimator.settings.magnetometer_delay == magnetometer.settings['magnetometer_delay']

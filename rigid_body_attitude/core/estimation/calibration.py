@@ -24,6 +24,16 @@ Formats read (the kind is recognised from the keys):
   misalignment · scale``, ``b_g = bias``; ``accelerometer_bias`` [m/s²] and
   ``accelerometer_matrix`` (3×3) likewise give ``b_a`` and ``N``.
 
+Any of them may also give the IMU's further figures the attitude filter uses
+(:data:`FIGURE_BOUNDS`, kept in :attr:`ImuNoise.figures`, each optional): the 1σ of the errors
+the calibration leaves (``accelerometer_bias_stddev`` [m/s²], ``gyroscope_turn_on_bias``
+[rad/s], ``gyroscope_scale_stddev``, ``gyroscope_misalignment_stddev``: the fields of
+:class:`~rigid_body_attitude.core.estimation.gyro_error_model.GyroErrorModel`), the
+accelerometer's full scale ``accelerometer_range`` [m/s²] and the 1σ of the instant a sample
+represents, ``sample_timing`` [s] (fields of
+:class:`~rigid_body_attitude.core.estimation.estimator_settings.EstimatorSettings`).
+:func:`calibration_noise` gives them with the noise figures.
+
 A leading ``%YAML:1.0`` line (written by OpenCV-based tools, refused by YAML parsers) is
 skipped. Files are checked as scene files are (:mod:`rigid_body_attitude.core.dynamics.scene`):
 size,
@@ -46,8 +56,9 @@ from rigid_body_attitude.core.errors import CalibrationError
 from rigid_body_attitude.core.yaml_files import (
     bounded as _bounded, Fields, quote, read_yaml)
 
-__all__ = ['CONDITION_LIMIT', 'ImuCalibration', 'KIND_NAMES', 'calibration_summary',
-           'calibration_terms', 'ImuNoise', 'NOISE_BOUNDS', 'ORTHONORMAL_TOLERANCE',
+__all__ = ['CONDITION_LIMIT', 'FIGURE_BOUNDS', 'ImuCalibration', 'KIND_NAMES',
+           'calibration_summary', 'calibration_terms', 'ImuNoise', 'NOISE_BOUNDS',
+           'ORTHONORMAL_TOLERANCE',
            'REQUIRED_NOISE_KEYS', 'calibration_from_mapping', 'calibration_noise',
            'calibration_values', 'load_calibration']
 
@@ -57,10 +68,21 @@ Mat = tuple[Vec, Vec, Vec]
 
 NOISE_KEYS = ('gyroscope_noise_density', 'gyroscope_random_walk',
               'accelerometer_noise_density', 'accelerometer_random_walk')
-_KALIBR_KEYS = {*NOISE_KEYS, 'update_rate', 'rostopic', 'model', 'gyroscopes',
+#: The IMU's further figures a file may give (each optional), with their bounds
+#: ``(low, high)`` in SI units: the priors (1σ) of the errors a calibration leaves, the
+#: accelerometer's full scale (a sensor's is 2-16 g, at least 1 m/s²), the 1σ of the instant a
+#: sample represents (:mod:`.gyro_error_model`, :mod:`.estimator_settings`). The gyro's bounds
+#: are the node parameters' of the same names.
+FIGURE_BOUNDS = {'accelerometer_bias_stddev': (0.0, 10.0),
+                 'gyroscope_turn_on_bias': (0.0, 1.0),
+                 'gyroscope_scale_stddev': (0.0, 0.5),
+                 'gyroscope_misalignment_stddev': (0.0, 0.5),
+                 'accelerometer_range': (1.0, 1e4),
+                 'sample_timing': (0.0, 0.1)}
+_KALIBR_KEYS = {*NOISE_KEYS, *FIGURE_BOUNDS, 'update_rate', 'rostopic', 'model', 'gyroscopes',
                 'accelerometers', 'T_i_b', 'time_offset'}
 _PLAIN_KEYS = {'bias', 'scale', 'misalignment', 'accelerometer_bias', 'accelerometer_matrix',
-               'update_rate', 'rostopic', *NOISE_KEYS}
+               'update_rate', 'rostopic', *NOISE_KEYS, *FIGURE_BOUNDS}
 #: Largest accepted condition number of a correction matrix (a scale-misalignment matrix of a
 #: working sensor is within a few per cent of a rotation: condition number near 1).
 CONDITION_LIMIT = 1e3
@@ -101,6 +123,8 @@ class ImuNoise:
         accelerometer_random_walk: [m/s³/√Hz].
         update_rate: [Hz].
         rostopic: the topic the calibration was recorded on ('' if none).
+        figures: the filter's further figures given (:data:`FIGURE_BOUNDS`: name → value,
+            SI units).
     """
 
     gyroscope_noise_density: float | None = None
@@ -109,6 +133,7 @@ class ImuNoise:
     accelerometer_random_walk: float | None = None
     update_rate: float | None = None
     rostopic: str = ''
+    figures: tuple[tuple[str, float], ...] = ()
 
     def gyro_sigma(self) -> float | None:
         """Discrete gyro noise per sample [rad/s]: density · √update_rate, if both are given."""
@@ -230,6 +255,11 @@ _NOISE_UNITS = {'gyroscope_noise_density': 'rad/s/sqrt(Hz)',
                 'accelerometer_random_walk': 'm/s^3/sqrt(Hz)', 'update_rate': 'Hz'}
 
 
+_FIGURE_UNITS = {'accelerometer_bias_stddev': 'm/s^2', 'gyroscope_turn_on_bias': 'rad/s',
+                 'gyroscope_scale_stddev': '1', 'gyroscope_misalignment_stddev': '1',
+                 'accelerometer_range': 'm/s^2', 'sample_timing': 's'}
+
+
 def _numbers(values: FloatArray) -> str:
     return '[' + ', '.join(_numbers(row) if row.ndim else f'{float(row):.6g}'
                            for row in values) + ']'
@@ -252,6 +282,8 @@ def calibration_terms(calibration: ImuCalibration) -> list[tuple[str, str]]:
         value = getattr(c.noise, key)
         if value is not None:
             terms.append((f'{key} [{unit}]', f'{value:.6g}'))
+    terms.extend((f'{key} [{_FIGURE_UNITS[key]}]', f'{value:.6g}')
+                 for key, value in c.noise.figures)
     return terms
 
 
@@ -277,8 +309,8 @@ def calibration_values(calibration: ImuCalibration | None) -> list[tuple[str, st
 
 
 def calibration_noise(calibration: ImuCalibration | None) -> dict[str, float]:
-    """The noise figures a calibration gives (kalibr names; empty without a file or
-    without a noise model)."""
+    """The noise figures a calibration gives (kalibr names) and its further figures
+    (:data:`FIGURE_BOUNDS`); empty without a file or without any."""
     if calibration is None:
         return {}
     noise = calibration.noise
@@ -286,7 +318,8 @@ def calibration_noise(calibration: ImuCalibration | None) -> dict[str, float]:
              'gyroscope_random_walk': noise.gyroscope_random_walk,
              'accelerometer_noise_density': noise.accelerometer_noise_density,
              'accelerometer_random_walk': noise.accelerometer_random_walk}
-    return {key: value for key, value in given.items() if value is not None}
+    return {**{key: value for key, value in given.items() if value is not None},
+            **dict(noise.figures)}
 
 
 def load_calibration(path: str | Path, imu_key: str = '') -> ImuCalibration:
@@ -404,10 +437,12 @@ def _noise(data: Mapping[Any, Any], prefix: str, required: tuple[str, ...] = ())
     topic = data.get('rostopic', '')
     if not isinstance(topic, str):
         raise CalibrationError(f'Expected {prefix}rostopic to be a topic name, got {quote(topic)}')
+    figures = tuple((key, _FIELDS.number(data[key], f'{prefix}{key}', low, high))
+                    for key, (low, high) in FIGURE_BOUNDS.items() if key in data)
     return ImuNoise(
         update_rate=None if rate is None else _FIELDS.number(
             rate, f'{prefix}update_rate', MIN_UPDATE_RATE, MAX_UPDATE_RATE),
-        rostopic=topic, **values)
+        rostopic=topic, figures=figures, **values)
 
 
 def _vector(value: Any, key: str, bound: float) -> FloatArray:

@@ -68,13 +68,16 @@ from rigid_body_attitude.core.estimation.velocity_update import BoundedVelocity
 from rigid_body_attitude.core.estimation.zero_rate_update import (
     RestIntervals, zero_rate_measurement)
 
-__all__ = ['AttitudeEstimator', 'FIELD_LIMIT', 'MAX_FIELD_AGE', 'SPECIFIC_FORCE_LIMIT']
+__all__ = ['AttitudeEstimator', 'FIELD_LIMIT', 'MAX_FIELD_AGE', 'SPECIFIC_FORCE_LIMIT',
+           'published_covariance']
 
 FloatArray = NDArray[np.float64]
 Quat = tuple[float, float, float, float]
 Vec = tuple[float, float, float]
 #: Largest specific force magnitude [m/s²] a sample may have.
 SPECIFIC_FORCE_LIMIT = 1.0e4
+#: Share of the accelerometer's range at which an axis counts as clipped.
+CLIP_FRACTION = 0.98
 
 
 class AttitudeEstimator:
@@ -115,6 +118,8 @@ class AttitudeEstimator:
         self.velocity = BoundedVelocity(settings.velocity_time, settings.motion_power_time,
                                         model.accelerometer_noise_density,
                                         settings.zero_velocity_stddev)
+        #: Specific force [m/s²] at or beyond which an axis is taken as clipped.
+        self._clip = CLIP_FRACTION * settings.accelerometer_range
         self.rest = RestIntervals(settings.rest_seconds, settings.rest_noise_factor,
                                   settings.max_rest_rate, settings.gravity_tolerance)
         self.covariance: FilterCovariance | None = None
@@ -165,6 +170,9 @@ class AttitudeEstimator:
                                  f'{SPECIFIC_FORCE_LIMIT:g} m/s^2, got {tuple(specific_force)!r}')
             b = self.accel_bias
             self.interval.add(q_after, rate, (fx - b[0], fy - b[1], fz - b[2]), dt)
+            c = self._clip
+            if not (-c < fx < c and -c < fy < c and -c < fz < c):  # NaN was refused above
+                self.interval.clipped += dt
         else:
             self.interval.duration += dt
         return self.interval.duration >= self.settings.update_interval
@@ -214,6 +222,11 @@ class AttitudeEstimator:
 
     def _velocity_change(self, q: Quat, rotation: FloatArray) -> tuple[Quat, FloatArray]:
         covariance, duration = self._state(), self.interval.count / self.sample_rate
+        if self.interval.clipped > 0.0:  # the clipped part of the velocity change is unknown
+            self.velocity.unseen(covariance, duration,
+                                 (self.settings.accelerometer_range * self.interval.clipped) ** 2)
+            self.counts['velocity_clipped'] += 1
+            return q, rotation
         force_sum = np.array(self.interval.mean_world_force()) * duration
         h, y, r = self.velocity.change(covariance, force_sum, duration, self.gravity, self.up)
         result = joseph_update(covariance.p, h, y, r, self.estimated)
@@ -310,3 +323,18 @@ class AttitudeEstimator:
     def state_size(self) -> int:
         """:data:`~rigid_body_attitude.core.estimation.filter_covariance.FILTER_STATE_SIZE`."""
         return FILTER_STATE_SIZE
+
+
+def published_covariance(attitude_covariance: FloatArray, q: Quat, rate: Vec,
+                         sample_timing: float) -> FloatArray:
+    """The 3×3 world-frame attitude covariance [rad²] to publish with the attitude ``q`` at
+    the body rate ``rate`` [rad/s]: the filter's ``attitude_covariance``, plus the uncertainty
+    of the instant the samples represent (``sample_timing`` ``σ_t`` [s]: an IMU's own filter
+    delays its samples by a millisecond or two; a turn at ``ω`` moves the attitude by
+    ``ω σ_t`` in that time, ``σ_t² ω_w ω_wᵀ`` with ``ω_w`` the world-frame rate)."""
+    w, x, y, z = q
+    rx, ry, rz = rate
+    tx, ty, tz = 2.0 * (y * rz - z * ry), 2.0 * (z * rx - x * rz), 2.0 * (x * ry - y * rx)
+    world = np.array([rx + w * tx + (y * tz - z * ty), ry + w * ty + (z * tx - x * tz),
+                      rz + w * tz + (x * ty - y * tx)]) * sample_timing
+    return attitude_covariance + np.outer(world, world)

@@ -32,6 +32,12 @@ The gyro's figures (and the accelerometer's noise density and bias prior) are th
 * ``velocity_time`` 0.5 s: ``τ_v``, the time a hand-held or arm-borne body takes to reverse
   its motion, the correlation time of its velocity (:mod:`.velocity_update`; the velocity's
   power is measured, not set).
+* ``sample_timing`` 2 ms: 1σ of the instant an IMU sample represents behind its stamp (a
+  MEMS gyro's digital low-pass delays its rate by about ``1/(2π f_c)``, 1.4 ms for the
+  BMI088's 116 Hz bandwidth); it widens the published covariance of a turning body
+  (:func:`~.estimator.published_covariance`), not the filter's.
+* ``accelerometer_range`` 16 g: the accelerometer's full scale (±16 g, the widest range of
+  the BMI088 and ICM-42688-P); an axis at 98 % of it is clipped.
 * ``zero_velocity_stddev`` 0.01 m/s: the velocity's 1σ while the rest test holds (a body
   resting on a table moves by micrometres).
 * ``acceleration_time`` 0.3 s (``'acceleration'`` model): the correlation time of the body's
@@ -105,6 +111,8 @@ class EstimatorSettings:
     motion_model: str = 'velocity'
     velocity_time: float = 0.5
     zero_velocity_stddev: float = 0.01
+    accelerometer_range: float = 16.0 * 9.80665
+    sample_timing: float = 0.002
 
     def __post_init__(self) -> None:
         """Every number finite and >= 0 (times and gates > 0), the declination in [-π, π]."""

@@ -39,6 +39,8 @@ class ImuInterval:
         self.sums = [0.0] * 11
         self.count = 0
         self.duration = 0.0
+        #: Seconds of samples at the accelerometer's full scale (clipped).
+        self.clipped = 0.0
 
     def add(self, q: Quat, rate: Sequence[float], specific_force: Sequence[float],
             dt: float) -> None:

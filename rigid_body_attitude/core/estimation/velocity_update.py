@@ -36,6 +36,13 @@ drift by ``g δθ`` per second; the bounded velocity refuses a drift that lasts 
 ``τ_v``, and that is how the tilt is measured. The linearisation holds the interval's
 attitude error at its value at the interval's end: the error of that is second order in ``T``.
 
+**The vertical row measures no tilt.** Its tilt term ``(F × δθ)·up = F_x δθ_y − F_y δθ_x``
+needs a horizontal velocity change, and the largest come from blows and taps, whose
+integrated specific force is the least reliable (ringing, the accelerometer's nonlinearity
+near full scale): a tap would turn a vertical velocity error into a tilt. The term is taken as
+noise instead (its variance from the tilt's covariance); the horizontal rows carry the tilt
+through gravity, ``g T [up×] δθ``.
+
 **No heading.** A heading error rotates the whole velocity path about the vertical, and a
 bounded velocity is as likely turned as not: the velocity says nothing about heading. The
 linearised model would still find some (the heading column ``F × up`` of ``[F×]``, a false
@@ -44,6 +51,11 @@ observability of the kind G. P. Huang, A. I. Mourikis and S. I. Roumeliotis anal
 so the velocity is kept in the frame of the estimated heading: that column is zero, and a
 heading correction turns the velocity with it (:mod:`.estimator`). World frames here have
 their vertical on the z axis (``enu``, ``ned``, ``nwu``).
+
+**Clipping.** An accelerometer at its full scale (``accelerometer_range``; a blow or a fall)
+reports less than the specific force: an interval with such a sample measures no velocity
+change; its step's variance grows by ``(range · t_clipped)²``, the most the clipped samples
+may hide.
 
 **At rest** (:func:`zero_velocity_measurement`): the velocity is zero (P. D. Groves,
 "Principles of GNSS, Inertial, and Multisensor Integrated Navigation Systems", 2nd ed., 2013,
@@ -63,7 +75,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rigid_body_attitude.core.estimation.filter_covariance import (
-    ACCEL_BIAS, ATTITUDE, FILTER_STATE_SIZE, VELOCITY, VELOCITY_START, FilterCovariance)
+    ACCEL_BIAS, FILTER_STATE_SIZE, VELOCITY, VELOCITY_START, FilterCovariance)
 
 __all__ = ['BoundedVelocity', 'VelocityPower', 'velocity_change_measurement',
            'zero_velocity_measurement']
@@ -117,20 +129,27 @@ class VelocityPower:
 
 def velocity_change_measurement(force_sum: FloatArray, mean_rotation: FloatArray,
                                 duration: float, gravity: float, up: FloatArray,
-                                velocity_change: FloatArray, noise_density: float
+                                velocity_change: FloatArray, noise_density: float,
+                                tilt_covariance: FloatArray | None = None
                                 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``(h, y, r)`` of the velocity change (module docstring): ``force_sum`` ``F`` [m/s]
     (world), ``mean_rotation`` ``R̄``, ``duration`` ``T`` [s], ``gravity`` ``g`` [m/s²],
     ``up`` the world's up, ``velocity_change`` ``v̂ − v̂₀`` [m/s], ``noise_density`` ``N_a``
-    [m/s²/√Hz]."""
+    [m/s²/√Hz], ``tilt_covariance`` the 2×2 covariance [rad²] of the tilt about the world's
+    x and y (the vertical row's tilt term, taken as noise; None: zero)."""
+    if tilt_covariance is None:
+        tilt_covariance = np.zeros((2, 2))
     fx, fy, fz = (float(value) for value in force_sum)
     h = np.zeros((3, FILTER_STATE_SIZE))
     h[:, VELOCITY] = np.eye(3)
     h[:, VELOCITY_START] = -np.eye(3)
-    h[:, ATTITUDE] = np.array([[0.0, -fz, 0.0], [fz, 0.0, 0.0], [-fy, fx, 0.0]])
+    h[0, 1], h[1, 0] = -fz, fz
     h[:, ACCEL_BIAS] = mean_rotation * duration
     residual = force_sum - gravity * duration * up - velocity_change
-    return h, residual, np.eye(3) * noise_density ** 2 * duration
+    r = np.eye(3) * noise_density ** 2 * duration
+    tilt = np.array([-fy, fx])
+    r[2, 2] += float(tilt @ tilt_covariance @ tilt)
+    return h, residual, r
 
 
 def zero_velocity_measurement(velocity: FloatArray, stddev: float
@@ -183,11 +202,15 @@ class BoundedVelocity:
                                                 duration))
         return velocity_change_measurement(
             force_sum, covariance.mean_rotation, duration, gravity, up,
-            self.velocity - self.velocity_start, self.noise_density)
+            self.velocity - self.velocity_start, self.noise_density, covariance.p[:2, :2])
 
-    def unseen(self, covariance: FilterCovariance, duration: float) -> None:
-        """An interval of ``duration`` [s] without specific force: the step only."""
-        self._step(covariance, *self.power.decay(self.power.power, duration))
+    def unseen(self, covariance: FilterCovariance, duration: float,
+               extra_variance: float = 0.0) -> None:
+        """An interval of ``duration`` [s] whose velocity change is not measured (no
+        specific force, or a clipped one): the step only, its variance raised by
+        ``extra_variance`` [(m/s)²] (what the clipped samples may hide)."""
+        decay, variance = self.power.decay(self.power.power, duration)
+        self._step(covariance, decay, variance + extra_variance)
 
     def at_rest(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``(h, y, r)`` of the zero-velocity update."""

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from rigid_body_attitude.core.estimation.calibration import (
-    calibration_from_mapping, ImuCalibration, load_calibration)
+    calibration_from_mapping, calibration_noise, calibration_terms, ImuCalibration,
+    load_calibration)
 from rigid_body_attitude.core.errors import CalibrationError
 from rigid_body_attitude.core.yaml_files import MAX_ERROR_CHARS, MAX_FILE_BYTES
 
@@ -272,3 +273,44 @@ def test_correct_gyro_rows_agree_with_samples():
         np.testing.assert_allclose(rate, rates[k], atol=1e-14)
         np.testing.assert_allclose(a, accs[k], atol=1e-14)
     assert math.isfinite(float(rates.sum()))
+
+
+# The IMU's further figures beside kalibr's noise (datasheet values of a MEMS IMU).
+FIGURES_YAML = """\
+accelerometer_bias_stddev: 0.196
+gyroscope_turn_on_bias: 0.0175
+gyroscope_scale_stddev: 0.01
+gyroscope_misalignment_stddev: 0.005
+accelerometer_range: 156.9
+sample_timing: 0.0015
+"""
+
+
+def test_a_calibration_file_carries_the_filters_further_figures(tmp_path):
+    calibration = load_calibration(_write(tmp_path, KALIBR_IMU_YAML + FIGURES_YAML))
+    noise = calibration_noise(calibration)
+    assert noise == {'gyroscope_noise_density': 1.6968e-04, 'gyroscope_random_walk': 1.9393e-05,
+                     'accelerometer_noise_density': 2e-3, 'accelerometer_random_walk': 3e-3,
+                     'accelerometer_bias_stddev': 0.196, 'gyroscope_turn_on_bias': 0.0175,
+                     'gyroscope_scale_stddev': 0.01, 'gyroscope_misalignment_stddev': 0.005,
+                     'accelerometer_range': 156.9, 'sample_timing': 0.0015}
+    terms = dict(calibration_terms(calibration))
+    assert terms['gyroscope_scale_stddev [1]'] == '0.01'
+    assert terms['accelerometer_range [m/s^2]'] == '156.9'
+    plain = load_calibration(_write(tmp_path, 'bias: [0.0, 0.0, 0.0]\nsample_timing: 0.001\n'))
+    assert calibration_noise(plain) == {'sample_timing': 0.001}
+    assert calibration_noise(load_calibration(_write(tmp_path, KALIBR_IMU_YAML))) == {
+        'gyroscope_noise_density': 1.6968e-04, 'gyroscope_random_walk': 1.9393e-05,
+        'accelerometer_noise_density': 2e-3, 'accelerometer_random_walk': 3e-3}
+
+
+@pytest.mark.parametrize('line, pattern', [
+    ('gyroscope_scale_stddev: 0.9\n', r'gyroscope_scale_stddev to be in \[0, 0\.5\], got 0\.9'),
+    ('accelerometer_bias_stddev: -0.1\n', r'accelerometer_bias_stddev to be in \[0, 10\]'),
+    ('accelerometer_range: 0.5\n', r'accelerometer_range to be in \[1, 10000\]'),
+    ('sample_timing: .nan\n', r'sample_timing'),
+    ('gyroscope_turn_on_bias: fast\n', r'gyroscope_turn_on_bias'),
+])
+def test_a_figure_out_of_its_bounds_is_one_error_line(tmp_path, line, pattern):
+    message = _refused(tmp_path, KALIBR_IMU_YAML + line, pattern)
+    assert '\n' not in message

@@ -302,3 +302,23 @@ def test_attached_magnet_is_learned_and_heading_holds():
     assert errors[True][0] < 1.0
     assert errors[False][1]['hard_iron_learned'] == 0
     assert errors[False][0] > 2.0 * errors[True][0]
+
+
+def test_a_clipped_interval_measures_no_velocity_change():
+    """A blow beyond the accelerometer's full scale (20 m/s² here): the clipped samples read
+    the full scale, so those intervals measure no velocity change (counted), and the tilt
+    holds."""
+    full_scale = 20.0
+
+    def blows(t):  # 40 m/s² along east for 30 ms every 2 s (then as much back: at rest again)
+        phase = t % 2.0
+        return np.array([40.0 if 1.0 <= phase < 1.03 else -40.0 if 1.5 <= phase < 1.53
+                         else 0.0, 0.0, 0.0])
+    truth, gyro, accel, _ = simulate(20.0, lambda t: 0.2 * rates(t), blows, seed=7)
+    accel = np.clip(accel, -full_scale, full_scale)
+    settings = dataclasses.replace(SETTINGS, accelerometer_range=full_scale)
+    estimator, q = started(truth[0], settings, magnetometer=False)
+    estimates, _ = run(estimator, q, gyro, accel)
+    assert estimator.counts['velocity_clipped'] == 20  # one interval per blow
+    tilt = np.degrees(np.linalg.norm(world_errors(truth, estimates)[:, :2], axis=1))
+    assert tilt.max() < 0.08  # 0.05 deg; the clipped blows taken as measured: 0.11 deg
