@@ -11,11 +11,15 @@ subtracted from the next samples, and the covariance published with ``imu/data``
   whose mount is the IMU's when the frames match, none in ``body_frame`` (or an empty frame),
   else the static transform the adapter knows (:attr:`FilteredGyroSession.frame_mount`);
 * ``attitude_measurement`` (:meth:`FilteredGyroSession.attitude_measurement`): an attitude in
-  ``world_frame`` with its covariance, fused at the latest gyro sample (a stamp further than
-  ``max_dt`` from it is refused: ``stale_measurement``).
+  ``world_frame`` with its covariance, fused at the gyro state of its stamp, in stamp order
+  with the gyro samples (:mod:`~rigid_body_attitude.session.attitude_input`; a stamp further
+  than ``max_dt`` from the latest gyro sample is refused: ``stale_measurement``); with
+  ``estimation: {start: attitude_measurement}`` the first one starts the filter.
 
 Each sample's gravity-free acceleration goes to the sink with the attitude
-(:meth:`~rigid_body_attitude.session.base.OutputSink.acceleration`, ``accel/filtered``).
+(:meth:`~rigid_body_attitude.session.base.OutputSink.acceleration`, ``accel/filtered``), and
+its attitude and corrected body rate with their covariances
+(:meth:`~rigid_body_attitude.session.base.OutputSink.odometry`, ``odom``).
 Refusals are counted by reason and warned about like every other input's.
 """
 
@@ -38,11 +42,13 @@ from rigid_body_attitude.core.estimation.magnetometer_file import (
     MagnetometerFile, load_magnetometer_calibration)
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs.untrusted import quoted
+from rigid_body_attitude.session.attitude_input import AttitudeMeasurements, start_result
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.estimation import STANDARD_GRAVITY, build_estimation
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.levelling import FROM_SCENE, AlignmentResult, SampleMap
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
+from rigid_body_attitude.session.stream import Outcome
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns
 from rigid_body_attitude.session.uncertainty import (
     CALIBRATION_KEYS, attitude_stddev_deg, error_model_from, orientation_block)
@@ -65,6 +71,8 @@ _DETAIL = {
     'invalid_covariance': 'an orientation covariance that is not a covariance',
     'not_started': 'the filter has not started (levelling)',
     'stale_measurement': 'a stamp further than max_dt from the latest gyro sample',
+    'stale_stamp': 'a stamp not newer than the last measurement',
+    'queue_full': 'more than 64 measurements ahead of the gyro; the oldest dropped',
 }
 
 
@@ -74,7 +82,7 @@ FILTER_REJECTION_KEYS = (
     'magnetometer_invalid_stamp', 'magnetometer_stale_stamp',
     *(f'attitude_measurement_{reason}' for reason in (
         'wrong_frame', 'non_finite', 'invalid_pose', 'invalid_covariance', 'not_started',
-        'stale_measurement')))
+        'stale_measurement', 'stale_stamp', 'queue_full')))
 
 
 class FilteredGyroSession(GyroSession):
@@ -110,6 +118,9 @@ class FilteredGyroSession(GyroSession):
         self.estimation_inputs = 0
         self._sample_ns = 0
         self._force: Vec | None = None
+        self.measurements = AttitudeMeasurements()
+        #: Whether the filter starts at the first attitude measurement (the section's start).
+        self.starts_from_attitude = spec.start == 'attitude_measurement'
 
     def apply(self, values: Mapping[str, Any]) -> None:
         """Take the run-time parameters (and ``set_pose_stddev``, ``tilt_stddev_warn``)."""
@@ -135,6 +146,9 @@ class FilteredGyroSession(GyroSession):
                            else self.clock_ns())
         if not self._special and accel is not None:  # the inline path: the force mapped here
             self._force = mapped_force(self._accel_affine, accel)
+        if self.measurements.held:
+            for q_measured, block in self.measurements.due(self._sample_ns):
+                self._fuse(q_measured, block)
         published = super().gyro(sec, nanosec, rate, imu, accel)
         force = self._force
         if published and force is not None and self.estimation.started:
@@ -149,6 +163,9 @@ class FilteredGyroSession(GyroSession):
         """:meth:`ImuStart._special_sample`; the body specific force kept for the filter when
         it is a real one (finite, not zero, within the accelerometer limit)."""
         self.body_specific_force = None
+        if self._aligning and self.starts_from_attitude:
+            self._refuse('awaiting_attitude', '')
+            return None
         body_rate = super()._special_sample(sec, nanosec, rate, accel)
         force = cast('Vec | None', self.body_specific_force)  # set by the call above
         if body_rate is not None and force is not None:
@@ -194,9 +211,20 @@ class FilteredGyroSession(GyroSession):
             self.propagator.set_attitude(q)
         self.sink.attitude_covariance(self.estimation.published)
 
+    def _outcome(self, outcome: Outcome, sec: int, nanosec: int, imu: bytes | None) -> bool:
+        """:meth:`GyroSession._outcome`, then the sample's ``odom`` (the attitude published and
+        the corrected body rate)."""
+        published = super()._outcome(outcome, sec, nanosec, imu)
+        attitude = self.tracker.previous
+        if published and attitude is not None and self.estimation.started:
+            self.sink.odometry(sec, nanosec, attitude, self.propagator.state.omega_tuple(),
+                               self.estimation.rate_covariance)
+        return published
+
     def _restart_uncertainty(self) -> None:
         """Reset, a jump back: the filter starts again from the settled start, or waits for
-        the levelling."""
+        the levelling (or the first attitude measurement)."""
+        self.measurements.restart()
         self.estimation.restart()
         if not self._aligning and self.alignment is not None:
             self._filter_aligned(self.alignment)
@@ -258,19 +286,59 @@ class FilteredGyroSession(GyroSession):
             block = orientation_block(covariance)
         except InputError:
             return self._refused('invalid_covariance', 'attitude_measurement')
-        if not self.estimation.started:
-            return self._refused('not_started', 'attitude_measurement')
         stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
         if not self.use_header_stamps:
             stamp_ns = self._sample_ns
+        w, x, y, z = (value / norm for value in attitude)
+        if not self.estimation.started:
+            if self._aligning and self.starts_from_attitude:
+                return self._start_from_measurement(stamp_ns, (w, x, y, z), block)
+            return self._refused('not_started', 'attitude_measurement')
         if abs(stamp_ns - self._sample_ns) > self.stream.max_dt * 1e9:
             return self._refused('stale_measurement', 'attitude_measurement')
-        w, x, y, z = (value / norm for value in attitude)
+        reason = self.measurements.accept(stamp_ns)
+        if reason:
+            return self._refused(reason, 'attitude_measurement')
+        self.estimation_inputs += 1
+        if stamp_ns > self.stream.last_ns:  # the gyro has not reached it: held
+            if self.measurements.hold(stamp_ns, (w, x, y, z), block):
+                self._refused('queue_full', 'attitude_measurement')
+            return None
+        if stamp_ns < self.stream.last_ns:
+            self.estimation.counts['attitude_late'] += 1
+        self._fuse((w, x, y, z), block)
+
+    def _fuse(self, q_measured: Quat, block: tuple[float, ...]) -> None:
+        """A measurement fused at the current gyro state."""
         state = self.propagator.state
-        q = self.estimation.attitude_measurement(state.attitude_tuple(), (w, x, y, z), block)
+        q = self.estimation.attitude_measurement(state.attitude_tuple(), q_measured, block)
         state.set_sample(state.time, q, state.omega_tuple())
         self._corrected()
+
+    def _start_from_measurement(self, stamp_ns: int, q: Quat,
+                                block: tuple[float, ...]) -> None:
+        """The filter's start at the first measurement (``start: attitude_measurement``): its
+        attitude and covariance at its stamp, the gyro stream's baseline; published there."""
+        self.measurements.accept(stamp_ns)
         self.estimation_inputs += 1
+        propagator = self.propagator
+        propagator.scene = replace(propagator.scene, initial_attitude=np.array(q))
+        propagator.set_attitude(q)
+        self.stream.start_at(stamp_ns)
+        self._sample_ns = stamp_ns
+        result = start_result(q)
+        self.alignment = result
+        self._aligning = False
+        self._update_paths()
+        self._filter_aligned(result)
+        self.estimation.reset_attitude_block(block)
+        self.sink.attitude_covariance(self.estimation.published)
+        sec, nanosec = split_ns(stamp_ns)
+        attitude = self.tracker.attitude(propagator)
+        self.sink.attitude(sec, nanosec, attitude, None)
+        self._output_sec, self._output_nanosec = sec, nanosec
+        self.sink.odometry(sec, nanosec, attitude, (0.0, 0.0, 0.0),
+                           self.estimation.rate_covariance)
 
     def _refused(self, reason: str, topic: str, frame: str | None = None) -> None:
         """An input of the filter refused: counted by ``reason``, warned about."""
