@@ -103,7 +103,7 @@ class _ControllerSink(_Quiet):
 
     def torque(self, sec, nanosec, torque_body):
         wheels: list[bytes] = []
-        self.drive.answer(sec, nanosec, torque_body, wheels.append, wheels.append)
+        self.drive.answer(sec, nanosec, torque_body, wheels.append)
         self.queued.append(decode_joint_state(wheels[0]))
 
 
@@ -124,7 +124,7 @@ def gnc_loop(seconds: float, star_first: bool = True) -> LoopRun:
     chosen = controller_defaults() | {key: tuple(value) if isinstance(value, list) else value
                                       for key, value in CONTROLLER.items()}
     assert check_controller_values(chosen) == ''
-    answers = _ControllerSink(WheelDrive(load_node_scene(PLANT), chosen['body_frame']))
+    answers = _ControllerSink(WheelDrive(load_node_scene(PLANT)))
     controller = ControllerSession(chosen, answers, lambda: 0.0)
     estimator_sink = _EstimatorSink(run, controller)
     values = defaults() | estimator_values()
