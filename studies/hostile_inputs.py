@@ -613,6 +613,292 @@ SURFACES = [
 ]
 
 
+# -- dynamics scenes: the command surfaces of a spacecraft in lockstep ------------------------
+
+#: The plant of the command attacks: four wheels on ``wheels/command``, rods on ``dipole``.
+COMMAND_SCENE = 'wheel_slew_commanded'
+WHEELS = ('wheel_a', 'wheel_b', 'wheel_c', 'wheel_d')
+TICK_NS = 50 * MS  # 20 Hz
+GOOD_EFFORTS = (0.001, -0.002, 0.0015, 0.0)  # N m
+GOOD_DIPOLE = (0.5, -0.3, 0.2)  # A m²
+#: Wall seconds the node waits for a tick's command before it advances (a tick whose
+#: attacked command is only the hostile case).
+LOCKSTEP_TIMEOUT = 0.05
+
+
+def joint_state(stamp_ns: int, names: Any = WHEELS, position: Any = (), velocity: Any = (),
+                effort: Any = ()) -> Any:
+    from sensor_msgs.msg import JointState
+    message = JointState()
+    message.header.stamp = stamp(stamp_ns)
+    message.name = list(names)
+    message.position, message.velocity, message.effort = (
+        [float(v) for v in position], [float(v) for v in velocity],
+        [float(v) for v in effort])
+    return message
+
+
+def dipole(stamp_ns: int, vector: tuple[float, float, float] = GOOD_DIPOLE) -> Any:
+    from geometry_msgs.msg import Vector3Stamped
+    message = Vector3Stamped()
+    message.header.stamp, message.header.frame_id = stamp(stamp_ns), 'base_link'
+    message.vector.x, message.vector.y, message.vector.z = vector
+    return message
+
+
+def good_command(topic: str, stamp_ns: int) -> Any:
+    """The good command of ``topic`` answering the tick ``stamp_ns``."""
+    if topic == 'wheels/command':
+        return joint_state(stamp_ns, effort=GOOD_EFFORTS)
+    return dipole(stamp_ns)
+
+
+@dataclass
+class CommandClass:
+    """One class of hostile commands. ``cases(k)``: the case sent at tick ``k`` (stamped
+    with it where a stamp applies). ``alone``: each case is the attacked topic's only
+    message of its tick (the node then advances after ``lockstep_timeout``, holding the last
+    command), so a decodable case is judged by its own reason, never coalesced with a good
+    command; otherwise each case goes just before the tick's good command."""
+
+    name: str
+    cases: list[Callable[[int], Any]]
+    reasons: str
+    alone: bool = False
+
+
+@dataclass
+class CommandSurface:
+    """A command topic of a dynamics scene in lockstep, attacked class by class while the
+    study answers each tick as a controller would (:func:`attack_commands`)."""
+
+    name: str
+    topic: str
+    message_type: Callable[[], Any]
+    classes: Callable[[int], Iterator[CommandClass]]
+
+
+def _malformed_command_classes(topic: str, seed: int) -> Iterator[CommandClass]:
+    from rclpy.serialization import serialize_message
+    good = serialize_message(good_command(topic, 0))
+    for name, payloads in malformed_cases(good, seed).items():
+        # A length field that still fits may decode as a command of its own: judged as such.
+        yield CommandClass(name, [(lambda k, data=data: data) for data in payloads],
+                           'malformed|superseded|unknown_wheel|missing_wheel|wheel_fields|'
+                           'wheel_lengths|stale_stamp')
+
+
+def _stamp_classes(topic: str) -> Iterator[CommandClass]:
+    def at(stamp_ns: Callable[[int], int], sec_nanosec: tuple[int, int] | None = None
+           ) -> Callable[[int], Any]:
+        def case(k: int) -> Any:
+            message = good_command(topic, stamp_ns(k))
+            if sec_nanosec is not None:
+                message.header.stamp.sec, message.header.stamp.nanosec = sec_nanosec
+            return message
+        return case
+    yield CommandClass('stamps: nanosec >= 1e9, negative sec', [
+        at(lambda k: 0, (k, nanosec)) for k, nanosec in enumerate([10**9, 2**32 - 1] * 3)
+    ] + [at(lambda k: 0, (-1, 0)), at(lambda k: 0, (-(2**31), 5))], 'invalid_stamp',
+        alone=True)
+    yield CommandClass('stamps off the tick: wall time, far past, the next tick', [
+        at(lambda k: BASE_NS), at(lambda k: (2**31 - 1) * 10**9),
+        at(lambda k: k * TICK_NS + 1), at(lambda k: (k + 1) * TICK_NS),
+        at(lambda k: k * TICK_NS - 1), at(lambda k: 1)] * 2, 'future_stamp|stale_stamp',
+        alone=True)
+
+
+def wheel_command_classes(seed: int) -> Iterator[CommandClass]:
+    """``wheels/command``: malformed bytes, JointStates the array refuses, bad stamps."""
+    yield from _malformed_command_classes('wheels/command', seed + 3)
+    refused = [
+        (WHEELS[:3] + ('wheel_x',), (), (), (0.01,) * 4, 'unknown_wheel'),
+        (WHEELS[:2] * 2, (), (), (0.01,) * 4, 'unknown_wheel'),
+        (('x' * 200,) * 1000, (), (), (0.01,) * 1000, 'unknown_wheel'),
+        (('\x1b[2J\x07',) + WHEELS[1:], (), (), (0.01,) * 4, 'unknown_wheel'),
+        (WHEELS[:3], (), (), (0.01,) * 3, 'missing_wheel'),
+        ((), (), (), (), 'missing_wheel'),
+        (WHEELS, (), (1.0,) * 4, (0.01,) * 4, 'wheel_fields'),
+        (WHEELS, (), (), (), 'wheel_fields'),
+        (WHEELS, (0.0,) * 4, (), (0.01,) * 4, 'wheel_fields'),
+        (WHEELS, (), (), (0.01,) * 3, 'wheel_lengths'),
+        (WHEELS, (), (1.0,) * 1000, (), 'wheel_lengths'),
+        (WHEELS, (), (), (math.nan, 0.0, 0.0, 0.0), 'non_finite'),
+        (WHEELS, (), (math.inf, 0.0, 0.0, 0.0), (), 'non_finite'),
+        (WHEELS, (), (), (1e13, 0.0, 0.0, 0.0), 'out_of_range'),
+        (WHEELS, (), (-1e300,) * 4, (), 'out_of_range')]
+    yield CommandClass(
+        'unknown (1 000 and escape sequences included), repeated, missing names; both fields, '
+        'neither, positions; wrong lengths; NaN, Inf, 1e13, 1e300', [
+            (lambda k, c=case: joint_state(k * TICK_NS, *c[:4])) for case in refused],
+        'unknown_wheel|missing_wheel|wheel_fields|wheel_lengths|non_finite|out_of_range',
+        alone=True)
+    yield from _stamp_classes('wheels/command')
+
+
+def dipole_command_classes(seed: int) -> Iterator[CommandClass]:
+    """``dipole``: malformed bytes, non-finite and absurd dipoles, bad stamps."""
+    yield from _malformed_command_classes('dipole', seed + 4)
+    vectors = [(math.nan, 0.0, 0.0), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf),
+               (1e13, 0.0, 0.0), (-1e308, 1e308, 1e308), (0.0, 1e200, 0.0)]
+    yield CommandClass('NaN, Inf, 1e13 and 1e308 dipoles', [
+        (lambda k, v=v: dipole(k * TICK_NS, v)) for v in vectors * 2],
+        'non_finite|out_of_range', alone=True)
+    yield from _stamp_classes('dipole')
+
+
+def _joint_state_type() -> Any:
+    from sensor_msgs.msg import JointState
+    return JointState
+
+
+def _vector3_type() -> Any:
+    from geometry_msgs.msg import Vector3Stamped
+    return Vector3Stamped
+
+
+#: The command surfaces of a dynamics scene (lockstep): add one entry to attack another.
+COMMAND_SURFACES = [
+    CommandSurface('wheels/command', 'wheels/command', _joint_state_type,
+                   wheel_command_classes),
+    CommandSurface('dipole', 'dipole', _vector3_type, dipole_command_classes),
+]
+
+
+def attack_commands(domain: int, surface: CommandSurface, hostile: CommandClass) -> Result:
+    """The node in lockstep on :data:`COMMAND_SCENE`, the study its controller: tick ``k``
+    gets the hostile case ``k`` and the good commands (:class:`CommandClass` says which);
+    the node must count every case under ``hostile.reasons`` and end with the attitude and
+    wheel speeds, bit for bit, of the session fed the good commands alone."""
+    from geometry_msgs.msg import QuaternionStamped
+    from diagnostic_msgs.msg import DiagnosticArray
+    from sensor_msgs.msg import JointState
+    name, cases = f'{surface.name}: {hostile.name}', hostile.cases
+    started = time.monotonic()
+    topics = [s.topic for s in COMMAND_SURFACES]
+    running = RunningNode(domain, [
+        '-p', f'scene:={COMMAND_SCENE}', '-p', 'lockstep:=true', '-p', 'publish_rate:=20.0',
+        '-p', 'real_time_factor:=0.0', '-p', f'lockstep_timeout:={LOCKSTEP_TIMEOUT}',
+        *deep_inputs(*topics)])
+    for other in COMMAND_SURFACES:
+        running.publisher(other.message_type(), other.topic)
+    orientations = running.record(QuaternionStamped, 'orientation')
+    wheel_states = running.record(JointState, 'wheels/state')
+    running.record(DiagnosticArray, '/diagnostics')
+    if not running.connected():
+        running.stop()
+        return Result(name, len(cases), hostile.reasons, 'node did not connect', 0.0, 0.0)
+    rss_start = running.rss_mib()
+    ticks, sent = len(cases) + 1, []  # sent: (tick, topic) of each good command
+    for k in range(ticks):
+        if not running.spin_until(lambda: _ticked(orientations, wheel_states, k), 30.0):
+            break
+        if k < len(cases):
+            running.publishers[surface.topic].publish(cases[k](k))
+        for topic in topics:
+            if topic != surface.topic or k >= len(cases) or not hostile.alone:
+                running.publishers[topic].publish(good_command(topic, k * TICK_NS))
+                sent.append((k, topic))
+    running.spin_until(lambda: _ticked(orientations, wheel_states, ticks), 30.0)
+    reasons = hostile.reasons.split('|')
+
+    def counted() -> int:
+        values = running.diagnostics()
+        return sum(int(values.get(f'rejected {key}', 0)) for key in reasons)
+    running.spin_until(lambda: counted() >= len(cases), 10.0)
+    running.spin_until(lambda: False, 1.5)  # a last diagnostics period
+    rss_growth, found = running.rss_mib() - rss_start, counted()
+    code, stderr = running.stop()
+    problems = _command_problems(code, stderr, found, len(cases), hostile.reasons)
+    problems += _command_state_problems(orientations, wheel_states, ticks, sent)
+    outcome = ('survived; all counted; attitude and wheels bit for bit as with the good '
+               'commands alone' if not problems else 'FAILED: ' + '; '.join(problems))
+    return Result(name, len(cases), hostile.reasons, outcome, time.monotonic() - started,
+                  rss_growth)
+
+
+def _ticked(orientations: list[Any], wheel_states: list[Any], k: int) -> bool:
+    """Whether the node's outputs of tick ``k`` arrived."""
+    at = k * TICK_NS
+    return (any(_stamp_ns(m) == at for m in orientations[-3:])
+            and any(_stamp_ns(m) == at for m in wheel_states[-3:]))
+
+
+def _stamp_ns(message: Any) -> int:
+    return message.header.stamp.sec * 10**9 + message.header.stamp.nanosec
+
+
+def _command_problems(code: int, stderr: str, found: int, expected: int, reasons: str
+                      ) -> list[str]:
+    problems = []
+    if code != 0 or 'Traceback' in stderr:
+        problems.append(f'exit {code}')
+        print(stderr[-4000:], file=sys.stderr)
+    longest = max((len(line) for line in stderr.splitlines()), default=0)
+    if longest > 1000:
+        problems.append(f'a log line of {longest} characters')
+    if found != expected:
+        problems.append(f'rejected {reasons} = {found} of {expected}')
+    return problems
+
+
+def _command_state_problems(orientations: list[Any], wheel_states: list[Any], ticks: int,
+                            sent: list[tuple[int, str]]) -> list[str]:
+    """The node's last tick against the session fed only the good commands ``sent``."""
+    attitude, speeds = reference_state(ticks, sent)
+    last = [m for m in orientations if _stamp_ns(m) == ticks * TICK_NS]
+    wheels = [m for m in wheel_states if _stamp_ns(m) == ticks * TICK_NS]
+    if not last or not wheels:
+        return [f'the node did not reach tick {ticks}']
+    q = last[-1].quaternion
+    values = [q.w, q.x, q.y, q.z, *wheels[-1].velocity]
+    if not all(math.isfinite(v) for v in values):
+        return ['non-finite output']
+    if (q.w, q.x, q.y, q.z) != attitude or tuple(wheels[-1].velocity) != speeds:
+        return ['state changed']
+    return []
+
+
+def reference_state(ticks: int, sent: list[tuple[int, str]]
+                    ) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The attitude (w, x, y, z) and wheel speeds at tick ``ticks`` of the node's own session
+    in lockstep, fed the good commands ``sent`` ((tick, topic) each) and nothing else."""
+    from rigid_body_attitude.msgs.joint_state import decode_joint_state
+    from rigid_body_attitude.session.parameters import defaults
+    from rigid_body_attitude.session.settings import load_node_scene, open_session
+
+    class Sink:
+        use_header_stamps = True
+        attitude: tuple[float, ...] = ()
+        speeds: tuple[float, ...] = ()
+
+        def dynamics(self, sec: int, nanosec: int, sample: Any, velocity: Any) -> None:
+            self.attitude = tuple(sample.attitude)
+
+        def wheel_state(self, data: bytes) -> None:
+            self.speeds = tuple(decode_joint_state(data).velocity)
+
+        def __getattr__(self, name: str) -> Callable[..., Any]:
+            return lambda *args: True  # every other output: wanted, and dropped
+    sink = Sink()
+    values = defaults() | {'scene': COMMAND_SCENE, 'lockstep': True, 'publish_rate': 20.0,
+                           'real_time_factor': 0.0}
+    session = open_session(load_node_scene(COMMAND_SCENE), values, sink, lambda: 0,
+                           lambda: 0.0)
+    by_tick: dict[int, list[str]] = {}
+    for k, topic in sent:
+        by_tick.setdefault(k, []).append(topic)
+    for k in range(ticks + 1):
+        session.lockstep_tick(k * TICK_NS)
+        for topic in by_tick.get(k, []):
+            sec, nanosec = divmod(k * TICK_NS, 10**9)
+            if topic == 'wheels/command':
+                session.wheel_command(sec, nanosec, WHEELS, (), (), GOOD_EFFORTS)
+            else:
+                session.dipole(sec, nanosec, GOOD_DIPOLE)
+    return sink.attitude, sink.speeds
+
+
 def _bad_stamp(sec: int, nanosec: int) -> Any:
     """An Imu whose stamp is not a normalised time (the message type allows any uint32)."""
     message = imu(BASE_NS)
@@ -839,7 +1125,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--domain', type=int, default=91)
     parser.add_argument('--seed', type=int, default=7)
     parser.add_argument('--surface', action='append', default=None,
-                        choices=[surface.name for surface in SURFACES],
+                        choices=[surface.name for surface in (*SURFACES, *COMMAND_SURFACES)],
                         help='attack only this surface (repeatable); no start-time attacks '
                              'unless --start names some')
     parser.add_argument('--start', action='append', default=None, choices=START_CLASSES,
@@ -853,14 +1139,23 @@ def main(argv: list[str] | None = None) -> int:
         if (args.surface or args.start) and surface.name not in (args.surface or ()):
             continue
         for hostile in surface.classes(args.seed):
-            result = attack(args.domain, surface, hostile)
-            print(f'{result.name}: {result.cases} cases: {result.outcome} '
-                  f'(RSS {result.rss_growth_mib:+.1f} MiB)', flush=True)
-            results.append(result)
+            results.append(_said(attack(args.domain, surface, hostile)))
+    for command_surface in COMMAND_SURFACES:
+        if (args.surface or args.start) and command_surface.name not in (args.surface or ()):
+            continue
+        for command_class in command_surface.classes(args.seed):
+            results.append(_said(attack_commands(args.domain, command_surface,
+                                                 command_class)))
     if args.start or not args.surface:
         results += start_attacks(args.domain, args.start or START_CLASSES)
     write_report(results, args.out, args.seed)
     return 0 if all(not r.outcome.startswith('FAILED') for r in results) else 1
+
+
+def _said(result: Result) -> Result:
+    print(f'{result.name}: {result.cases} cases: {result.outcome} '
+          f'(RSS {result.rss_growth_mib:+.1f} MiB)', flush=True)
+    return result
 
 
 #: The start-time classes: what a user gives at start.

@@ -8,9 +8,13 @@ world_frame) and ``twist`` (geometry_msgs/TwistStamped, the angular part in body
 (geometry_msgs/WrenchStamped, body_frame, zero force), or with ``actuator``
 ``reaction_wheels`` the scene's wheels' motor torques on ``wheels/command``
 (sensor_msgs/JointState; :class:`~rigid_body_attitude.session.wheel_drive.WheelDrive`), and
-``/diagnostics``. Remap ``odom`` to read an estimator (robot_localization's
-``odometry/filtered``) instead of the plant's truth. The inputs are served by the package's
-raw-take loop
+``/diagnostics``. With torque rods (``actuator`` ``magnetorquers``: B-dot; or the wheels'
+scene's commanded rods: dumping) it publishes ``dipole`` (geometry_msgs/Vector3Stamped) and
+reads the magnetometer (``imu/mag``, sensor_msgs/MagneticField), the plant's ``wheels/state``
+(dumping) and ``/tf_static`` (the magnetometer's mount;
+:mod:`~rigid_body_attitude.session.magnetic_control`). Remap ``odom`` to read an estimator
+(robot_localization's ``odometry/filtered``) instead of the plant's truth. The inputs are
+served by the package's raw-take loop
 (:class:`~rigid_body_attitude.ros.raw_take_loop.RawTakeLoop`, every queued message per wake-up) and
 the parameter services by an executor in a second thread; on rclpy's stock executor path
 (:mod:`~rigid_body_attitude.ros.rclpy_internals`) one executor serves all. Everything else
@@ -37,10 +41,13 @@ from rcl_interfaces.msg import SetParametersResult
 
 from rigid_body_attitude.console import closed_pipe_safe
 from rigid_body_attitude.core.errors import InputError
-from rigid_body_attitude.msgs.cdr import stamped_floats_encoder
-from rigid_body_attitude.msgs.decoders import decode_quaternion_stamped, decode_twist_stamped
+from rigid_body_attitude.msgs.cdr import encode_vector3_stamped, stamped_floats_encoder
+from rigid_body_attitude.msgs.decoders import (
+    decode_magnetic_field, decode_quaternion_stamped, decode_twist_stamped)
 from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.joint_state import decode_joint_state
 from rigid_body_attitude.msgs.odometry import decode_odometry
+from rigid_body_attitude.msgs.tf_message import decode_tf_message
 from rigid_body_attitude.ros.cli_help import format_parameter_help, ParameterRow
 from rigid_body_attitude.ros.parameters import (
     declare_retired_parameters, declare_table_parameter, parameter_values, ros_value)
@@ -54,6 +61,7 @@ from rigid_body_attitude.session.controller_parameters import (
     CONTROLLER_PARAMETERS, check_controller_values, RENAMED_CONTROLLER_PARAMETERS,
     renamed_problem, STATE_INPUTS)
 from rigid_body_attitude.session.interface import CONTROLLER_INTERFACE
+from rigid_body_attitude.session.magnetic_control import magnetic_control
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.settings import DIAGNOSTICS_PERIOD, load_node_scene
 from rigid_body_attitude.session.wheel_drive import WheelDrive
@@ -81,10 +89,12 @@ class AttitudeControllerNode(Node):
         problem = check_controller_values(values)
         if problem:
             raise InputError(problem)
+        scene = load_node_scene(values['scene']) if values['scene'] else None
         #: ``actuator`` ``reaction_wheels``: the scene's wheel array the torque drives.
-        self.wheel_drive = (WheelDrive(load_node_scene(values['scene']), values['body_frame'])
-                            if values['actuator'] == 'reaction_wheels' else None)
-        self.session = ControllerSession(values, self, time.monotonic)
+        self.wheel_drive = (WheelDrive(scene) if values['actuator'] == 'reaction_wheels'
+                            and scene is not None else None)
+        magnetic = magnetic_control(values, scene, self.wheel_drive)
+        self.session = ControllerSession(values, self, time.monotonic, magnetic)
         #: The inputs and the diagnostics timer: served by :meth:`loop`'s raw-take loop (or,
         #: on rclpy's stock executor, as any callback group); the parameter callbacks run in
         #: the executor's thread, so the session is changed under this lock.
@@ -98,10 +108,14 @@ class AttitudeControllerNode(Node):
         self.diagnostics_publisher = DiagnosticsPublisher(self, CONTROLLER_INTERFACE,
                                                           CONTROLLER_NODE_NAME)
         callbacks = {'odometry': self.odometry_callback, 'attitude': self.orientation_callback,
-                     'twist': self.twist_callback, 'target': self.target_callback}
-        wanted = (*STATE_INPUTS[values['state_input']], 'target')
+                     'twist': self.twist_callback, 'target': self.target_callback,
+                     'magnetic_field': self.magnetometer_callback,
+                     'wheel_state': self.wheel_state_callback,
+                     'transforms': self.tf_static_callback}
+        wanted = (*STATE_INPUTS[values['state_input']], 'target',
+                  *(magnetic.inputs if magnetic else ()))
         #: (subscription, callback) of each input of :data:`CONTROLLER_INTERFACE` that
-        #: ``state_input`` asks for.
+        #: ``state_input`` and the torque rods ask for.
         self.inputs = [
             (create_subscription(self, endpoint, callbacks[endpoint.quantity], self.loop_group),
              callbacks[endpoint.quantity])
@@ -114,15 +128,15 @@ class AttitudeControllerNode(Node):
         self.add_post_set_parameters_callback(self.parameters_set_callback)
 
     def _create_command_publishers(self) -> None:
-        """``torque``, or (``actuator`` ``reaction_wheels``) ``wheels/command`` and, when
-        the plant takes it, ``dipole``."""
+        """``torque``, or (``actuator`` ``reaction_wheels``) ``wheels/command``; ``dipole``
+        with torque rods."""
         def publisher(name: str) -> Any:
             return create_publisher(self, CONTROLLER_INTERFACE.endpoint(name, 'out'))
-        drive = self.wheel_drive
-        self.torque_publisher = publisher('torque') if drive is None else None
+        drive, session = self.wheel_drive, self.session
+        self.torque_publisher = (publisher('torque') if drive is None and session.torque_out
+                                 else None)
         self.wheels_publisher = None if drive is None else publisher('wheels/command')
-        self.dipole_publisher = (publisher('dipole') if drive is not None
-                                 and drive.answers_dipole else None)
+        self.dipole_publisher = publisher('dipole') if session.magnetic is not None else None
 
     def _declare_parameters(self) -> dict[str, Any]:
         values = {parameter.name: declare_table_parameter(self, parameter)
@@ -201,6 +215,39 @@ class AttitudeControllerNode(Node):
         with self.session_lock:
             self.session.twist(sec, nanosec, frame_id, angular)
 
+    def magnetometer_callback(self, data: bytes) -> None:
+        """``imu/mag``: a magnetometer sample."""
+        try:
+            sec, nanosec, frame_id, field, _ = decode_magnetic_field(data)
+        except MalformedMessage as err:
+            with self.session_lock:
+                self.session.malformed('imu/mag', err.reason)
+            return
+        with self.session_lock:
+            self.session.magnetometer(sec, nanosec, frame_id, field)
+
+    def wheel_state_callback(self, data: bytes) -> None:
+        """``wheels/state``: the plant's wheel speeds."""
+        try:
+            state = decode_joint_state(data)
+        except MalformedMessage as err:
+            with self.session_lock:
+                self.session.malformed('wheels/state', err.reason)
+            return
+        with self.session_lock:
+            self.session.wheel_state(state.sec, state.nanosec, state.names, state.velocity)
+
+    def tf_static_callback(self, data: bytes) -> None:
+        """``/tf_static``: the magnetometer's mount."""
+        try:
+            transforms = decode_tf_message(data)
+        except MalformedMessage as err:
+            with self.session_lock:
+                self.session.malformed('/tf_static', err.reason)
+            return
+        with self.session_lock:
+            self.session.transforms(transforms)
+
     def target_callback(self, data: bytes) -> None:
         """``target``: a new target attitude."""
         try:
@@ -218,8 +265,7 @@ class AttitudeControllerNode(Node):
         """Publish ``torque`` stamped ``(sec, nanosec)`` in body_frame, or the wheels' motor
         torques of it (and the rods' dipole) with that stamp."""
         if self.wheel_drive is not None:
-            self.wheel_drive.answer(sec, nanosec, torque_body, self._publish_wheels,
-                                    self._publish_dipole)
+            self.wheel_drive.answer(sec, nanosec, torque_body, self._publish_wheels)
             return
         assert self._publish_torque is not None
         frame = self.session.body_frame
@@ -234,9 +280,11 @@ class AttitudeControllerNode(Node):
         assert self.wheels_publisher is not None
         self.wheels_publisher.publish(data)
 
-    def _publish_dipole(self, data: bytes) -> None:
+    def dipole(self, sec: int, nanosec: int, dipole_body: tuple[float, float, float]) -> None:
+        """Publish the rods' ``dipole`` [A m²] stamped ``(sec, nanosec)`` in body_frame."""
         assert self.dipole_publisher is not None
-        self.dipole_publisher.publish(data)
+        self.dipole_publisher.publish(encode_vector3_stamped(
+            sec * 1_000_000_000 + nanosec, self.session.body_frame, dipole_body))
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """Publish one ``/diagnostics`` status, stamped with the node clock."""

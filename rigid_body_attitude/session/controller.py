@@ -24,6 +24,12 @@ Rejections are counted by reason and warned about, at most every
 :data:`~.base.WARNING_INTERVAL` seconds per reason. A complete pair stamped before the last
 answered tick means the plant's time went back (a reset): the hold is cleared and the pair
 answered (counted as ``time_jumps_back``).
+
+With torque rods (:mod:`~rigid_body_attitude.session.magnetic_control`: B-dot, or dumping the
+wheels' momentum) each tick is answered with a dipole too (``actuator`` ``magnetorquers``: the
+dipole only), once its magnetometer sample (and wheel state) came: a complete tick waits for
+them (at most :data:`MAX_PENDING` ticks; one that never gets them before a later tick is
+answered counts as ``unpaired``).
 """
 
 from __future__ import annotations
@@ -38,6 +44,8 @@ from rigid_body_attitude.core.control import as_axis_gains, pd_torque_floats
 from rigid_body_attitude.session.base import LEVEL_INFO, WARNING_INTERVAL
 from rigid_body_attitude.session.controller_parameters import UNIT_TOLERANCE
 from rigid_body_attitude.core.attitude.quaternion import from_rpy
+from rigid_body_attitude.session.magnetic_control import MagneticControl
+from rigid_body_attitude.session.magnetic_ticks import MagneticTicks
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_OK, LEVEL_WARN
 from rigid_body_attitude.session.times import seconds_to_ns, stamp_problem, to_ns
 
@@ -50,6 +58,7 @@ Vector = tuple[float, float, float]
 MAX_PENDING = 64
 
 _IDENTITY: Quaternion = (1.0, 0.0, 0.0, 0.0)
+_ZERO: Vector = (0.0, 0.0, 0.0)
 
 
 class TorqueSink(Protocol):
@@ -57,6 +66,9 @@ class TorqueSink(Protocol):
 
     def torque(self, sec: int, nanosec: int, torque_body: Vector) -> None:
         """The torque [N m, body axes] answering the tick stamped ``(sec, nanosec)``."""
+
+    def dipole(self, sec: int, nanosec: int, dipole_body: Vector) -> None:
+        """The rods' dipole [A m², body axes] answering the tick stamped ``(sec, nanosec)``."""
 
     def diagnostics(self, report: DiagnosticReport) -> None:
         """One diagnostics report."""
@@ -78,13 +90,18 @@ def target_from_values(values: Mapping[str, Any]) -> Quaternion:
     return _IDENTITY
 
 
-class ControllerSession:
+class ControllerSession(MagneticTicks):
     """Answers each tick's stamped orientation and twist with one torque of the same stamp."""
 
     def __init__(self, values: Mapping[str, Any], sink: TorqueSink,
-                 monotonic: Callable[[], float]) -> None:
-        """``values``: checked parameters (:mod:`.controller_parameters`)."""
-        self.sink, self.monotonic = sink, monotonic
+                 monotonic: Callable[[], float], magnetic: MagneticControl | None = None
+                 ) -> None:
+        """``values``: checked parameters (:mod:`.controller_parameters`); ``magnetic``: the
+        torque rods' part (:func:`~.magnetic_control.magnetic_control`), if any."""
+        self.sink, self.monotonic, self.magnetic = sink, monotonic, magnetic
+        self.parked = {}
+        #: Whether a torque (or the wheels' torques) answers the ticks (not B-dot alone).
+        self.torque_out = values.get('actuator', 'body') != 'magnetorquers'
         self.rejections: Counter[str] = Counter()
         self.pending: dict[str, dict[int, tuple[float, ...]]] = {'orientation': {}, 'twist': {}}
         self._targets: list[tuple[int, Quaternion]] = []
@@ -203,11 +220,18 @@ class ControllerSession:
 
     def _answer(self, stamp_ns: int, attitude: tuple[float, ...],
                 rate: tuple[float, ...]) -> None:
-        """Publish the torque for the tick ``stamp_ns`` (recomputed or held)."""
+        """Publish the torque (and dipole) for the tick ``stamp_ns`` (recomputed or held),
+        or keep the tick until its magnetometer sample came."""
+        magnetic = self.magnetic
+        if magnetic is not None and magnetic.waiting_for(stamp_ns):
+            self.park(stamp_ns, attitude, rate)
+            return
         if self.last_stamp is not None and stamp_ns < self.last_stamp:
             self.time_jumps_back += 1
             self.held = None
             self._drop_pending(lambda stamp: True)
+            if magnetic is not None:
+                magnetic.restart(stamp_ns)
             self._note('time_jump_back', 'inputs stamped before the last answered tick: the '
                                          'plant restarted; hold cleared')
         else:
@@ -216,10 +240,16 @@ class ControllerSession:
             self.repeated += 1  # the held torque of this tick's interval is sent again
         self.last_stamp = stamp_ns
         interval = stamp_ns // self.period_ns if self.period_ns else stamp_ns
-        if self.held is None or self.held[0] != interval:
-            self.held = (interval, self._compute(stamp_ns, attitude, rate))
+        held = self.held
+        recompute = held is None or held[0] != interval
+        if held is None or recompute:
+            held = self.held = (interval, self._compute(stamp_ns, attitude, rate)
+                                if self.torque_out else _ZERO)
         sec, nanosec = divmod(stamp_ns, 1_000_000_000)
-        self.sink.torque(sec, nanosec, self.held[1])
+        if magnetic is not None:
+            self.sink.dipole(sec, nanosec, magnetic.answer(stamp_ns, recompute))
+        if self.torque_out:
+            self.sink.torque(sec, nanosec, held[1])
         self.answered += 1
         self._period_answered += 1
 
@@ -237,6 +267,7 @@ class ControllerSession:
                 del waiting[stamp]
                 self._reject('unpaired', f'{topic}: no partner of the same stamp before a '
                                          f'later tick was answered')
+        self.drop_parked(drop)
 
     # -- counting, warnings, diagnostics ----------------------------------------------------
 
@@ -265,12 +296,16 @@ class ControllerSession:
         problems = [f'{count} {reason}' for reason, count in
                     sorted(self._period_rejections.items())]
         if not self._period_answered:
-            problems.insert(0, f'no tick answered: waiting for {self.waiting_for}')
+            waiting = self.waiting_for
+            if self.parked and self.magnetic is not None:
+                waiting = self.magnetic.waiting_for(min(self.parked)) or waiting
+            problems.insert(0, f'no tick answered: waiting for {waiting}')
         values = (
             ('ticks answered', str(self.answered)), ('torques computed', str(self.computed)),
             ('ticks answered again', str(self.repeated)),
             ('pointing error [deg]', f'{math.degrees(self.pointing_error):.6g}'),
             ('torque [N m]', str(self.held[1] if self.held else None)),
+            *((('dipole [A m2]', str(self.magnetic.dipole)),) if self.magnetic else ()),
             ('target (w, x, y, z)', str(self.target)),
             ('time jumps back', str(self.time_jumps_back)),
             *((f'rejected {reason}', str(count))

@@ -54,15 +54,28 @@ CONTROLLER_PARAMETERS: tuple[Parameter, ...] = (
               'N m: each torque component clipped to +-this (0 = no limit)', 0.0, 1e12,
               read_only=False),
     Parameter('actuator', str, 'body',
-              'what the torque drives: body (torque, WrenchStamped) or reaction_wheels (the '
-              "scene's wheel array, wheels/command: JointState efforts)",
-              choices=('body', 'reaction_wheels')),
+              'what the controller drives: body (torque, WrenchStamped), reaction_wheels (the '
+              "scene's wheel array, wheels/command: JointState efforts) or magnetorquers "
+              '(B-dot detumbling on the measured field, dipole: Vector3Stamped)',
+              choices=('body', 'reaction_wheels', 'magnetorquers')),
     Parameter('scene', str, '',
               "the plant's scene (built-in name or file) whose reaction_wheels the controller "
               'drives (actuator reaction_wheels)', may_be_empty=True),
     Parameter('control_period', float, 0.0,
               's: the torque is recomputed when the input stamps reach a multiple of this and '
               'held in between (0 = at every tick)', 0.0, 3600.0, read_only=False),
+    Parameter('bdot_gain', float, 0.0,
+              'A m2 s/T: k of B-dot, m = -k dB/dt from the magnetometer (actuator '
+              'magnetorquers: > 0)', 0.0, 1e12),
+    Parameter('dumping_gain', float, 0.0,
+              "1/s: k of the rods' momentum dumping, m = k (h_w x B)/|B|^2 from wheels/state "
+              'and the magnetometer (actuator reaction_wheels; 0 = a zero dipole)', 0.0, 1e6),
+    Parameter('magnetometer_period', float, 0.0,
+              's: period P of the magnetometer (imu/mag): a tick stamped t uses its sample '
+              "stamped floor(t/P) P (0 = the scene's sensors.magnetometer rate)", 0.0, 3600.0),
+    Parameter('magnetometer_mount_rpy', tuple, (),
+              'rad: [roll, pitch, yaw] of the magnetometer frame in body_frame ([] = from '
+              '/tf_static, none for samples in body_frame)', -10.0, 10.0, may_be_empty=True),
 )
 
 _BY_NAME = {parameter.name: parameter for parameter in CONTROLLER_PARAMETERS}
@@ -87,7 +100,8 @@ def check_controller_values(values: Mapping[str, Any]) -> str:
     """Why these parameter values are unusable, or ``''`` when they are fine.
 
     Each value against its declaration, then: a ``scene`` with ``actuator``
-    ``reaction_wheels``, at most one of ``target_rpy`` and ``target_quaternion_xyzw``, and a
+    ``reaction_wheels``, a ``bdot_gain`` with ``magnetorquers``, ``reaction_wheels`` with a
+    ``dumping_gain``, at most one of ``target_rpy`` and ``target_quaternion_xyzw``, and a
     target quaternion of unit norm within :data:`UNIT_TOLERANCE`.
     """
     problem = values_problem(values, _BY_NAME)
@@ -96,6 +110,12 @@ def check_controller_values(values: Mapping[str, Any]) -> str:
     if values.get('actuator') == 'reaction_wheels' and not values.get('scene'):
         return ('Expected parameter `scene` (the plant\'s scene, with its reaction_wheels) '
                 'with `actuator` reaction_wheels, got none')
+    if values.get('actuator') == 'magnetorquers' and not values.get('bdot_gain', 0.0) > 0.0:
+        return ('Expected parameter `bdot_gain` > 0 (A m2 s/T) with `actuator` magnetorquers '
+                '(B-dot), got 0.0')
+    if values.get('dumping_gain', 0.0) > 0.0 and values.get('actuator') != 'reaction_wheels':
+        return ('Expected `actuator` reaction_wheels with parameter `dumping_gain` > 0 (the '
+                f'rods dump the wheels\' momentum), got actuator {values.get("actuator")!r}')
     if values.get('target_rpy') and values.get('target_quaternion_xyzw'):
         return ('Expected at most one of `target_rpy` and `target_quaternion_xyzw`, got both: '
                 f'{list(values["target_rpy"])} and {list(values["target_quaternion_xyzw"])}')

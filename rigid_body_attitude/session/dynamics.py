@@ -3,8 +3,14 @@
 At each tick (:meth:`DynamicsSession.tick`, the node's timer on its clock, ``use_sim_time``
 works) the state is integrated up to the clock's time under the clock rules
 (:class:`~rigid_body_attitude.session.stream.ClockDriver`) and every output goes to the sink,
-stamped with the propagated time. Commands (``wrench``: torque and force; ``rotor_torque``)
-are held from their stamp on (:class:`~rigid_body_attitude.session.stream.CommandStream`).
+stamped with the propagated time. **Scene time** (what the effects and sensors read: the orbit,
+the field, a controller's sample instants) is 0 at the scene's first tick, and again at the
+first tick after a reset or a backward clock jump (:class:`~.times.TimeBase`), whatever the
+clock's origin: the batch engine's time from 0, in the node and the replay alike. Commands
+(``wrench``: torque and force; ``rotor_torque``; ``dipole``; the wheels') are held from their
+stamp on (:class:`~rigid_body_attitude.session.stream.CommandStream`); one received before
+the first tick, stamped before the start or far from the clock is refused
+(:meth:`~.stream.CommandStream.timing`), so no command moves the scene's time.
 The session times its own work (the monotonic clock) to report a scene that cannot keep up:
 its real-time factor and its lag behind the clock. A scene with simulated sensors (its
 ``sensors`` section) is integrated through a
@@ -33,18 +39,24 @@ from rigid_body_attitude.session.reports import LEVEL_WARN, PeriodCounts, body_f
 from rigid_body_attitude.session.sensors import SensorSampler, simulated_sensors
 from rigid_body_attitude.session.sim_clock import SimClock
 from rigid_body_attitude.session.stream import ClockDriver, CommandStream, Outcome
-from rigid_body_attitude.session.times import TimeBase, split_ns, stamp_problem, to_ns
+from rigid_body_attitude.session.times import (
+    seconds_to_ns, split_ns, stamp_problem, TimeBase, to_ns)
 
 __all__ = ['DynamicsSession']
 
 _DETAIL = {
     'non_finite': 'a non-finite value (NaN or Inf); message ignored',
     'out_of_range': 'a value beyond 1e12 (N, N m); message ignored',
-    'stale_stamp': 'a stamp older than the last command (in lockstep: than the current tick, '
-                   'or a second command for it); message ignored (parameter '
+    'stale_stamp': 'a stamp older than the last command, than the scene\'s start or than the '
+                   'clock by more than time_jump_threshold (in lockstep: than the current '
+                   'tick, or a second command for it); message ignored (parameter '
                    '`use_header_stamps`)',
-    'future_stamp': 'a stamp after the current lockstep tick; a command must carry the stamp '
-                    'of the tick it answers; message ignored (parameter `lockstep`)',
+    'future_stamp': 'a stamp after the current lockstep tick, or more than time_jump_threshold '
+                    'ahead of the clock; a command must carry the stamp of the tick it answers '
+                    '(lockstep) or of the clock; message ignored (parameters `lockstep`, '
+                    '`time_jump_threshold`)',
+    'not_started': 'received before the scene\'s first tick (the first after a start, a reset '
+                   'or a backward clock jump: scene time 0); message ignored',
 }
 
 
@@ -57,9 +69,12 @@ class DynamicsSession(Session):
                  clock_ns: Callable[[], int], monotonic: Callable[[], float]) -> None:
         """The scene's dynamics propagator, clock rules and command stream."""
         self.propagator = DynamicsPropagator(scene)
-        self.clock = ClockDriver(self.propagator, values['time_jump_threshold'])
-        self.commands = CommandStream(self.propagator)
+        #: Scene time: 0 at the tick that (re)started the scene.
         self.time_base = TimeBase()
+        self._tick_ns = 0
+        self.clock = ClockDriver(self.propagator, values['time_jump_threshold'],
+                                 self._scene_start)
+        self.commands = CommandStream(self.propagator)
         inputs = self.propagator.input_names
         #: The WrenchStamped fields the scene takes (``torque``, ``force``).
         self.wrench_inputs = tuple(name for name in ('torque', 'force') if name in inputs)
@@ -155,8 +170,13 @@ class DynamicsSession(Session):
         return self.clock_ns()
 
     def _command(self, name: str, stamp_ns: int, value: Sequence[float], key: str = '') -> bool:
-        outcome = self.commands.add(name, stamp_ns, self.time_base.seconds(stamp_ns), value,
-                                    key)
+        commands, time_base = self.commands, self.time_base
+        # A bad value is refused as such (by add) whatever its stamp; a good one's stamp first.
+        refused = None if commands.check(value) else commands.timing(
+            stamp_ns, self.clock_ns(), time_base.epoch_ns if self.clock.started else None,
+            seconds_to_ns(self.clock.time_jump_threshold))
+        time_s = time_base.seconds(stamp_ns) if time_base.started else math.nan
+        outcome = refused or commands.add(name, stamp_ns, time_s, value, key)
         if outcome.reason:
             self.warn(outcome.reason, f'{name}: {_DETAIL[outcome.reason]}')
         return outcome.accepted
@@ -165,10 +185,12 @@ class DynamicsSession(Session):
 
     def tick(self, now_ns: int) -> None:
         """Integrate up to the clock time ``now_ns`` and hand every output to the sink."""
-        propagator = self.propagator
+        propagator, clock = self.propagator, self.clock
         before, started = propagator.state.time, self.monotonic()
+        starting = not clock.started
+        self._tick_ns = now_ns
         try:
-            outcome = self.clock.tick(self.time_base.seconds(now_ns))
+            outcome = clock.tick(0.0 if starting else self.time_base.seconds(now_ns))
         except AttitudeError as err:  # the integrator refused the step; the state is intact
             self._restart('integration_failed', f'integration refused at '
                                                 f't={propagator.state.time:.6f} s: {err}')
@@ -181,8 +203,14 @@ class DynamicsSession(Session):
                 self._lag = max(self._lag, lag)
         if outcome.reason:
             self._clock_rejected(outcome)
+        if self.sensors is not None and (outcome.reset or starting and outcome.accepted):
+            self.sensors.advance_to(propagator.state.time)  # the samples due at the start
         if outcome.moved:
             self._publish()
+
+    def _scene_start(self, now: float) -> float:
+        """The scene (re)starts at this tick: scene time 0 at its clock time."""
+        return self.time_base.start(self._tick_ns)
 
     def lockstep_tick(self, now_ns: int) -> None:
         """Lockstep: tick ``now_ns`` of the sim clock, then wait for the commands stamped
@@ -191,13 +219,18 @@ class DynamicsSession(Session):
         self.commands.tick_ns = now_ns
 
     def republish(self) -> None:
-        """The outputs of the current state again (lockstep's first tick, until answered)."""
+        """The outputs of the current state again, the simulated sensors' last samples first
+        (lockstep's first tick, until answered: a controller that subscribed late gets the
+        magnetometer sample it waits for too)."""
         if self.clock.started:
+            if self.sensors is not None:
+                self.sensors.resend()
             self._publish()
 
     def lockstep_answered(self) -> bool:
-        """Lockstep: every commanded input has its command for the current tick."""
-        return self.commands.answered(self.command_inputs)
+        """Lockstep: every commanded input has its command for the current tick (or the
+        scene starts again at the next: a reset)."""
+        return not self.clock.started or self.commands.answered(self.command_inputs)
 
     def _publish(self) -> None:
         sample = self.tracker.sample(self.propagator)
@@ -272,15 +305,20 @@ class DynamicsSession(Session):
         counts.lag, counts.tick_period = self._lag, self.tick_period
         if self.sim_clock is not None:
             self.sim_clock.report(counts)
-        if self.wheels is not None:
-            values, problems = self.wheels.report()
-            counts.actuator_values += tuple(values) + tuple(
-                (f'rejected {reason}', str(self.rejections[reason]))
-                for reason in WHEEL_REASONS)
-            counts.actuator_problems += tuple(problems)
-        if self.rods is not None:
-            counts.actuator_values += tuple(self.rods.values())
+        _actuator_counts(counts, self.wheels, self.rods, self.rejections)
         self._work = self._simulated = self._lag = 0.0
+
+
+def _actuator_counts(counts: PeriodCounts, wheels: WheelArray | None,
+                     rods: MagnetorquerReport | None, rejections: Counter[str]) -> None:
+    """The wheels' and the rods' lines of the period's report."""
+    if wheels is not None:
+        values, problems = wheels.report()
+        counts.actuator_values += tuple(values) + tuple(
+            (f'rejected {reason}', str(rejections[reason])) for reason in WHEEL_REASONS)
+        counts.actuator_problems += tuple(problems)
+    if rods is not None:
+        counts.actuator_values += tuple(rods.values())
 
 
 def _finite(sample: OutputSample) -> bool:

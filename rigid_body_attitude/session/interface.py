@@ -127,7 +127,8 @@ class Endpoint:
         quantity: what an input carries for the session (``angular_rate``, ``wrench``,
             ``rotor_torque``, ``wheel_command``, ``dipole``, ``pose``,
             ``pose_with_covariance``, ``transforms``;
-            the controller's ``attitude``, ``twist``, ``target``); ``''`` for outputs.
+            the controller's ``attitude``, ``twist``, ``target``, ``magnetic_field``,
+            ``wheel_state``, ``transforms``); ``''`` for outputs.
         when: when it exists, in words (the README's).
         meaning: what it carries, one line.
         kinds: the scenes' rate sources it belongs to (``gyro``, ``dynamics``).
@@ -392,6 +393,16 @@ CONTROLLER_INTERFACE = Interface((
              "the plant's body rate (the angular part), `body_frame`", quantity='twist'),
     Endpoint('target', QUATERNION_STAMPED, _IN, 'command', 'sensor', 'always',
              'a new target attitude, `world_frame`', quantity='target'),
+    Endpoint('imu/mag', MAGNETIC_FIELD, _IN, 'sensor_input', 'sensor',
+             '`actuator` `magnetorquers`, or a `dumping_gain`',
+             'the measured field [T], its frame; tick `t` waits for the sample stamped '
+             '⌊t/P⌋ P', quantity='magnetic_field'),
+    Endpoint('wheels/state', JOINT_STATE, _IN, 'command', 'sensor', 'a `dumping_gain`',
+             "the plant's wheel speeds (`velocity`) [rad/s], stamped like the tick",
+             quantity='wheel_state'),
+    Endpoint('/tf_static', TF_MESSAGE, _IN, 'tf_static_listener', 'transforms',
+             'with `imu/mag`, no `magnetometer_mount_rpy`',
+             "the mount `body_frame` -> the magnetometer's frame", quantity='transforms'),
     Endpoint('torque', WRENCH_STAMPED, _OUT, 'latched_output', 'output',
              '`actuator` `body` (default), every tick answered',
              'the torque, stamped like the tick it answers, `body_frame`, zero force'),
@@ -400,8 +411,9 @@ CONTROLLER_INTERFACE = Interface((
              "the scene's wheels (`name`) and their motor torques [N m] (`effort`), stamped "
              'like the tick it answers'),
     Endpoint('dipole', VECTOR3_STAMPED, _OUT, 'latched_output', 'output',
-             '`actuator` `reaction_wheels`, a scene with commanded `magnetorquers`',
-             'a zero dipole [A m²], `body_frame`, stamped like the tick it answers'),
+             '`actuator` `magnetorquers`, or `reaction_wheels` on a scene with commanded '
+             '`magnetorquers`', 'the dipole [A m²], `body_frame`: B-dot, dumping (zero without '
+             '`dumping_gain`), stamped like the tick it answers'),
     Endpoint('/diagnostics', DIAGNOSTIC_ARRAY, _OUT, 'output', 'diagnostics', 'once a second',
              'pointing error, counts, rejections by reason, the status and why'),
 ))

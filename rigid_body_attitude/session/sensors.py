@@ -33,13 +33,19 @@ or not, and a sample is encoded only when the sink wants it (:meth:`OutputSink.s
 <rigid_body_attitude.session.base.OutputSink.sensor_wanted>`: a matched subscription, a topic
 of the output bag). So the samples depend only on the scene, the seeds and the instants: not
 on how ticks group the instants, on which topics are matched, or on whether the node or the
-replay tool ticks the session.
+replay tool ticks the session. The instants are the clock's (multiples of the period in
+nanoseconds of the clock), the model reads the scene time of each (seconds since the scene's
+first tick: :class:`~rigid_body_attitude.session.times.TimeBase`), and an instant at the
+scene's start is sampled at its first tick. A lockstep node repeating its first tick for a
+controller that subscribed late sends each sensor's last sample again with it
+(:meth:`SensorSampler.resend`).
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
+from typing import Any
 
 from rigid_body_attitude.core.dynamics.effects.translation import Translation
 from rigid_body_attitude.core.dynamics.scene import GRAVITY_EFFECTS, Scene
@@ -87,6 +93,8 @@ class SimulatedSensor(ABC):
         self.count = 0
         #: The last instant sampled [ns] (``None``: none since the last reset).
         self.last_ns: int | None = None
+        #: The last sample given: its instant [ns] and what its message encodes.
+        self.last_sample: tuple[int, tuple[object, ...]] | None = None
 
     def next_instant(self, start_ns: int) -> int:
         """The first instant to sample from ``start_ns`` [ns] on: a multiple of the period,
@@ -102,8 +110,28 @@ class SimulatedSensor(ABC):
 
     def reset(self) -> None:
         """The scene starts again: the sensor too (its constants and noise from its seed)."""
-        self.last_ns = None
+        self.last_ns = self.last_sample = None
         self.restart()
+
+    def give(self, instant_ns: int, *sample: object) -> None:
+        """Hand the sample of ``instant_ns`` to the sink if it wants it (and keep it)."""
+        self.count += 1
+        self.last_sample = (instant_ns, sample)
+        if self.sink.sensor_wanted(self.topic):
+            sec, nanosec = split_ns(instant_ns)
+            self.sink.simulated_sensor(self.topic, self.encode(sec, nanosec, *sample))
+
+    def resend(self) -> None:
+        """The last sample again (a lockstep node repeating its first tick to a controller
+        that subscribed late), if the sink wants it."""
+        if self.last_sample is not None and self.sink.sensor_wanted(self.topic):
+            instant_ns, sample = self.last_sample
+            sec, nanosec = split_ns(instant_ns)
+            self.sink.simulated_sensor(self.topic, self.encode(sec, nanosec, *sample))
+
+    @abstractmethod
+    def encode(self, sec: int, nanosec: int, *sample: Any) -> bytes:
+        """The message of one sample stamped ``(sec, nanosec)``."""
 
     def sample(self, instant_ns: int, t: float) -> None:
         """Take the sample of the instant ``instant_ns`` (scene time ``t`` [s])."""
@@ -126,7 +154,7 @@ class ImuOutput(SimulatedSensor):
         """Samples of ``spec`` on ``propagator``'s motion."""
         super().__init__(spec.topic, spec.period_ns, propagator, sink)
         self.model = ImuModel(spec, scene_gravity(propagator, spec))
-        self.encode = simulated_imu_encoder(spec.frame_id, *spec.sample_variances())
+        self._encode = simulated_imu_encoder(spec.frame_id, *spec.sample_variances())
         self.translation = next((e for e in propagator.stateful if isinstance(e, Translation)),
                                 None)
         self._previous: tuple[Quat, Vector] | None = None
@@ -156,10 +184,12 @@ class ImuOutput(SimulatedSensor):
         (q0, v0) = previous
         gyro, acc = self.model.sample(q0, attitude, (velocity[0] - v0[0], velocity[1] - v0[1],
                                                      velocity[2] - v0[2]))
-        self.count += 1
-        if self.sink.sensor_wanted(self.topic):
-            sec, nanosec = split_ns(instant_ns)
-            self.sink.simulated_sensor(self.topic, self.encode(sec, nanosec, gyro, acc))
+        self.give(instant_ns, gyro, acc)
+
+    def encode(self, sec: int, nanosec: int, *sample: Any) -> bytes:
+        """A ``sensor_msgs/Imu`` of the rates and specific forces ``sample``."""
+        gyro, acc = sample
+        return self._encode(sec, nanosec, gyro, acc)
 
 
 class MagnetometerOutput(SimulatedSensor):
@@ -170,7 +200,7 @@ class MagnetometerOutput(SimulatedSensor):
         """Samples of ``spec`` in ``field`` (``None``: the section's local field)."""
         super().__init__(spec.topic, spec.period_ns, propagator, sink)
         self.model = MagnetometerModel(spec, field)
-        self.encode = magnetic_field_encoder(spec.frame_id, spec.magnetic_field_covariance())
+        self._encode = magnetic_field_encoder(spec.frame_id, spec.magnetic_field_covariance())
 
     def reset(self) -> None:
         """The model again from its seed (the bias walk at zero)."""
@@ -178,11 +208,12 @@ class MagnetometerOutput(SimulatedSensor):
         super().reset()
 
     def _sample(self, instant_ns: int, t: float) -> None:
-        measured = self.model.sample(t, self.propagator.state.attitude_tuple())
-        self.count += 1
-        if self.sink.sensor_wanted(self.topic):
-            sec, nanosec = split_ns(instant_ns)
-            self.sink.simulated_sensor(self.topic, self.encode(sec, nanosec, measured))
+        self.give(instant_ns, self.model.sample(t, self.propagator.state.attitude_tuple()))
+
+    def encode(self, sec: int, nanosec: int, *sample: Any) -> bytes:
+        """A ``sensor_msgs/MagneticField`` of the measured field ``sample``."""
+        (measured,) = sample
+        return self._encode(sec, nanosec, measured)
 
 
 class StarTrackerOutput(SimulatedSensor):
@@ -203,8 +234,8 @@ class StarTrackerOutput(SimulatedSensor):
         """The header's frame of the following samples."""
         if world_frame != self.world_frame:
             self.world_frame = world_frame
-            self.encode = attitude_with_covariance_encoder(world_frame,
-                                                           UNKNOWN_POSITION_VARIANCE)
+            self._encode = attitude_with_covariance_encoder(world_frame,
+                                                            UNKNOWN_POSITION_VARIANCE)
 
     def reset(self) -> None:
         """The model again from its seed (its misalignment drawn again, the same)."""
@@ -216,12 +247,13 @@ class StarTrackerOutput(SimulatedSensor):
         if measured is None:
             self.excluded += 1
             return
-        self.count += 1
-        if self.sink.sensor_wanted(self.topic):
-            sec, nanosec = split_ns(instant_ns)
-            attitude, covariance = measured
-            self.sink.simulated_sensor(self.topic, self.encode(sec, nanosec, attitude,
-                                                               covariance))
+        self.give(instant_ns, *measured)
+
+    def encode(self, sec: int, nanosec: int, *sample: Any) -> bytes:
+        """A ``geometry_msgs/PoseWithCovarianceStamped`` of the measured attitude and its
+        covariance ``sample``."""
+        attitude, covariance = sample
+        return self._encode(sec, nanosec, attitude, covariance)
 
 
 class SensorSampler:
@@ -258,6 +290,11 @@ class SensorSampler:
         """The frame of the world-frame samples (``world_frame``)."""
         for sensor in self.sensors:
             sensor.set_world_frame(world_frame)
+
+    def resend(self) -> None:
+        """Every sensor's last sample again (lockstep's first tick, repeated)."""
+        for sensor in self.sensors:
+            sensor.resend()
 
     def advance_to(self, t_end: float) -> int:
         """:meth:`DynamicsPropagator.advance_to` with a stop at every sample instant on the

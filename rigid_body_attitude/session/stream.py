@@ -26,17 +26,22 @@ Gyro samples (:class:`GyroStream`)
       (its module says how); :meth:`GyroStream.settle` counts a partial batch (at each
       diagnostics report). They are counted in :attr:`GyroStream.missed_samples`.
 
-Commanded inputs (:class:`CommandStream`): not 3 finite numbers → ``non_finite``; a
+Commanded inputs (:class:`CommandStream`): first their stamps against the scene's time
+(:meth:`CommandStream.timing`): received before the scene's first tick (the first after a
+start, a reset or a backward clock jump: scene time 0) → ``not_started``; without lockstep,
+stamped more than ``time_jump_threshold`` ahead of the clock → ``future_stamp``, before the
+scene's start or more than ``time_jump_threshold`` behind the clock → ``stale_stamp``. A
+command never moves the scene's time. Then the value: not 3 finite numbers → ``non_finite``; a
 magnitude above :data:`COMMAND_LIMIT` → ``out_of_range``; older than the last command of the
 same input → ``stale_stamp``; otherwise passed to the propagator. In lockstep
 (:attr:`CommandStream.tick_ns` set: the tick the commands must answer) a command is used only
 when stamped exactly with that tick, once per input: a later stamp → ``future_stamp``, an
 earlier one or a second one for the tick → ``stale_stamp``.
 
-Clock ticks of dynamics scenes (:class:`ClockDriver`): the first tick sets the scene's start
-time; a backward jump larger than ``time_jump_threshold`` resets (``time_jump``); a forward
-jump larger than it is not integrated across (``gap``); otherwise the state is integrated up
-to the tick.
+Clock ticks of dynamics scenes (:class:`ClockDriver`): the first tick starts the scene (its
+time there is the one its ``start`` gives: the session's scene time 0); a backward jump larger
+than ``time_jump_threshold`` starts it again (``time_jump``); a forward jump larger than it is
+not integrated across (``gap``); otherwise the state is integrated up to the tick.
 """
 
 from __future__ import annotations
@@ -55,7 +60,7 @@ __all__ = ['COMMAND_LIMIT', 'ClockDriver', 'CommandStream', 'GyroStream', 'INTEG
 
 #: Rejection reasons of the streams, in the order the diagnostics list them.
 REASONS = ('non_finite', 'out_of_range', 'stale_stamp', 'outlier_stamp', 'gap', 'time_jump',
-           'future_stamp')
+           'future_stamp', 'not_started')
 
 #: Samples after a jump that must confirm it (each within ``max_dt`` of the one before).
 JUMP_CONFIRMATIONS = 2
@@ -341,6 +346,24 @@ class CommandStream(_Counting):
             return 'out_of_range'
         return ''
 
+    def timing(self, stamp_ns: int, clock_ns: int, start_ns: int | None,
+               window_ns: int) -> Outcome | None:
+        """The refusal (counted) of a command stamped ``stamp_ns`` received at ``clock_ns``
+        in a scene started at ``start_ns`` (``None``: not started), or ``None`` when its
+        stamp may act: ``not_started``; without lockstep (the tick rule of :meth:`add`
+        decides then) a stamp more than ``window_ns`` ahead of the clock (``future_stamp``:
+        held from it, it would hold back every later command), or before the start or more
+        than ``window_ns`` behind the clock (``stale_stamp``)."""
+        if start_ns is None:
+            return self._reject('not_started')
+        if self.tick_ns is not None:
+            return None
+        if stamp_ns > clock_ns + window_ns:
+            return self._reject('future_stamp')
+        if stamp_ns < start_ns or stamp_ns < clock_ns - window_ns:
+            return self._reject('stale_stamp')
+        return None
+
     def add(self, input_name: str, stamp_ns: int, time_s: float,
             value: Sequence[float], key: str = '') -> Outcome:
         """Process one command ``value`` for ``input_name`` stamped ``stamp_ns`` (``time_s``
@@ -374,11 +397,16 @@ class CommandStream(_Counting):
 class ClockDriver(_Counting):
     """Advances a :class:`DynamicsPropagator` to each tick of a clock (node or sim time)."""
 
-    def __init__(self, propagator: DynamicsPropagator, time_jump_threshold: float) -> None:
-        """Reset on backward jumps larger than ``time_jump_threshold`` [s]."""
+    def __init__(self, propagator: DynamicsPropagator, time_jump_threshold: float,
+                 start: Callable[[float], float] | None = None) -> None:
+        """Reset on backward jumps larger than ``time_jump_threshold`` [s]; ``start``: the
+        scene's time at the tick that (re)starts it, from the tick's time (default: the
+        tick's time)."""
         super().__init__()
         self.propagator = propagator
         self.time_jump_threshold = time_jump_threshold
+        #: The scene's time at a tick that starts it (the session's: 0, its time base moved).
+        self.start: Callable[[float], float] = start if start is not None else _same
         self.started = False
         self.resuming = False
         #: Integrates up to a time [s]: the propagator's ``advance_to``, or a simulated
@@ -392,7 +420,7 @@ class ClockDriver(_Counting):
             return self._reject('non_finite')
         propagator = self.propagator
         if not self.started:
-            propagator.reset(time=now)
+            propagator.reset(time=self.start(now))
             self.started = True
             return self._accept(_BASELINE)
         if self.resuming:
@@ -401,12 +429,15 @@ class ClockDriver(_Counting):
                 propagator.state.time = now  # the pause: not integrated across
                 return self._accept(_BASELINE)
         last = propagator.state.time
-        if now < last - self.time_jump_threshold:
-            propagator.reset(time=now)
+        # Compared in whole nanoseconds: a tick exactly time_jump_threshold after the last
+        # (1 Hz ticks, a 1 s threshold) is no jump, whatever the round-off of the seconds.
+        step_ns, threshold_ns = round((now - last) * 1e9), round(self.time_jump_threshold * 1e9)
+        if step_ns < -threshold_ns:
+            propagator.reset(time=self.start(now))
             return self._reject('time_jump', reset=True)
         if now <= last:
             return self._reject('stale_stamp')
-        if now - last > self.time_jump_threshold:
+        if step_ns > threshold_ns:
             propagator.state.time = now
             return self._reject('gap')
         self.advance(now)
@@ -420,3 +451,7 @@ class ClockDriver(_Counting):
         """Keep the state; the next tick is a new baseline (nothing integrated across the
         pause before it)."""
         self.resuming = True
+
+
+def _same(now: float) -> float:
+    return now

@@ -2,9 +2,11 @@
 
 Every time that enters or leaves the session layer is an ``int`` of nanoseconds: header stamps
 (``builtin_interfaces/Time``: ``sec`` int32, ``nanosec`` uint32), the node clock, bag times.
-The propagators integrate in float seconds; :class:`TimeBase` maps nanoseconds to seconds since
-an epoch so that stamps near 1.7e9 s keep sub-nanosecond resolution (a float near 1.7e9 has a
-spacing of 2.4e-7 s, which would put a 2.4e-4 relative error on the step of a 1 kHz gyro).
+The propagators integrate in float seconds; :class:`TimeBase` maps nanoseconds to a dynamics
+scene's time, seconds since its start, so that stamps near 1.7e9 s keep sub-nanosecond
+resolution (a float near 1.7e9 has a spacing of 2.4e-7 s, which would put a 2.4e-4 relative
+error on the step of a 1 kHz gyro) and the scene's time-dependent effects (orbit, field) see
+the same time in the node as in the batch engine.
 """
 
 from __future__ import annotations
@@ -51,29 +53,38 @@ def seconds_to_ns(seconds: float) -> int:
 
 
 class TimeBase:
-    """Nanoseconds ↔ float seconds since an epoch fixed by the first time converted.
+    """Nanoseconds ↔ float seconds of scene time: seconds since the scene's start.
 
-    The epoch is the first time's whole seconds, so the first time maps to ``[0, 1)`` s and
-    later ones to their exact distance from it (float resolution ~1e-10 s within ±1e6 s of the
-    epoch). :meth:`rebase` moves the epoch (after the state was reset to a new time).
+    A dynamics scene's time starts at 0 at its first tick (:meth:`start`): the first after the
+    node starts, a reset or a backward clock jump. Every time of a stamp or a clock maps to its
+    exact distance from that instant (integer nanoseconds subtracted first, so a float
+    resolution of ~1e-10 s holds within ±1e6 s of the start whatever the clock's origin), and
+    back (:meth:`nanoseconds`). Before the first start there is no scene time
+    (:attr:`started` is false).
     """
 
     def __init__(self) -> None:
-        """No epoch until the first conversion."""
+        """No scene time until :meth:`start`."""
         self.epoch_ns: int | None = None
 
-    def seconds(self, nanoseconds: int) -> float:
-        """Seconds since the epoch of a time in nanoseconds."""
-        if self.epoch_ns is None:
-            self.epoch_ns = nanoseconds - nanoseconds % NANOSECONDS_PER_SECOND
-        return (nanoseconds - self.epoch_ns) * 1e-9
+    @property
+    def started(self) -> bool:
+        """Whether the scene has started (its time is defined)."""
+        return self.epoch_ns is not None
 
-    def rebase(self, nanoseconds: int) -> float:
-        """Move the epoch to ``nanoseconds``' whole seconds; its seconds since the new epoch."""
-        self.epoch_ns = None
-        return self.seconds(nanoseconds)
+    def start(self, nanoseconds: int) -> float:
+        """The scene (re)starts at ``nanoseconds``: scene time 0 there; returns 0.0."""
+        self.epoch_ns = nanoseconds
+        return 0.0
+
+    def seconds(self, nanoseconds: int) -> float:
+        """Scene time [s] of a time in nanoseconds (the scene must have started)."""
+        epoch = self.epoch_ns
+        if epoch is None:
+            raise RuntimeError('no scene time before the scene starts (TimeBase.start)')
+        return (nanoseconds - epoch) * 1e-9
 
     def nanoseconds(self, seconds: float) -> int:
-        """Nanoseconds of ``seconds`` since the epoch, rounded to the nanosecond."""
+        """Nanoseconds of the scene time ``seconds``, rounded to the nanosecond."""
         epoch = self.epoch_ns if self.epoch_ns is not None else 0
         return epoch + round(seconds * NANOSECONDS_PER_SECOND)

@@ -11,14 +11,17 @@ pseudo-inverse of the axes, the same allocation an ``attitude_pd`` of the scene 
 wheels' own limits are the plant's: it clips each torque to ``max_torque`` and cuts it at
 ``max_speed``.
 
-When the scene's ``magnetorquers`` take commands, a lockstep plant also waits for a ``dipole``
-each tick: the controller answers it with the same stamp, zero (the rods idle; momentum the
-wheels gather stays in them).
+When the scene's ``magnetorquers`` take commands (:attr:`WheelDrive.answers_dipole`), a
+lockstep plant also waits for a ``dipole`` each tick: the controller answers it with the same
+stamp, zero (the rods idle; momentum the wheels gather stays in them) or, with a
+``dumping_gain``, the dipole dumping the wheels' stored momentum ``h_w = Σ Jₛᵢ Ωᵢ âᵢ``
+(:meth:`WheelDrive.stored_momentum`, from the speeds the plant's ``wheels/state`` reports;
+:mod:`~rigid_body_attitude.session.magnetic_control`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from rigid_body_attitude.core.control.allocation import wheel_torques
 from rigid_body_attitude.core.dynamics.effects.magnetorquers import Magnetorquers
@@ -26,19 +29,17 @@ from rigid_body_attitude.core.dynamics.effects.reaction_wheels import ReactionWh
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.yaml_files import quote
-from rigid_body_attitude.msgs.cdr import encode_vector3_stamped
 from rigid_body_attitude.msgs.joint_state import joint_state_encoder
 
 __all__ = ['WheelDrive']
 
 Vector = tuple[float, float, float]
-_ZERO: Vector = (0.0, 0.0, 0.0)
 
 
 class WheelDrive:
-    """A scene's wheel array driven by body torques; the rods' dipole answered when asked."""
+    """A scene's wheel array driven by body torques; whether its rods take a dipole."""
 
-    def __init__(self, scene: Scene, body_frame: str) -> None:
+    def __init__(self, scene: Scene) -> None:
         """The array of ``scene`` (SceneError naming the scene when it has none)."""
         effects = scene.build_effects()
         wheels = next((e for e in effects if isinstance(e, ReactionWheels)), None)
@@ -47,7 +48,10 @@ class WheelDrive:
                              f'(parameter `actuator` reaction_wheels), got none')
         self.names = wheels.names
         self.allocation = wheels.allocation
-        self.body_frame = body_frame
+        #: Each wheel's spin axis (body, unit) and spin inertia [kg m²], in :attr:`names` order.
+        self.axes: tuple[tuple[float, float, float], ...] = tuple(
+            (float(a), float(b), float(c)) for a, b, c in wheels.axes)
+        self.spin_inertia = tuple(float(j) for j in wheels.wheel['spin_inertia'])
         self._encode = joint_state_encoder('', self.names)
         #: Whether the plant takes a ``dipole`` command every tick (commanded rods).
         self.answers_dipole = any(isinstance(e, Magnetorquers) and 'dipole' in e.input_names
@@ -56,12 +60,15 @@ class WheelDrive:
         self.torques: tuple[float, ...] = (0.0,) * len(self.names)
 
     def answer(self, sec: int, nanosec: int, torque_body: Vector,
-               publish_wheels: Callable[[bytes], None],
-               publish_dipole: Callable[[bytes], None]) -> None:
-        """The wheels' JointState for ``torque_body`` [N m] and, when the plant waits for
-        one, the zero dipole, both stamped ``(sec, nanosec)``."""
+               publish_wheels: Callable[[bytes], None]) -> None:
+        """The wheels' JointState for ``torque_body`` [N m], stamped ``(sec, nanosec)``."""
         self.torques = wheel_torques(self.allocation, torque_body)
         publish_wheels(self._encode(sec, nanosec, (), (), self.torques))
-        if self.answers_dipole:
-            publish_dipole(encode_vector3_stamped(sec * 1_000_000_000 + nanosec,
-                                                  self.body_frame, _ZERO))
+
+    def stored_momentum(self, speeds: Sequence[float]) -> Vector:
+        """``h_w = Σ Jₛᵢ Ωᵢ âᵢ`` [N m s, body] of the speeds relative to the body ``speeds``
+        [rad/s] (in :attr:`names` order)."""
+        x = y = z = 0.0
+        for (a, b, c), j, speed in zip(self.axes, self.spin_inertia, speeds):
+            x, y, z = x + j * speed * a, y + j * speed * b, z + j * speed * c
+        return x, y, z

@@ -585,6 +585,7 @@ def test_commanded_torque_on_sim_time_gives_the_core_rates_and_energy(ros, reque
     propagator = build_propagator(load_scene('commanded_torque'))
     driver, commands, time_base = ClockDriver(propagator, 1.0), CommandStream(propagator), \
         TimeBase()
+    time_base.start(first_ns)  # scene time 0 at the first tick
     driver.tick(time_base.seconds(first_ns))
     commands.add('torque', first_ns, time_base.seconds(first_ns), torque_body)
     j2 = propagator.scene.inertia.tensor[1, 1]
@@ -656,6 +657,7 @@ def test_commanded_force_moves_the_pose_as_the_core_predicts(ros, request):
     propagator = build_propagator(load_scene('free_flyer'))
     driver, commands, time_base = ClockDriver(propagator, 1.0), CommandStream(propagator), \
         TimeBase()
+    time_base.start(first_ns)  # scene time 0 at the first tick
     driver.tick(time_base.seconds(first_ns))
     start = time_base.seconds(first_ns)
     commands.add('torque', first_ns, start, torque_body)

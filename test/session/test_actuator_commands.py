@@ -25,6 +25,12 @@ def stamp(nanoseconds):
     return divmod(nanoseconds, 10**9)
 
 
+def tick(session, clocks, now_ns):
+    """A tick of the node clock at ``now_ns`` (commands are checked against that clock)."""
+    clocks.now_ns = now_ns
+    session.tick(now_ns)
+
+
 def values(report):
     return dict(report.values)
 
@@ -86,15 +92,15 @@ def test_a_bad_wheel_command_is_refused_by_reason_and_changes_nothing(open_scene
         'non_finite', 'out_of_range')
 
 
-def test_a_command_in_any_order_of_names_drives_the_wheels_in_the_arrays_order(open_scene):
+def test_a_command_in_any_order_of_names_drives_the_wheels_in_the_arrays_order(open_scene, clocks):
     """Speeds in reversed name order; the servo drives each wheel to its own speed."""
     session, sink = wheel_session(open_scene)
     targets = {'wheel_a': 152.0, 'wheel_b': -98.0, 'wheel_c': 118.0, 'wheel_d': -62.0}
-    session.tick(0)
+    tick(session, clocks, 0)
     names = tuple(reversed(NAMES))
     session.wheel_command(0, 1, names, (), tuple(targets[name] for name in names), ())
     for k in range(1, 201):  # 10 s: the servo (5/s) and the torque limit settle
-        session.tick(k * PERIOD_NS)
+        tick(session, clocks, k * PERIOD_NS)
         session.wheel_command(*stamp(k * PERIOD_NS + 1), names,
                               (), tuple(targets[name] for name in names), ())
     state = decode_joint_state(sink.wheel_states[-1])
@@ -111,11 +117,11 @@ def test_a_command_in_any_order_of_names_drives_the_wheels_in_the_arrays_order(o
 
 def test_the_speed_limit_is_said_per_wheel_in_the_diagnostics_and_the_log(open_scene, clocks):
     session, sink = wheel_session(open_scene)
-    session.tick(0)
+    tick(session, clocks, 0)
     torques = (0.02, 0.0, 0.0, 0.0)  # wheel_a from 150 rad/s to its 600 rad/s limit in 225 s
     for k in range(1, 4700):
         session.wheel_command(*stamp(k * PERIOD_NS - 1), NAMES, (), (), torques)
-        session.tick(k * PERIOD_NS)
+        tick(session, clocks, k * PERIOD_NS)
     effect = session.wheels.effect
     # at the limit the cut motor lets friction slow the wheel below it, then drives it back:
     # each return is an episode
@@ -133,21 +139,21 @@ def test_the_speed_limit_is_said_per_wheel_in_the_diagnostics_and_the_log(open_s
     assert shown['reaction_wheels.speed_limit'] == str(episodes)
     clocks.monotonic += 1.0
     session.wheel_command(*stamp(4700 * PERIOD_NS - 1), NAMES, (), (), (-0.02, 0.0, 0.0, 0.0))
-    session.tick(4700 * PERIOD_NS)  # the step up to it began at the limit, cut
+    tick(session, clocks, 4700 * PERIOD_NS)  # the step up to it began at the limit, cut
     assert 'wheel_a at its speed limit for 0.05 s' in session.report().message
-    session.tick(4701 * PERIOD_NS)
+    tick(session, clocks, 4701 * PERIOD_NS)
     assert 'speed limit' not in session.report().message
 
 
-def test_the_handler_decodes_joint_states_and_the_dipole(open_scene):
+def test_the_handler_decodes_joint_states_and_the_dipole(open_scene, clocks):
     session, sink = wheel_session(open_scene)
-    session.tick(0)
+    tick(session, clocks, 0)
     wheels = input_handler(session, 'wheels/command')
     dipole = input_handler(session, 'dipole')
     wheels(joint_state_encoder('', NAMES)(0, 1, (), (), (0.001, 0.0, 0.0, -0.001)))
     wheels(b'\x00\x01\x00\x00garbage')
     dipole(encode_vector3_stamped(2, 'base_link', (1.0, 0.0, 0.0)))
-    session.tick(PERIOD_NS * 2)
+    tick(session, clocks, PERIOD_NS * 2)
     assert session.commands_accepted == 2
     assert session.malformed_by_topic['wheels/command'] == 1
     assert session.rods.effect.dipole == pytest.approx((1.0, 0.0, 0.0))

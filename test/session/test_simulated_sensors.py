@@ -264,7 +264,7 @@ def test_the_star_tracker_follows_the_world_frame_parameter(open_scene, tmp_path
 def test_the_magnetometer_reads_a_field_model_at_scene_time(open_scene, tmp_path):
     """A field model given to the magnetometer (as a scene's field model is), a field
     turning about world z at 0.5 rad/s: each sample is the field at its instant's scene time
-    (seconds since the first tick's whole second), within 6 σ of the noise."""
+    (seconds since the first tick), within 6 σ of the noise."""
     session, sink = open_scene(scene_file(tmp_path, {'magnetometer': dict(
         MAGNETOMETER, mount_rpy=[0.0, 0.0, 0.0])}, omega=(0.0, 0.0, 0.0)))
 
@@ -275,11 +275,12 @@ def test_the_magnetometer_reads_a_field_model_at_scene_time(open_scene, tmp_path
     sampler = SensorSampler(simulated_sensors(session.scene, session.propagator, sink,
                                               Turning()), session.propagator, session.time_base)
     session.sensors, session.clock.advance = sampler, sampler.advance_to
-    run(session, [START_NS + 123 * MS + k * 100 * MS for k in range(21)])
+    first_ns = START_NS + 123 * MS
+    run(session, [first_ns + k * 100 * MS for k in range(21)])
     samples = by_topic(sink)['imu/mag']
     assert len(samples) == 200
     for stamp, _, body in samples:
-        expected = Turning().field_world((stamp - START_NS) * 1e-9)
+        expected = Turning().field_world((stamp - first_ns) * 1e-9)
         assert np.max(np.abs(np.array(body[:3]) - expected)) < 6 * 2e-7
 
 
