@@ -37,7 +37,7 @@ GYRO = {'gyroscope_noise_density': 5.0e-5, 'gyroscope_random_walk': 1.0e-6,
         'gyroscope_misalignment_stddev': 1.0e-4}
 #: The controller: the PD law on the estimate, 20 degrees of yaw and 10 of roll.
 TARGET_RPY = [0.17453293, 0.0, 0.34906585]
-GAINS = {'kp': 0.08, 'kd': 0.36, 'torque_limit': 0.008}
+GAINS = {'kp': 0.4, 'kd': 0.8, 'torque_limit': 0.007}
 CONTROLLER = {'actuator': 'reaction_wheels', 'scene': PLANT, 'target_rpy': TARGET_RPY,
               **GAINS}
 

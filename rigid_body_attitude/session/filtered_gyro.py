@@ -42,7 +42,7 @@ from rigid_body_attitude.core.estimation.magnetometer_file import (
     MagnetometerFile, load_magnetometer_calibration)
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs.untrusted import quoted
-from rigid_body_attitude.session.attitude_input import AttitudeMeasurements, start_result
+from rigid_body_attitude.session.attitude_input import AttitudeInput, AttitudeMeasurements
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.estimation import STANDARD_GRAVITY, build_estimation
 from rigid_body_attitude.session.gyro import GyroSession
@@ -85,7 +85,7 @@ FILTER_REJECTION_KEYS = (
         'stale_measurement', 'stale_stamp', 'queue_full')))
 
 
-class FilteredGyroSession(GyroSession):
+class FilteredGyroSession(AttitudeInput, GyroSession):
     """A gyro session with the attitude filter (module docstring)."""
 
     #: The mount the specific force's map was made for, and the map (12 floats).
@@ -125,6 +125,7 @@ class FilteredGyroSession(GyroSession):
     def apply(self, values: Mapping[str, Any]) -> None:
         """Take the run-time parameters (and ``set_pose_stddev``, ``tilt_stddev_warn``)."""
         super().apply(values)
+        self.measurement_period_ns = round(values['attitude_measurement_period'] * 1e9)
         self.set_pose_stddev: float = values['set_pose_stddev']
         self.tilt_stddev_warn: float = values['tilt_stddev_warn']
 
@@ -140,15 +141,25 @@ class FilteredGyroSession(GyroSession):
 
     def gyro(self, sec: int, nanosec: int, rate: Sequence[float],
              imu: bytes | None = None, accel: Sequence[float] | None = None) -> bool:
-        """:meth:`GyroSession.gyro`, then the sample's gravity-free acceleration."""
+        """:meth:`GyroSession.gyro`, then the sample's gravity-free acceleration; held
+        first while its attitude measurement is awaited (``attitude_measurement_period``)."""
+        if self.measurement_period_ns and self.estimation.started and self.use_header_stamps:
+            stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
+            if self._waits(stamp_ns, (stamp_ns, sec, nanosec, rate, imu, accel)):
+                return False
+        return self._integrated_gyro(sec, nanosec, rate, imu, accel)
+
+    def _integrated_gyro(self, sec: int, nanosec: int, rate: Sequence[float],
+                         imu: bytes | None = None,
+                         accel: Sequence[float] | None = None) -> bool:
+        """The sample after the held measurements stamped before it were fused."""
         self._force = None
         self._sample_ns = (sec * NANOSECONDS_PER_SECOND + nanosec if self.use_header_stamps
                            else self.clock_ns())
         if not self._special and accel is not None:  # the inline path: the force mapped here
             self._force = mapped_force(self._accel_affine, accel)
         if self.measurements.held:
-            for q_measured, block in self.measurements.due(self._sample_ns):
-                self._fuse(q_measured, block)
+            self._fuse_due()
         published = super().gyro(sec, nanosec, rate, imu, accel)
         force = self._force
         if published and force is not None and self.estimation.started:
@@ -206,6 +217,7 @@ class FilteredGyroSession(GyroSession):
         window = result.window_seconds if result.at_rest and result.window_seconds > 0 else None
         q = self.estimation.start(result.attitude, result.gyro_bias, window,
                                   gravity if gravity > 0.0 else STANDARD_GRAVITY)
+        self.measurements.wait_from_ns = self._sample_ns
         if q != result.attitude:
             self.propagator.scene = replace(self.propagator.scene, initial_attitude=np.array(q))
             self.propagator.set_attitude(q)
@@ -271,74 +283,6 @@ class FilteredGyroSession(GyroSession):
         levelling = self.levelling
         return (self._aligning and levelling is not None
                 and levelling.aligner.state == ALIGNING)
-
-    def attitude_measurement(self, sec: int, nanosec: int, frame: str,
-                             attitude: Quat, covariance: Sequence[float]) -> None:
-        """One ``attitude_measurement`` (module docstring); refused ones counted by reason."""
-        if frame != self.world_frame:
-            return self._refused('wrong_frame', 'attitude_measurement', frame)
-        if not all(math.isfinite(value) for value in attitude):
-            return self._refused('non_finite', 'attitude_measurement')
-        norm = math.sqrt(sum(value * value for value in attitude))
-        if norm == 0.0:
-            return self._refused('invalid_pose', 'attitude_measurement')
-        try:
-            block = orientation_block(covariance)
-        except InputError:
-            return self._refused('invalid_covariance', 'attitude_measurement')
-        stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
-        if not self.use_header_stamps:
-            stamp_ns = self._sample_ns
-        w, x, y, z = (value / norm for value in attitude)
-        if not self.estimation.started:
-            if self._aligning and self.starts_from_attitude:
-                return self._start_from_measurement(stamp_ns, (w, x, y, z), block)
-            return self._refused('not_started', 'attitude_measurement')
-        if abs(stamp_ns - self._sample_ns) > self.stream.max_dt * 1e9:
-            return self._refused('stale_measurement', 'attitude_measurement')
-        reason = self.measurements.accept(stamp_ns)
-        if reason:
-            return self._refused(reason, 'attitude_measurement')
-        self.estimation_inputs += 1
-        if stamp_ns > self.stream.last_ns:  # the gyro has not reached it: held
-            if self.measurements.hold(stamp_ns, (w, x, y, z), block):
-                self._refused('queue_full', 'attitude_measurement')
-            return None
-        if stamp_ns < self.stream.last_ns:
-            self.estimation.counts['attitude_late'] += 1
-        self._fuse((w, x, y, z), block)
-
-    def _fuse(self, q_measured: Quat, block: tuple[float, ...]) -> None:
-        """A measurement fused at the current gyro state."""
-        state = self.propagator.state
-        q = self.estimation.attitude_measurement(state.attitude_tuple(), q_measured, block)
-        state.set_sample(state.time, q, state.omega_tuple())
-        self._corrected()
-
-    def _start_from_measurement(self, stamp_ns: int, q: Quat,
-                                block: tuple[float, ...]) -> None:
-        """The filter's start at the first measurement (``start: attitude_measurement``): its
-        attitude and covariance at its stamp, the gyro stream's baseline; published there."""
-        self.measurements.accept(stamp_ns)
-        self.estimation_inputs += 1
-        propagator = self.propagator
-        propagator.scene = replace(propagator.scene, initial_attitude=np.array(q))
-        propagator.set_attitude(q)
-        self.stream.start_at(stamp_ns)
-        self._sample_ns = stamp_ns
-        result = start_result(q)
-        self.alignment = result
-        self._aligning = False
-        self._update_paths()
-        self._filter_aligned(result)
-        self.estimation.reset_attitude_block(block)
-        self.sink.attitude_covariance(self.estimation.published)
-        sec, nanosec = split_ns(stamp_ns)
-        attitude = self.tracker.attitude(propagator)
-        self.sink.attitude(sec, nanosec, attitude, None)
-        self._output_sec, self._output_nanosec = sec, nanosec
-        self.sink.odometry(sec, nanosec, attitude, (0.0, 0.0, 0.0),
-                           self.estimation.rate_covariance)
 
     def _refused(self, reason: str, topic: str, frame: str | None = None) -> None:
         """An input of the filter refused: counted by ``reason``, warned about."""

@@ -157,3 +157,52 @@ def test_a_bad_start_is_one_scene_error(section, match):
     with pytest.raises(SceneError, match=match):
         scene_from_mapping({'rate_source': 'gyro', 'body': {'inertia': {'moments': [1, 1, 1]}},
                             'estimation': section})
+
+
+def test_the_start_is_published_again_while_its_measurement_comes_again(open_scene):
+    session, sink = open_scene('star_tracker_filter', **GYRO)
+    star = input_handler(session, 'attitude_measurement')
+    for _ in range(3):  # a lockstep plant repeating its first tick
+        star(measurement(0))
+    assert [entry[:4] for entry in sink.odometries] == [
+        (START_NS // 10**9, START_NS % 10**9, truth(0), (0.0, 0.0, 0.0))] * 3
+    assert session.estimation.counts['attitude_start_repeated'] == 2
+    assert session.rejection_counts()['attitude_measurement_stale_stamp'] == 0
+    sec, nanosec = divmod(START_NS + PERIOD_NS, 10**9)
+    session.gyro(sec, nanosec, OMEGA)
+    star(measurement(0))  # after a gyro sample: stale
+    assert session.rejection_counts()['attitude_measurement_stale_stamp'] == 1
+    assert len(sink.odometries) == 4
+
+
+def test_with_the_period_a_gyro_sample_waits_for_its_late_measurement(open_scene):
+    """The measurement of instant k arrives after the gyro sample of k + 1 (a slow link): the
+    sample of k + 1 waits for it, and the outputs are those of a measurement on time."""
+    offsets = {k: (2e-4, -1e-4 * math.sin(k), 3e-4) for k in range(10, 101, 10)}
+    on_time, sink = open_scene('star_tracker_filter', **GYRO, attitude_measurement_period=0.1)
+    feed(on_time, 100, True, offsets)
+    late, late_sink = open_scene('star_tracker_filter', **GYRO, attitude_measurement_period=0.1)
+    star = input_handler(late, 'attitude_measurement')
+    star(measurement(0))
+    for k in range(1, 101):
+        sec, nanosec = divmod(START_NS + k * PERIOD_NS, 10**9)
+        published = len(late_sink.odometries)
+        late.gyro(sec, nanosec, OMEGA)
+        if k % 10 == 1 and k > 1:
+            assert len(late_sink.odometries) == published  # held
+            star(measurement(k - 1, offsets[k - 1]))
+            assert len(late_sink.odometries) == published + 1  # released
+    assert late_sink.odometries == sink.odometries
+    assert late.estimation.counts['attitude_late'] == 0
+
+
+def test_a_missing_measurement_is_given_up_at_the_next_gyro_sample(open_scene):
+    session, sink = open_scene('star_tracker_filter', **GYRO, attitude_measurement_period=0.1)
+    input_handler(session, 'attitude_measurement')(measurement(0))
+    for k in range(1, 13):
+        sec, nanosec = divmod(START_NS + k * PERIOD_NS, 10**9)
+        session.gyro(sec, nanosec, OMEGA)
+    stamps = [sec * 10**9 + nanosec for sec, nanosec, *_ in sink.odometries]
+    assert stamps == [START_NS + k * PERIOD_NS for k in range(13)]  # 11 went on at 12
+    assert session.estimation.counts['attitude_missing'] == 1
+    assert len(session.measurements.samples) == 0  # 12 waits for none: 10 was given up
