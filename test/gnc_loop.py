@@ -108,8 +108,9 @@ class _ControllerSink(_Quiet):
 
 
 def estimator_values() -> dict[str, Any]:
-    """The estimator node's parameters (besides the remaps)."""
-    return {'scene': ESTIMATOR, **GYRO}
+    """The estimator node's parameters (besides the remaps): the gyro's figures and the
+    star tracker's period, which each gyro sample waits for."""
+    return {'scene': ESTIMATOR, **GYRO, 'attitude_measurement_period': 0.1}
 
 
 def gnc_loop(seconds: float, star_first: bool = True) -> LoopRun:

@@ -97,15 +97,13 @@ def ros_loop(ros, namespace: str) -> tuple[dict, dict, dict, dict]:
         last = (TICKS - 1) * TICK_NS
         done = harness.spin_until(lambda: bool(truth) and stamp_ns(truth[-1]) >= last and bool(
             odometry) and stamp_ns(odometry[-1]) >= last and bool(commands) and stamp_ns(
-            commands[-1]) >= last, timeout=60.0)
+            commands[-1]) >= last, timeout=240.0)
     finally:
         stopped = [stop_with_sigint(process) for process in (plant, estimator)]
         if controller is not None:
             controller.terminate()
             _, controller_errors = controller.communicate(timeout=10.0)
             assert 'Traceback' not in controller_errors, controller_errors
-    for name, text in zip(('plant', 'est', 'ctl'), (stopped[0][1], stopped[1][1], controller_errors)):
-        open(f'/tmp/gnc/{name}.err', 'w').write(text)
     assert done, (f'{len(truth)} ticks recorded', stopped[0][1][-3000:], stopped[1][1][-3000:],
                   controller_errors[-3000:])
     for code, stderr in stopped:
@@ -138,8 +136,6 @@ def test_the_gnc_loop_is_reproducible_consistent_and_points(ros, request, capsys
     truth, estimates, covariances, commands = ros_loop(ros, unique_namespace(request))
     again = ros_loop(ros, unique_namespace(request) + '_again')
     stamps = [k * TICK_NS for k in range(TICKS)]
-    import pickle
-    pickle.dump(((truth, estimates, covariances, commands), again), open('/tmp/gnc/runs.pkl', 'wb'))
     assert [estimates[at] for at in stamps] == [again[1][at] for at in stamps]
     assert [commands[at] for at in stamps] == [again[3][at] for at in stamps]
     local = gnc_loop(SECONDS, star_first=False)
