@@ -53,8 +53,9 @@ def values_of(launch: LaunchFile, executable: str) -> dict[str, Any]:
     return report.values
 
 
-def test_the_package_ships_five_launch_files():
-    assert LAUNCH_FILES == ['closed_loop.launch.xml', 'dynamics.launch.xml', 'imu.launch.xml',
+def test_the_package_ships_seven_launch_files():
+    assert LAUNCH_FILES == ['closed_loop.launch.xml', 'dynamics.launch.xml',
+                            'gnc_loop.launch.xml', 'imu.launch.xml',
                             'imu_filter.launch.xml', 'managed.launch.py',
                             'spacecraft_loop.launch.xml']
 

@@ -42,9 +42,9 @@ the start's outputs published again (counted ``attitude_start_repeated``), so th
 gets the estimate of that tick whenever it subscribed.
 
 Refusals (counted ``attitude_measurement_<reason>``): ``stale_stamp`` (a stamp not newer than
-the last accepted measurement's), ``stale_measurement`` (further than ``max_dt`` from the latest gyro sample),
-``queue_full`` (more than :data:`MEASUREMENT_QUEUE` held for a stalled gyro: the oldest is
-dropped), besides the message checks of the session.
+the last accepted measurement's), ``stale_measurement`` (further than ``max_dt`` from the
+latest gyro sample), ``queue_full`` (more than :data:`MEASUREMENT_QUEUE` held for a stalled
+gyro: the oldest is dropped), besides the message checks of the session.
 """
 
 from __future__ import annotations
@@ -72,7 +72,8 @@ MEASUREMENT_QUEUE = 64
 #: The alignment status of a filter started from an attitude measurement.
 ATTITUDE_START_STATUS = 'started from the first attitude_measurement'
 #: A gyro sample held for a measurement: its stamp and :meth:`gyro`'s arguments.
-HeldSample = tuple[int, int, int, Sequence[float], 'bytes | None', 'Sequence[float] | None']
+HeldSample = tuple[int, int, int, Sequence[float], 'bytes | None',
+                   'Sequence[float] | None']
 
 
 class AttitudeMeasurements:

@@ -79,8 +79,7 @@ class Estimation:
         self._last_field_ns: int | None = None
         #: Row-major 3×3 attitude covariance [rad²] about fixed world axes, as published.
         self.published: tuple[float, ...] = (0.0,) * 9
-        #: Row-major 3×3 covariance [(rad/s)²] of a corrected body rate: the gyro bias
-        #: estimate's and one sample's white noise (``odom``'s twist, angular block).
+        #: Row-major 3×3 covariance [(rad/s)²] of a corrected rate (bias and white noise).
         self.rate_covariance: tuple[float, ...] = (0.0,) * 9
         self._acceleration_covariance: tuple[float, ...] = (0.0,) * 9
         self._acceleration_at: tuple[Quat, Vec] | None = None  # the last update's, not used

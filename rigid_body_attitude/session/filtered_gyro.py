@@ -35,7 +35,6 @@ import numpy as np
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.scene import Scene
-from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.alignment import ALIGNING
 from rigid_body_attitude.core.estimation.magnetometer import MagnetometerCalibration
 from rigid_body_attitude.core.estimation.magnetometer_file import (
@@ -51,7 +50,7 @@ from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.stream import Outcome
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns
 from rigid_body_attitude.session.uncertainty import (
-    CALIBRATION_KEYS, attitude_stddev_deg, error_model_from, orientation_block)
+    CALIBRATION_KEYS, attitude_stddev_deg, error_model_from)
 
 __all__ = ['FILTER_REJECTION_KEYS', 'FilteredGyroSession', 'mapped_force',
            'specific_force_map']
