@@ -41,7 +41,8 @@ from rigid_body_attitude.core.estimation.magnetometer_file import (
     MagnetometerFile, load_magnetometer_calibration)
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs.untrusted import quoted
-from rigid_body_attitude.session.attitude_input import AttitudeInput, AttitudeMeasurements
+from rigid_body_attitude.session.attitude_input import (
+    AttitudeInput, AttitudeMeasurements, MEASUREMENT_QUEUE)
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.estimation import STANDARD_GRAVITY, build_estimation
 from rigid_body_attitude.session.gyro import GyroSession
@@ -71,7 +72,8 @@ _DETAIL = {
     'not_started': 'the filter has not started (levelling)',
     'stale_measurement': 'a stamp further than max_dt from the latest gyro sample',
     'stale_stamp': 'a stamp not newer than the last measurement',
-    'queue_full': 'more than 64 measurements ahead of the gyro; the oldest dropped',
+    'queue_full': f'more than {MEASUREMENT_QUEUE} measurements ahead of the gyro; the oldest '
+                  f'dropped',
 }
 
 
