@@ -37,6 +37,7 @@ from gnc_loop import CONTROLLER, estimator_values, gnc_loop, TARGET_RPY, TICK_RA
 from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from ros_helpers import Harness, ros_session, RosContext, unique_namespace
 from scipy.stats import chi2
 from sensor_msgs.msg import JointState
@@ -51,6 +52,9 @@ SECONDS = 60
 TICKS = SECONDS * round(TICK_RATE) + 1
 BOUND = chi2.ppf(0.99, 3)
 SETTLED_NS = 30 * 10**9
+LATCHED = QoSProfile(depth=10000, history=HistoryPolicy.KEEP_LAST,
+                     reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 @pytest.fixture
@@ -74,7 +78,6 @@ def ros_loop(ros, namespace: str) -> tuple[dict, dict, dict, dict]:
     harness = Harness(ros, namespace)
     truth = harness.record(QuaternionStamped, 'orientation')
     odometry = harness.record(Odometry, 'est/odom')
-    commands = harness.record(JointState, 'wheels/command')
     plant = start('--ros-args', '-r', f'__ns:={namespace}', '-p', 'scene:=star_tracker_pointing',
                   '-p', 'lockstep:=true', '-p', f'publish_rate:={TICK_RATE}',
                   '-p', 'real_time_factor:=0.0', '-p', 'lockstep_timeout:=60.0')
@@ -88,6 +91,9 @@ def ros_loop(ros, namespace: str) -> tuple[dict, dict, dict, dict]:
     try:
         read_until(plant, SERVING)
         read_until(estimator, SERVING)
+        harness.wait_for_connections(30.0)  # tick 0 repeats until the controller answers
+        # the controller's writer is transient local: its first commands reach a late reader
+        commands = harness.record(JointState, 'wheels/command', LATCHED)
         assert CONTROLLER_PATH.is_file() and os.access(CONTROLLER_PATH, os.X_OK)
         controller = subprocess.Popen(
             [str(CONTROLLER_PATH), '--ros-args', '-r', f'__ns:={namespace}',
