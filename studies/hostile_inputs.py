@@ -622,8 +622,9 @@ TICK_NS = 50 * MS  # 20 Hz
 GOOD_EFFORTS = (0.001, -0.002, 0.0015, 0.0)  # N m
 GOOD_DIPOLE = (0.5, -0.3, 0.2)  # A m²
 #: Wall seconds the node waits for a tick's command before it advances (a tick whose
-#: attacked command is only the hostile case).
-LOCKSTEP_TIMEOUT = 0.05
+#: attacked command is only the hostile case): long enough for the other topic's good
+#: command to arrive on a loaded machine.
+LOCKSTEP_TIMEOUT = 0.5
 
 
 def joint_state(stamp_ns: int, names: Any = WHEELS, position: Any = (), velocity: Any = (),
@@ -655,11 +656,13 @@ def good_command(topic: str, stamp_ns: int) -> Any:
 
 @dataclass
 class CommandClass:
-    """One class of hostile commands. ``cases(k)``: the case sent at tick ``k`` (stamped
-    with it where a stamp applies). ``alone``: each case is the attacked topic's only
-    message of its tick (the node then advances after ``lockstep_timeout``, holding the last
-    command), so a decodable case is judged by its own reason, never coalesced with a good
-    command; otherwise each case goes just before the tick's good command."""
+    """One class of hostile commands. ``cases[j](k)``: the ``j``-th case, sent at tick
+    ``k = j + 1`` (stamped with it where a stamp applies; tick 0, which the node waits for
+    without a timeout, gets the good commands only). ``alone``: each case is the attacked
+    topic's only message of its tick (the node then advances after ``lockstep_timeout``,
+    holding the last command), so a decodable case is judged by its own reason; otherwise
+    each case goes just after the tick's good command, so whatever it decodes to is a second
+    answer to the tick (or an answer to a tick already past): ``stale_stamp``."""
 
     name: str
     cases: list[Callable[[int], Any]]
@@ -678,14 +681,20 @@ class CommandSurface:
     classes: Callable[[int], Iterator[CommandClass]]
 
 
+#: What a decodable mutation of a good command may be refused as, by topic.
+DECODED_REASONS = {
+    'wheels/command': 'stale_stamp|future_stamp|invalid_stamp|unknown_wheel|missing_wheel|'
+                      'wheel_fields|wheel_lengths|non_finite|out_of_range',
+    'dipole': 'stale_stamp|future_stamp|invalid_stamp|non_finite|out_of_range'}
+
+
 def _malformed_command_classes(topic: str, seed: int) -> Iterator[CommandClass]:
     from rclpy.serialization import serialize_message
     good = serialize_message(good_command(topic, 0))
     for name, payloads in malformed_cases(good, seed).items():
         # A length field that still fits may decode as a command of its own: judged as such.
         yield CommandClass(name, [(lambda k, data=data: data) for data in payloads],
-                           'malformed|superseded|unknown_wheel|missing_wheel|wheel_fields|'
-                           'wheel_lengths|stale_stamp')
+                           'malformed|' + DECODED_REASONS[topic])
 
 
 def _stamp_classes(topic: str) -> Iterator[CommandClass]:
@@ -701,11 +710,12 @@ def _stamp_classes(topic: str) -> Iterator[CommandClass]:
         at(lambda k: 0, (k, nanosec)) for k, nanosec in enumerate([10**9, 2**32 - 1] * 3)
     ] + [at(lambda k: 0, (-1, 0)), at(lambda k: 0, (-(2**31), 5))], 'invalid_stamp',
         alone=True)
-    yield CommandClass('stamps off the tick: wall time, far past, the next tick', [
+    off_the_tick = [
         at(lambda k: BASE_NS), at(lambda k: (2**31 - 1) * 10**9),
         at(lambda k: k * TICK_NS + 1), at(lambda k: (k + 1) * TICK_NS),
-        at(lambda k: k * TICK_NS - 1), at(lambda k: 1)] * 2, 'future_stamp|stale_stamp',
-        alone=True)
+        at(lambda k: k * TICK_NS - 1), at(lambda k: 1)]
+    yield CommandClass('stamps off the tick: wall time, 2^31 - 1 s, 1 ns either side, the next '
+                       'tick, 1 ns', off_the_tick * 2, 'future_stamp|stale_stamp', alone=True)
 
 
 def wheel_command_classes(seed: int) -> Iterator[CommandClass]:
@@ -766,10 +776,10 @@ COMMAND_SURFACES = [
 
 
 def attack_commands(domain: int, surface: CommandSurface, hostile: CommandClass) -> Result:
-    """The node in lockstep on :data:`COMMAND_SCENE`, the study its controller: tick ``k``
-    gets the hostile case ``k`` and the good commands (:class:`CommandClass` says which);
-    the node must count every case under ``hostile.reasons`` and end with the attitude and
-    wheel speeds, bit for bit, of the session fed the good commands alone."""
+    """The node in lockstep on :data:`COMMAND_SCENE`, the study its controller: tick
+    ``j + 1`` gets the hostile case ``j`` and the good commands (:class:`CommandClass` says
+    which); the node must count every case under ``hostile.reasons`` and end with the
+    attitude and wheel speeds, bit for bit, of the session fed the good commands alone."""
     from geometry_msgs.msg import QuaternionStamped
     from diagnostic_msgs.msg import DiagnosticArray
     from sensor_msgs.msg import JointState
@@ -793,12 +803,13 @@ def attack_commands(domain: int, surface: CommandSurface, hostile: CommandClass)
     for k in range(ticks):
         if not running.spin_until(lambda: _ticked(orientations, wheel_states, k), 30.0):
             break
-        if k < len(cases):
-            running.publishers[surface.topic].publish(cases[k](k))
+        attacked = 1 <= k <= len(cases)
         for topic in topics:
-            if topic != surface.topic or k >= len(cases) or not hostile.alone:
+            if topic != surface.topic or not attacked or not hostile.alone:
                 running.publishers[topic].publish(good_command(topic, k * TICK_NS))
                 sent.append((k, topic))
+        if attacked:
+            running.publishers[surface.topic].publish(cases[k - 1](k))
     running.spin_until(lambda: _ticked(orientations, wheel_states, ticks), 30.0)
     reasons = hostile.reasons.split('|')
 

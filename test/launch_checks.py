@@ -358,10 +358,11 @@ def _controller_with(controller: NodeReport, plant: NodeReport) -> list[str]:
         if controller.values[frame] != plant.values[frame]:
             found.append(f'the controller\'s {frame} {controller.values[frame]!r} is not the '
                          f'propagator\'s {plant.values[frame]!r}')
-    # the controller's command: the body torque, or (actuator reaction_wheels) the wheels'
+    # the controller's command: the body torque, the wheels' (actuator reaction_wheels) or
+    # the rods' dipole (actuator magnetorquers)
     commands = [CONTROLLER_INTERFACE.endpoint(
-        'wheels/command' if controller.values.get('actuator') == 'reaction_wheels'
-        else 'torque', 'out')]
+        {'reaction_wheels': 'wheels/command', 'magnetorquers': 'dipole'}.get(
+            controller.values.get('actuator', 'body'), 'torque'), 'out')]
     if plant.situation is not None and not all(any(
             endpoint.name == command.name and endpoint.present(plant.situation)
             for endpoint in NODE_INTERFACE.inputs(plant.situation)) for command in commands):

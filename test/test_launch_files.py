@@ -53,11 +53,23 @@ def values_of(launch: LaunchFile, executable: str) -> dict[str, Any]:
     return report.values
 
 
-def test_the_package_ships_seven_launch_files():
-    assert LAUNCH_FILES == ['closed_loop.launch.xml', 'dynamics.launch.xml',
-                            'gnc_loop.launch.xml', 'imu.launch.xml',
+def test_the_package_ships_eight_launch_files():
+    assert LAUNCH_FILES == ['bdot_loop.launch.xml', 'closed_loop.launch.xml',
+                            'dynamics.launch.xml', 'gnc_loop.launch.xml', 'imu.launch.xml',
                             'imu_filter.launch.xml', 'managed.launch.py',
                             'spacecraft_loop.launch.xml']
+
+
+def test_bdot_loop_is_the_measured_bdot_example():
+    """The values of test/ros/test_magnetic_loop.py's B-dot run (docs/closed-loop.md)."""
+    launch = read('bdot_loop.launch.xml')
+    assert problems(launch) == []
+    plant, controller = (values_of(launch, name) for name in (
+        'propagation_node', 'attitude_controller'))
+    assert plant['scene'] == controller['scene'] == 'bdot_detumbling_commanded'
+    assert (plant['lockstep'], plant['publish_rate']) == (True, 1.0)
+    assert (controller['actuator'], controller['bdot_gain'], controller['control_period']) == (
+        'magnetorquers', 4e5, 1.0)
 
 
 def test_spacecraft_loop_gives_both_nodes_the_scene_and_drives_the_wheels():

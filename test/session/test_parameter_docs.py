@@ -1,4 +1,5 @@
-"""The README's parameter tables and config/params.yaml say what the parameter table declares."""
+"""The README's parameter tables and config/params.yaml say what the parameter table declares;
+docs/closed-loop.md's table what the controller's declares."""
 
 import re
 from pathlib import Path
@@ -46,16 +47,20 @@ def test_readme_rows_are_one_line_each():
 def test_readme_gives_every_parameter_its_type_default_bounds_and_mutability():
     rows = readme_rows('Standard parameters') | readme_rows('Advanced parameters')
     for parameter in DOCUMENTED:
-        type_default, run_time = rows[parameter.name]
-        type_name = {float: 'double', bool: 'bool', str: 'string',
-                     tuple: 'double array'}[parameter.type]
-        default = str(parameter.default).lower() if parameter.default != '' else "''"
-        if parameter.type is tuple:
-            default = str(list(parameter.default))
-        assert type_default.startswith(f'{type_name}, `{default}`'), parameter.name
-        if parameter.range_text():
-            assert type_default.endswith(parameter.range_text()), parameter.name
-        assert run_time == ('no' if parameter.read_only else 'yes'), parameter.name
+        assert_row_says(parameter, *rows[parameter.name])
+
+
+def assert_row_says(parameter, type_default: str, run_time: str) -> None:
+    """A table row's type, default, bounds and mutability are the parameter's."""
+    type_name = {float: 'double', bool: 'bool', str: 'string',
+                 tuple: 'double array'}[parameter.type]
+    default = str(parameter.default).lower() if parameter.default != '' else "''"
+    if parameter.type is tuple:
+        default = str(list(parameter.default))
+    assert type_default.startswith(f'{type_name}, `{default}`'), parameter.name
+    if parameter.range_text():
+        assert type_default.endswith(parameter.range_text()), parameter.name
+    assert run_time == ('no' if parameter.read_only else 'yes'), parameter.name
 
 
 def test_params_yaml_holds_every_default():
@@ -64,3 +69,19 @@ def test_params_yaml_holds_every_default():
     values.pop('use_sim_time')
     assert values == {parameter.name: list(parameter.default) if parameter.type is tuple
                       else parameter.default for parameter in DOCUMENTED}
+
+
+def test_the_controller_table_gives_every_controller_parameter_once():
+    from rigid_body_attitude.session.controller_parameters import CONTROLLER_PARAMETERS
+    text = (REPO_ROOT / 'docs' / 'closed-loop.md').read_text()
+    start = text.index('\n## The reference controller\n')
+    section = text[start:text.index('\n## ', start + 1)]
+    rows = {}
+    for line in section.splitlines():
+        match = re.match(r'\| `(\w+)` \| (.*?) \| (yes|no) \| .+ \|$', line)
+        if match:
+            assert match.group(1) not in rows, match.group(1)
+            rows[match.group(1)] = [match.group(2), match.group(3)]
+    assert sorted(rows) == sorted(p.name for p in CONTROLLER_PARAMETERS)
+    for parameter in CONTROLLER_PARAMETERS:
+        assert_row_says(parameter, *rows[parameter.name])
