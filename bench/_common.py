@@ -114,17 +114,25 @@ def cpu_seconds(pid: int) -> float:
 def thread_run_ns(pid: int) -> Dict[int, Tuple[str, int]]:
     """Return {tid: (thread name, run time in ns)} for every thread of ``pid``
     (/proc/<pid>/task/<tid>/comm and schedstat)."""
-    threads = {}
+    return {tid: (name, run_ns) for tid, (name, run_ns, _) in thread_stats(pid).items()}
+
+
+def thread_stats(pid: int) -> Dict[int, Tuple[str, int, int]]:
+    """Return {tid: (thread name, run time in ns, voluntary context switches)} for every live
+    thread of ``pid`` (/proc/<pid>/task/<tid>/comm, schedstat and status)."""
+    found = {}
     for task in os.listdir(f'/proc/{pid}/task'):
         try:
             with open(f'/proc/{pid}/task/{task}/comm') as comm:
                 name = comm.read().rstrip('\n')
             with open(f'/proc/{pid}/task/{task}/schedstat') as schedstat:
                 run_ns = int(schedstat.read().split()[0])
-        except (FileNotFoundError, ProcessLookupError):
+            with open(f'/proc/{pid}/task/{task}/status') as status:
+                switches = int(status.read().split('voluntary_ctxt_switches:')[1].split()[0])
+        except (FileNotFoundError, ProcessLookupError, IndexError):
             continue  # the thread ended meanwhile
-        threads[int(task)] = (name, run_ns)
-    return threads
+        found[int(task)] = (name, run_ns, switches)
+    return found
 
 
 def cpu_by_thread_name(before: Dict[int, Tuple[str, int]], after: Dict[int, Tuple[str, int]],

@@ -38,7 +38,7 @@ import sys
 import tempfile
 import time
 
-from _common import ros_env
+from _common import ros_env, thread_stats
 
 SCENE = """name: slew_under_pd
 description: a box 60 deg from the identity, driven by commanded torques
@@ -72,25 +72,8 @@ def controller_command(controller: str) -> list:
     return command('attitude_controller') + ['--ros-args', *GAINS]
 
 
-def threads(pid: int) -> dict:
-    """{tid: (name, run ns, voluntary context switches)} of every live thread of ``pid``."""
-    found = {}
-    for task in os.listdir(f'/proc/{pid}/task'):
-        try:
-            with open(f'/proc/{pid}/task/{task}/comm') as comm:
-                name = comm.read().rstrip('\n')
-            with open(f'/proc/{pid}/task/{task}/schedstat') as schedstat:
-                run_ns = int(schedstat.read().split()[0])
-            with open(f'/proc/{pid}/task/{task}/status') as status:
-                switches = int(status.read().split('voluntary_ctxt_switches:')[1].split()[0])
-        except (FileNotFoundError, ProcessLookupError, IndexError):
-            continue  # the thread ended meanwhile
-        found[int(task)] = (name, run_ns, switches)
-    return found
-
-
 def budget(pid: int, before: dict, after: dict) -> dict:
-    """Run ns and wake-ups between two :func:`threads` snapshots: the main thread, the
+    """Run ns and wake-ups between two :func:`_common.thread_stats` snapshots: the main thread, the
     middleware's threads (``dds.*``) and the rest."""
     parts = {'main': 0, 'middleware': 0, 'other': 0, 'wakeups': 0}
     for tid, (name, run_ns, switches) in after.items():
@@ -124,7 +107,7 @@ def diagnostics_reader(domain_id: int, pids: tuple):
                     'sim_time': float(values['sim_time [s]']),
                     'work_factor': float(values['real_time_factor']),
                     'wall': time.monotonic(),
-                    'threads': [threads(pid) for pid in pids]})
+                    'threads': [thread_stats(pid) for pid in pids]})
     node.create_subscription(DiagnosticArray, '/diagnostics', take, 10)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)

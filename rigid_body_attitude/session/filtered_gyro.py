@@ -202,11 +202,18 @@ class FilteredGyroSession(AttitudeInput, GyroSession):
             estimation.mark_acceleration_covariance(q, self._force)
 
     def _corrected(self) -> None:
-        """After an update: the bias subtracted from the next samples, the covariance published."""
-        bias = self.estimation.estimator.gyro_bias
-        self.sample_map.set_gyro_bias(bias)
-        self._update_paths()
+        """After an update: the gyro's estimates removed from the next samples, the covariance
+        published."""
+        self._take_gyro_estimates()
         self.sink.attitude_covariance(self.estimation.published)
+
+    def _take_gyro_estimates(self) -> None:
+        """The filter's gyro bias and intrinsic errors (scale factors, misalignment) removed
+        from the next samples: the error states the filter's covariance describes are what
+        is left of them."""
+        estimator = self.estimation.estimator
+        self.sample_map.set_gyro_bias(estimator.gyro_bias, estimator.intrinsic.tolist())
+        self._update_paths()
 
     def _filter_aligned(self, result: AlignmentResult) -> None:
         """The integration's start is settled: the filter starts from it."""
@@ -219,6 +226,7 @@ class FilteredGyroSession(AttitudeInput, GyroSession):
         q = self.estimation.start(result.attitude, result.gyro_bias, window,
                                   gravity if gravity > 0.0 else STANDARD_GRAVITY)
         self.measurements.wait_from_ns = self._sample_ns
+        self._take_gyro_estimates()
         if q != result.attitude:
             self.propagator.scene = replace(self.propagator.scene, initial_attitude=np.array(q))
             self.propagator.set_attitude(q)

@@ -203,8 +203,7 @@ class ImuStart(Session):
                 bias = levelling.refine(body_rate, body_accel, dt)
                 if bias is not None:
                     self.sample_map.set_gyro_bias(bias)
-        b = self.sample_map.gyro_bias
-        return body_rate[0] - b[0], body_rate[1] - b[1], body_rate[2] - b[2]
+        return self.sample_map.bias_removed(body_rate)
 
     def _levelling_sample(self, stamp_ns: int, rate: Sequence[float],
                           accel: Sequence[float]) -> Sequence[float] | None:
@@ -230,8 +229,7 @@ class ImuStart(Session):
             self._align_samples += 1
             return None
         self._aligned(levelling.result())
-        b = self.sample_map.gyro_bias
-        return body_rate[0] - b[0], body_rate[1] - b[1], body_rate[2] - b[2]
+        return self.sample_map.bias_removed(body_rate)
 
     def _refuse(self, reason: str, context: str) -> None:
         """A sample refused by the session before the stream saw it: counted by ``reason``,

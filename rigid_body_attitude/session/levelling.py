@@ -14,12 +14,17 @@ Per sample, in this order (:class:`~rigid_body_attitude.session.gyro.GyroSession
    roll and pitch come from gravity, the yaw from ``initial_yaw`` or a ``set_pose``
    received meanwhile, and the window's mean rate is the gyro bias estimate ``b`` (body frame);
 4. **bias**: ``ω_body − b``, optionally refined whenever the body is at rest
-   (:class:`~rigid_body_attitude.core.estimation.rest.RestBiasEstimator`).
+   (:class:`~rigid_body_attitude.core.estimation.rest.RestBiasEstimator`); with the attitude
+   filter's estimate ``Ê`` of the gyro's scale-factor and misalignment errors (body frame,
+   the model ``ω_m = (I + E) ω + b`` of
+   :mod:`~rigid_body_attitude.core.estimation.gyro_error_model`) also
+   ``ω = (I + Ê)⁻¹ (ω_body − b)``.
 
 After levelling the whole map is one affine map of the measured rate, ``ω = A ω_measured +
-c`` with ``A = R K`` and ``c = −R K b_g − b`` (:attr:`SampleMap.affine`: 12 floats, 9
-multiplications and 9 additions per sample); only a calibration whose gyro correction
-depends on the specific force (kalibr's ``A`` matrix) takes the accelerometer on that path.
+c`` with ``A = (I + Ê)⁻¹ R K`` and ``c = −(I + Ê)⁻¹ (R K b_g + b)`` (:attr:`SampleMap.affine`:
+12 floats, 9 multiplications and 9 additions per sample); only a calibration whose gyro
+correction depends on the specific force (kalibr's ``A`` matrix) takes the accelerometer on
+that path.
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.estimation.alignment import ALIGNED, GravityAligner
@@ -40,6 +46,7 @@ __all__ = ['AlignmentResult', 'Levelling', 'SampleMap', 'heading']
 
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
+FloatArray = NDArray[np.float64]
 Affine = tuple[float, float, float, float, float, float, float, float, float, float, float,
                float]
 
@@ -91,6 +98,8 @@ class SampleMap:
                  mount: Sequence[float] | None = None) -> None:
         self.calibration = calibration if calibration is not None else ImuCalibration()
         self.gyro_bias: Vec = (0.0, 0.0, 0.0)
+        #: ``(I + Ê)⁻¹``, the inverse of the gyro's estimated intrinsic errors (body frame).
+        self._intrinsic_inverse: FloatArray = np.eye(3)
         self.set_mount(mount)
 
     def set_mount(self, mount: Sequence[float] | None) -> None:
@@ -112,14 +121,33 @@ class SampleMap:
         self._gyro_offset = -(self._gyro_matrix @ calibration.gyro_bias)
         self._update_affine()
 
-    def set_gyro_bias(self, bias: Vec) -> None:
-        """The body-frame gyro bias estimate [rad/s] the affine map subtracts."""
+    def set_gyro_bias(self, bias: Vec, intrinsic: Sequence[float] | None = None) -> None:
+        """The body-frame gyro bias estimate ``b`` [rad/s] the affine map subtracts and the
+        estimate ``Ê`` of the intrinsic errors it undoes (9 numbers, row-major, body frame;
+        ``None``: none): ``ω = (I + Ê)⁻¹ (ω_body − b)`` (module docstring)."""
         self.gyro_bias = bias
+        inverse: FloatArray = np.eye(3)
+        if intrinsic is not None:
+            matrix: FloatArray = np.reshape(np.asarray(intrinsic, dtype=np.float64), (3, 3))
+            inverse = np.asarray(np.linalg.inv(inverse + matrix), dtype=np.float64)
+        self._intrinsic_inverse = inverse
         self._update_affine()
 
+    def bias_removed(self, body_rate: Sequence[float]) -> Vec:
+        """``(I + Ê)⁻¹ (ω_body − b)`` [rad/s] of a body rate of :meth:`body_sample`."""
+        b = self.gyro_bias
+        x, y, z = body_rate[0] - b[0], body_rate[1] - b[1], body_rate[2] - b[2]
+        if self._intrinsic_identity:
+            return x, y, z
+        (k00, k01, k02), (k10, k11, k12), (k20, k21, k22) = self._intrinsic_inverse.tolist()
+        return (k00 * x + k01 * y + k02 * z, k10 * x + k11 * y + k12 * z,
+                k20 * x + k21 * y + k22 * z)
+
     def _update_affine(self) -> None:
-        a = self._gyro_matrix.ravel().tolist()
-        c = (self._gyro_offset - np.array(self.gyro_bias)).tolist()
+        inverse = self._intrinsic_inverse
+        self._intrinsic_identity = bool(np.array_equal(inverse, np.eye(3)))
+        a = (inverse @ self._gyro_matrix).ravel().tolist()
+        c = (inverse @ (self._gyro_offset - np.array(self.gyro_bias))).tolist()
         self.affine: Affine = (a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8],
                                c[0], c[1], c[2])
         #: Whether the affine map is the identity (nothing to do per sample).

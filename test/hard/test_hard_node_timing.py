@@ -6,7 +6,9 @@ a looping bag a jump of minus its length; a NaN poisons the state for good; and 
 renormalised from q or −q at random makes the published stream flip sign.
 
 Here one in-process node (the shipped ``strapdown`` scene, real rclpy publishers and
-subscriptions in a context of the test's own) receives 10⁵ ``angular_velocity`` messages with
+subscriptions in a context of the test's own), served as the executable serves it (its
+raw-take loop in a thread of its own, an executor for the rest), receives 10⁵
+``angular_velocity`` messages with
 random jitter, duplicates, swapped neighbours, short backward steps, gaps longer than
 ``max_dt``, backward jumps longer than ``time_jump_threshold`` and non-finite values, with
 rates up to 40 rad/s so the attitude passes w = 0 thousands of times. Checked: nothing
@@ -14,18 +16,26 @@ crashes; every published orientation is finite, unit and on the side of the prev
 (q · q_prev ≥ 0, hard case 5); accepted plus rejected equals the messages sent, in the node's
 counters and in its /diagnostics; and the published stream is bit-for-bit the core's
 (:class:`GyroStream` + :class:`OutputTracker`) for the same messages.
+
+The inputs are published as CDR bytes (:func:`encode_vector3_stamped`, byte-equal to rclpy's
+serialisation: ``test/msgs/test_cdr.py``) and the orientations recorded as bytes, every queued
+one per wake-up, then decoded with rclpy's own ``deserialize_message``: the harness's Python
+messages and one executor wake-up per message would otherwise take most of the run.
 """
 
 import math
+import threading
 
-from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import QuaternionStamped, Vector3Stamped
 import numpy as np
 from rclpy.parameter import Parameter
-from ros_helpers import Harness, unique_namespace
+from rclpy.serialization import deserialize_message
+from ros_helpers import DEEP_RELIABLE_QOS, Harness, unique_namespace
 
+from rigid_body_attitude.msgs.cdr import encode_vector3_stamped
 from rigid_body_attitude.ros.node import AttitudePropagatorNode
+from rigid_body_attitude.ros.rclpy_internals import raw_taker
 from rigid_body_attitude.session.outputs import OutputTracker
 from rigid_body_attitude.core.propagator import build_propagator
 from rigid_body_attitude.core.dynamics.scene import load_scene
@@ -81,13 +91,28 @@ def faulty_stream(count, seed=10):
 
 
 def rate_message(stamp_ns, rate):
-    """A Vector3Stamped body rate stamped ``stamp_ns``."""
-    message = Vector3Stamped()
-    sec, nanosec = divmod(stamp_ns, 10**9)
-    message.header.stamp = Time(sec=sec, nanosec=nanosec)
-    message.header.frame_id = 'base_link'
-    message.vector.x, message.vector.y, message.vector.z = rate
-    return message
+    """The CDR bytes of a Vector3Stamped body rate stamped ``stamp_ns``."""
+    return encode_vector3_stamped(stamp_ns, 'base_link', rate)
+
+
+def record_raw(harness, message_type, topic):
+    """Record the CDR bytes of every message on ``topic``: each callback also takes every
+    message queued behind its own (one executor wake-up for many messages)."""
+    messages = []
+    take = []
+    subscription = harness.node.create_subscription(
+        message_type, topic, lambda data: _take_all(data, messages, take[0]), DEEP_RELIABLE_QOS,
+        raw=True)
+    take.append(raw_taker(subscription, True))
+    harness.subscriptions[topic] = subscription
+    return messages
+
+
+def _take_all(data, messages, take):
+    """Append ``data`` and every message ``take`` still finds queued."""
+    while data is not None:
+        messages.append(data)
+        data = take()
 
 
 def core_outputs(stamps, rates):
@@ -115,20 +140,44 @@ def test_a_hundred_thousand_faulty_gyro_messages(ros, request):
         context=ros.context, namespace=namespace,
         parameter_overrides=[Parameter(name, value=value) for name, value in overrides.items()]))
     publisher = harness.publisher(Vector3Stamped, 'angular_velocity')
-    orientations = harness.record(QuaternionStamped, 'orientation')
+    orientations = record_raw(harness, QuaternionStamped, 'orientation')
     diagnostics = harness.record(DiagnosticArray, '/diagnostics')
     harness.wait_for_connections()
 
     stamps, rates = faulty_stream(MESSAGES)
     expected, core = core_outputs(stamps, rates)
-    for start in range(0, MESSAGES, BATCH):
-        stop = min(start + BATCH, MESSAGES)
-        for k in range(start, stop):
-            publisher.publish(rate_message(stamps[k], rates[k]))
-        assert harness.spin_until(lambda: node.built.session.received_count() >= stop, 60.0), (
-            f'the node took {node.built.session.received_count()} of {stop} messages')
-    assert harness.spin_until(lambda: len(orientations) >= len(expected), 30.0)
-    harness.spin_for(0.1)
+    inputs = [rate_message(stamp_ns, rate) for stamp_ns, rate in zip(stamps, rates)]
+    loop = node.serving_loop()
+    thread = threading.Thread(target=loop.run, daemon=True)
+    thread.start()
+    try:
+        for start in range(0, MESSAGES, BATCH):
+            stop = min(start + BATCH, MESSAGES)
+            for data in inputs[start:stop]:
+                publisher.publish(data)
+            assert harness.spin_until(lambda: node.built.session.received_count() >= stop,
+                                      60.0), (
+                f'the node took {node.built.session.received_count()} of {stop} messages')
+        assert harness.spin_until(lambda: len(orientations) >= len(expected), 30.0)
+        harness.spin_for(0.1)
+        check_outputs(harness, node, (orientations, diagnostics), (expected, core))
+
+        # Still alive and integrating after all that.
+        last = max(stamps) + 20 * MS  # a jump ahead: taken when two more samples confirm it
+        for k in range(3):
+            publisher.publish(rate_message(last + k * MS, (0.0, 0.0, 1.0)))
+        assert harness.spin_until(lambda: len(orientations) > len(expected), 5.0)
+    finally:
+        loop.stop()
+        thread.join(5.0)
+    assert not thread.is_alive()
+    loop.close()
+
+
+def check_outputs(harness, node, recorded, from_core):
+    """What the node counted, reported and published against the core's run."""
+    orientations, diagnostics = recorded
+    expected, core = from_core
 
     # Every message is accounted for exactly once, in the node and in its diagnostics.
     assert node.built.session.received_count() == MESSAGES
@@ -153,16 +202,11 @@ def test_a_hundred_thousand_faulty_gyro_messages(ros, request):
 
     # Outputs: finite, unit, never flipping sign, and the core's to the bit.
     published = np.array([(m.quaternion.w, m.quaternion.x, m.quaternion.y, m.quaternion.z)
-                          for m in orientations])
+                          for m in (deserialize_message(data, QuaternionStamped)
+                                    for data in orientations)])
     assert published.shape == expected.shape
     assert np.all(np.isfinite(published))
     assert np.max(np.abs(np.linalg.norm(published, axis=1) - 1.0)) <= 1e-12
     assert np.all(np.sum(published[1:] * published[:-1], axis=1) >= 0.0)
     assert np.sum(published[:, 0] < 0.0) >= 1000  # the stream really crossed w = 0 a lot
     np.testing.assert_array_equal(published, expected)
-
-    # Still alive and integrating after all that.
-    last = max(stamps) + 20 * MS  # a jump ahead: taken when two more samples confirm it
-    for k in range(3):
-        publisher.publish(rate_message(last + k * MS, (0.0, 0.0, 1.0)))
-    assert harness.spin_until(lambda: len(orientations) > len(expected), 5.0)

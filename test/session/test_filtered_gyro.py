@@ -1,10 +1,12 @@
 """The attitude filter in a gyro session: the ``imu_filter`` scene on simulated IMU samples.
 
 A body rests, then turns about a changing axis; the gyro reads the true rate plus a bias and
-white noise, the accelerometer gravity, the magnetometer the local field (dip 60°), each with
-noise. The truth is integrated with the strapdown rule the scene uses (``delta_single``), so
-the attitude error is the filter's alone. The session levels, turns to magnetic north, tracks
-the attitude and the gyro bias, publishes a covariance that bounds its error, refuses hostile
+white noise (and, where a test says, scale-factor and misalignment errors), the accelerometer
+gravity, the magnetometer the local field (dip 60°), each with noise. The truth is integrated
+with the strapdown rule the scene uses (``delta_single``), so the attitude error is the
+filter's alone. The session levels, turns to magnetic north, tracks the attitude, the gyro
+bias and the gyro's scale-factor and misalignment errors (taken off the samples), publishes a
+covariance that bounds its error, refuses hostile
 magnetometer samples and attitude measurements by reason, never tilts for a magnet, and keeps
 ``set_pose`` a reset.
 """
@@ -14,6 +16,7 @@ import math
 import numpy as np
 import pytest
 from conftest import BASE_NS, MS
+from scipy.stats import chi2
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.attitude.float_quaternion import q_exp, q_multiply, q_normalize
@@ -45,9 +48,11 @@ def body_rate(t):
                      0.4 + 0.3 * math.sin(0.2 * t)])
 
 
-def simulate(seconds, rest=2.0, yaw=1.0, bias=(0.01, -0.02, 0.015), seed=1, magnet=None):
+def simulate(seconds, rest=2.0, yaw=1.0, bias=(0.01, -0.02, 0.015), seed=1, magnet=None,
+             intrinsic=np.zeros((3, 3))):
     """Samples ``(stamp_ns, gyro, accel, field, q_true)``; ``magnet``: (start, end, field [T]
-    world) added to the field between those times after the rest."""
+    world) added to the field between those times after the rest; ``intrinsic``: the gyro's
+    scale-factor and misalignment errors ``E`` (``ω_m = (I + E) ω + b + n``)."""
     rng = np.random.default_rng(seed)
     count = int((rest + seconds) * RATE)
     times = np.arange(count) / RATE - rest
@@ -61,7 +66,8 @@ def simulate(seconds, rest=2.0, yaw=1.0, bias=(0.01, -0.02, 0.015), seed=1, magn
     field = np.tile(FIELD, (count, 1))
     if magnet is not None:
         field[(times >= magnet[0]) & (times < magnet[1])] += np.array(magnet[2])
-    gyro = omega + np.array(bias) + rng.normal(0.0, GYRO_NOISE, (count, 3))
+    gyro = omega @ (np.eye(3) + intrinsic).T + np.array(bias) + rng.normal(
+        0.0, GYRO_NOISE, (count, 3))
     accel = quaternion.rotate_inverse(q_true, np.array([0.0, 0.0, G])) + rng.normal(
         0.0, ACCEL_NOISE, (count, 3))
     mag = quaternion.rotate_inverse(q_true, field) + rng.normal(0.0, FIELD_NOISE, (count, 3))
@@ -112,6 +118,38 @@ def test_the_gyro_bias_is_estimated_and_reported(open_scene):
     assert values['gyro_bias_estimate [rad/s]'].split() == [f'{v:.6g}' for v in estimate]
     assert 'magnetometer' in values['updates and rejections']
     assert session.bias_text().endswith('(filter)')
+
+
+def test_the_gyros_scale_and_misalignment_errors_are_learned_and_taken_off_the_samples(
+        open_scene):
+    intrinsic = np.array([[0.02, -0.015, 0.0], [0.01, -0.01, 0.02], [0.0, 0.015, 0.01]])
+    session, _ = open_scene('imu_filter', **PARAMETERS)
+    samples = simulate(60.0, intrinsic=intrinsic)
+    estimates, truths, covariances = [], [], []
+    for stamp, gyro, accel, field, q_true in samples:
+        sec, nanosec = divmod(stamp, 10**9)
+        session.magnetic_field(sec, nanosec, 'base_link', field)
+        if session.gyro(sec, nanosec, gyro, None, accel):
+            estimates.append(session.propagator.state.attitude_tuple())
+            truths.append(q_true)
+            covariances.append(covariance(session))
+    estimator = session.estimation.estimator
+    estimate = estimator.intrinsic.reshape(3, 3)
+    assert np.abs(estimate - intrinsic).max() < 0.005  # 2 % errors learned within 0.5 %
+    probe = np.array([0.7, -0.4, 1.1])  # the map the samples take: (I + Ê)⁻¹ (ω − b̂)
+    a = np.reshape(session.sample_map.affine[:9], (3, 3))
+    expected = np.linalg.solve(np.eye(3) + estimate, probe - np.array(estimator.gyro_bias))
+    assert a @ probe + session.sample_map.affine[9:] == pytest.approx(expected, abs=1e-12)
+    assert session.sample_map.bias_removed(probe) == pytest.approx(expected, abs=1e-12)
+    errors = quaternion.log(quaternion.multiply(np.array(truths),
+                                                quaternion.conjugate(np.array(estimates))))
+    assert np.degrees(np.linalg.norm(errors, axis=1)).max() < 3.0
+    nees = np.einsum('ni,ni->n', errors, np.linalg.solve(np.array(covariances),
+                                                         errors[:, :, None])[:, :, 0])
+    assert np.mean(nees <= chi2.ppf(0.99, 3)) >= 0.99
+    session.reset()  # a new start: no estimate left on the samples
+    assert session.sample_map.affine == (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0,
+                                         0.0, 0.0)
 
 
 def test_without_magnetometer_the_heading_is_propagated_and_says_so(open_scene, tmp_path):

@@ -131,6 +131,8 @@ class AttitudeEstimator:
         self.covariance, self.gravity = covariance, float(gravity)
         self.magnetometer_channel.reference = field
         self.gyro_bias = (float(gyro_bias[0]), float(gyro_bias[1]), float(gyro_bias[2]))
+        self.intrinsic = np.zeros(9)  # the prior's mean, as the covariance's
+        self.accel_bias = np.zeros(3)
         self.velocity.restart(covariance)
         self.interval.clear()
         self.magnetometer_channel.interval.clear()

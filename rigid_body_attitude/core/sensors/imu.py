@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 import struct
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -52,7 +52,7 @@ from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.gyro_error_model import GyroErrorModel
 from rigid_body_attitude.core.sensors.section import (
-    MAX_RATE, NOISE_BLOCK, Quat, SampledSensorSpec, SensorSection, Vector,
+    MAX_RATE, NOISE_BLOCK, Quat, SampledSensorSpec, SensorSection, Vector, check_section_keys,
     limited)
 
 __all__ = ['ImuModel', 'ImuSpec', 'MAX_RATE', 'imu_spec']
@@ -287,12 +287,4 @@ class ImuModel:
         return gyro, acc
 
 
-def _field_names() -> set[str]:
-    """Every key of the section is a field of :class:`ImuSpec` (checked at import)."""
-    names = {f.name for f in fields(ImuSpec)}
-    if not (set(_BOUNDS) | _OTHER_KEYS) <= names:
-        raise ImportError('sensors.imu keys and ImuSpec fields differ')
-    return names
-
-
-_field_names()
+check_section_keys('imu', ImuSpec, set(_BOUNDS) | _OTHER_KEYS)

@@ -56,7 +56,7 @@ spec and motion give the same samples, however the samples are grouped, and a ze
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -66,8 +66,8 @@ from rigid_body_attitude.core.environment.magnetic_field import (
     LocalMagneticField, MagneticFieldModel, WORLD_AXES)
 from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.core.sensors.section import (
-    MAX_RATE, Matrix, NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec,
-    SensorSection, Vector, body_to_sensor_matrix, limited)
+    MAX_RATE, Matrix, NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec, SensorSection, Vector,
+    body_to_sensor_matrix, check_section_keys, limited)
 
 __all__ = ['MagnetometerModel', 'MagnetometerSpec', 'SOFT_IRON_CONDITION_LIMIT',
            'STREAM', 'magnetometer_spec']
@@ -258,12 +258,4 @@ class MagnetometerModel:
         return limited(mx, my, mz, *self._limits)
 
 
-def _field_names() -> set[str]:
-    """Every key of the section is a field of :class:`MagnetometerSpec` (checked at import)."""
-    names = {f.name for f in fields(MagnetometerSpec)}
-    if not (set(_BOUNDS) | _OTHER_KEYS) <= names:
-        raise ImportError('sensors.magnetometer keys and MagnetometerSpec fields differ')
-    return names
-
-
-_field_names()
+check_section_keys('magnetometer', MagnetometerSpec, set(_BOUNDS) | _OTHER_KEYS)

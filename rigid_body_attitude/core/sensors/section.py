@@ -15,7 +15,8 @@ from __future__ import annotations
 import math
 import re
 import struct
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
@@ -25,8 +26,8 @@ from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.yaml_files import Fields, quote
 
 __all__ = ['ANGLE_LIMIT', 'MAX_RATE', 'Matrix', 'NOISE_BLOCK', 'NormalRows', 'SampledSensorSpec',
-           'Quat', 'SensorSection', 'Vector', 'body_to_sensor_matrix', 'limited',
-           'mount_quaternion', 'unit_vector']
+           'Quat', 'SensorSection', 'Vector', 'body_to_sensor_matrix', 'check_section_keys',
+           'limited', 'mount_quaternion', 'unit_vector']
 
 Vector = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
@@ -196,3 +197,10 @@ def unit_vector(where: str, value: Vector) -> Vector:
     if not norm > 0.0:
         raise SceneError(f'Expected {where} to be a non-zero direction, got {list(value)!r}')
     return value[0] / norm, value[1] / norm, value[2] / norm
+
+
+def check_section_keys(section: str, spec: type[Any], keys: Iterable[str]) -> None:
+    """Raise ImportError unless every key of ``sensors.<section>`` is a field of the dataclass
+    ``spec`` (called once at import by each sensor's module)."""
+    if not set(keys) <= {f.name for f in fields(spec)}:
+        raise ImportError(f'sensors.{section} keys and {spec.__name__} fields differ')

@@ -53,7 +53,7 @@ Earth or Moon occultation (scenes have no orbit for it), no stellar aberration.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -63,7 +63,7 @@ from rigid_body_attitude.core.attitude.float_quaternion import q_exp, q_multiply
 from rigid_body_attitude.core.environment.sun import SunDirectionModel
 from rigid_body_attitude.core.errors import InputError, SceneError
 from rigid_body_attitude.core.sensors.section import (
-    NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec, SensorSection, Vector,
+    NOISE_BLOCK, NormalRows, Quat, SampledSensorSpec, SensorSection, Vector, check_section_keys,
     mount_quaternion, unit_vector)
 
 __all__ = ['ARCSECOND', 'MAX_STAR_TRACKER_RATE', 'STREAM', 'StarTrackerModel',
@@ -241,12 +241,4 @@ class StarTrackerModel:
         return w / norm, x / norm, y / norm, z / norm
 
 
-def _field_names() -> set[str]:
-    """Every key of the section is a field of :class:`StarTrackerSpec` (checked at import)."""
-    names = {f.name for f in fields(StarTrackerSpec)}
-    if not (set(_BOUNDS) | _OTHER_KEYS) <= names:
-        raise ImportError('sensors.star_tracker keys and StarTrackerSpec fields differ')
-    return names
-
-
-_field_names()
+check_section_keys('star_tracker', StarTrackerSpec, set(_BOUNDS) | _OTHER_KEYS)
