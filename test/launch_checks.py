@@ -317,10 +317,37 @@ def together(reports: list[NodeReport], transforms: list[dict[str, Any]]) -> lis
             if transform.get('--frame-id') != report.values['body_frame']:
                 found.append(f'the static transform\'s parent {transform.get("--frame-id")!r} '
                              f'is not body_frame {report.values["body_frame"]!r}')
+    plants = [r for r in propagators
+              if r.situation is None or r.situation.scene.rate_source == 'dynamics']
     for controller in (r for r in reports if not r.kind.propagator):
-        for report in propagators:
+        for report in plants:
             found += _controller_with(controller, report)
+        found += _state_source(controller, propagators)
     return found
+
+
+def _resolved(namespace: str, topic: str) -> str:
+    """A topic name resolved in ``namespace`` (an absolute one as it is)."""
+    if topic.startswith('/'):
+        return topic
+    return '/' + '/'.join(part for part in (namespace.strip('/'), topic) if part)
+
+
+def _state_source(controller: NodeReport, propagators: list[NodeReport]) -> list[str]:
+    """The controller's ``odom`` (remapped or not) is a propagator's of the file: the
+    plant's truth or an estimator's (a filter scene)."""
+    if controller.values.get('state_input', 'odom') != 'odom' or not propagators:
+        return []
+    source = dict(controller.node.remaps).get('odom', 'odom')
+    wanted = _resolved(controller.node.namespace, source)
+    published = {_resolved(report.node.namespace, 'odom') for report in propagators
+                 if report.situation is None or any(
+                     endpoint.name == 'odom' and endpoint.direction == 'out'
+                     for endpoint in NODE_INTERFACE.present(report.situation))}
+    if wanted in published:
+        return []
+    return [f'the controller reads odom on {wanted}, which no propagator of the file '
+            f'publishes ({", ".join(sorted(published)) or "none"})']
 
 
 def _controller_with(controller: NodeReport, plant: NodeReport) -> list[str]:

@@ -53,10 +53,11 @@ def values_of(launch: LaunchFile, executable: str) -> dict[str, Any]:
     return report.values
 
 
-def test_the_package_ships_seven_launch_files():
+def test_the_package_ships_eight_launch_files():
     assert LAUNCH_FILES == ['bdot_loop.launch.xml', 'closed_loop.launch.xml',
-                            'dynamics.launch.xml', 'imu.launch.xml', 'imu_filter.launch.xml',
-                            'managed.launch.py', 'spacecraft_loop.launch.xml']
+                            'dynamics.launch.xml', 'gnc_loop.launch.xml', 'imu.launch.xml',
+                            'imu_filter.launch.xml', 'managed.launch.py',
+                            'spacecraft_loop.launch.xml']
 
 
 def test_bdot_loop_is_the_measured_bdot_example():

@@ -164,6 +164,8 @@ class RosOutputs:
         #: covariance (:meth:`attitude_covariance`).
         self.orientation_covariance: tuple[float, ...] = _UNKNOWN
         self.pose_covariance = pose_covariance(_UNKNOWN)
+        #: The covariances the filtered ``odom`` encoder was made with (:meth:`odometry`).
+        self._odom_covariances: tuple[tuple[float, ...], ...] = ()
         #: Rotation (w, x, y, z) of the IMU's frame in the body frame for ``imu/data``
         #: (:meth:`sensor_mount`; ``None``: identity).
         self.imu_mount: Quaternion | None = None
@@ -248,6 +250,23 @@ class RosOutputs:
         output = self.acceleration_raw
         if output.subscription_count():
             output.publish(self.encode_acceleration(sec, nanosec, *estimate()))
+
+    def odometry(self, sec: int, nanosec: int, attitude: Quaternion, omega_body: Vector,
+                 rate_covariance: tuple[float, ...]) -> None:
+        """``odom`` of one filtered gyro sample: the pose covariance of
+        ``pose_with_covariance``, the twist's angular block ``rate_covariance`` (its linear
+        block marked unknown, as the position); the encoder is made again when they change."""
+        odom = self.odom_raw
+        if not odom.matched():
+            return
+        covariances = (self.pose_covariance, rate_covariance)
+        if covariances != self._odom_covariances:
+            self._odom_covariances = covariances
+            self._encode_filtered_odom = odometry_encoder(
+                self.world_frame, self.body_frame, self.pose_covariance,
+                pose_covariance(rate_covariance))
+        odom.publish(self._encode_filtered_odom(sec, nanosec, _ZERO_POSITION, attitude,
+                                                _ZERO_POSITION, omega_body))
 
     def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
         """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``

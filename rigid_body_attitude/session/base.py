@@ -85,6 +85,13 @@ class OutputSink(Protocol):
         its row-major 3×3 covariance [(m/s²)²], computed when called (an output that
         publishes nothing need not)."""
 
+    def odometry(self, sec: int, nanosec: int, attitude: Quaternion, omega_body: Vector,
+                 rate_covariance: tuple[float, ...]) -> None:
+        """A filtered gyro sample's state for ``odom`` (scenes with an ``estimation``
+        section), stamped like the attitude just given: the attitude (w, x, y, z) with the
+        attitude covariance given last, the corrected body rate [rad/s] with its row-major
+        3×3 covariance [(rad/s)²]."""
+
     def sensor_wanted(self, topic: str) -> bool:
         """Whether a simulated sensor's sample on the output ``topic`` would reach anyone (a
         matched subscription, a topic of the output bag): the session encodes it only then."""

@@ -19,7 +19,8 @@ node, the replay and the studies). :class:`Estimation` is what the session holds
 * **magnetometer** (:meth:`Estimation.magnetic_field`): corrected for hard and soft iron in
   its sensor frame (the calibration file), turned into the body frame by its mount, held
   until the gyro stream reaches its stamp (then paired with the attitude of that step);
-* **external attitude** (:meth:`Estimation.attitude_measurement`): an update at once.
+* **external attitude** (:meth:`Estimation.attitude_measurement`): an update at once (the
+  session orders it with the gyro samples: :mod:`~rigid_body_attitude.session.attitude_input`).
 
 The covariance the session publishes is the filter's attitude block (about fixed world axes,
 REP-145), refreshed at every update (every ``update_interval`` of steps), with the
@@ -41,6 +42,7 @@ from rigid_body_attitude.core.estimation.estimator import (
     MAX_FIELD_AGE, AttitudeEstimator, published_covariance)
 from rigid_body_attitude.core.estimation.estimator_start import (
     magnetic_start, start_estimator)
+from rigid_body_attitude.core.estimation.filter_covariance import GYRO_BIAS
 from rigid_body_attitude.core.estimation.gravity_free import gravity_free_acceleration
 from rigid_body_attitude.core.estimation.magnetometer import MagnetometerCalibration
 from rigid_body_attitude.core.estimation.magnetometer_file import MagnetometerFile
@@ -79,6 +81,8 @@ class Estimation:
         self._last_field_ns: int | None = None
         #: Row-major 3×3 attitude covariance [rad²] about fixed world axes, as published.
         self.published: tuple[float, ...] = (0.0,) * 9
+        #: Row-major 3×3 covariance [(rad/s)²] of a corrected rate (bias and white noise).
+        self.rate_covariance: tuple[float, ...] = (0.0,) * 9
         self._acceleration_covariance: tuple[float, ...] = (0.0,) * 9
         self._acceleration_at: tuple[Quat, Vec] | None = None  # the last update's, not used
 
@@ -245,6 +249,10 @@ class Estimation:
             block = published_covariance(block, q, rate, self.estimator.settings.sample_timing)
         self.published = tuple(block.reshape(9).tolist())
         self._p = state.p
+        estimator = self.estimator
+        white = estimator.model.gyroscope_noise_density ** 2 * estimator.sample_rate
+        self.rate_covariance = tuple((state.p[GYRO_BIAS, GYRO_BIAS] + white * np.eye(3))
+                                     .reshape(9).tolist())
 
     def acceleration_estimate(self, q: Quat, specific_force: Vec
                               ) -> tuple[Vec, tuple[float, ...]]:

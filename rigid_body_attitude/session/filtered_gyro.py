@@ -11,11 +11,15 @@ subtracted from the next samples, and the covariance published with ``imu/data``
   whose mount is the IMU's when the frames match, none in ``body_frame`` (or an empty frame),
   else the static transform the adapter knows (:attr:`FilteredGyroSession.frame_mount`);
 * ``attitude_measurement`` (:meth:`FilteredGyroSession.attitude_measurement`): an attitude in
-  ``world_frame`` with its covariance, fused at the latest gyro sample (a stamp further than
-  ``max_dt`` from it is refused: ``stale_measurement``).
+  ``world_frame`` with its covariance, fused at the gyro state of its stamp, in stamp order
+  with the gyro samples (:mod:`~rigid_body_attitude.session.attitude_input`; a stamp further
+  than ``max_dt`` from the latest gyro sample is refused: ``stale_measurement``); with
+  ``estimation: {start: attitude_measurement}`` the first one starts the filter.
 
 Each sample's gravity-free acceleration goes to the sink with the attitude
-(:meth:`~rigid_body_attitude.session.base.OutputSink.acceleration`, ``accel/filtered``).
+(:meth:`~rigid_body_attitude.session.base.OutputSink.acceleration`, ``accel/filtered``), and
+its attitude and corrected body rate with their covariances
+(:meth:`~rigid_body_attitude.session.base.OutputSink.odometry`, ``odom``).
 Refusals are counted by reason and warned about like every other input's.
 """
 
@@ -31,21 +35,23 @@ import numpy as np
 
 from rigid_body_attitude.core.attitude import quaternion
 from rigid_body_attitude.core.dynamics.scene import Scene
-from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.estimation.alignment import ALIGNING
 from rigid_body_attitude.core.estimation.magnetometer import MagnetometerCalibration
 from rigid_body_attitude.core.estimation.magnetometer_file import (
     MagnetometerFile, load_magnetometer_calibration)
 from rigid_body_attitude.core.estimation.rest import SPECIFIC_FORCE_LIMIT
 from rigid_body_attitude.msgs.untrusted import quoted
+from rigid_body_attitude.session.attitude_input import (
+    AttitudeInput, AttitudeMeasurements, MEASUREMENT_QUEUE)
 from rigid_body_attitude.session.base import OutputSink
 from rigid_body_attitude.session.estimation import STANDARD_GRAVITY, build_estimation
 from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.levelling import FROM_SCENE, AlignmentResult, SampleMap
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
+from rigid_body_attitude.session.stream import Outcome
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns
 from rigid_body_attitude.session.uncertainty import (
-    CALIBRATION_KEYS, attitude_stddev_deg, error_model_from, orientation_block)
+    CALIBRATION_KEYS, attitude_stddev_deg, error_model_from)
 
 __all__ = ['CALIBRATION_SETTINGS', 'FILTER_CALIBRATION_KEYS', 'FILTER_REJECTION_KEYS',
            'FilteredGyroSession', 'mapped_force', 'specific_force_map']
@@ -71,6 +77,9 @@ _DETAIL = {
     'invalid_covariance': 'an orientation covariance that is not a covariance',
     'not_started': 'the filter has not started (levelling)',
     'stale_measurement': 'a stamp further than max_dt from the latest gyro sample',
+    'stale_stamp': 'a stamp not newer than the last measurement',
+    'queue_full': f'more than {MEASUREMENT_QUEUE} measurements ahead of the gyro; the oldest '
+                  f'dropped',
 }
 
 
@@ -80,10 +89,10 @@ FILTER_REJECTION_KEYS = (
     'magnetometer_invalid_stamp', 'magnetometer_stale_stamp',
     *(f'attitude_measurement_{reason}' for reason in (
         'wrong_frame', 'non_finite', 'invalid_pose', 'invalid_covariance', 'not_started',
-        'stale_measurement')))
+        'stale_measurement', 'stale_stamp', 'queue_full')))
 
 
-class FilteredGyroSession(GyroSession):
+class FilteredGyroSession(AttitudeInput, GyroSession):
     """A gyro session with the attitude filter (module docstring)."""
 
     #: The mount the specific force's map was made for, and the map (12 floats).
@@ -116,10 +125,14 @@ class FilteredGyroSession(GyroSession):
         self.estimation_inputs = 0
         self._sample_ns = 0
         self._force: Vec | None = None
+        self.measurements = AttitudeMeasurements()
+        #: Whether the filter starts at the first attitude measurement (the section's start).
+        self.starts_from_attitude = spec.start == 'attitude_measurement'
 
     def apply(self, values: Mapping[str, Any]) -> None:
         """Take the run-time parameters (and ``set_pose_stddev``, ``tilt_stddev_warn``)."""
         super().apply(values)
+        self.measurement_period_ns = round(values['attitude_measurement_period'] * 1e9)
         self.set_pose_stddev: float = values['set_pose_stddev']
         self.tilt_stddev_warn: float = values['tilt_stddev_warn']
 
@@ -135,12 +148,25 @@ class FilteredGyroSession(GyroSession):
 
     def gyro(self, sec: int, nanosec: int, rate: Sequence[float],
              imu: bytes | None = None, accel: Sequence[float] | None = None) -> bool:
-        """:meth:`GyroSession.gyro`, then the sample's gravity-free acceleration."""
+        """:meth:`GyroSession.gyro`, then the sample's gravity-free acceleration; held
+        first while its attitude measurement is awaited (``attitude_measurement_period``)."""
+        if self.measurement_period_ns and self.estimation.started and self.use_header_stamps:
+            stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
+            if self._waits(stamp_ns, (stamp_ns, sec, nanosec, rate, imu, accel)):
+                return False
+        return self._integrated_gyro(sec, nanosec, rate, imu, accel)
+
+    def _integrated_gyro(self, sec: int, nanosec: int, rate: Sequence[float],
+                         imu: bytes | None = None,
+                         accel: Sequence[float] | None = None) -> bool:
+        """The sample after the held measurements stamped before it were fused."""
         self._force = None
         self._sample_ns = (sec * NANOSECONDS_PER_SECOND + nanosec if self.use_header_stamps
                            else self.clock_ns())
         if not self._special and accel is not None:  # the inline path: the force mapped here
             self._force = mapped_force(self._accel_affine, accel)
+        if self.measurements.held:
+            self._fuse_due()
         published = super().gyro(sec, nanosec, rate, imu, accel)
         force = self._force
         if published and force is not None and self.estimation.started:
@@ -155,6 +181,9 @@ class FilteredGyroSession(GyroSession):
         """:meth:`ImuStart._special_sample`; the body specific force kept for the filter when
         it is a real one (finite, not zero, within the accelerometer limit)."""
         self.body_specific_force = None
+        if self._aligning and self.starts_from_attitude:
+            self._refuse('awaiting_attitude', '')
+            return None
         body_rate = super()._special_sample(sec, nanosec, rate, accel)
         force = cast('Vec | None', self.body_specific_force)  # set by the call above
         if body_rate is not None and force is not None:
@@ -202,15 +231,27 @@ class FilteredGyroSession(GyroSession):
         window = result.window_seconds if result.at_rest and result.window_seconds > 0 else None
         q = self.estimation.start(result.attitude, result.gyro_bias, window,
                                   gravity if gravity > 0.0 else STANDARD_GRAVITY)
+        self.measurements.wait_from_ns = self._sample_ns
         self._take_gyro_estimates()
         if q != result.attitude:
             self.propagator.scene = replace(self.propagator.scene, initial_attitude=np.array(q))
             self.propagator.set_attitude(q)
         self.sink.attitude_covariance(self.estimation.published)
 
+    def _outcome(self, outcome: Outcome, sec: int, nanosec: int, imu: bytes | None) -> bool:
+        """:meth:`GyroSession._outcome`, then the sample's ``odom`` (the attitude published and
+        the corrected body rate)."""
+        published = super()._outcome(outcome, sec, nanosec, imu)
+        attitude = self.tracker.previous
+        if published and attitude is not None and self.estimation.started:
+            self.sink.odometry(sec, nanosec, attitude, self.propagator.state.omega_tuple(),
+                               self.estimation.rate_covariance)
+        return published
+
     def _restart_uncertainty(self) -> None:
         """Reset, a jump back: the filter starts again from the settled start, or waits for
-        the levelling."""
+        the levelling (or the first attitude measurement)."""
+        self.measurements.restart()
         self.estimation.restart()
         if not self._aligning and self.alignment is not None:
             self._filter_aligned(self.alignment)
@@ -257,34 +298,6 @@ class FilteredGyroSession(GyroSession):
         levelling = self.levelling
         return (self._aligning and levelling is not None
                 and levelling.aligner.state == ALIGNING)
-
-    def attitude_measurement(self, sec: int, nanosec: int, frame: str,
-                             attitude: Quat, covariance: Sequence[float]) -> None:
-        """One ``attitude_measurement`` (module docstring); refused ones counted by reason."""
-        if frame != self.world_frame:
-            return self._refused('wrong_frame', 'attitude_measurement', frame)
-        if not all(math.isfinite(value) for value in attitude):
-            return self._refused('non_finite', 'attitude_measurement')
-        norm = math.sqrt(sum(value * value for value in attitude))
-        if norm == 0.0:
-            return self._refused('invalid_pose', 'attitude_measurement')
-        try:
-            block = orientation_block(covariance)
-        except InputError:
-            return self._refused('invalid_covariance', 'attitude_measurement')
-        if not self.estimation.started:
-            return self._refused('not_started', 'attitude_measurement')
-        stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
-        if not self.use_header_stamps:
-            stamp_ns = self._sample_ns
-        if abs(stamp_ns - self._sample_ns) > self.stream.max_dt * 1e9:
-            return self._refused('stale_measurement', 'attitude_measurement')
-        w, x, y, z = (value / norm for value in attitude)
-        state = self.propagator.state
-        q = self.estimation.attitude_measurement(state.attitude_tuple(), (w, x, y, z), block)
-        state.set_sample(state.time, q, state.omega_tuple())
-        self._corrected()
-        self.estimation_inputs += 1
 
     def _refused(self, reason: str, topic: str, frame: str | None = None) -> None:
         """An input of the filter refused: counted by ``reason``, warned about."""

@@ -45,6 +45,8 @@ REJECTION_DETAIL = {
                      'ignored',
     'gap': 'a gap longer than max_dt, confirmed by the next samples; not integrated across, '
            'attitude held',
+    'awaiting_attitude': 'the filter starts at its first attitude_measurement; sample not '
+                         'integrated',
 }
 _NO_ACCELEROMETER = ('not levelled: no accelerometer data (angular_velocity input or zero '
                      'linear_acceleration); initial attitude from the scene or set_pose')

@@ -244,6 +244,12 @@ def _mounted_simulated_sensor(situation: Situation) -> bool:
                for _, spec in situation.scene.sensors.items())
 
 
+def _odometry(situation: Situation) -> bool:
+    """Whether the node publishes ``odom``: a dynamics scene, or a filter."""
+    scene = situation.scene
+    return scene.rate_source == DYNAMICS or scene.estimation is not None
+
+
 def _has_wheels(situation: Situation) -> bool:
     """The scene has a reaction-wheel array."""
     return any(name == 'reaction_wheels' for name, _ in situation.scene.effects)
@@ -324,9 +330,11 @@ NODE_INTERFACE = Interface((
     Endpoint('twist', TWIST_STAMPED, _OUT, 'output', 'output', 'dynamics scenes, every tick',
              'the body rate (and velocity), `body_frame`', kinds=(DYNAMICS,),
              qos_overrides=True, replayed=True),
-    Endpoint('odom', ODOMETRY, _OUT, 'output', 'output', 'dynamics scenes, every tick',
-             'the pose (`world_frame`) and the twist (`body_frame`) in one message, '
-             'covariances zero (exact)', kinds=(DYNAMICS,), qos_overrides=True, replayed=True),
+    Endpoint('odom', ODOMETRY, _OUT, 'output', 'output',
+             'dynamics scenes, every tick; scenes with an `estimation` section, every sample',
+             'the pose (`world_frame`) and the twist (`body_frame`) in one message: the truth '
+             '(covariances zero) or the filter\'s attitude and corrected body rate with their '
+             'covariances', condition=_odometry, qos_overrides=True, replayed=True),
     Endpoint('energy', FLOAT64, _OUT, 'output', 'output', 'dynamics scenes, every tick',
              "the body's kinetic energy [J] (a gyro scene simulates no body)",
              kinds=(DYNAMICS,), qos_overrides=True, replayed=True),

@@ -272,6 +272,10 @@ PARAMETERS: tuple[Parameter, ...] = (
               'm/s^3/sqrt(Hz): accelerometer bias random walk (kalibr name)', 0.0, 10.0),
     Parameter('magnetometer_noise_density', float, _SETTINGS.magnetometer_noise_density,
               'T/sqrt(Hz): magnetometer white noise', 0.0, 1.0e-3),
+    Parameter('attitude_measurement_period', float, 0.0,
+              's: period P of attitude_measurement (a star tracker stamped at multiples of P): '
+              'a gyro sample stamped t waits for the one stamped at the last multiple of P '
+              'before t (0 = none waits)', 0.0, 3600.0),
 )
 
 _BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}

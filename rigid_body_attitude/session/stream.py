@@ -219,6 +219,15 @@ class GyroStream(_Counting):
         samples were not for this stream: nothing is integrated across it)."""
         self.propagator.has_sample = False
 
+    def start_at(self, stamp_ns: int) -> None:
+        """A baseline at ``stamp_ns`` without a sample: the state there is known from
+        elsewhere (an attitude measurement); the next sample is integrated from it with its
+        own rate (its rate is the first interval's for ``delta_single``; the baseline's rate is
+        zero for the methods that read it)."""
+        self.pending.clear()
+        self.epoch_ns = stamp_ns - round(self.propagator.state.time * 1e9)
+        self._start(stamp_ns, (0.0, 0.0, 0.0))
+
     def add(self, stamp_ns: int, omega_body: Sequence[float]) -> Outcome:
         """Process one gyro sample stamped ``stamp_ns`` with rate ``omega_body`` [rad/s]."""
         try:

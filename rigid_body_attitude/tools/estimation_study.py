@@ -153,6 +153,9 @@ class _SeriesSink:
     def acceleration(self, sec: int, nanosec: int, estimate: Any) -> None:
         """Nothing: ``accel/filtered`` is not kept."""
 
+    def odometry(self, *args: Any) -> None:
+        """Nothing: ``odom`` is not kept."""
+
     def dynamics(self, *args: Any) -> None:
         """Nothing: a gyro scene."""
 

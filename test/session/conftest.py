@@ -33,9 +33,13 @@ class RecordingSink:
     wheel_states: list[bytes] = field(default_factory=list)
     accelerations: list[tuple[int, int, tuple[float, ...], tuple[float, ...]]] = field(
         default_factory=list)
+    odometries: list[tuple[Any, ...]] = field(default_factory=list)
 
     def acceleration(self, sec, nanosec, estimate):
         self.accelerations.append((sec, nanosec, *estimate()))
+
+    def odometry(self, sec, nanosec, attitude, omega_body, rate_covariance):
+        self.odometries.append((sec, nanosec, attitude, omega_body, rate_covariance))
 
     def sensor_mount(self, q_body_sensor):
         self.mounts.append(q_body_sensor)

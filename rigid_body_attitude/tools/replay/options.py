@@ -100,6 +100,7 @@ class ReplayOptions:
     accelerometer_noise_density: float = _DEFAULT['accelerometer_noise_density']
     accelerometer_random_walk: float = _DEFAULT['accelerometer_random_walk']
     magnetometer_noise_density: float = _DEFAULT['magnetometer_noise_density']
+    attitude_measurement_period: float = _DEFAULT['attitude_measurement_period']
     gyro_topic: str = ''
     torque_topic: str = NODE_INTERFACE.endpoint('torque').name
     rotor_torque_topic: str = NODE_INTERFACE.endpoint('rotor_torque').name

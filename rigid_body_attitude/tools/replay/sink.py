@@ -26,7 +26,7 @@ from rigid_body_attitude.msgs import (
     imu_with_orientation, pose_stamped_encoder, pose_with_covariance_stamped_encoder,
     quaternion_stamped_encoder)
 from rigid_body_attitude.msgs.cdr import accel_with_covariance_stamped_encoder
-from rigid_body_attitude.msgs.odometry import odometry_encoder
+from rigid_body_attitude.msgs.odometry import encode_odometry, odometry_encoder
 from rigid_body_attitude.session.base import AccelerationEstimate, Session
 from rigid_body_attitude.session.outputs import OutputSample
 from rigid_body_attitude.session.reports import (
@@ -193,6 +193,15 @@ class BagSink:
             self.records.append((self._acceleration, self.now_ns, self.encode_acceleration(
                 sec, nanosec, *estimate())))
             self.counts['accel/filtered'] += 1
+
+    def odometry(self, sec: int, nanosec: int, attitude: Quaternion, omega_body: Vector,
+                 rate_covariance: tuple[float, ...]) -> None:
+        """``odom`` of one filtered gyro sample (the node's covariances)."""
+        if 'odom' in self.ids:
+            self._write('odom', encode_odometry(
+                sec * NANOSECONDS_PER_SECOND + nanosec, self.world_frame, self.body_frame,
+                _ZERO, attitude, _ZERO, omega_body, self.pose_covariance,
+                pose_covariance(rate_covariance)))
 
     def sensor_mount(self, q_body_sensor: Quaternion | None) -> None:
         """The IMU's mount: ``imu/data`` carries the sensor frame's attitude, ``orientation``
