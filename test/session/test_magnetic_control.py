@@ -269,8 +269,8 @@ def test_a_plant_restarting_uses_the_samples_stamped_before_the_last_tick():
         sample(session, k * 100 * MS)
         tick(session, k * 100 * MS)
     sample(session, 0, field=(3e-5, 0.0, 0.0))  # the restarted plant's first sample
-    sample(session, 100 * MS, field=(3e-5, 1e-5, 0.0))
     tick(session, 0)
+    sample(session, 100 * MS, field=(3e-5, 1e-5, 0.0))
     tick(session, 100 * MS)
     assert session.time_jumps_back == 1
     assert sink.dipoles[-1] == (100 * MS, bdot_dipole((3e-5, 1e-5, 0.0), (3e-5, 0.0, 0.0),
