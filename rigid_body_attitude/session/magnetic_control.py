@@ -36,10 +36,11 @@ is unknown waits for it.
 
 **Checks** (each refusal counted by reason in ``/diagnostics`` and warned about): a sample
 with a non-finite component (``non_finite``), one beyond :data:`MAX_FIELD` T or whose largest
-component is below :data:`MIN_FIELD` T, zero included (``out_of_range``); a wheel state naming a wheel the scene's array does not have or one twice
-(``unknown_wheel``), leaving one out (``missing_wheel``), with another number of speeds than
-names (``wheel_lengths``) or a non-finite speed (``non_finite``). At most :data:`MAX_KEPT`
-samples and wheel states wait for their ticks (the newest-stamped dropped beyond that, counted
+component is below :data:`MIN_FIELD` T, zero included (``out_of_range``); a wheel state
+naming a wheel the scene's array does not have or one twice (``unknown_wheel``), leaving one
+out (``missing_wheel``), with another number of speeds than names (``wheel_lengths``) or a
+non-finite speed (``non_finite``). At most :data:`MAX_KEPT` samples and wheel states wait
+for their ticks (the newest-stamped dropped beyond that, counted
 ``unpaired``: a flood of far-future stamps never pushes out the ones a tick needs). A second
 message of a stamp already kept, different from the first, replaces it (the first counted
 ``repeated_stamp``), unless an answered tick used the first (the second counted); an equal
