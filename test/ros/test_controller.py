@@ -413,6 +413,9 @@ def test_bdot_controller_counts_hostile_fields_and_transforms(ros, request, proc
                     magnetic_field(t1, 'mag_link', fields[t1])):
         mag.publish(message)
     mag.publish(NOT_A_MESSAGE)
+    # the good sample replaced the first of its stamp before the tick comes (another topic)
+    assert harness.spin_until(lambda: counted_values(diagnostics).get(
+        'rejected repeated_stamp') == '1', 10.0), last_status(diagnostics)
     odom.publish(odometry(t1))
     assert harness.spin_until(lambda: len(dipoles) == 1, 10.0), last_status(diagnostics)
     mag.publish(magnetic_field(500_000_000, 'mag_link', fields[t1]))  # stale
@@ -485,6 +488,9 @@ def test_dumping_controller_counts_hostile_wheel_states_and_fields(ros, request,
     wheels.publish(joint_state(500_000_000, names, speeds[t1]))     # stale
     wheels.publish(joint_state(t2, names, (1.0, 2.0, 3.0, 4.0)))    # replaced: repeated
     wheels.publish(joint_state(t2, names, speeds[t2]))
+    # the good wheel state replaced the first of its stamp before the tick comes
+    assert harness.spin_until(lambda: counted_values(diagnostics).get(
+        'rejected repeated_stamp') == '2', 10.0), last_status(diagnostics)
     odom.publish(odometry(t2))  # its sample is t1's (10 Hz)
     assert harness.spin_until(lambda: len(dipoles) == 2 and len(commands) == 2, 10.0)
     harness.spin_for(0.3)
