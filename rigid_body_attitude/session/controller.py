@@ -248,6 +248,7 @@ class ControllerSession(MagneticTicks):
         sec, nanosec = divmod(stamp_ns, 1_000_000_000)
         if magnetic is not None:
             self.sink.dipole(sec, nanosec, magnetic.answer(stamp_ns, recompute))
+            self.count_dropped_inputs()
         if self.torque_out:
             self.sink.torque(sec, nanosec, held[1])
         self.answered += 1

@@ -35,12 +35,18 @@ gate checks them), else none needed for samples in ``body_frame``. A tick whose 
 is unknown waits for it.
 
 **Checks** (each refusal counted by reason in ``/diagnostics`` and warned about): a sample
-with a non-finite component (``non_finite``) or one beyond :data:`MAX_FIELD` T
-(``out_of_range``); a wheel state naming a wheel the scene's array does not have or one twice
-(``unknown_wheel``), leaving one out (``missing_wheel``), with another number of speeds than
-names (``wheel_lengths``) or a non-finite speed (``non_finite``). At most :data:`MAX_KEPT`
-samples and wheel states wait for their ticks (the newest-stamped dropped beyond that, counted
-``unpaired``: a flood of far-future stamps never pushes out the ones a tick needs).
+with a non-finite component (``non_finite``), one beyond :data:`MAX_FIELD` T or whose largest
+component is below :data:`MIN_FIELD` T, zero included (``out_of_range``); a wheel state
+naming a wheel the scene's array does not have or one twice (``unknown_wheel``), leaving one
+out (``missing_wheel``), with another number of speeds than names (``wheel_lengths``) or a
+non-finite speed (``non_finite``). At most :data:`MAX_KEPT` samples and wheel states wait
+for their ticks (the newest-stamped dropped beyond that, counted
+``unpaired``: a flood of far-future stamps never pushes out the ones a tick needs). A second
+message of a stamp already kept, different from the first, replaces it (the first counted
+``repeated_stamp``), unless an answered tick used the first (the second counted); an equal
+one changes nothing. One stamped before what the last answered tick used is kept while the
+plant may restart at it, and counted ``stale_stamp`` when dropped unused. A tick whose
+sample's mount never came before a later tick was answered counts as ``no_mount``.
 """
 
 from __future__ import annotations
@@ -64,7 +70,7 @@ from rigid_body_attitude.session.wheel_drive import WheelDrive
 
 _Kept = TypeVar('_Kept')
 
-__all__ = ['MAX_FIELD', 'MAX_KEPT', 'MagneticControl', 'Refusal', 'magnetic_control']
+__all__ = ['MAX_FIELD', 'MAX_KEPT', 'MIN_FIELD', 'MagneticControl', 'Refusal', 'magnetic_control']
 
 Vector = tuple[float, float, float]
 Quaternion = tuple[float, float, float, float]
@@ -74,6 +80,10 @@ Refusal = tuple[str, str]
 #: Largest field component taken [T] (the Earth's field is below 7e-5 T; no magnetometer of
 #: attitude control measures a tesla).
 MAX_FIELD = 1.0
+#: Smallest largest field component taken [T]: the Earth's field is thousands of times
+#: stronger, and dumping's ``k / |B|²`` of a weaker field (a magnetometer reading zero, or a
+#: denormal) is no dipole any rod gives, or not finite.
+MIN_FIELD = 1e-9
 #: Samples (and wheel states) kept while waiting for their ticks.
 MAX_KEPT = 256
 
@@ -98,6 +108,8 @@ class MagneticControl:
         #: Wheel states waiting for their ticks (dumping): stamp [ns] → speeds [rad/s].
         self.speeds: dict[int, tuple[float, ...]] = {}
         self._index = {} if drive is None else {name: i for i, name in enumerate(drive.names)}
+        #: Refusals found while answering (stale messages dropped unused), for the session.
+        self.refusals: list[Refusal] = []
         self.restart()
 
     @property
@@ -124,6 +136,10 @@ class MagneticControl:
         (B-dot), a zero dipole held, nothing kept from after ``tick_ns``."""
         self.previous: tuple[int, Vector] | None = None
         self.dipole: Vector = _ZERO
+        #: The last answered tick's stamp [ns] (None: none since the start or a restart).
+        self.last_tick_ns: int | None = None
+        #: Stamps of kept messages that came stamped before what the last tick used.
+        self.stale: dict[str, set[int]] = {'imu/mag': set(), 'wheels/state': set()}
         if tick_ns is not None:
             for kept in (self.fields, self.speeds):
                 for stamp in [stamp for stamp in kept if stamp > tick_ns]:
@@ -135,10 +151,14 @@ class MagneticControl:
         """One sample [T] in ``frame_id`` stamped ``stamp_ns``; the refusal, if any."""
         if not all(math.isfinite(value) for value in field):
             return 'non_finite', 'imu/mag: a non-finite field component (NaN or Inf)'
-        if max(abs(value) for value in field) > MAX_FIELD:
+        largest = max(abs(value) for value in field)
+        if largest > MAX_FIELD:
             return 'out_of_range', f'imu/mag: a field component beyond {MAX_FIELD:g} T'
+        if largest < MIN_FIELD:
+            return 'out_of_range', f'imu/mag: a field weaker than {MIN_FIELD:g} T (zero included)'
         x, y, z = field
-        return self._keep(self.fields, stamp_ns, (frame_id, (x, y, z)), 'imu/mag')
+        used = None if self.last_tick_ns is None else self.sample_ns(self.last_tick_ns)
+        return self._keep(self.fields, stamp_ns, (frame_id, (x, y, z)), 'imu/mag', used)
 
     def wheel_state(self, stamp_ns: int, names: Sequence[str],
                     velocity: Sequence[float]) -> Refusal:
@@ -161,20 +181,33 @@ class MagneticControl:
         ordered = [0.0] * len(names)
         for name, value in zip(names, velocity):
             ordered[index[name]] = value
-        return self._keep(self.speeds, stamp_ns, tuple(ordered), 'wheels/state')
+        return self._keep(self.speeds, stamp_ns, tuple(ordered), 'wheels/state',
+                          self.last_tick_ns)
 
     def add_transforms(self, transforms: Iterable[Transform]) -> Counter[str]:
         """Static transforms from ``/tf_static``; how many were refused, by reason."""
         return self.transforms.add_all(transforms)
 
-    def _keep(self, kept: dict[int, _Kept], stamp_ns: int, value: _Kept,
-              topic: str) -> Refusal:
+    def _keep(self, kept: dict[int, _Kept], stamp_ns: int, value: _Kept, topic: str,
+              used_ns: int | None) -> Refusal:
+        """Keep ``value`` for the ticks; ``used_ns``: the stamp the last answered tick used."""
+        refusal = _ACCEPTED
+        if stamp_ns in kept:
+            if kept[stamp_ns] == value:
+                return _ACCEPTED
+            if stamp_ns == used_ns:
+                return 'repeated_stamp', (f'{topic}: a second, different message stamped like '
+                                          f'the one an answered tick used; ignored')
+            refusal = 'repeated_stamp', (f'{topic}: a second, different message of one stamp; '
+                                         f'the first dropped')
+        elif used_ns is not None and stamp_ns < used_ns:
+            self.stale[topic].add(stamp_ns)
         kept[stamp_ns] = value
         if len(kept) > MAX_KEPT:
             del kept[max(kept)]
             return 'unpaired', (f'{topic}: more than {MAX_KEPT} messages waiting for their '
                                 f'ticks; the newest-stamped dropped')
-        return _ACCEPTED
+        return refusal
 
     # -- ticks ------------------------------------------------------------------------------
 
@@ -197,6 +230,11 @@ class MagneticControl:
             return f'the wheels/state stamped {tick_ns * 1e-9:.9f} s'
         return ''
 
+    def lacks_mount(self, tick_ns: int) -> bool:
+        """Whether tick ``tick_ns``'s sample came but its frame's mount is unknown."""
+        sample = self.fields.get(self.sample_ns(tick_ns)) if self.needs_field else None
+        return sample is not None and self._rotation(sample[0]) is None
+
     def answer(self, tick_ns: int, recompute: bool) -> Vector:
         """The dipole [A m², body] answering the ready tick ``tick_ns``: recomputed (at the
         first tick of a control interval) or held."""
@@ -212,6 +250,7 @@ class MagneticControl:
                     field, previous[1], (sample_ns - previous[0]) / NANOSECONDS_PER_SECOND,
                     self.gain))
                 self.previous = (sample_ns, field)
+        self.last_tick_ns = tick_ns
         self._forget_before(tick_ns)
         return self.dipole
 
@@ -232,11 +271,18 @@ class MagneticControl:
 
     def _forget_before(self, tick_ns: int) -> None:
         """Drop what no later tick needs (ticks come in stamp order)."""
-        sample_ns = self.sample_ns(tick_ns)
-        for stamp in [stamp for stamp in self.fields if stamp < sample_ns]:
-            del self.fields[stamp]
-        for stamp in [stamp for stamp in self.speeds if stamp < tick_ns]:
-            del self.speeds[stamp]
+        kept: tuple[tuple[str, dict[int, Any], int], ...] = (
+            ('imu/mag', self.fields, self.sample_ns(tick_ns)),
+            ('wheels/state', self.speeds, tick_ns))
+        for topic, messages, first_needed in kept:
+            stale = self.stale[topic]
+            for stamp in [stamp for stamp in messages if stamp < first_needed]:
+                del messages[stamp]
+                if stamp in stale:
+                    stale.discard(stamp)
+                    self.refusals.append(('stale_stamp', (
+                        f'{topic}: stamped before what the last answered tick used, and no '
+                        f'tick went back to it; dropped')))
 
 
 def magnetic_control(values: Mapping[str, Any], scene: Scene | None,

@@ -100,8 +100,22 @@ class MagneticTicks(ABC):
 
     def drop_parked(self, drop: Callable[[int], bool]) -> None:
         """Forget the waiting ticks ``drop`` selects (a later tick was answered), counted
-        ``unpaired``."""
+        ``no_mount`` (its sample came, its frame's mount did not) or ``unpaired``."""
         for stamp in [stamp for stamp in self.parked if drop(stamp)]:
             del self.parked[stamp]
-            self._reject('unpaired', 'a tick whose magnetometer sample (or wheel state) '
-                                     'never came before a later tick was answered')
+            if self.magnetic is not None and self.magnetic.lacks_mount(stamp):
+                self._reject('no_mount', 'a tick whose magnetometer sample is in a frame '
+                                         'without a mount on /tf_static (or parameter '
+                                         '`magnetometer_mount_rpy`) before a later tick was '
+                                         'answered')
+            else:
+                self._reject('unpaired', 'a tick whose magnetometer sample (or wheel state) '
+                                         'never came before a later tick was answered')
+
+    def count_dropped_inputs(self) -> None:
+        """Count the magnetic inputs the last answer dropped unused (``stale_stamp``)."""
+        magnetic = self.magnetic
+        if magnetic is not None and magnetic.refusals:
+            for reason, text in magnetic.refusals:
+                self._reject(reason, text)
+            magnetic.refusals.clear()

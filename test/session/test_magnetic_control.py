@@ -18,7 +18,8 @@ from rigid_body_attitude.msgs.tf_message import Transform
 from rigid_body_attitude.session.controller import ControllerSession
 from rigid_body_attitude.session.controller_parameters import (
     check_controller_values, controller_defaults)
-from rigid_body_attitude.session.magnetic_control import MAX_KEPT, magnetic_control
+from rigid_body_attitude.session.magnetic_control import (
+    MAX_KEPT, MIN_FIELD, magnetic_control)
 from rigid_body_attitude.session.magnetic_ticks import MAX_PARKED
 from rigid_body_attitude.session.settings import load_node_scene
 from rigid_body_attitude.session.wheel_drive import WheelDrive
@@ -183,6 +184,9 @@ def test_parameters_and_scenes_that_cannot_give_a_dipole_are_refused():
 @pytest.mark.parametrize('call, reason', [
     (lambda s: s.magnetometer(0, 0, 'base_link', (math.nan, 0.0, 0.0)), 'non_finite'),
     (lambda s: s.magnetometer(0, 0, 'base_link', (2.0, 0.0, 0.0)), 'out_of_range'),
+    (lambda s: s.magnetometer(0, 0, 'base_link', (0.0, 0.0, 0.0)), 'out_of_range'),
+    (lambda s: s.magnetometer(0, 0, 'base_link', (1e-160, 0.0, -1e-160)), 'out_of_range'),
+    (lambda s: s.magnetometer(0, 0, 'base_link', (0.99e-9, 0.0, 0.0)), 'out_of_range'),
     (lambda s: s.magnetometer(-1, 0, 'base_link', (0.0, 0.0, 0.0)), 'invalid_stamp'),
     (lambda s: s.wheel_state(0, 2 * SECOND, ('wheel_a',), (1.0,)), 'invalid_stamp'),
     (lambda s: s.wheel_state(0, 0, ('wheel_a', 'wheel_b', 'wheel_c', 'wheel_x'), (0.0,) * 4),
@@ -219,3 +223,67 @@ def test_a_flood_of_far_future_samples_keeps_the_ones_ticks_need_and_ticks_stay_
         tick(session, k * 100 * MS)
     assert len(session.parked) == MAX_PARKED
     assert session.rejections['unpaired'] == 11 + 5
+
+
+def test_the_weakest_field_taken_gives_a_finite_dumping_dipole():
+    """A field whose largest component is MIN_FIELD is taken; one of 1e-160 T (refused) would
+    give dumping's ``k / |B|²`` = inf, and a NaN or infinite dipole."""
+    assert not all(math.isfinite(v) for v in dumping_dipole((0.0, 0.01, 0.02),
+                                                            (1e-160, 0.0, 0.0), 0.001))
+    session, sink = controller(actuator='reaction_wheels', scene='wheel_slew_commanded',
+                               dumping_gain=1e6, kp=0.5)
+    names = session.magnetic.drive.names
+    session.wheel_state(0, 0, names, (600.0, -600.0, 600.0, -600.0))
+    session.magnetometer(0, 0, 'base_link', (MIN_FIELD, 0.0, 0.0))
+    tick(session, 0)
+    assert not session.rejections and len(sink.dipoles) == 1
+    assert all(math.isfinite(v) for v in sink.dipoles[0][1])
+
+
+def test_repeated_and_stale_stamps_are_counted_and_never_change_an_answered_tick():
+    """A second, different sample of one stamp replaces the first (counted); one of a stamp a
+    tick used is refused; one stamped before what the last tick used is counted when
+    dropped unused; an equal one changes nothing."""
+    session, sink = controller(**BDOT, magnetometer_mount_rpy=(0.0, 0.0, 0.0))
+    sample(session, 0, field=(9e-5, 9e-5, 9e-5))
+    sample(session, 0)  # replaces the first
+    sample(session, 0)  # equal: nothing counted
+    assert dict(session.rejections) == {'repeated_stamp': 1}
+    tick(session, 0)
+    sample(session, 0, field=(5e-5, 0.0, 0.0))  # the sample tick 0 used: refused
+    assert session.magnetic.fields[0][1] == field_at(0)
+    sample(session, 100 * MS)
+    tick(session, 100 * MS)
+    sample(session, 50 * MS)  # before tick 100 ms's sample: stale, kept while no tick goes back
+    assert session.rejections['stale_stamp'] == 0
+    sample(session, 200 * MS)
+    tick(session, 200 * MS)
+    assert dict(session.rejections) == {'repeated_stamp': 2, 'stale_stamp': 1}
+    assert sink.dipoles[1] == (100 * MS, bdot_dipole(field_at(100 * MS), field_at(0), 0.1,
+                                                     4e5))
+
+
+def test_a_plant_restarting_uses_the_samples_stamped_before_the_last_tick():
+    session, sink = controller(**BDOT, magnetometer_mount_rpy=(0.0, 0.0, 0.0))
+    for k in range(3):
+        sample(session, k * 100 * MS)
+        tick(session, k * 100 * MS)
+    sample(session, 0, field=(3e-5, 0.0, 0.0))  # the restarted plant's first sample
+    tick(session, 0)
+    sample(session, 100 * MS, field=(3e-5, 1e-5, 0.0))
+    tick(session, 100 * MS)
+    assert session.time_jumps_back == 1
+    assert sink.dipoles[-1] == (100 * MS, bdot_dipole((3e-5, 1e-5, 0.0), (3e-5, 0.0, 0.0),
+                                                      0.1, 4e5))
+    assert 'stale_stamp' not in session.rejections
+
+
+def test_a_tick_whose_sample_never_gets_a_mount_is_counted_no_mount():
+    session, sink = controller(**BDOT)
+    sample(session, 0, frame='map')
+    tick(session, 0)
+    assert sink.dipoles == [] and 'map' in session.report().message
+    sample(session, 100 * MS, frame='base_link')
+    tick(session, 100 * MS)
+    assert [stamp for stamp, _ in sink.dipoles] == [100 * MS]
+    assert dict(session.rejections) == {'no_mount': 1}
