@@ -47,7 +47,7 @@ from rigid_body_attitude.core.estimation.gravity_free import gravity_free_accele
 from rigid_body_attitude.core.estimation.magnetometer import MagnetometerCalibration
 from rigid_body_attitude.core.estimation.magnetometer_file import MagnetometerFile
 
-__all__ = ['Estimation', 'FIELD_QUEUE', 'STANDARD_GRAVITY']
+__all__ = ['Estimation', 'FIELD_QUEUE', 'STANDARD_GRAVITY', 'gravity_free_sample']
 
 Quat = tuple[float, float, float, float]
 Vec = tuple[float, float, float]
@@ -264,22 +264,8 @@ class Estimation:
         if at is not None:
             self._acceleration_at = None
             self._acceleration_covariance = self._covariance_at(*at)
-        return self.gravity_free(q, specific_force), self._acceleration_covariance
-
-    def gravity_free(self, q: Quat, specific_force: Vec) -> Vec:
-        """The body's acceleration [m/s², body frame] of one sample (gravity and the
-        accelerometer bias removed)."""
-        estimator = self.estimator
-        bias, gravity, up = estimator.accel_bias, estimator.gravity, estimator.up
-        w, x, y, z = q
-        ux, uy, uz = float(up[0]), float(up[1]), float(up[2])
-        # Rᵀ up with R the body → world rotation of q (plain floats: per sample)
-        bx = (1 - 2 * (y * y + z * z)) * ux + 2 * (x * y + w * z) * uy + 2 * (x * z - w * y) * uz
-        by = 2 * (x * y - w * z) * ux + (1 - 2 * (x * x + z * z)) * uy + 2 * (y * z + w * x) * uz
-        bz = 2 * (x * z + w * y) * ux + 2 * (y * z - w * x) * uy + (1 - 2 * (x * x + y * y)) * uz
-        return (specific_force[0] - float(bias[0]) - gravity * bx,
-                specific_force[1] - float(bias[1]) - gravity * by,
-                specific_force[2] - float(bias[2]) - gravity * bz)
+        return gravity_free_sample(self.estimator, q, specific_force), (
+            self._acceleration_covariance)
 
     def mark_acceleration_covariance(self, q: Quat, specific_force: Vec) -> None:
         """An update ran at ``q`` with ``specific_force``: the acceleration's covariance is
@@ -317,6 +303,21 @@ class Estimation:
 
 
 _FIELD_LIMIT_SQUARED = 1.0e-2 ** 2
+
+
+def gravity_free_sample(estimator: AttitudeEstimator, q: Quat, specific_force: Vec) -> Vec:
+    """The body's acceleration [m/s², body frame] of one sample at ``q`` (gravity and the
+    estimator's accelerometer bias removed; plain floats: per sample)."""
+    bias, gravity, up = estimator.accel_bias, estimator.gravity, estimator.up
+    w, x, y, z = q
+    ux, uy, uz = float(up[0]), float(up[1]), float(up[2])
+    # Rᵀ up with R the body → world rotation of q
+    bx = (1 - 2 * (y * y + z * z)) * ux + 2 * (x * y + w * z) * uy + 2 * (x * z - w * y) * uz
+    by = 2 * (x * y - w * z) * ux + (1 - 2 * (x * x + z * z)) * uy + 2 * (y * z + w * x) * uz
+    bz = 2 * (x * z + w * y) * ux + 2 * (y * z - w * x) * uy + (1 - 2 * (x * x + y * y)) * uz
+    return (specific_force[0] - float(bias[0]) - gravity * bx,
+            specific_force[1] - float(bias[1]) - gravity * by,
+            specific_force[2] - float(bias[2]) - gravity * bz)
 
 
 def _rotated(q: Quat, v: Vec) -> Vec:

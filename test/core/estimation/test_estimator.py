@@ -316,7 +316,8 @@ def test_a_clipped_interval_measures_no_velocity_change():
                          else 0.0, 0.0, 0.0])
     truth, gyro, accel, _ = simulate(20.0, lambda t: 0.2 * rates(t), blows, seed=7)
     accel = np.clip(accel, -full_scale, full_scale)
-    settings = dataclasses.replace(SETTINGS, accelerometer_range=full_scale)
+    settings = dataclasses.replace(SETTINGS, accelerometer_range=full_scale,
+                                   motion_model='velocity')
     estimator, q = started(truth[0], settings, magnetometer=False)
     estimates, _ = run(estimator, q, gyro, accel)
     assert estimator.counts['velocity_clipped'] == 20  # one interval per blow
