@@ -16,11 +16,9 @@ propagator; the test prints both).
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
-import subprocess
 
-from ament_index_python.packages import get_package_prefix
+from controller_process import assert_every_tick_answered, start_controller, stop_controller
 from geometry_msgs.msg import QuaternionStamped
 import numpy as np
 from ros_helpers import Harness, unique_namespace
@@ -32,8 +30,6 @@ from rigid_body_attitude.core.dynamics.batch import SceneBatch
 from rigid_body_attitude.core.dynamics.scene import scene_from_mapping
 from rigid_body_attitude.core.propagator import DynamicsPropagator
 
-PACKAGE = 'rigid_body_attitude'
-CONTROLLER = Path(get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / 'attitude_controller'
 TICK_NS = 10_000_000  # 100 Hz
 TICKS = 6001  # 0 .. 60 s
 KP, KD, LIMIT, CONTROL_PERIOD = 0.05, 0.04, 0.02, 0.02
@@ -68,23 +64,16 @@ def ros_loop(ros, namespace: str, scene_path: Path) -> dict[int, np.ndarray]:
     try:
         read_until(node, SERVING)
         harness.wait_for_connections()
-        assert CONTROLLER.is_file() and os.access(CONTROLLER, os.X_OK), CONTROLLER
-        controller = subprocess.Popen(
-            [str(CONTROLLER), '--ros-args', '-r', f'__ns:={namespace}', '-p', f'kp:={KP}',
-             '-p', f'kd:={KD}', '-p', f'torque_limit:={LIMIT}',
-             '-p', f'control_period:={CONTROL_PERIOD}'],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        controller = start_controller(namespace, {
+            'kp': KP, 'kd': KD, 'torque_limit': LIMIT, 'control_period': CONTROL_PERIOD})
         last = (TICKS - 1) * TICK_NS
         assert harness.spin_until(lambda: bool(orientation) and max(
             m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in orientation[-5:])
             >= last, timeout=300.0), f'{len(orientation)} ticks recorded'
     finally:
         code, stderr = stop_with_sigint(node)
-        if controller is not None:
-            controller.terminate()
-            controller.communicate(timeout=10.0)
-    assert code == 0 and 'Traceback' not in stderr, stderr
-    assert 'lockstep: no command stamped' not in stderr.split('SIGINT')[0], stderr
+        stop_controller(controller)
+    assert_every_tick_answered(code, stderr)
     found: dict[int, np.ndarray] = {}
     for message in orientation:
         q = message.quaternion

@@ -27,11 +27,8 @@ the pointing error (truth against target), RMS and largest.
 from __future__ import annotations
 
 from collections.abc import Iterator
-import os
-from pathlib import Path
-import subprocess
 
-from ament_index_python.packages import get_package_prefix
+from controller_process import parameter_arguments, start_controller, stop_controller
 from geometry_msgs.msg import QuaternionStamped
 from gnc_loop import CONTROLLER, estimator_values, gnc_loop, TARGET_RPY, TICK_RATE
 from nav_msgs.msg import Odometry
@@ -45,8 +42,6 @@ from test_node_subprocess import read_until, SERVING, start, stop_with_sigint
 
 from rigid_body_attitude.core.attitude import quaternion
 
-PACKAGE = 'rigid_body_attitude'
-CONTROLLER_PATH = Path(get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / 'attitude_controller'
 TICK_NS = round(1e9 / TICK_RATE)
 SECONDS = 60
 TICKS = SECONDS * round(TICK_RATE) + 1
@@ -67,12 +62,6 @@ def stamp_ns(message) -> int:
     return message.header.stamp.sec * 10**9 + message.header.stamp.nanosec
 
 
-def parameters(values: dict) -> list[str]:
-    """``-p name:=value`` of each entry."""
-    return [item for key, value in values.items()
-            for item in ('-p', f'{key}:={list(value) if isinstance(value, tuple) else value}')]
-
-
 def ros_loop(ros, namespace: str) -> tuple[dict, dict, dict, dict]:
     """One run: by stamp, the truth, the estimate, its covariance, the wheel command."""
     harness = Harness(ros, namespace)
@@ -86,7 +75,7 @@ def ros_loop(ros, namespace: str) -> tuple[dict, dict, dict, dict]:
     estimator = start('--ros-args', '-r', f'__ns:={namespace}/est',
                       '-r', f'imu:={namespace}/imu',
                       '-r', f'attitude_measurement:={namespace}/star_tracker',
-                      *parameters({**estimator_values(), **reliable}))
+                      *parameter_arguments({**estimator_values(), **reliable}))
     controller = None
     try:
         read_until(plant, SERVING)
@@ -94,11 +83,7 @@ def ros_loop(ros, namespace: str) -> tuple[dict, dict, dict, dict]:
         harness.wait_for_connections(30.0)  # tick 0 repeats until the controller answers
         # the controller's writer is transient local: its first commands reach a late reader
         commands = harness.record(JointState, 'wheels/command', LATCHED)
-        assert CONTROLLER_PATH.is_file() and os.access(CONTROLLER_PATH, os.X_OK)
-        controller = subprocess.Popen(
-            [str(CONTROLLER_PATH), '--ros-args', '-r', f'__ns:={namespace}',
-             '-r', f'odom:={namespace}/est/odom', *parameters(CONTROLLER)],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        controller = start_controller(namespace, CONTROLLER, '-r', f'odom:={namespace}/est/odom')
         harness.wait_for_connections(30.0)
         last = (TICKS - 1) * TICK_NS
         done = harness.spin_until(lambda: bool(truth) and stamp_ns(truth[-1]) >= last and bool(
@@ -106,10 +91,7 @@ def ros_loop(ros, namespace: str) -> tuple[dict, dict, dict, dict]:
             commands[-1]) >= last, timeout=240.0)
     finally:
         stopped = [stop_with_sigint(process) for process in (plant, estimator)]
-        if controller is not None:
-            controller.terminate()
-            _, controller_errors = controller.communicate(timeout=10.0)
-            assert 'Traceback' not in controller_errors, controller_errors
+        controller_errors = stop_controller(controller)
     assert done, (f'{len(truth)} ticks recorded', stopped[0][1][-3000:], stopped[1][1][-3000:],
                   controller_errors[-3000:])
     for code, stderr in stopped:

@@ -16,19 +16,14 @@ The installed ``propagation_node`` (``lockstep``, ``real_time_factor`` 0) and th
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-import subprocess
 
-from ament_index_python.packages import get_package_prefix
+from controller_process import assert_every_tick_answered, start_controller, stop_controller
 from geometry_msgs.msg import QuaternionStamped, TwistStamped
 from ros_helpers import Harness, unique_namespace
 from test_node_subprocess import read_until, SERVING, start, stop_with_sigint
 
 from magnetic_loop import rate_deg_s, spacecraft_loop, Tick
 
-PACKAGE = 'rigid_body_attitude'
-CONTROLLER = Path(get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / 'attitude_controller'
 BDOT = {'actuator': 'magnetorquers', 'bdot_gain': 4e5, 'control_period': 1.0}
 DUMPING = {'actuator': 'reaction_wheels', 'dumping_gain': 0.001, 'kp': 0.4, 'kd': 4.0,
            'torque_limit': 0.03, 'control_period': 0.1, 'target_rpy': [0.0, 0.0, 0.6981317]}
@@ -52,24 +47,15 @@ def ros_loop(ros, namespace: str, scene: str, controller_values: dict, publish_r
     try:
         read_until(node, SERVING)
         harness.wait_for_connections()
-        assert CONTROLLER.is_file() and os.access(CONTROLLER, os.X_OK), CONTROLLER
-        controller = subprocess.Popen(
-            [str(CONTROLLER), '--ros-args', '-r', f'__ns:={namespace}', '-p', f'scene:={scene}',
-             *(item for key, value in controller_values.items()
-               for item in ('-p', f'{key}:={value}'))],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        controller = start_controller(namespace, {'scene': scene, **controller_values})
         assert harness.spin_until(lambda: len(twist) > 5 and len(orientation) > 5 and min(
             max(stamp_ns(m) for m in twist[-5:]),
             max(stamp_ns(m) for m in orientation[-5:])) >= last, timeout=600.0), (
             f'{len(twist)} ticks recorded')
     finally:
         code, stderr = stop_with_sigint(node)
-        if controller is not None:
-            controller.terminate()
-            _, controller_errors = controller.communicate(timeout=10.0)
-            assert 'Traceback' not in controller_errors, controller_errors
-    assert code == 0 and 'Traceback' not in stderr, stderr
-    assert 'lockstep: no command stamped' not in stderr.split('SIGINT')[0], stderr
+        stop_controller(controller)
+    assert_every_tick_answered(code, stderr)
     attitudes = {}
     for message in orientation:
         q = message.quaternion

@@ -16,11 +16,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
-from pathlib import Path
-import subprocess
 
-from ament_index_python.packages import get_package_prefix
+from controller_process import assert_every_tick_answered, start_controller, stop_controller
 from geometry_msgs.msg import QuaternionStamped
 import numpy as np
 from ros_helpers import Harness, unique_namespace
@@ -33,8 +30,6 @@ from rigid_body_attitude.core.dynamics.scene import load_scene
 from rigid_body_attitude.core.dynamics.effects.reaction_wheels import ReactionWheels
 from rigid_body_attitude.core.propagator import DynamicsPropagator
 
-PACKAGE = 'rigid_body_attitude'
-CONTROLLER = Path(get_package_prefix(PACKAGE)) / 'lib' / PACKAGE / 'attitude_controller'
 TICK_NS = 50_000_000  # 20 Hz, the scene's step
 TICKS = 1201  # 0 .. 60 s
 GAINS = {'kp': 0.4, 'kd': 4.0, 'torque_limit': 0.03, 'control_period': 0.1}
@@ -57,13 +52,9 @@ def ros_loop(ros, namespace: str) -> tuple[dict[int, np.ndarray], dict[int, tupl
     try:
         read_until(node, SERVING)
         harness.wait_for_connections()
-        assert CONTROLLER.is_file() and os.access(CONTROLLER, os.X_OK), CONTROLLER
-        controller = subprocess.Popen(
-            [str(CONTROLLER), '--ros-args', '-r', f'__ns:={namespace}',
-             '-p', 'actuator:=reaction_wheels', '-p', 'scene:=wheel_slew_commanded',
-             '-p', f'target_rpy:={TARGET_RPY}',
-             *(item for key, value in GAINS.items() for item in ('-p', f'{key}:={value}'))],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        controller = start_controller(namespace, {
+            'actuator': 'reaction_wheels', 'scene': 'wheel_slew_commanded',
+            'target_rpy': TARGET_RPY, **GAINS})
         last = (TICKS - 1) * TICK_NS
         assert harness.spin_until(lambda: bool(wheels) and bool(orientation) and max(
             stamp_ns(m) for m in orientation[-5:]) >= last and max(
@@ -71,12 +62,8 @@ def ros_loop(ros, namespace: str) -> tuple[dict[int, np.ndarray], dict[int, tupl
             f'{len(orientation)} ticks recorded')
     finally:
         code, stderr = stop_with_sigint(node)
-        if controller is not None:
-            controller.terminate()
-            _, controller_errors = controller.communicate(timeout=10.0)
-            assert 'Traceback' not in controller_errors, controller_errors
-    assert code == 0 and 'Traceback' not in stderr, stderr
-    assert 'lockstep: no command stamped' not in stderr.split('SIGINT')[0], stderr
+        stop_controller(controller)
+    assert_every_tick_answered(code, stderr)
     attitudes: dict[int, np.ndarray] = {}
     for message in orientation:
         q = message.quaternion
