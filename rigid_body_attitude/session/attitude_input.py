@@ -59,15 +59,15 @@ import numpy as np
 
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.session.levelling import FROM_SCENE, AlignmentResult
-from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns
+from rigid_body_attitude.session.times import split_ns, to_ns
 from rigid_body_attitude.session.uncertainty import orientation_block
 
 __all__ = ['ATTITUDE_START_STATUS', 'AttitudeInput', 'AttitudeMeasurements',
            'MEASUREMENT_QUEUE', 'start_result']
 
 Quat = tuple[float, float, float, float]
-#: Measurements held for a gyro that has not reached their stamps, and gyro samples held for
-#: a measurement.
+#: Measurements held for a gyro that has not reached their stamps (a gyro sample waits for
+#: its measurement alone: the next one releases it).
 MEASUREMENT_QUEUE = 64
 #: The alignment status of a filter started from an attitude measurement.
 ATTITUDE_START_STATUS = 'started from the first attitude_measurement'
@@ -187,7 +187,7 @@ class AttitudeInput:
             block = orientation_block(covariance)
         except InputError:
             return self._refused('invalid_covariance', 'attitude_measurement')
-        stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
+        stamp_ns = to_ns(sec, nanosec)
         if not self.use_header_stamps:
             stamp_ns = self._sample_ns
         w, x, y, z = (value / norm for value in attitude)
@@ -241,8 +241,6 @@ class AttitudeInput:
         if measurements.awaited(stamp_ns, self.measurement_period_ns) is None:
             return False
         measurements.samples.append(sample)
-        if len(measurements.samples) > MEASUREMENT_QUEUE:
-            self._release(missing=True)
         return True
 
     def _release(self, missing: bool) -> None:
@@ -275,11 +273,10 @@ class AttitudeInput:
         result = start_result(q)
         self.alignment = result
         self._aligning = False
-        self._update_paths()
         self._filter_aligned(result)
         self.estimation.reset_attitude_block(block)
         self.sink.attitude_covariance(self.estimation.published)
-        self.measurements.start_ns = self.measurements.wait_from_ns = stamp_ns
+        self.measurements.start_ns = stamp_ns
         self._publish_start(stamp_ns)
 
     def _publish_start(self, stamp_ns: int) -> None:

@@ -49,7 +49,7 @@ from rigid_body_attitude.session.gyro import GyroSession
 from rigid_body_attitude.session.levelling import FROM_SCENE, AlignmentResult, SampleMap
 from rigid_body_attitude.session.reports import DiagnosticReport, LEVEL_WARN
 from rigid_body_attitude.session.stream import Outcome
-from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns
+from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, split_ns, to_ns
 from rigid_body_attitude.session.uncertainty import (
     CALIBRATION_KEYS, attitude_stddev_deg, error_model_from)
 
@@ -151,7 +151,7 @@ class FilteredGyroSession(AttitudeInput, GyroSession):
         """:meth:`GyroSession.gyro`, then the sample's gravity-free acceleration; held
         first while its attitude measurement is awaited (``attitude_measurement_period``)."""
         if self.measurement_period_ns and self.estimation.started and self.use_header_stamps:
-            stamp_ns = sec * NANOSECONDS_PER_SECOND + nanosec
+            stamp_ns = to_ns(sec, nanosec)
             if self._waits(stamp_ns, (stamp_ns, sec, nanosec, rate, imu, accel)):
                 return False
         return self._integrated_gyro(sec, nanosec, rate, imu, accel)
@@ -161,7 +161,7 @@ class FilteredGyroSession(AttitudeInput, GyroSession):
                          accel: Sequence[float] | None = None) -> bool:
         """The sample after the held measurements stamped before it were fused."""
         self._force = None
-        self._sample_ns = (sec * NANOSECONDS_PER_SECOND + nanosec if self.use_header_stamps
+        self._sample_ns = (to_ns(sec, nanosec) if self.use_header_stamps
                            else self.clock_ns())
         if not self._special and accel is not None:  # the inline path: the force mapped here
             self._force = mapped_force(self._accel_affine, accel)
@@ -287,7 +287,7 @@ class FilteredGyroSession(AttitudeInput, GyroSession):
             x, y, z = (float(value) for value in field)
         except (TypeError, ValueError):
             return self._refused('non_finite', 'imu/mag')
-        reason = self.estimation.magnetic_field(sec * NANOSECONDS_PER_SECOND + nanosec,
+        reason = self.estimation.magnetic_field(to_ns(sec, nanosec),
                                                 (x, y, z), mount, self._levelling_window())
         if reason:
             return self._refused(reason, 'imu/mag')

@@ -58,7 +58,6 @@ from typing import Any, TypeVar
 
 from rigid_body_attitude.core.attitude.quaternion import from_rpy, rotate_floats
 from rigid_body_attitude.core.control.magnetic import bdot_dipole, dumping_dipole
-from rigid_body_attitude.core.dynamics.effects.magnetorquers import Magnetorquers
 from rigid_body_attitude.core.dynamics.scene import Scene
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.core.yaml_files import quote
@@ -66,7 +65,7 @@ from rigid_body_attitude.msgs.tf_message import Transform
 from rigid_body_attitude.msgs.untrusted import quoted
 from rigid_body_attitude.session.mount import StaticTransforms
 from rigid_body_attitude.session.times import NANOSECONDS_PER_SECOND, seconds_to_ns
-from rigid_body_attitude.session.wheel_drive import WheelDrive
+from rigid_body_attitude.session.wheel_drive import WheelDrive, commanded_rods
 
 _Kept = TypeVar('_Kept')
 
@@ -295,8 +294,7 @@ def magnetic_control(values: Mapping[str, Any], scene: Scene | None,
     ``dumping_gain`` has no rods to act with."""
     if values['actuator'] == 'magnetorquers':
         gain, drive = values['bdot_gain'], None
-        if scene is not None and not any(isinstance(e, Magnetorquers) and e.input_names
-                                         for e in scene.build_effects()):
+        if scene is not None and not commanded_rods(scene.build_effects()):
             raise InputError(f'Expected scene {quote(scene.name)} to have magnetorquers that '
                              f'take dipole commands (parameter `actuator` magnetorquers), got '
                              f'none')

@@ -21,7 +21,7 @@ stamp, zero (the rods idle; momentum the wheels gather stays in them) or, with a
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 
 from rigid_body_attitude.core.control.allocation import wheel_torques
 from rigid_body_attitude.core.dynamics.effects.magnetorquers import Magnetorquers
@@ -31,7 +31,7 @@ from rigid_body_attitude.core.errors import SceneError
 from rigid_body_attitude.core.yaml_files import quote
 from rigid_body_attitude.msgs.joint_state import joint_state_encoder
 
-__all__ = ['WheelDrive']
+__all__ = ['WheelDrive', 'commanded_rods']
 
 Vector = tuple[float, float, float]
 
@@ -54,8 +54,7 @@ class WheelDrive:
         self.spin_inertia = tuple(float(j) for j in wheels.wheel['spin_inertia'])
         self._encode = joint_state_encoder('', self.names)
         #: Whether the plant takes a ``dipole`` command every tick (commanded rods).
-        self.answers_dipole = any(isinstance(e, Magnetorquers) and 'dipole' in e.input_names
-                                  for e in effects)
+        self.answers_dipole = commanded_rods(effects)
         #: The last motor torques sent [N m], in :attr:`names` order.
         self.torques: tuple[float, ...] = (0.0,) * len(self.names)
 
@@ -72,3 +71,8 @@ class WheelDrive:
         for (a, b, c), j, speed in zip(self.axes, self.spin_inertia, speeds):
             x, y, z = x + j * speed * a, y + j * speed * b, z + j * speed * c
         return x, y, z
+
+
+def commanded_rods(effects: Iterable[object]) -> bool:
+    """Whether ``effects`` hold magnetorquers that take a ``dipole`` command."""
+    return any(isinstance(e, Magnetorquers) and 'dipole' in e.input_names for e in effects)
