@@ -32,6 +32,7 @@ from typing import NamedTuple
 from rigid_body_attitude.core.errors import InputError
 from rigid_body_attitude.msgs.decoders import ENCAPSULATIONS, Floats
 from rigid_body_attitude.msgs.errors import MalformedMessage
+from rigid_body_attitude.msgs.tf_message import CdrReader
 
 __all__ = ['JOINT_STATE', 'JointStateEncoder', 'JointStateValues', 'MAX_JOINTS',
            'MAX_JOINT_NAME', 'decode_joint_state', 'joint_state_encoder']
@@ -55,56 +56,35 @@ class JointStateValues(NamedTuple):
     effort: Floats
 
 
-class _Reader:
-    """Bounds-checked reads at payload offsets of one message."""
+class _Reader(CdrReader):
+    """:class:`~rigid_body_attitude.msgs.tf_message.CdrReader` for a JointState: sequences of
+    at most :data:`MAX_JOINTS`, names of at most :data:`MAX_JOINT_NAME` bytes."""
 
     def __init__(self, raw: bytes, little_endian: bool, float64_alignment: int) -> None:
-        self.raw, self.offset = raw, 4
-        self.order = '<' if little_endian else '>'
-        self.alignment = float64_alignment
-
-    def _take(self, size: int, alignment: int) -> int:
-        start = 4 + -(-(self.offset - 4) // alignment) * alignment
-        if start + size > len(self.raw):
-            raise MalformedMessage(JOINT_STATE, f'truncated: {len(self.raw)} bytes, '
-                                                f'{start + size} needed')
-        self.offset = start + size
-        return start
-
-    def integers(self, fmt: str) -> tuple[int, ...]:
-        values: tuple[int, ...] = struct.unpack_from(self.order + fmt, self.raw,
-                                                     self._take(struct.calcsize(fmt), 4))
-        return values
+        super().__init__(raw, little_endian, float64_alignment, JOINT_STATE)
 
     def count(self, field: str, smallest: int) -> int:
         """A sequence's length, refused when it cannot fit or exceeds :data:`MAX_JOINTS`."""
-        (count,) = self.integers('I')
+        (count,) = self.uint32s('I')
         if count > MAX_JOINTS or count * smallest > len(self.raw) - self.offset:
             raise MalformedMessage(JOINT_STATE, f'{field}: {count} elements in a message of '
                                                 f'{len(self.raw)} bytes')
         return count
 
-    def float64s(self, field: str) -> Floats:
+    def float_field(self, field: str) -> Floats:
+        """The float64 sequence ``field``."""
         count = self.count(field, 8)
-        if not count:
-            return ()
-        values: Floats = struct.unpack_from(f'{self.order}{count}d', self.raw,
-                                            self._take(8 * count, self.alignment))
-        return values
+        return self.float64s(count) if count else ()
 
-    def string(self, field: str) -> str:
-        (length,) = self.integers('I')
+    def string(self, name: str) -> str:
+        """The CDR string ``name``, its length refused beyond :data:`MAX_JOINT_NAME`."""
+        at = self.offset
+        (length,) = self.uint32s('I')
         if length == 0 or length > MAX_JOINT_NAME:
-            raise MalformedMessage(JOINT_STATE, f'{field} length {length} (1 to '
+            raise MalformedMessage(JOINT_STATE, f'{name} length {length} (1 to '
                                                 f'{MAX_JOINT_NAME} bytes with the NUL)')
-        text = self.raw[self._take(length, 1):self.offset]
-        if text.find(0) != length - 1:
-            raise MalformedMessage(JOINT_STATE, f'{field} is not NUL-terminated once')
-        try:
-            return text[:-1].decode('utf-8')
-        except UnicodeDecodeError as err:
-            raise MalformedMessage(JOINT_STATE, f'{field} is not UTF-8 (byte {err.start})'
-                                   ) from None
+        self.offset = at
+        return super().string(name)
 
 
 def decode_joint_state(data: bytes) -> JointStateValues:
@@ -118,11 +98,11 @@ def decode_joint_state(data: bytes) -> JointStateValues:
     if encapsulation is None:
         raise MalformedMessage(JOINT_STATE, f'bad encapsulation 0x{raw[0] << 8 | raw[1]:04x}')
     reader = _Reader(raw, encapsulation.little_endian, encapsulation.float64_alignment)
-    sec, nanosec = reader.integers('iI')
+    sec, nanosec = reader.uint32s('iI')
     frame_id = reader.string('frame_id')
     names = tuple(reader.string('name') for _ in range(reader.count('name', 5)))
-    return JointStateValues(sec, nanosec, frame_id, names, reader.float64s('position'),
-                            reader.float64s('velocity'), reader.float64s('effort'))
+    return JointStateValues(sec, nanosec, frame_id, names, reader.float_field('position'),
+                            reader.float_field('velocity'), reader.float_field('effort'))
 
 
 #: Packs one message: ``(sec, nanosec, position, velocity, effort)`` → CDR_LE bytes.
